@@ -1,0 +1,27 @@
+#include "lmcal/models/friction.hpp"
+
+#include "lmcal/error.hpp"
+
+namespace lmcal {
+
+void validate(const FrictionConstants<double>& k) {
+  require_finite("k1", k.k1);
+  require_finite("k2", k.k2);
+  require_non_negative("mu_st", k.mu_st);
+  require_positive("v_st_m_s", k.v_st_m_s);
+  require_non_negative("mu_v", k.mu_v);
+  require_finite("beta_per_K", k.beta_per_K);
+  require_finite("f0", k.f0);
+  require_positive("nu_ref_mm2_s", k.nu_ref_mm2_s);
+  require_in_range("T_ref_C", k.T_ref_C, -273.15, 1000.0);
+}
+
+void validate(const FrictionConditions<double>& c) {
+  require_non_negative("load_N", c.load_N);
+  require_non_negative("preload_um", c.preload_um);
+  require_positive("block_length_mm", c.block_length_mm);
+  require_non_negative("velocity_m_s", c.velocity_m_s);
+  require_in_range("temperature_C", c.temperature_C, -273.15, 1000.0);
+}
+
+}  // namespace lmcal

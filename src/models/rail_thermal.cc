@@ -1,0 +1,514 @@
+// Rail FDM solver (Eqs. 11-15). The header explains the model and the scheme;
+// this file holds the definitions and the explicit instantiations.
+#include "lmcal/models/rail_thermal.hpp"
+
+#include <ceres/jet.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "lmcal/error.hpp"
+
+namespace lmcal {
+
+std::string_view to_string(TimeScheme scheme) {
+  return scheme == TimeScheme::backward_euler ? "backward-euler" : "crank-nicolson";
+}
+
+TimeScheme parse_time_scheme(std::string_view name) {
+  if (name == "backward-euler" || name == "be") return TimeScheme::backward_euler;
+  if (name == "crank-nicolson" || name == "cn") return TimeScheme::crank_nicolson;
+  throw InvalidParameter("scheme", "unknown time scheme '" + std::string(name) +
+                                       "'; expected backward-euler (be) or crank-nicolson (cn)");
+}
+
+double AmbientTrace::at(double t) const {
+  LMCAL_ASSERT(!time_s.empty() && time_s.size() == temperature_C.size(), "ambient trace is empty or ragged");
+  if (time_s.size() == 1 || t <= time_s.front()) return temperature_C.front();
+  if (t >= time_s.back()) return temperature_C.back();
+  const auto it = std::upper_bound(time_s.begin(), time_s.end(), t);
+  const std::size_t j = static_cast<std::size_t>(it - time_s.begin());
+  const double s = (t - time_s[j - 1]) / (time_s[j] - time_s[j - 1]);
+  return temperature_C[j - 1] + s * (temperature_C[j] - temperature_C[j - 1]);
+}
+
+void validate(const RailGeometry& g) {
+  require_positive("rail_length_m", g.rail_length_m);
+  require_positive("area_m2", g.area_m2);
+  require_positive("perimeter_m", g.perimeter_m);
+  require_positive("stroke_m", g.stroke_m);
+  require_positive("contact_length_m", g.contact_length_m);
+  require_non_negative("velocity_m_s", g.velocity_m_s);
+  if (g.stroke_m + g.contact_length_m > g.rail_length_m)
+    throw InvalidParameter("rail_length_m", g.rail_length_m,
+                           "at least stroke_m + contact_length_m = " +
+                               std::to_string(g.stroke_m + g.contact_length_m) + " (the block must stay on the rail)");
+}
+
+void validate(const RailNumerics& n) {
+  if (n.half_rail_segments < 1)
+    throw InvalidParameter("half_rail_segments", n.half_rail_segments, "at least 1 segment");
+  require_positive("time_step_s", n.time_step_s);
+}
+
+void validate(const RailParams<double>& p) {
+  require_in_range("heat_partition", p.heat_partition, 0.0, 1.0);
+  require_non_negative("heat_rate_W", p.heat_rate_W);
+  require_positive("h_W_m2K", p.h_W_m2K);
+  require_positive("conductivity_W_mK", p.conductivity_W_mK);
+  require_positive("density_kg_m3", p.density_kg_m3);
+  require_positive("specific_heat_J_kgK", p.specific_heat_J_kgK);
+  require_in_range("initial_temperature_C", p.initial_temperature_C, -273.15, 1000.0);
+}
+
+namespace {
+
+double value_of(double x) { return x; }
+template <int N>
+double value_of(const ceres::Jet<double, N>& x) { return x.a; }
+
+template <typename T>
+RailParams<double> values_of(const RailParams<T>& p) {
+  return {value_of(p.heat_partition),      value_of(p.heat_rate_W),         value_of(p.h_W_m2K),
+          value_of(p.conductivity_W_mK),   value_of(p.density_kg_m3),       value_of(p.specific_heat_J_kgK),
+          value_of(p.initial_temperature_C)};
+}
+
+void validate(const AmbientTrace& ambient, double duration_s) {
+  if (ambient.time_s.empty() || ambient.time_s.size() != ambient.temperature_C.size())
+    throw InvalidParameter("ambient", "the ambient trace needs as many temperatures as times, and at least one");
+  for (std::size_t i = 0; i < ambient.time_s.size(); ++i) {
+    require_finite("ambient time_s", ambient.time_s[i]);
+    require_in_range("ambient temperature_C", ambient.temperature_C[i], -273.15, 1000.0);
+    if (i > 0 && !(ambient.time_s[i] > ambient.time_s[i - 1]))
+      throw InvalidParameter("ambient time_s", ambient.time_s[i], "times increasing strictly");
+  }
+  if (ambient.time_s.size() > 1 && (ambient.time_s.front() > 0 || ambient.time_s.back() < duration_s))
+    throw InvalidParameter("ambient", "the trace covers [" + std::to_string(ambient.time_s.front()) + ", " +
+                                          std::to_string(ambient.time_s.back()) + "] s but the run needs [0, " +
+                                          std::to_string(duration_s) + "] s");
+}
+
+void validate_times(const char* name, const std::vector<double>& times, double duration_s) {
+  for (std::size_t i = 0; i < times.size(); ++i) {
+    require_in_range(name, times[i], 0.0, duration_s);
+    if (i > 0 && times[i] < times[i - 1]) throw InvalidParameter(name, times[i], "times in ascending order");
+  }
+}
+
+// Vertex-centred grid: nodes x_i, control volume i = [faces[i], faces[i+1]].
+struct Grid {
+  bool full_rail;
+  double dx;
+  std::vector<double> x;
+  std::vector<double> faces;
+  double symmetry_factor() const { return full_rail ? 1.0 : 2.0; }  // energies for the whole rail
+  std::size_t size() const { return x.size(); }
+};
+
+Grid make_grid(const RailGeometry& g, const RailNumerics& n, bool full_rail) {
+  Grid grid;
+  grid.full_rail = full_rail;
+  const int segments = full_rail ? 2 * n.half_rail_segments : n.half_rail_segments;
+  const double start = full_rail ? -0.5 * g.rail_length_m : 0.0;
+  grid.dx = (full_rail ? g.rail_length_m : 0.5 * g.rail_length_m) / segments;
+  grid.x.resize(static_cast<std::size_t>(segments) + 1);
+  for (std::size_t i = 0; i < grid.x.size(); ++i) grid.x[i] = start + static_cast<double>(i) * grid.dx;
+  grid.x.back() = start + (full_rail ? g.rail_length_m : 0.5 * g.rail_length_m);
+  grid.faces.resize(grid.x.size() + 1);
+  grid.faces.front() = grid.x.front();
+  grid.faces.back() = grid.x.back();
+  for (std::size_t i = 1; i < grid.x.size(); ++i) grid.faces[i] = 0.5 * (grid.x[i - 1] + grid.x[i]);
+  return grid;
+}
+
+// Linear interpolation weights of a sensor between two nodes.
+struct Probe {
+  std::size_t node;
+  double weight;  // share of node + 1
+};
+
+Probe make_probe(const Grid& grid, const RailGeometry& g, double position_m) {
+  require_in_range("sensor position_m", position_m, -0.5 * g.rail_length_m, 0.5 * g.rail_length_m);
+  const double x = grid.full_rail ? position_m : std::abs(position_m);
+  const double s = (x - grid.x.front()) / grid.dx;
+  const auto last = grid.size() - 2;
+  const std::size_t j = std::min(static_cast<std::size_t>(std::max(0.0, std::floor(s))), last);
+  return {j, std::clamp(s - static_cast<double>(j), 0.0, 1.0)};
+}
+
+template <typename T>
+T probe_value(const Probe& p, const std::vector<T>& field) {
+  return field[p.node] + p.weight * (field[p.node + 1] - field[p.node]);
+}
+
+// The discrete operator: capacity C_i (J/K), side conductance h p ΔV_i (W/K), end
+// conductance h A at the convective end nodes, and the inter-node conductance k A / Δx.
+template <typename T>
+struct Operator {
+  std::vector<T> capacity;
+  std::vector<T> side;
+  T end{};
+  bool left_end_convects = false;  // the full rail convects at both ends; the half rail is symmetric at x = 0
+  T link{};
+
+  T convective(std::size_t i, std::size_t n) const {
+    T c = side[i];
+    if ((i == 0 && left_end_convects) || i + 1 == n) c += end;
+    return c;
+  }
+};
+
+template <typename T>
+Operator<T> make_operator(const Grid& grid, const RailGeometry& g, const RailParams<T>& p) {
+  Operator<T> op;
+  const std::size_t n = grid.size();
+  op.capacity.resize(n);
+  op.side.resize(n);
+  const T rho_c_A = p.density_kg_m3 * p.specific_heat_J_kgK * g.area_m2;
+  const T h_p = p.h_W_m2K * g.perimeter_m;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double length = grid.faces[i + 1] - grid.faces[i];
+    op.capacity[i] = rho_c_A * length;
+    op.side[i] = h_p * length;
+  }
+  op.end = p.h_W_m2K * g.area_m2;
+  op.left_end_convects = grid.full_rail;
+  op.link = p.conductivity_W_mK * g.area_m2 / grid.dx;
+  return op;
+}
+
+// Tridiagonal matrix with diagonal d_i and constant off-diagonal e, factorised once;
+// solve() overwrites the right-hand side with the solution.
+//
+// A step's cost is the latency of the elimination's dependency chain, so the matrix
+// is factorised from both ends at once and the two halves meet at a twist row k
+// ("burn at both ends"): rows above k are eliminated downwards, rows below upwards,
+// and the two independent chains run interleaved in one loop.
+//   top    i < k:  x_i + m_i x_{i+1} = y_i,   y_i = r_i / p_i - m_i y_{i-1},  m_i = e / p_i
+//   bottom i > k:  x_i + m_i x_{i-1} = y_i,   y_i = r_i / p_i - m_i y_{i+1}
+//   twist  i = k:  (d_k - e m_{k-1} - e m_{k+1}) x_k = r_k - e y_{k-1} - e y_{k+1}
+template <typename T>
+class TridiagonalFactor {
+ public:
+  TridiagonalFactor(const std::vector<T>& diagonal, const T& off)
+      : n_(diagonal.size()), twist_(n_ / 2), off_(off), inv_(n_), m_(n_) {
+    for (std::size_t i = 0; i < twist_; ++i) {
+      const T pivot = i == 0 ? diagonal[0] : diagonal[i] - off * m_[i - 1];
+      inv_[i] = T(1.0) / pivot;
+      m_[i] = off * inv_[i];
+    }
+    for (std::size_t i = n_ - 1; i > twist_; --i) {
+      const T pivot = i == n_ - 1 ? diagonal[i] : diagonal[i] - off * m_[i + 1];
+      inv_[i] = T(1.0) / pivot;
+      m_[i] = off * inv_[i];
+    }
+    T pivot = diagonal[twist_];
+    if (twist_ > 0) pivot -= off * m_[twist_ - 1];
+    if (twist_ + 1 < n_) pivot -= off * m_[twist_ + 1];
+    inv_[twist_] = T(1.0) / pivot;
+  }
+
+  void solve(std::vector<T>& r) const {
+    LMCAL_ASSERT(r.size() == n_, "right-hand side of the wrong size");
+    T* x = r.data();
+    const T* inv = inv_.data();
+    const T* m = m_.data();
+    const std::size_t k = twist_, last = n_ - 1;
+    const std::size_t top = k, bottom = last - k;  // rows eliminated from each end
+    // The running values live in locals: reloading x[i - 1] from memory would put a
+    // store-to-load round trip on the dependency chain.
+    T up = top > 0 ? x[0] * inv[0] : T(0.0);
+    T down = bottom > 0 ? x[last] * inv[last] : T(0.0);
+    if (top > 0) x[0] = up;
+    if (bottom > 0) x[last] = down;
+    const std::size_t both = std::min(top, bottom);
+    for (std::size_t j = 1; j < both; ++j) {
+      up = x[j] * inv[j] - m[j] * up;
+      down = x[last - j] * inv[last - j] - m[last - j] * down;
+      x[j] = up;
+      x[last - j] = down;
+    }
+    for (std::size_t j = std::max<std::size_t>(both, 1); j < top; ++j) x[j] = up = x[j] * inv[j] - m[j] * up;
+    for (std::size_t j = std::max<std::size_t>(both, 1); j < bottom; ++j)
+      x[last - j] = down = x[last - j] * inv[last - j] - m[last - j] * down;
+    T centre = x[k];
+    if (k > 0) centre -= off_ * x[k - 1];
+    if (k < last) centre -= off_ * x[k + 1];
+    centre *= inv[k];
+    x[k] = centre;
+    up = down = centre;
+    for (std::size_t j = 1; j <= both; ++j) {
+      up = x[k - j] - m[k - j] * up;
+      down = x[k + j] - m[k + j] * down;
+      x[k - j] = up;
+      x[k + j] = down;
+    }
+    for (std::size_t j = both + 1; j <= top; ++j) x[k - j] = up = x[k - j] - m[k - j] * up;
+    for (std::size_t j = both + 1; j <= bottom; ++j) x[k + j] = down = x[k + j] - m[k + j] * down;
+  }
+
+ private:
+  std::size_t n_, twist_;
+  T off_;
+  std::vector<T> inv_;  // 1 / pivot_i
+  std::vector<T> m_;    // e / pivot_i
+};
+
+std::size_t neighbours(std::size_t i, std::size_t n) { return (i == 0 || i + 1 == n) ? 1 : 2; }
+
+template <typename T>
+struct Prepared {
+  Grid grid;
+  Operator<T> op;
+  BlockMotion motion;
+  std::vector<Probe> probes;
+};
+
+template <typename T>
+Prepared<T> prepare(const RailGeometry& geometry, const RailNumerics& numerics,
+                    const std::vector<double>& sensors, const RailParams<T>& params) {
+  validate(geometry);
+  validate(numerics);
+  validate(values_of(params));
+  if (numerics.source == SourceModel::moving) require_positive("velocity_m_s", geometry.velocity_m_s);
+  Prepared<T> prep{make_grid(geometry, numerics, numerics.source == SourceModel::moving), {},
+                   {geometry.stroke_m, geometry.contact_length_m, geometry.velocity_m_s}, {}};
+  prep.op = make_operator(prep.grid, geometry, params);
+  for (double x : sensors) prep.probes.push_back(make_probe(prep.grid, geometry, x));
+  return prep;
+}
+
+template <typename T>
+void record_sensors(const std::vector<Probe>& probes, const std::vector<T>& before, const std::vector<T>& after,
+                    double s, std::vector<T>& out) {
+  for (const Probe& p : probes) {
+    const T a = probe_value(p, before), b = probe_value(p, after);
+    out.push_back(a + s * (b - a));
+  }
+}
+
+// Heat input per step: P times the static weights, or the moving block's exact sweep.
+template <typename T>
+class SourceTerm {
+ public:
+  SourceTerm(SourceModel model, const BlockMotion& motion, const Grid& grid, const T& power)
+      : model_(model), motion_(motion), faces_(grid.faces), power_(power) {
+    if (model != SourceModel::moving)
+      for (double w : static_source_weights(model, motion, grid.faces)) {
+        static_W_.push_back(power * w);
+        static_total_W_ += static_W_.back();
+      }
+  }
+
+  // Adds the mean power over [t0, t1] to `rhs` (W per volume); returns the energy injected, J.
+  T add(double t0, double t1, std::vector<T>& rhs) {
+    const double dt = t1 - t0;
+    T injected{};
+    if (model_ == SourceModel::moving) {
+      moving_source_energy(motion_, faces_, t0, t1, sweep_);
+      double total_s = 0;
+      for (std::size_t k = 0; k < sweep_.energy_s.size(); ++k) {
+        rhs[sweep_.first + k] += power_ * (sweep_.energy_s[k] / dt);
+        total_s += sweep_.energy_s[k];
+      }
+      injected = power_ * total_s;
+    } else {
+      for (std::size_t i = 0; i < rhs.size(); ++i) rhs[i] += static_W_[i];
+      injected = static_total_W_ * dt;
+    }
+    return injected;
+  }
+
+ private:
+  SourceModel model_;
+  BlockMotion motion_;
+  const std::vector<double>& faces_;
+  T power_;
+  std::vector<T> static_W_;
+  T static_total_W_{};
+  SweepEnergy sweep_;
+};
+
+// One θ-scheme step of fixed length, factorised once:
+//   (C/Δt + θK) T^{n+1} = (C/Δt - (1-θ)K) T^n + s̄ + conv·T∞_θ,   K = link·(graph Laplacian) + conv.
+template <typename T>
+class ThetaStepper {
+ public:
+  ThetaStepper(const Operator<T>& op, std::size_t n, double theta, double dt)
+      : op_(op), theta_(theta), dt_(dt), explicit_diagonal_(n), convective_(n),
+        explicit_link_((1.0 - theta) * op.link), factor_(implicit_diagonal(op, n, theta, dt), -theta * op.link) {
+    for (std::size_t i = 0; i < n; ++i) {
+      convective_[i] = op.convective(i, n);
+      explicit_diagonal_[i] = op.capacity[i] / dt - (1.0 - theta) * (op.link * double(neighbours(i, n)) + convective_[i]);
+    }
+  }
+
+  double dt() const { return dt_; }
+
+  // current (at t0) -> next (at t0 + Δt). Accumulates the energy terms when `energy` is given.
+  void advance(const std::vector<T>& current, std::vector<T>& next, double t0, const AmbientTrace& ambient,
+               SourceTerm<T>& source, RailEnergy<T>* energy) const {
+    const std::size_t n = current.size();
+    const double t1 = t0 + dt_;
+    const double ambient_theta = theta_ * ambient.at(t1) + (1.0 - theta_) * ambient.at(t0);
+    for (std::size_t i = 0; i < n; ++i) next[i] = explicit_diagonal_[i] * current[i] + convective_[i] * ambient_theta;
+    if (theta_ < 1.0) {
+      next[0] += explicit_link_ * current[1];
+      for (std::size_t i = 1; i + 1 < n; ++i) next[i] += explicit_link_ * (current[i - 1] + current[i + 1]);
+      next[n - 1] += explicit_link_ * current[n - 2];
+    }
+    const T injected = source.add(t0, t1, next);
+    factor_.solve(next);
+    if (energy == nullptr) return;
+    // The scheme's own quadrature of the losses, so the balance closes to round-off.
+    auto excess = [&](std::size_t i) { return theta_ * next[i] + (1.0 - theta_) * current[i] - ambient_theta; };
+    energy->injected_J += injected;
+    for (std::size_t i = 0; i < n; ++i) energy->convected_side_J += op_.side[i] * excess(i) * dt_;
+    energy->convected_end_J += op_.end * excess(n - 1) * dt_;
+    if (op_.left_end_convects) energy->convected_end_J += op_.end * excess(0) * dt_;
+  }
+
+ private:
+  static std::vector<T> implicit_diagonal(const Operator<T>& op, std::size_t n, double theta, double dt) {
+    std::vector<T> d(n);
+    for (std::size_t i = 0; i < n; ++i)
+      d[i] = op.capacity[i] / dt + theta * (op.link * double(neighbours(i, n)) + op.convective(i, n));
+    return d;
+  }
+
+  const Operator<T>& op_;
+  double theta_, dt_;
+  std::vector<T> explicit_diagonal_, convective_;
+  T explicit_link_;
+  TridiagonalFactor<T> factor_;
+};
+
+}  // namespace
+
+template <typename T>
+RailSolution<T> simulate_rail(const RailGeometry& geometry, const RailNumerics& numerics,
+                              const RailOutputs& outputs, const RailParams<T>& params,
+                              const AmbientTrace& ambient) {
+  require_positive("duration_s", outputs.duration_s);
+  validate(ambient, outputs.duration_s);
+  validate_times("output_times_s", outputs.output_times_s, outputs.duration_s);
+  validate_times("profile_times_s", outputs.profile_times_s, outputs.duration_s);
+  const Prepared<T> prep = prepare(geometry, numerics, outputs.sensor_positions_m, params);
+  const Grid& grid = prep.grid;
+  const Operator<T>& op = prep.op;
+  const std::size_t n = grid.size();
+
+  const int steps = static_cast<int>(std::ceil(outputs.duration_s / numerics.time_step_s - 1e-9));
+  const double dt = outputs.duration_s / steps;
+  const bool crank_nicolson = numerics.scheme == TimeScheme::crank_nicolson;
+  const ThetaStepper<T> stepper(op, n, crank_nicolson ? 0.5 : 1.0, dt);
+  // Rannacher start-up: Crank-Nicolson's first step is taken as kStartupSubsteps backward-Euler
+  // substeps, which damp the stiff modes that switching the heat on excites (CN alone would let
+  // them ring for hours) while keeping second order.
+  constexpr int kStartupSubsteps = 4;
+  const ThetaStepper<T> startup(op, n, 1.0, dt / kStartupSubsteps);
+
+  SourceTerm<T> source(numerics.source, prep.motion, grid, params.heat_partition * params.heat_rate_W);
+
+  RailSolution<T> sol;
+  sol.output_times_s = outputs.output_times_s;
+  sol.sensor_positions_m = outputs.sensor_positions_m;
+  sol.node_positions_m = grid.x;
+  sol.time_step_s = dt;
+  sol.steps = steps;
+  sol.sensor_temperature_C.reserve(outputs.output_times_s.size() * outputs.sensor_positions_m.size());
+
+  std::vector<T> current(n, params.initial_temperature_C), next(n);
+  std::size_t next_output = 0, next_profile = 0;
+  // Records the outputs that fall in (t_before, t_after], interpolating linearly in time.
+  auto emit = [&](double t_before, double t_after, const std::vector<T>& before, const std::vector<T>& after,
+                  bool last) {
+    auto within = [&](double t) { return last || t <= t_after + 1e-9 * dt; };
+    auto share = [&](double t) {
+      return t_after > t_before ? std::clamp((t - t_before) / (t_after - t_before), 0.0, 1.0) : 1.0;
+    };
+    for (; next_output < outputs.output_times_s.size() && within(outputs.output_times_s[next_output]); ++next_output)
+      record_sensors(prep.probes, before, after, share(outputs.output_times_s[next_output]), sol.sensor_temperature_C);
+    for (; next_profile < outputs.profile_times_s.size() && within(outputs.profile_times_s[next_profile]);
+         ++next_profile) {
+      const double s = share(outputs.profile_times_s[next_profile]);
+      std::vector<T> profile(n);
+      for (std::size_t i = 0; i < n; ++i) profile[i] = before[i] + s * (after[i] - before[i]);
+      sol.profiles_C.push_back(std::move(profile));
+    }
+  };
+  emit(0.0, 0.0, current, current, false);
+
+  RailEnergy<T> energy;
+  RailEnergy<T>* tally = outputs.energy_balance ? &energy : nullptr;
+  double t = 0.0;
+  for (int step = 0; step < steps; ++step) {
+    const bool substeps = crank_nicolson && step == 0;
+    const ThetaStepper<T>& s = substeps ? startup : stepper;
+    for (int k = 0; k < (substeps ? kStartupSubsteps : 1); ++k) {
+      s.advance(current, next, t, ambient, source, tally);
+      const bool last = step + 1 == steps && (!substeps || k + 1 == kStartupSubsteps);
+      const double t_next = last ? outputs.duration_s : t + s.dt();
+      emit(t, t_next, current, next, last);
+      std::swap(current, next);
+      t = t_next;
+    }
+  }
+
+  if (tally) {
+    for (std::size_t i = 0; i < n; ++i) energy.stored_J += op.capacity[i] * (current[i] - params.initial_temperature_C);
+    const double f = grid.symmetry_factor();
+    sol.energy = {f * energy.injected_J, f * energy.stored_J, f * energy.convected_side_J, f * energy.convected_end_J};
+  }
+  return sol;
+}
+
+template <typename T>
+RailSolution<T> steady_rail(const RailGeometry& geometry, const RailNumerics& numerics,
+                            const std::vector<double>& sensor_positions_m, const RailParams<T>& params,
+                            double ambient_C) {
+  require_in_range("ambient_C", ambient_C, -273.15, 1000.0);
+  const Prepared<T> prep = prepare(geometry, numerics, sensor_positions_m, params);
+  const Grid& grid = prep.grid;
+  const std::size_t n = grid.size();
+  // `moving` has no steady state; its cycle average is the averaged source.
+  const SourceModel shape = numerics.source == SourceModel::moving ? SourceModel::averaged : numerics.source;
+  const std::vector<double> weights = static_source_weights(shape, prep.motion, grid.faces);
+  const T power = params.heat_partition * params.heat_rate_W;
+
+  std::vector<T> diagonal(n), solution(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const T convective = prep.op.convective(i, n);
+    diagonal[i] = prep.op.link * double(neighbours(i, n)) + convective;
+    solution[i] = power * weights[i] + convective * ambient_C;
+  }
+  TridiagonalFactor<T>(diagonal, -prep.op.link).solve(solution);
+
+  RailSolution<T> sol;
+  sol.output_times_s = {0.0};
+  sol.sensor_positions_m = sensor_positions_m;
+  sol.node_positions_m = grid.x;
+  record_sensors(prep.probes, solution, solution, 0.0, sol.sensor_temperature_C);
+  sol.profiles_C.push_back(std::move(solution));
+  return sol;
+}
+
+#define LMCAL_INSTANTIATE_RAIL(T)                                                                        \
+  template RailSolution<T> simulate_rail<T>(const RailGeometry&, const RailNumerics&, const RailOutputs&, \
+                                            const RailParams<T>&, const AmbientTrace&);                  \
+  template RailSolution<T> steady_rail<T>(const RailGeometry&, const RailNumerics&,                      \
+                                          const std::vector<double>&, const RailParams<T>&, double);
+
+LMCAL_INSTANTIATE_RAIL(double)
+using Jet1 = ceres::Jet<double, 1>;
+using Jet2 = ceres::Jet<double, 2>;
+using Jet4 = ceres::Jet<double, 4>;
+using Jet8 = ceres::Jet<double, 8>;
+LMCAL_INSTANTIATE_RAIL(Jet1)
+LMCAL_INSTANTIATE_RAIL(Jet2)
+LMCAL_INSTANTIATE_RAIL(Jet4)
+LMCAL_INSTANTIATE_RAIL(Jet8)
+
+}  // namespace lmcal

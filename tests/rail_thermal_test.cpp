@@ -1,0 +1,249 @@
+#include "lmcal/models/rail_thermal.hpp"
+
+#include <ceres/jet.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "lmcal/error.hpp"
+#include "support/fin_analytic.hpp"
+#include "support/srn35c.hpp"
+
+namespace lmcal {
+namespace {
+
+using test::srn35c_geometry;
+using test::srn35c_params;
+
+constexpr double kSixHours_s = 6 * 3600.0;
+
+RailNumerics numerics(SourceModel source, TimeScheme scheme, int segments, double dt) {
+  return {.source = source, .scheme = scheme, .half_rail_segments = segments, .time_step_s = dt};
+}
+
+// Steady state of the published (uniform, half-stroke) source against the closed-form fin.
+TEST(RailThermal, SteadyStateMatchesTheAnalyticFin) {
+  const auto g = srn35c_geometry();
+  const auto p = srn35c_params();
+  const double line_power = p.heat_partition * p.heat_rate_W / g.contact_length_m;
+  const test::FinAnalytic exact(p.h_W_m2K, g.perimeter_m, p.conductivity_W_mK, g.area_m2, line_power,
+                                0.5 * g.stroke_m, 0.5 * g.rail_length_m);
+  const std::vector<double> sensors = {0.0, 0.05, 0.1, 0.15, 0.2, 0.25, 0.3};
+  const auto steady = steady_rail(g, numerics(SourceModel::paper, TimeScheme::backward_euler, 3000, 1), sensors, p, 20.0);
+  const double peak = exact.excess_K(0.0);
+  for (std::size_t i = 0; i < sensors.size(); ++i) {
+    const double rise = steady.temperature_C(0, i) - 20.0;
+    EXPECT_LT(std::abs(rise - exact.excess_K(sensors[i])), 1e-3 * peak) << "x = " << sensors[i];
+  }
+  // A long transient settles on the same state.
+  RailOutputs out{.duration_s = 40 * 3600.0, .sensor_positions_m = sensors, .output_times_s = {40 * 3600.0}};
+  auto p20 = p;
+  p20.initial_temperature_C = 20.0;
+  const auto late = simulate_rail(g, numerics(SourceModel::paper, TimeScheme::backward_euler, 300, 60), out, p20,
+                                  AmbientTrace::constant(20.0));
+  EXPECT_NEAR(late.temperature_C(0, 0) - 20.0, peak, 2e-3 * peak);
+}
+
+// Injected = stored + convected for every source model and scheme, with a drifting ambient;
+// and the injected energy is the model's analytic power times the duration.
+TEST(RailThermal, EnergyIsConservedForEverySourceModel) {
+  const auto g = srn35c_geometry();
+  const auto p = srn35c_params();
+  const AmbientTrace drift{{0.0, 7200.0, kSixHours_s}, {26.0, 27.5, 25.0}};
+  RailOutputs out{.duration_s = kSixHours_s, .sensor_positions_m = {0.0}, .output_times_s = {kSixHours_s},
+                  .energy_balance = true};
+  const double P = p.heat_partition * p.heat_rate_W;
+  for (auto source : {SourceModel::paper, SourceModel::averaged, SourceModel::moving}) {
+    for (auto scheme : {TimeScheme::backward_euler, TimeScheme::crank_nicolson}) {
+      const int segments = source == SourceModel::moving ? 150 : 50;
+      const double dt = source == SourceModel::moving ? 0.5 : 600;
+      const auto sol = simulate_rail(g, numerics(source, scheme, segments, dt), out, p, drift);
+      const auto& e = sol.energy;
+      const double expected = (source == SourceModel::paper ? g.stroke_m / g.contact_length_m : 1.0) * P * kSixHours_s;
+      EXPECT_NEAR(e.injected_J, expected, 1e-9 * expected) << to_string(source);
+      EXPECT_LT(std::abs(e.imbalance_J()), 1e-3 * e.injected_J) << to_string(source) << " " << to_string(scheme);
+      EXPECT_GT(e.stored_J, 0.1 * e.injected_J);       // a real transient, not a trivial balance
+      EXPECT_GT(e.convected_side_J, 0.1 * e.injected_J);
+      EXPECT_GT(e.convected_end_J, 0.0);
+    }
+  }
+}
+
+double observed_order(double coarse_error, double fine_error, double ratio = 2.0) {
+  return std::log(coarse_error / fine_error) / std::log(ratio);
+}
+
+TEST(RailThermal, SpaceConvergenceIsSecondOrder) {
+  const auto g = srn35c_geometry();
+  const auto p = srn35c_params();
+  for (auto source : {SourceModel::paper, SourceModel::averaged}) {
+    const std::vector<double> sensors = {0.0, 0.07, 0.12};
+    auto steady = [&](int segments) {
+      return steady_rail(g, numerics(source, TimeScheme::backward_euler, segments, 1), sensors, p, 26.0);
+    };
+    const auto reference = steady(19200);
+    double previous = 0;
+    for (int segments : {30, 60, 120, 240}) {
+      const auto s = steady(segments);
+      double error = 0;
+      for (std::size_t i = 0; i < sensors.size(); ++i)
+        error = std::max(error, std::abs(s.temperature_C(0, i) - reference.temperature_C(0, i)));
+      if (previous > 0) {
+        const double order = observed_order(previous, error);
+        EXPECT_GT(order, 1.8) << to_string(source) << " segments " << segments;
+        EXPECT_LT(order, 2.3) << to_string(source) << " segments " << segments;
+      }
+      previous = error;
+    }
+  }
+}
+
+TEST(RailThermal, TimeConvergenceIsFirstOrderForBackwardEulerAndSecondForCrankNicolson) {
+  const auto g = srn35c_geometry();
+  const auto p = srn35c_params();
+  RailOutputs out{.duration_s = kSixHours_s, .sensor_positions_m = {0.0, 0.1},
+                  .output_times_s = {1800, 3600, 3 * 3600, kSixHours_s}};
+  for (auto scheme : {TimeScheme::backward_euler, TimeScheme::crank_nicolson}) {
+    auto run = [&](double dt) {
+      return simulate_rail(g, numerics(SourceModel::averaged, scheme, 60, dt), out, p, AmbientTrace::constant(26.0));
+    };
+    const auto reference = run(0.5);
+    double previous = 0;
+    for (double dt : {450.0, 225.0, 112.5, 56.25}) {
+      const auto s = run(dt);
+      double error = 0;
+      for (std::size_t k = 0; k < s.sensor_temperature_C.size(); ++k)
+        error = std::max(error, std::abs(s.sensor_temperature_C[k] - reference.sensor_temperature_C[k]));
+      if (previous > 0) {
+        const double order = observed_order(previous, error);
+        const double expected = scheme == TimeScheme::backward_euler ? 1.0 : 2.0;
+        EXPECT_NEAR(order, expected, 0.2) << to_string(scheme) << " dt " << dt;
+      }
+      previous = error;
+    }
+  }
+}
+
+// Cycle 2 L1 / V = 3.6 s against a 72 min time constant: the moving block looks like its average
+// away from the stroke ends.
+TEST(RailThermal, MovingApproachesAveragedAwayFromStrokeEnds) {
+  const auto g = srn35c_geometry(0.11);
+  const auto p = srn35c_params();
+  const std::vector<double> sensors = {-0.04, 0.0, 0.03};
+  RailOutputs out{.duration_s = kSixHours_s, .sensor_positions_m = sensors,
+                  .output_times_s = {1800, 3600, 2 * 3600, kSixHours_s}};
+  const auto moving = simulate_rail(g, numerics(SourceModel::moving, TimeScheme::crank_nicolson, 300, 0.5), out, p,
+                                    AmbientTrace::constant(26.0));
+  const auto averaged = simulate_rail(g, numerics(SourceModel::averaged, TimeScheme::crank_nicolson, 300, 0.5), out,
+                                      p, AmbientTrace::constant(26.0));
+  const double rise = averaged.temperature_C(3, 1) - 26.0;
+  ASSERT_GT(rise, 0.5);
+  for (std::size_t k = 0; k < moving.sensor_temperature_C.size(); ++k)
+    EXPECT_LT(std::abs(moving.sensor_temperature_C[k] - averaged.sensor_temperature_C[k]), 0.01 * rise) << k;
+}
+
+// ∂T/∂θ from Jets equals central finite differences, for α, Q, h, k, ρ, c, T0.
+TEST(RailThermal, JetDerivativesEqualFiniteDifferences) {
+  using Jet = ceres::Jet<double, 8>;
+  const auto g = srn35c_geometry();
+  const AmbientTrace ambient{{0.0, kSixHours_s}, {25.0, 27.0}};
+  RailOutputs out{.duration_s = kSixHours_s, .sensor_positions_m = {0.0, 0.13}, .output_times_s = {3600, kSixHours_s}};
+  const auto p = srn35c_params();
+  for (auto source : {SourceModel::paper, SourceModel::averaged}) {
+    for (auto scheme : {TimeScheme::backward_euler, TimeScheme::crank_nicolson}) {
+      const auto n = numerics(source, scheme, 40, 300);
+      RailParams<Jet> pj{Jet(p.heat_partition, 0), Jet(p.heat_rate_W, 1), Jet(p.h_W_m2K, 2),
+                         Jet(p.conductivity_W_mK, 3), Jet(p.density_kg_m3, 4), Jet(p.specific_heat_J_kgK, 5),
+                         Jet(p.initial_temperature_C, 6)};
+      const auto sj = simulate_rail(g, n, out, pj, ambient);
+      auto value = [&](const RailParams<double>& q, std::size_t k) {
+        return simulate_rail(g, n, out, q, ambient).sensor_temperature_C[k];
+      };
+      for (int i = 0; i < 7; ++i) {
+        auto plus = p, minus = p;
+        double* mp = &plus.heat_partition + i;
+        double* mm = &minus.heat_partition + i;
+        const double step = 1e-6 * std::max(1.0, std::abs(*mp));
+        *mp += step;
+        *mm -= step;
+        for (std::size_t k = 0; k < sj.sensor_temperature_C.size(); ++k) {
+          const double fd = (value(plus, k) - value(minus, k)) / (2 * step);
+          EXPECT_NEAR(sj.sensor_temperature_C[k].v[i], fd, 1e-5 * std::max(1e-2, std::abs(fd)))
+              << "parameter " << i << " output " << k << " " << to_string(source) << " " << to_string(scheme);
+        }
+      }
+    }
+  }
+}
+
+TEST(RailThermal, OutputsAreInterpolatedInTimeAndSpace) {
+  const auto g = srn35c_geometry();
+  const auto p = srn35c_params();
+  const auto n = numerics(SourceModel::averaged, TimeScheme::crank_nicolson, 60, 1200);  // Δx = 5 mm
+  RailOutputs grid_out{.duration_s = 7200, .sensor_positions_m = {0.05, 0.0525}, .output_times_s = {0, 1200, 1800, 2400}};
+  const auto s = simulate_rail(g, n, grid_out, p, AmbientTrace::constant(26.0));
+  ASSERT_EQ(s.sensor_temperature_C.size(), 8u);
+  EXPECT_DOUBLE_EQ(s.temperature_C(0, 0), 26.0);
+  // 1800 s lies halfway between the steps at 1200 and 2400 s; 0.0525 m halfway between nodes 0.05 and 0.055.
+  EXPECT_NEAR(s.temperature_C(2, 0), 0.5 * (s.temperature_C(1, 0) + s.temperature_C(3, 0)), 1e-12);
+  RailOutputs node_out{.duration_s = 7200, .sensor_positions_m = {0.05, 0.055}, .output_times_s = {2400}};
+  const auto nodes = simulate_rail(g, n, node_out, p, AmbientTrace::constant(26.0));
+  EXPECT_NEAR(s.temperature_C(3, 1), 0.5 * (nodes.temperature_C(0, 0) + nodes.temperature_C(0, 1)), 1e-12);
+  // Symmetry: a sensor at -x reads what one at +x reads.
+  RailOutputs mirrored{.duration_s = 7200, .sensor_positions_m = {-0.05}, .output_times_s = {2400}};
+  EXPECT_DOUBLE_EQ(simulate_rail(g, n, mirrored, p, AmbientTrace::constant(26.0)).temperature_C(0, 0),
+                   s.temperature_C(3, 0));
+}
+
+TEST(RailThermal, AmbientFollowsTheTraceWhenThereIsNoHeat) {
+  // No heat, rail starts at the ambient, ambient constant: the rail stays there exactly.
+  const auto g = srn35c_geometry();
+  auto p = srn35c_params();
+  p.heat_partition = 0;
+  p.initial_temperature_C = 23.0;
+  RailOutputs out{.duration_s = kSixHours_s, .sensor_positions_m = {0.0, 0.3}, .output_times_s = {kSixHours_s}};
+  const auto s = simulate_rail(g, numerics(SourceModel::averaged, TimeScheme::crank_nicolson, 50, 600), out, p,
+                               AmbientTrace::constant(23.0));
+  EXPECT_NEAR(s.temperature_C(0, 0), 23.0, 1e-9);
+  // A 10 K higher ambient: the rail warms towards it, the end (convecting through A too) first.
+  const auto w = simulate_rail(g, numerics(SourceModel::averaged, TimeScheme::crank_nicolson, 50, 600), out, p,
+                               AmbientTrace::constant(33.0));
+  EXPECT_GT(w.temperature_C(0, 1), w.temperature_C(0, 0));
+  // Lumped exponential with the 72 min time constant far from the end.
+  const double tau = p.density_kg_m3 * p.specific_heat_J_kgK * g.area_m2 / (p.h_W_m2K * g.perimeter_m);
+  EXPECT_NEAR(w.temperature_C(0, 0), 33.0 - 10.0 * std::exp(-kSixHours_s / tau), 0.05);
+}
+
+TEST(RailThermal, RefusesNonPhysicalInputNamingTheParameter) {
+  const auto g = srn35c_geometry();
+  const auto p = srn35c_params();
+  const auto n = numerics(SourceModel::averaged, TimeScheme::backward_euler, 50, 600);
+  const RailOutputs out{.duration_s = 3600, .sensor_positions_m = {0.0}, .output_times_s = {3600}};
+  const auto ambient = AmbientTrace::constant(26.0);
+  auto expect_refused = [&](const char* name, auto mutate) {
+    auto g2 = g;
+    auto n2 = n;
+    auto p2 = p;
+    auto o2 = out;
+    mutate(g2, n2, p2, o2);
+    try {
+      simulate_rail(g2, n2, o2, p2, ambient);
+      ADD_FAILURE() << name << " accepted";
+    } catch (const InvalidParameter& e) {
+      EXPECT_EQ(e.parameter(), name) << e.what();
+    }
+  };
+  expect_refused("heat_partition", [](auto&, auto&, auto& p2, auto&) { p2.heat_partition = 1.2; });
+  expect_refused("heat_partition", [](auto&, auto&, auto& p2, auto&) { p2.heat_partition = -0.1; });
+  expect_refused("rail_length_m", [](auto& g2, auto&, auto&, auto&) { g2.rail_length_m = -1; });
+  expect_refused("area_m2", [](auto& g2, auto&, auto&, auto&) { g2.area_m2 = 0; });
+  expect_refused("half_rail_segments", [](auto&, auto& n2, auto&, auto&) { n2.half_rail_segments = 0; });
+  expect_refused("time_step_s", [](auto&, auto& n2, auto&, auto&) { n2.time_step_s = 0; });
+  expect_refused("h_W_m2K", [](auto&, auto&, auto& p2, auto&) { p2.h_W_m2K = std::nan(""); });
+  expect_refused("sensor position_m", [](auto&, auto&, auto&, auto& o2) { o2.sensor_positions_m = {0.31}; });
+  expect_refused("rail_length_m", [](auto& g2, auto&, auto&, auto&) { g2.rail_length_m = 0.25; });
+  expect_refused("output_times_s", [](auto&, auto&, auto&, auto& o2) { o2.output_times_s = {4000}; });
+}
+
+}  // namespace
+}  // namespace lmcal
