@@ -1,1 +1,32 @@
-int main() { return 0; }
+// lmcal: calibration toolkit for roller linear-motion guideways.
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+
+#include <iostream>
+
+#include "cli_common.hpp"
+#include "lmcal/error.hpp"
+
+int main(int argc, char** argv) {
+  const std::vector<std::string> args(argv, argv + argc);
+  CLI::App app{"lmcal: calibrate the friction and thermal models of roller LM guides (Cheng et al. 2017)"};
+  app.set_version_flag("--version", std::string("lmcal ") + LMCAL_VERSION);
+  app.set_config("--config", "", "Read options from a TOML file");
+  app.require_subcommand(1);
+  lmcal::cli::setup_simulate(app, args);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const lmcal::InputError& e) {
+    std::cerr << "lmcal: error: " << e.what() << "\n";
+    return 2;
+  } catch (const lmcal::InvalidParameter& e) {
+    std::cerr << "lmcal: error: " << e.what() << "\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "lmcal: error: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}

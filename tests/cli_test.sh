@@ -1,0 +1,62 @@
+#!/usr/bin/env bash
+# End-to-end checks of the lmcal command line: outputs that pandas-style readers
+# can parse, numbers that match the physics, and bad input refused with a clear
+# message, a non-zero exit and no output written. $LMCAL is the binary.
+set -uo pipefail
+: "${LMCAL:?set LMCAL to the lmcal binary}"
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+cd "$work"
+failures=0
+pass=0
+
+check() {  # check NAME CONDITION...
+  local name=$1; shift
+  if "$@"; then pass=$((pass + 1)); else echo "FAILED: $name"; failures=$((failures + 1)); fi
+}
+
+# Refused: exit code 2, message naming the parameter, nothing written.
+refused() {  # refused EXPECTED_TEXT ARGS...
+  local expected=$1; shift
+  rm -rf out; mkdir out
+  "$LMCAL" "$@" >stdout.txt 2>stderr.txt
+  local rc=$?
+  if [[ $rc -eq 0 ]]; then echo "  accepted: $*"; return 1; fi
+  if ! grep -qF -- "$expected" stderr.txt; then echo "  message lacks '$expected': $(cat stderr.txt)"; return 1; fi
+  if [[ -n "$(ls -A out)" ]]; then echo "  wrote output despite the error: $(ls out)"; return 1; fi
+  return 0
+}
+
+# --- friction sweep: the sanity figure of PHYSICS.md at V = 0.11 m/s -------------------------
+"$LMCAL" simulate friction -o f.csv --velocity 0.066,0.083,0.11 >/dev/null
+check "friction csv written" test -s f.csv -a -s f.csv.json
+check "friction csv has a header and 3 rows" test "$(wc -l < f.csv)" -eq 4
+f110=$(awk -F, 'NR > 1 && $2 == 0.11 {print $11}' f.csv)
+check "F(0.11 m/s) = 44.2 N" awk -v f="$f110" 'BEGIN { exit !(f > 44.15 && f < 44.25) }'
+check "inputs recorded" grep -q '"k1": 0.315' f.csv.json
+
+# --- thermal run: CSVs with the declared columns, and the steady state above the run's end ----
+"$LMCAL" simulate thermal -o t --velocity 0.11 --duration 7200 --output-every 600 >/dev/null
+check "thermal outputs written" test -s t_time.csv -a -s t_profile.csv -a -s t.json
+check "time csv rows: 13 times x 3 sensors" test "$(wc -l < t_time.csv)" -eq 40
+check "time csv header" grep -q '^case,guide,velocity_m_s,load_N,preload_um,block_length_mm,contact_length_mm,stroke_m,heat_rate_W,time_s,sensor_x_m,temperature_C$' t_time.csv
+check "rail warms at the centre" awk -F, 'NR > 1 && $11 == 0 {if (first == "") first = $12; last = $12} END { exit !(last > first + 1) }' t_time.csv
+check "steady state hotter than after 2 h" awk -F, '$10 == "end_of_run" && $11 == 0 {e = $12} $10 == "steady_state" && $11 == 0 {s = $12} END { exit !(s > e) }' t_profile.csv
+
+# --- refusals ----------------------------------------------------------------------------------
+check "alpha outside [0, 1]" refused "--alpha = 1.5" simulate thermal -o out/t --alpha 1.5
+check "NaN alpha" refused "--alpha = nan" simulate thermal -o out/t --alpha nan
+check "zero segments" refused "--segments = 0" simulate thermal -o out/t --segments 0
+check "negative step" refused "--dt = -1" simulate thermal -o out/t --dt -1
+check "negative rail length" refused "--rail-length = -0.5" simulate thermal -o out/t --rail-length -0.5
+check "rail shorter than stroke + block" refused "rail_length_m = 0.25" simulate thermal -o out/t --rail-length 0.25
+check "negative load" refused "load_N = -10" simulate friction -o out/f.csv --load -10
+check "not a number in a list" refused "'fast' is not a number" simulate friction -o out/f.csv --velocity 0.1,fast
+check "unknown guide" refused "unknown model 'SRN 99'" simulate friction -o out/f.csv --guide "SRN 99"
+check "material missing in the catalog" refused "conductivity_W_mK: the catalog has no value for guide SRG 25C" \
+  simulate thermal -o out/t --guide "SRG 25C"
+check "unknown source model" refused "unknown source model 'uniform'" simulate thermal -o out/t --source uniform
+check "unknown catalog field" refused "unknown guide field" simulate thermal -o out/t --set colour_mm=3
+
+echo "$pass passed, $failures failed"
+exit $((failures > 0))

@@ -247,3 +247,35 @@ TEST(RailThermal, RefusesNonPhysicalInputNamingTheParameter) {
 
 }  // namespace
 }  // namespace lmcal
+
+namespace lmcal {
+namespace {
+
+// The figure the README states: how far the published numerics (paper source, 50 segments,
+// Δt = 600 s, backward Euler) are from the converged solution for SRN 35C at 0.11 m/s, at
+// spot 1 (x = 0), sampled at the paper's own step times. Nearly all of it is the time step.
+TEST(RailThermal, PublishedNumericsErrorIsAboutOneKelvinAndComesFromTheTimeStep) {
+  const auto g = srn35c_geometry(0.11);
+  const auto p = srn35c_params();
+  RailOutputs out{.duration_s = kSixHours_s, .sensor_positions_m = {0.0}};
+  for (double t = 600; t <= kSixHours_s; t += 600) out.output_times_s.push_back(t);
+  auto run = [&](TimeScheme scheme, int segments, double dt) {
+    return simulate_rail(g, numerics(SourceModel::paper, scheme, segments, dt), out, p, AmbientTrace::constant(26.0));
+  };
+  auto max_error = [&](const RailSolution<double>& a, const RailSolution<double>& b) {
+    double e = 0;
+    for (std::size_t k = 0; k < a.sensor_temperature_C.size(); ++k)
+      e = std::max(e, std::abs(a.sensor_temperature_C[k] - b.sensor_temperature_C[k]));
+    return e;
+  };
+  const auto converged = run(TimeScheme::crank_nicolson, 400, 5);
+  const double published = max_error(run(TimeScheme::backward_euler, 50, 600), converged);
+  const double space_only = max_error(run(TimeScheme::crank_nicolson, 50, 5), converged);
+  const double time_only = max_error(run(TimeScheme::backward_euler, 400, 600), converged);
+  EXPECT_NEAR(published, 0.92, 0.03);  // README, "Numerical error of the published setup"
+  EXPECT_LT(space_only, 0.02);
+  EXPECT_NEAR(time_only, published, 0.05 * published);
+}
+
+}  // namespace
+}  // namespace lmcal

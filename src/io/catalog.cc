@@ -143,6 +143,14 @@ const std::vector<std::string>& guide_field_names() {
   return names;
 }
 
+std::optional<double> field_value(const GuideSpec& spec, std::string_view name) {
+  const FieldDef* field = find_field(name);
+  if (!field)
+    throw InvalidParameter(std::string(name),
+                           fmt::format("unknown guide field; known: {}", fmt::join(guide_field_names(), ", ")));
+  return spec.*field->member;
+}
+
 const GuideSpec& GuideCatalog::find(std::string_view model) const {
   const std::string key = model_key(model);
   for (const GuideSpec& guide : guides) {
@@ -207,11 +215,8 @@ const GuideCatalog& builtin_catalog() {
 
 GuideSpec with_overrides(GuideSpec spec, const std::map<std::string, double>& overrides) {
   for (const auto& [name, value] : overrides) {
+    field_value(spec, name);  // refuses unknown names
     const FieldDef* field = find_field(name);
-    if (!field) {
-      throw InvalidParameter(name,
-                             fmt::format("unknown guide field; known: {}", fmt::join(guide_field_names(), ", ")));
-    }
     require_positive(field->name, value);
     spec.*field->member = value;
     // The catalog's note described the replaced value; keep the provenance honest.

@@ -46,6 +46,9 @@ struct GuideSpec {
 // Names of the numeric fields of GuideSpec, as used in the TOML file and by with_overrides.
 const std::vector<std::string>& guide_field_names();
 
+// The value of the field called `name` (one of guide_field_names()); InvalidParameter if unknown.
+std::optional<double> field_value(const GuideSpec& spec, std::string_view name);
+
 struct GuideCatalog {
   std::string source;  // file name, or "<built-in>"
   std::vector<GuideSpec> guides;

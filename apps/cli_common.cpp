@@ -1,0 +1,184 @@
+#include "cli_common.hpp"
+
+#include <fmt/format.h>
+
+#include <charconv>
+#include <cmath>
+
+#include "lmcal/error.hpp"
+
+namespace lmcal::cli {
+
+namespace {
+
+double parse_number(std::string_view option, std::string_view token, std::string_view expected) {
+  while (!token.empty() && token.front() == ' ') token.remove_prefix(1);
+  while (!token.empty() && token.back() == ' ') token.remove_suffix(1);
+  double value = 0;
+  const auto [end, ec] = std::from_chars(token.data(), token.data() + token.size(), value);
+  if (token.empty() || ec != std::errc() || end != token.data() + token.size() || !std::isfinite(value))
+    throw InvalidParameter(std::string(option), fmt::format("'{}' is not a number; expected {}", token, expected));
+  return value;
+}
+
+std::vector<std::string_view> split(std::string_view text, char separator) {
+  std::vector<std::string_view> parts;
+  std::size_t start = 0;
+  while (true) {
+    const std::size_t at = text.find(separator, start);
+    parts.push_back(text.substr(start, at == std::string_view::npos ? std::string_view::npos : at - start));
+    if (at == std::string_view::npos) return parts;
+    start = at + 1;
+  }
+}
+
+}  // namespace
+
+std::vector<double> parse_list(std::string_view option, std::string_view text) {
+  constexpr std::string_view kExpected = "a list like 0.066,0.083,0.11 or a range start:stop:step";
+  std::vector<double> values;
+  for (std::string_view item : split(text, ',')) {
+    const auto range = split(item, ':');
+    if (range.size() == 1) {
+      values.push_back(parse_number(option, item, kExpected));
+    } else if (range.size() == 3) {
+      const double start = parse_number(option, range[0], kExpected);
+      const double stop = parse_number(option, range[1], kExpected);
+      const double step = parse_number(option, range[2], kExpected);
+      if (!(step > 0) || stop < start)
+        throw InvalidParameter(std::string(option), fmt::format("range '{}' needs start <= stop and step > 0", item));
+      const auto count = static_cast<long>(std::floor((stop - start) / step + 1e-9));
+      if (count > 100000) throw InvalidParameter(std::string(option), fmt::format("range '{}' has over 100000 values", item));
+      for (long i = 0; i <= count; ++i) values.push_back(start + static_cast<double>(i) * step);
+    } else {
+      throw InvalidParameter(std::string(option), fmt::format("'{}' is not understood; expected {}", item, kExpected));
+    }
+  }
+  return values;
+}
+
+std::vector<std::pair<double, double>> parse_pairs(std::string_view option, std::string_view text) {
+  constexpr std::string_view kExpected = "time_s:temperature_C pairs like 0:26,3600:27.5";
+  std::vector<std::pair<double, double>> pairs;
+  for (std::string_view item : split(text, ',')) {
+    const auto pair = split(item, ':');
+    if (pair.size() != 2)
+      throw InvalidParameter(std::string(option), fmt::format("'{}' is not understood; expected {}", item, kExpected));
+    pairs.emplace_back(parse_number(option, pair[0], kExpected), parse_number(option, pair[1], kExpected));
+  }
+  return pairs;
+}
+
+CsvText::CsvText(std::vector<std::string> header) : columns_(header.size()) {
+  for (std::size_t i = 0; i < header.size(); ++i) text_ += (i ? "," : "") + header[i];
+  text_ += '\n';
+}
+
+CsvText& CsvText::cell(double value) {
+  text_ += in_row_++ ? "," : "";
+  text_ += fmt::format("{}", value);
+  return *this;
+}
+
+CsvText& CsvText::cell(std::string_view text) {
+  text_ += in_row_++ ? "," : "";
+  const bool quote = text.find_first_of(",\"\n") != std::string_view::npos;
+  if (!quote) {
+    text_ += text;
+  } else {
+    text_ += '"';
+    for (char c : text) text_ += c == '"' ? std::string("\"\"") : std::string(1, c);
+    text_ += '"';
+  }
+  return *this;
+}
+
+void CsvText::end_row() {
+  LMCAL_ASSERT(in_row_ == columns_, "CSV row with the wrong number of cells");
+  text_ += '\n';
+  in_row_ = 0;
+}
+
+nlohmann::json run_record(const std::vector<std::string>& argv) {
+  return {{"lmcal_version", LMCAL_VERSION}, {"command", argv}};
+}
+
+}  // namespace lmcal::cli
+
+namespace lmcal::cli {
+
+void GuideOptions::add_to(CLI::App& app) {
+  app.add_option("--guide", guides, "Guide model(s) from the catalog, e.g. \"SRN 35C\" (a list sweeps them)")
+      ->delimiter(',')
+      ->capture_default_str();
+  app.add_option("--catalog", catalog_file, "Guide catalog TOML file (default: the built-in catalog)");
+  app.add_option_function<std::vector<std::string>>(
+         "--set",
+         [this](const std::vector<std::string>& items) {
+           for (const std::string& item : items) {
+             const auto eq = item.find('=');
+             if (eq == std::string::npos)
+               throw InvalidParameter("--set", fmt::format("'{}' is not FIELD=VALUE", item));
+             overrides[item.substr(0, eq)] =
+                 parse_number("--set", std::string_view(item).substr(eq + 1), "FIELD=VALUE with a number");
+           }
+         },
+         "Override a catalog value: --set conductivity_W_mK=36 (repeatable)")
+      ->delimiter(',');
+}
+
+GuideSpec GuideOptions::resolve(const std::string& model) const {
+  const GuideCatalog loaded = catalog_file.empty() ? GuideCatalog{} : load_catalog(catalog_file);
+  const GuideCatalog& catalog = catalog_file.empty() ? builtin_catalog() : loaded;
+  return with_overrides(catalog.find(model), overrides);
+}
+
+nlohmann::json GuideOptions::record() const {
+  nlohmann::json guides_json = nlohmann::json::array();
+  for (const auto& model : guides) {
+    const GuideSpec spec = resolve(model);
+    nlohmann::json g{{"model", spec.model}};
+    for (const auto& name : guide_field_names()) {
+      const auto value = field_value(spec, name);
+      g[name] = value ? nlohmann::json(*value) : nlohmann::json(nullptr);
+    }
+    g["notes"] = spec.notes;
+    guides_json.push_back(std::move(g));
+  }
+  return {{"catalog", catalog_file.empty() ? "<built-in>" : catalog_file}, {"guides", guides_json}};
+}
+
+void FrictionOptions::add_to(CLI::App& app) {
+  auto* group = app.add_option_group("Friction constants", "Eq. 8 constants (default: the paper's)");
+  group->add_option("--k1", constants.k1, "Coulomb coefficient k1")->capture_default_str();
+  group->add_option("--k2", constants.k2, "Preload reduction k2, 1/um")->capture_default_str();
+  group->add_option("--mu-st", constants.mu_st, "Stribeck coefficient muSt")->capture_default_str();
+  group->add_option("--v-st", constants.v_st_m_s, "Stribeck velocity VSt, m/s")->capture_default_str();
+  group->add_option("--mu-v", constants.mu_v, "Viscous coefficient muv")->capture_default_str();
+  group->add_option("--beta", constants.beta_per_K, "Viscosity-temperature coefficient beta, 1/K")->capture_default_str();
+  group->add_option("--f0", constants.f0, "Viscous offset f0, N/mm")->capture_default_str();
+  group->add_option("--viscosity40", constants.nu_ref_mm2_s, "Oil viscosity at the reference temperature, mm2/s")
+      ->capture_default_str();
+  group->add_option("--reference-temperature", constants.T_ref_C, "Reference temperature of the viscosity, C")
+      ->capture_default_str();
+}
+
+nlohmann::json FrictionOptions::record() const {
+  const auto& k = constants;
+  return {{"k1", k.k1},       {"k2", k.k2},         {"mu_st", k.mu_st},
+          {"v_st_m_s", k.v_st_m_s}, {"mu_v", k.mu_v}, {"beta_per_K", k.beta_per_K},
+          {"f0", k.f0},       {"nu_ref_mm2_s", k.nu_ref_mm2_s}, {"T_ref_C", k.T_ref_C}};
+}
+
+void add_list(CLI::App& app, const char* name, std::vector<double>& values, const char* help) {
+  app.add_option_function<std::string>(
+      name, [&values, name](const std::string& text) { values = parse_list(name, text); }, help);
+}
+
+std::vector<double> or_catalog(const std::vector<double>& given, const GuideSpec& spec,
+                               std::optional<double> GuideSpec::*field, const char* name) {
+  if (!given.empty()) return given;
+  return {require(spec, field, name)};
+}
+
+}  // namespace lmcal::cli

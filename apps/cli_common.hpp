@@ -1,0 +1,78 @@
+// Helpers shared by the subcommands: value lists on the command line, CSV text,
+// and the record of a run's inputs.
+#pragma once
+
+#include <nlohmann/json.hpp>
+
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace lmcal::cli {
+
+// "0.066,0.083,0.11" or "start:stop:step" (inclusive, e.g. "0.01:0.2:0.01"), or a mix
+// joined by commas. Throws InvalidParameter naming the option and what was expected.
+std::vector<double> parse_list(std::string_view option, std::string_view text);
+
+// "t:T,t:T,..." pairs of time (s) and temperature (°C), for an ambient trace.
+std::vector<std::pair<double, double>> parse_pairs(std::string_view option, std::string_view text);
+
+// Tidy CSV, built in memory and written whole. Numbers print in their shortest exact form.
+class CsvText {
+ public:
+  explicit CsvText(std::vector<std::string> header);
+  CsvText& cell(double value);
+  CsvText& cell(std::string_view text);
+  void end_row();
+  const std::string& str() const { return text_; }
+
+ private:
+  std::size_t columns_, in_row_ = 0;
+  std::string text_;
+};
+
+// Version, command line and time-independent facts every output carries alongside.
+nlohmann::json run_record(const std::vector<std::string>& argv);
+
+}  // namespace lmcal::cli
+
+#include <map>
+
+#include <CLI/CLI.hpp>
+
+#include "lmcal/io/catalog.hpp"
+#include "lmcal/models/friction.hpp"
+
+namespace lmcal::cli {
+
+// --guide, --catalog and --set FIELD=VALUE overrides of catalog values.
+struct GuideOptions {
+  std::vector<std::string> guides{"SRN 35C"};
+  std::string catalog_file;                 // empty: the built-in catalog
+  std::map<std::string, double> overrides;  // e.g. conductivity_W_mK -> 36
+  void add_to(CLI::App& app);
+  // The catalog entry of `model` with the overrides applied.
+  GuideSpec resolve(const std::string& model) const;
+  nlohmann::json record() const;
+};
+
+// The friction constants, defaulting to the paper's Eq. 8.
+struct FrictionOptions {
+  FrictionConstants<double> constants = paper_friction_constants();
+  void add_to(CLI::App& app);
+  nlohmann::json record() const;
+};
+
+// A value the catalog may lack, or the user's list: the user's list wins.
+std::vector<double> or_catalog(const std::vector<double>& given, const GuideSpec& spec,
+                               std::optional<double> GuideSpec::*field, const char* name);
+
+// The subcommands; `argv` is recorded in every output.
+void setup_simulate(CLI::App& app, const std::vector<std::string>& argv);
+void setup_simulate_friction(CLI::App& parent, const std::vector<std::string>& argv);
+void setup_simulate_thermal(CLI::App& parent, const std::vector<std::string>& argv);
+
+// A list option parsed with parse_list.
+void add_list(CLI::App& app, const char* name, std::vector<double>& values, const char* help);
+
+}  // namespace lmcal::cli

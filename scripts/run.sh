@@ -1,0 +1,24 @@
+#!/usr/bin/env bash
+# The main job: installs what is missing, builds (Release) and runs lmcal on the
+# bundled case. For now that is a simulation of the paper's SRN 35C rail case
+# (Cheng et al. 2017, Tables 2-3); outputs go to fits/simulation/.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bash scripts/build.sh
+out=fits/simulation
+lmcal=build/lmcal
+
+echo
+echo "== Friction law (Eqs. 3-7) over speed, load, preload and temperature (Figs. 4-7) =="
+"$lmcal" simulate friction -o "$out/friction.csv" \
+  --velocity 0.005:0.2:0.005 --load 1000,2000,3000 --preload 1.5,2.5,4 --temperature 26,40
+
+echo
+echo "== SRN 35C rail, the paper's model and numerics (paper source, 50 segments, 600 s, backward Euler) =="
+echo "   with the numerical error of that setup against a converged solution"
+"$lmcal" simulate thermal -o "$out/paper" --velocity 0.066,0.083,0.11 \
+  --source paper --scheme be --segments 50 --dt 600 --output-every 600 --reference
+
+echo
+echo "== The same rail with the energy-exact averaged source (converged numerics) =="
+"$lmcal" simulate thermal -o "$out/averaged" --velocity 0.066,0.083,0.11 --source averaged
