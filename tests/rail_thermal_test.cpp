@@ -149,9 +149,9 @@ TEST(RailThermal, JetDerivativesEqualFiniteDifferences) {
   const AmbientTrace ambient{{0.0, kSixHours_s}, {25.0, 27.0}};
   RailOutputs out{.duration_s = kSixHours_s, .sensor_positions_m = {0.0, 0.13}, .output_times_s = {3600, kSixHours_s}};
   const auto p = srn35c_params();
-  for (auto source : {SourceModel::paper, SourceModel::averaged}) {
+  for (auto source : {SourceModel::paper, SourceModel::averaged, SourceModel::moving}) {
     for (auto scheme : {TimeScheme::backward_euler, TimeScheme::crank_nicolson}) {
-      const auto n = numerics(source, scheme, 40, 300);
+      const auto n = source == SourceModel::moving ? numerics(source, scheme, 60, 2.0) : numerics(source, scheme, 40, 300);
       RailParams<Jet> pj{Jet(p.heat_partition, 0), Jet(p.heat_rate_W, 1), Jet(p.h_W_m2K, 2),
                          Jet(p.conductivity_W_mK, 3), Jet(p.density_kg_m3, 4), Jet(p.specific_heat_J_kgK, 5),
                          Jet(p.initial_temperature_C, 6)};
@@ -163,7 +163,8 @@ TEST(RailThermal, JetDerivativesEqualFiniteDifferences) {
         auto plus = p, minus = p;
         double* mp = &plus.heat_partition + i;
         double* mm = &minus.heat_partition + i;
-        const double step = 1e-6 * std::max(1.0, std::abs(*mp));
+        // Large enough that round-off accumulated over thousands of steps stays out of the quotient.
+        const double step = 1e-4 * std::max(1.0, std::abs(*mp));
         *mp += step;
         *mm -= step;
         for (std::size_t k = 0; k < sj.sensor_temperature_C.size(); ++k) {
@@ -275,6 +276,45 @@ TEST(RailThermal, PublishedNumericsErrorIsAboutOneKelvinAndComesFromTheTimeStep)
   EXPECT_NEAR(published, 0.92, 0.03);  // README, "Numerical error of the published setup"
   EXPECT_LT(space_only, 0.02);
   EXPECT_NEAR(time_only, published, 0.05 * published);
+}
+
+}  // namespace
+}  // namespace lmcal
+
+namespace lmcal {
+namespace {
+
+// Q_f from the friction law with Jet constants carries dT/d(friction constant) through the solver.
+TEST(RailThermal, DerivativesReachTheFrictionConstantsThroughTheHeatRate) {
+  using Jet = ceres::Jet<double, 2>;
+  const auto g = srn35c_geometry(0.11);
+  const auto conditions = test::srn35c_conditions(0.11);
+  const RailNumerics n{.source = SourceModel::averaged, .scheme = TimeScheme::crank_nicolson,
+                       .half_rail_segments = 50, .time_step_s = 120};
+  const RailOutputs out{.duration_s = 7200, .sensor_positions_m = {0.0}, .output_times_s = {7200}};
+  auto centre = [&](const FrictionConstants<double>& k) {
+    auto p = srn35c_params(heat_rate_W(k, conditions));
+    return simulate_rail(g, n, out, p, AmbientTrace::constant(26.0)).sensor_temperature_C[0];
+  };
+  const auto k = paper_friction_constants();
+  auto kj = k.cast<Jet>();
+  kj.mu_v.v[0] = 1.0;
+  kj.beta_per_K.v[1] = 1.0;
+  const auto p = srn35c_params();
+  RailParams<Jet> pj{Jet(p.heat_partition), heat_rate_W(kj, conditions), Jet(p.h_W_m2K), Jet(p.conductivity_W_mK),
+                     Jet(p.density_kg_m3), Jet(p.specific_heat_J_kgK), Jet(p.initial_temperature_C)};
+  const Jet T = simulate_rail(g, n, out, pj, AmbientTrace::constant(26.0)).sensor_temperature_C[0];
+  for (int i = 0; i < 2; ++i) {
+    auto plus = k, minus = k;
+    double& mp = i == 0 ? plus.mu_v : plus.beta_per_K;
+    double& mm = i == 0 ? minus.mu_v : minus.beta_per_K;
+    const double step = 1e-4 * std::abs(mp);
+    mp += step;
+    mm -= step;
+    const double fd = (centre(plus) - centre(minus)) / (2 * step);
+    EXPECT_NEAR(T.v[i], fd, 1e-5 * std::abs(fd)) << i;
+    EXPECT_GT(std::abs(fd), 1.0);  // the derivative is real, not a zero that trivially matches
+  }
 }
 
 }  // namespace
