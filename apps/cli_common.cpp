@@ -69,36 +69,6 @@ std::vector<std::pair<double, double>> parse_pairs(std::string_view option, std:
   return pairs;
 }
 
-CsvText::CsvText(std::vector<std::string> header) : columns_(header.size()) {
-  for (std::size_t i = 0; i < header.size(); ++i) text_ += (i ? "," : "") + header[i];
-  text_ += '\n';
-}
-
-CsvText& CsvText::cell(double value) {
-  text_ += in_row_++ ? "," : "";
-  text_ += fmt::format("{}", value);
-  return *this;
-}
-
-CsvText& CsvText::cell(std::string_view text) {
-  text_ += in_row_++ ? "," : "";
-  const bool quote = text.find_first_of(",\"\n") != std::string_view::npos;
-  if (!quote) {
-    text_ += text;
-  } else {
-    text_ += '"';
-    for (char c : text) text_ += c == '"' ? std::string("\"\"") : std::string(1, c);
-    text_ += '"';
-  }
-  return *this;
-}
-
-void CsvText::end_row() {
-  LMCAL_ASSERT(in_row_ == columns_, "CSV row with the wrong number of cells");
-  text_ += '\n';
-  in_row_ = 0;
-}
-
 nlohmann::json run_record(const std::vector<std::string>& argv) {
   return {{"lmcal_version", LMCAL_VERSION}, {"command", argv}};
 }

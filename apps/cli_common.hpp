@@ -4,6 +4,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "lmcal/io/csv_writer.hpp"
+
 #include <string>
 #include <string_view>
 #include <vector>
@@ -16,20 +18,6 @@ std::vector<double> parse_list(std::string_view option, std::string_view text);
 
 // "t:T,t:T,..." pairs of time (s) and temperature (°C), for an ambient trace.
 std::vector<std::pair<double, double>> parse_pairs(std::string_view option, std::string_view text);
-
-// Tidy CSV, built in memory and written whole. Numbers print in their shortest exact form.
-class CsvText {
- public:
-  explicit CsvText(std::vector<std::string> header);
-  CsvText& cell(double value);
-  CsvText& cell(std::string_view text);
-  void end_row();
-  const std::string& str() const { return text_; }
-
- private:
-  std::size_t columns_, in_row_ = 0;
-  std::string text_;
-};
 
 // Version, command line and time-independent facts every output carries alongside.
 nlohmann::json run_record(const std::vector<std::string>& argv);

@@ -1,0 +1,51 @@
+// Units at the edges: column headers and manifest keys carry their unit as a suffix
+// (`load_N`, `velocity_mm_s`, `tc1_K`), and loaders convert to the units lmcal uses
+// inside (the friction law's: N, µm, mm, m/s, °C, mm²/s; SI otherwise).
+//
+//   quantity     internal   accepted suffixes
+//   time         s          s, ms, min, h
+//   velocity     m/s        m_s, mm_s, m_min
+//   load         N          N, kN, kgf, lbf
+//   friction     N          N, kN, kgf, lbf
+//   preload      µm         um, mm
+//   length       mm         mm, m            (block_length, contact_length)
+//   distance     m          m, mm            (stroke, rail_length, positions)
+//   temperature  °C         C, K, F
+//   viscosity    mm²/s      mm2_s, cSt, m2_s
+//
+// Example: split_unit("load_kgf", Quantity::force) -> {"load", {9.80665, 0}}.
+// Trap: temperature conversions have an offset; always call Conversion::apply.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace lmcal {
+
+enum class Quantity { time, velocity, force, preload, length_mm, distance_m, temperature, viscosity };
+
+// value_internal = scale * value_given + offset
+struct Conversion {
+  double scale = 1.0;
+  double offset = 0.0;
+  double apply(double value) const { return scale * value + offset; }
+};
+
+// The accepted unit suffixes of a quantity, the internal one first (for messages).
+const std::vector<std::string>& unit_names(Quantity quantity);
+
+// The conversion for a unit suffix, or nullopt if the quantity does not know it.
+std::optional<Conversion> unit_conversion(Quantity quantity, std::string_view unit);
+
+// Splits "NAME_UNIT" where UNIT is one of the quantity's suffixes (longest match wins):
+// "velocity_mm_s" -> {"velocity", mm/s}. nullopt if no suffix of the quantity matches.
+struct SplitName {
+  std::string name;
+  std::string unit;
+  Conversion conversion;
+};
+std::optional<SplitName> split_unit(std::string_view column, Quantity quantity);
+
+}  // namespace lmcal
