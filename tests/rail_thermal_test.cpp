@@ -319,3 +319,68 @@ TEST(RailThermal, DerivativesReachTheFrictionConstantsThroughTheHeatRate) {
 
 }  // namespace
 }  // namespace lmcal
+
+namespace lmcal {
+namespace {
+
+TEST(RailThermal, BaseLossSteadyStateMatchesTheAnalyticFin) {
+  const auto g = srn35c_geometry();
+  auto p = srn35c_params();
+  p.base_loss_W_mK = 0.5;  // a bolted rail: comparable to the side convection h p = 0.74 W/mK
+  const double line_power = p.heat_partition * p.heat_rate_W / g.contact_length_m;
+  const test::FinAnalytic exact(p.h_W_m2K, g.perimeter_m, p.conductivity_W_mK, g.area_m2, line_power,
+                                0.5 * g.stroke_m, 0.5 * g.rail_length_m, p.base_loss_W_mK);
+  const std::vector<double> sensors = {0.0, 0.1, 0.2};
+  const auto steady = steady_rail(g, numerics(SourceModel::paper, TimeScheme::backward_euler, 3000, 1), sensors, p, 20.0);
+  for (std::size_t i = 0; i < sensors.size(); ++i)
+    EXPECT_LT(std::abs(steady.temperature_C(0, i) - 20.0 - exact.excess_K(sensors[i])), 1e-3 * exact.excess_K(0.0));
+  // And it is cooler than without the base loss.
+  EXPECT_LT(steady.temperature_C(0, 0),
+            steady_rail(g, numerics(SourceModel::paper, TimeScheme::backward_euler, 300, 1), {0.0}, srn35c_params(), 20.0)
+                .temperature_C(0, 0));
+}
+
+TEST(RailThermal, EnergyBalanceCountsBaseLossAndVaryingHeat) {
+  const auto g = srn35c_geometry();
+  auto p = srn35c_params();
+  p.base_loss_W_mK = 0.3;
+  RailOutputs out{.duration_s = kSixHours_s, .sensor_positions_m = {0.0}, .output_times_s = {kSixHours_s},
+                  .energy_balance = true};
+  const HeatRateModel<double> cooling = [](const double& T) { return 4.86 * std::exp(-0.05 * (T - 26.0)); };
+  for (auto source : {SourceModel::averaged, SourceModel::moving}) {
+    const auto n = source == SourceModel::moving ? numerics(source, TimeScheme::crank_nicolson, 150, 1.0)
+                                                 : numerics(source, TimeScheme::crank_nicolson, 50, 60);
+    const auto s = simulate_rail(g, n, out, p, AmbientTrace::constant(26.0), cooling);
+    EXPECT_GT(s.energy.base_J, 0.1 * s.energy.injected_J);
+    EXPECT_LT(std::abs(s.energy.imbalance_J()), 1e-9 * s.energy.injected_J) << to_string(source);
+  }
+}
+
+// Q from the friction law at the rail temperature: as the rail warms the grease thins and
+// the heat falls, so the rail ends cooler than with Q frozen at the start.
+TEST(RailThermal, TwoWayCouplingLowersTheHeatAsTheRailWarms) {
+  const auto g = srn35c_geometry(0.11);
+  const auto k = paper_friction_constants();
+  const auto conditions = test::srn35c_conditions(0.11);
+  auto q_at = [&](const double& T) {
+    auto c = conditions;
+    c.temperature_C = T;
+    return heat_rate_W(k, c);
+  };
+  const auto p = srn35c_params(q_at(26.0));
+  const auto n = numerics(SourceModel::averaged, TimeScheme::crank_nicolson, 50, 30);
+  RailOutputs out{.duration_s = kSixHours_s, .sensor_positions_m = {0.0}, .output_times_s = {0, 3600, kSixHours_s}};
+  const auto frozen = simulate_rail(g, n, out, p, AmbientTrace::constant(26.0));
+  const auto coupled = simulate_rail(g, n, out, p, AmbientTrace::constant(26.0), HeatRateModel<double>(q_at));
+  EXPECT_DOUBLE_EQ(coupled.heat_rate_W[0], q_at(26.0));
+  EXPECT_LT(coupled.heat_rate_W[2], 0.8 * coupled.heat_rate_W[0]);
+  EXPECT_NEAR(coupled.heat_rate_W[2], q_at(coupled.source_temperature_C[2]), 1e-6);
+  EXPECT_LT(coupled.temperature_C(2, 0), frozen.temperature_C(2, 0) - 1.0);
+  // A model that returns the constant reproduces the uncoupled run exactly.
+  const auto constant = simulate_rail(g, n, out, p, AmbientTrace::constant(26.0),
+                                      HeatRateModel<double>([&](const double&) { return p.heat_rate_W; }));
+  EXPECT_DOUBLE_EQ(constant.temperature_C(2, 0), frozen.temperature_C(2, 0));
+}
+
+}  // namespace
+}  // namespace lmcal

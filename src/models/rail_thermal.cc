@@ -60,6 +60,7 @@ void validate(const RailParams<double>& p) {
   require_positive("density_kg_m3", p.density_kg_m3);
   require_positive("specific_heat_J_kgK", p.specific_heat_J_kgK);
   require_in_range("initial_temperature_C", p.initial_temperature_C, -273.15, 1000.0);
+  require_non_negative("base_loss_W_mK", p.base_loss_W_mK);
 }
 
 namespace {
@@ -72,7 +73,7 @@ template <typename T>
 RailParams<double> values_of(const RailParams<T>& p) {
   return {value_of(p.heat_partition),      value_of(p.heat_rate_W),         value_of(p.h_W_m2K),
           value_of(p.conductivity_W_mK),   value_of(p.density_kg_m3),       value_of(p.specific_heat_J_kgK),
-          value_of(p.initial_temperature_C)};
+          value_of(p.initial_temperature_C), value_of(p.base_loss_W_mK)};
 }
 
 void validate(const AmbientTrace& ambient, double duration_s) {
@@ -143,18 +144,20 @@ T probe_value(const Probe& p, const std::vector<T>& field) {
   return field[p.node] + p.weight * (field[p.node + 1] - field[p.node]);
 }
 
-// The discrete operator: capacity C_i (J/K), side conductance h p ΔV_i (W/K), end
-// conductance h A at the convective end nodes, and the inter-node conductance k A / Δx.
+// The discrete operator: capacity C_i (J/K), side conductance h p ΔV_i and base
+// conductance b ΔV_i (W/K), end conductance h A at the convective end nodes, and the
+// inter-node conductance k A / Δx.
 template <typename T>
 struct Operator {
   std::vector<T> capacity;
   std::vector<T> side;
+  std::vector<T> base;
   T end{};
   bool left_end_convects = false;  // the full rail convects at both ends; the half rail is symmetric at x = 0
   T link{};
 
   T convective(std::size_t i, std::size_t n) const {
-    T c = side[i];
+    T c = side[i] + base[i];
     if ((i == 0 && left_end_convects) || i + 1 == n) c += end;
     return c;
   }
@@ -166,12 +169,14 @@ Operator<T> make_operator(const Grid& grid, const RailGeometry& g, const RailPar
   const std::size_t n = grid.size();
   op.capacity.resize(n);
   op.side.resize(n);
+  op.base.resize(n);
   const T rho_c_A = p.density_kg_m3 * p.specific_heat_J_kgK * g.area_m2;
   const T h_p = p.h_W_m2K * g.perimeter_m;
   for (std::size_t i = 0; i < n; ++i) {
     const double length = grid.faces[i + 1] - grid.faces[i];
     op.capacity[i] = rho_c_A * length;
     op.side[i] = h_p * length;
+    op.base[i] = p.base_loss_W_mK * length;
   }
   op.end = p.h_W_m2K * g.area_m2;
   op.left_end_convects = grid.full_rail;
@@ -289,23 +294,36 @@ void record_sensors(const std::vector<Probe>& probes, const std::vector<T>& befo
   }
 }
 
+// The time-independent shape a source model spreads P with (`moving`: its cycle average).
+SourceModel static_shape(SourceModel model) {
+  return model == SourceModel::moving ? SourceModel::averaged : model;
+}
+
 // Heat input per step: P times the static weights, or the moving block's exact sweep.
+// P may change from step to step (two-way coupling).
 template <typename T>
 class SourceTerm {
  public:
   SourceTerm(SourceModel model, const BlockMotion& motion, const Grid& grid, const T& power)
-      : model_(model), motion_(motion), faces_(grid.faces), power_(power) {
-    if (model != SourceModel::moving)
-      for (double w : static_source_weights(model, motion, grid.faces)) {
-        static_W_.push_back(power * w);
-        static_total_W_ += static_W_.back();
-      }
+      : model_(model), motion_(motion), faces_(grid.faces), power_(power),
+        weights_(static_source_weights(static_shape(model), motion, grid.faces)) {
+    for (double w : weights_) weight_total_ += w;
+  }
+
+  void set_power(const T& power) { power_ = power; }
+
+  // The rail temperature under the block: the source-weighted mean of the field (the cycle
+  // average for the moving block).
+  T source_temperature(const std::vector<T>& field) const {
+    T sum{};
+    for (std::size_t i = 0; i < field.size(); ++i)
+      if (weights_[i] != 0.0) sum += weights_[i] * field[i];
+    return sum / weight_total_;
   }
 
   // Adds the mean power over [t0, t1] to `rhs` (W per volume); returns the energy injected, J.
   T add(double t0, double t1, std::vector<T>& rhs) {
     const double dt = t1 - t0;
-    T injected{};
     if (model_ == SourceModel::moving) {
       moving_source_energy(motion_, faces_, t0, t1, sweep_);
       double total_s = 0;
@@ -313,12 +331,10 @@ class SourceTerm {
         rhs[sweep_.first + k] += power_ * (sweep_.energy_s[k] / dt);
         total_s += sweep_.energy_s[k];
       }
-      injected = power_ * total_s;
-    } else {
-      for (std::size_t i = 0; i < rhs.size(); ++i) rhs[i] += static_W_[i];
-      injected = static_total_W_ * dt;
+      return power_ * total_s;
     }
-    return injected;
+    for (std::size_t i = 0; i < rhs.size(); ++i) rhs[i] += power_ * weights_[i];
+    return power_ * (weight_total_ * dt);
   }
 
  private:
@@ -326,8 +342,8 @@ class SourceTerm {
   BlockMotion motion_;
   const std::vector<double>& faces_;
   T power_;
-  std::vector<T> static_W_;
-  T static_total_W_{};
+  std::vector<double> weights_;  // share of P per volume (the averaged shape for `moving`)
+  double weight_total_ = 0;
   SweepEnergy sweep_;
 };
 
@@ -365,7 +381,11 @@ class ThetaStepper {
     // The scheme's own quadrature of the losses, so the balance closes to round-off.
     auto excess = [&](std::size_t i) { return theta_ * next[i] + (1.0 - theta_) * current[i] - ambient_theta; };
     energy->injected_J += injected;
-    for (std::size_t i = 0; i < n; ++i) energy->convected_side_J += op_.side[i] * excess(i) * dt_;
+    for (std::size_t i = 0; i < n; ++i) {
+      const T e = excess(i) * dt_;
+      energy->convected_side_J += op_.side[i] * e;
+      energy->base_J += op_.base[i] * e;
+    }
     energy->convected_end_J += op_.end * excess(n - 1) * dt_;
     if (op_.left_end_convects) energy->convected_end_J += op_.end * excess(0) * dt_;
   }
@@ -390,7 +410,7 @@ class ThetaStepper {
 template <typename T>
 RailSolution<T> simulate_rail(const RailGeometry& geometry, const RailNumerics& numerics,
                               const RailOutputs& outputs, const RailParams<T>& params,
-                              const AmbientTrace& ambient) {
+                              const AmbientTrace& ambient, const HeatRateModel<T>& heat_rate) {
   require_positive("duration_s", outputs.duration_s);
   validate(ambient, outputs.duration_s);
   validate_times("output_times_s", outputs.output_times_s, outputs.duration_s);
@@ -411,6 +431,10 @@ RailSolution<T> simulate_rail(const RailGeometry& geometry, const RailNumerics& 
   const ThetaStepper<T> startup(op, n, 1.0, dt / kStartupSubsteps);
 
   SourceTerm<T> source(numerics.source, prep.motion, grid, params.heat_partition * params.heat_rate_W);
+  // Q_f for the step starting from `field`: constant, or from the coupling model.
+  auto heat_rate_for = [&](const std::vector<T>& field) {
+    return heat_rate ? heat_rate(source.source_temperature(field)) : params.heat_rate_W;
+  };
 
   RailSolution<T> sol;
   sol.output_times_s = outputs.output_times_s;
@@ -424,13 +448,18 @@ RailSolution<T> simulate_rail(const RailGeometry& geometry, const RailNumerics& 
   std::size_t next_output = 0, next_profile = 0;
   // Records the outputs that fall in (t_before, t_after], interpolating linearly in time.
   auto emit = [&](double t_before, double t_after, const std::vector<T>& before, const std::vector<T>& after,
-                  bool last) {
+                  const T& q_before, const T& q_after, bool last) {
     auto within = [&](double t) { return last || t <= t_after + 1e-9 * dt; };
     auto share = [&](double t) {
       return t_after > t_before ? std::clamp((t - t_before) / (t_after - t_before), 0.0, 1.0) : 1.0;
     };
-    for (; next_output < outputs.output_times_s.size() && within(outputs.output_times_s[next_output]); ++next_output)
-      record_sensors(prep.probes, before, after, share(outputs.output_times_s[next_output]), sol.sensor_temperature_C);
+    for (; next_output < outputs.output_times_s.size() && within(outputs.output_times_s[next_output]); ++next_output) {
+      const double s = share(outputs.output_times_s[next_output]);
+      record_sensors(prep.probes, before, after, s, sol.sensor_temperature_C);
+      const T ts_before = source.source_temperature(before), ts_after = source.source_temperature(after);
+      sol.source_temperature_C.push_back(ts_before + s * (ts_after - ts_before));
+      sol.heat_rate_W.push_back(q_before + s * (q_after - q_before));
+    }
     for (; next_profile < outputs.profile_times_s.size() && within(outputs.profile_times_s[next_profile]);
          ++next_profile) {
       const double s = share(outputs.profile_times_s[next_profile]);
@@ -439,7 +468,8 @@ RailSolution<T> simulate_rail(const RailGeometry& geometry, const RailNumerics& 
       sol.profiles_C.push_back(std::move(profile));
     }
   };
-  emit(0.0, 0.0, current, current, false);
+  T q = heat_rate_for(current);
+  emit(0.0, 0.0, current, current, q, q, false);
 
   RailEnergy<T> energy;
   RailEnergy<T>* tally = outputs.energy_balance ? &energy : nullptr;
@@ -448,10 +478,13 @@ RailSolution<T> simulate_rail(const RailGeometry& geometry, const RailNumerics& 
     const bool substeps = crank_nicolson && step == 0;
     const ThetaStepper<T>& s = substeps ? startup : stepper;
     for (int k = 0; k < (substeps ? kStartupSubsteps : 1); ++k) {
+      source.set_power(params.heat_partition * q);
       s.advance(current, next, t, ambient, source, tally);
       const bool last = step + 1 == steps && (!substeps || k + 1 == kStartupSubsteps);
       const double t_next = last ? outputs.duration_s : t + s.dt();
-      emit(t, t_next, current, next, last);
+      const T q_next = heat_rate ? heat_rate_for(next) : q;
+      emit(t, t_next, current, next, q, q_next, last);
+      q = q_next;
       std::swap(current, next);
       t = t_next;
     }
@@ -460,7 +493,8 @@ RailSolution<T> simulate_rail(const RailGeometry& geometry, const RailNumerics& 
   if (tally) {
     for (std::size_t i = 0; i < n; ++i) energy.stored_J += op.capacity[i] * (current[i] - params.initial_temperature_C);
     const double f = grid.symmetry_factor();
-    sol.energy = {f * energy.injected_J, f * energy.stored_J, f * energy.convected_side_J, f * energy.convected_end_J};
+    sol.energy = {f * energy.injected_J, f * energy.stored_J, f * energy.convected_side_J, f * energy.convected_end_J,
+                  f * energy.base_J};
   }
   return sol;
 }
@@ -474,8 +508,7 @@ RailSolution<T> steady_rail(const RailGeometry& geometry, const RailNumerics& nu
   const Grid& grid = prep.grid;
   const std::size_t n = grid.size();
   // `moving` has no steady state; its cycle average is the averaged source.
-  const SourceModel shape = numerics.source == SourceModel::moving ? SourceModel::averaged : numerics.source;
-  const std::vector<double> weights = static_source_weights(shape, prep.motion, grid.faces);
+  const std::vector<double> weights = static_source_weights(static_shape(numerics.source), prep.motion, grid.faces);
   const T power = params.heat_partition * params.heat_rate_W;
 
   std::vector<T> diagonal(n), solution(n);
@@ -497,7 +530,8 @@ RailSolution<T> steady_rail(const RailGeometry& geometry, const RailNumerics& nu
 
 #define LMCAL_INSTANTIATE_RAIL(T)                                                                        \
   template RailSolution<T> simulate_rail<T>(const RailGeometry&, const RailNumerics&, const RailOutputs&, \
-                                            const RailParams<T>&, const AmbientTrace&);                  \
+                                            const RailParams<T>&, const AmbientTrace&,                   \
+                                            const HeatRateModel<T>&);                                    \
   template RailSolution<T> steady_rail<T>(const RailGeometry&, const RailNumerics&,                      \
                                           const std::vector<double>&, const RailParams<T>&, double);
 

@@ -82,10 +82,11 @@ struct FrictionConditions {
   T block_length_mm{};  // Lb, block length
   T velocity_m_s{};     // V, sliding speed (>= 0)
   T temperature_C{};    // T, lubricant / rail temperature
+  T direction{1.0};     // +1 or -1, sense of travel (the published law ignores it)
 
   template <typename U>
   FrictionConditions<U> cast() const {
-    return {U(load_N), U(preload_um), U(block_length_mm), U(velocity_m_s), U(temperature_C)};
+    return {U(load_N), U(preload_um), U(block_length_mm), U(velocity_m_s), U(temperature_C), U(direction)};
   }
 };
 

@@ -1,10 +1,11 @@
 // Transient temperature of an LM rail heated by its block: the fin model of
 // Cheng et al. (2017), Eqs. 11-15; see shared/PHYSICS.md §4.
 //
-//   ρ c A ∂T/∂t = k A ∂²T/∂x² + g(x, t) - h p (T - T∞(t))
+//   ρ c A ∂T/∂t = k A ∂²T/∂x² + g(x, t) - (h p + b) (T - T∞(t))
 //   -k A ∂T/∂x = h A (T - T∞)  at the rail ends,   T(x, 0) = T_initial
 //
-// g is the heat input per unit length from one of the source models of
+// b is an optional heat loss through the rail base (W/mK per metre of rail; 0 in the
+// paper, whose symmetric rig has no bed). g is the heat input per unit length from one of the source models of
 // heat_source.hpp, carrying P = α·Q_f in total (`paper`: P·L1/Lb1). `paper` and
 // `averaged` are symmetric and solved on the half rail 0 <= x <= L/2 with
 // ∂T/∂x = 0 at x = 0; `moving` is solved on the full rail -L/2 <= x <= L/2.
@@ -41,6 +42,7 @@
 #pragma once
 
 #include <cstddef>
+#include <functional>
 #include <string_view>
 #include <vector>
 
@@ -88,7 +90,15 @@ struct RailParams {
   T density_kg_m3{7800.0};          // ρ
   T specific_heat_J_kgK{461.0};     // c
   T initial_temperature_C{26.0};    // uniform T(x, 0)
+  T base_loss_W_mK{0.0};            // b, conductance to the ambient through the base, W/K per m of rail
 };
+
+// Two-way coupling: Q_f as a function of the rail temperature under the block (the source-
+// weighted mean of the temperature field), evaluated at the start of every step (explicit,
+// first order in Δt: keep Δt well below the time constant when it is used). Empty = the
+// constant RailParams::heat_rate_W.
+template <typename T>
+using HeatRateModel = std::function<T(const T& source_temperature_C)>;
 
 // Measured or assumed ambient temperature, linearly interpolated between samples.
 // One sample means a constant ambient; otherwise the trace must cover the run.
@@ -106,7 +116,8 @@ struct RailEnergy {
   T stored_J{};          // ∫ ρ c A (T_end - T_0) dx
   T convected_side_J{};  // ∫∫ h p (T - T∞) dx dt
   T convected_end_J{};   // ∫ h A (T_end_face - T∞) dt over both ends
-  T imbalance_J() const { return injected_J - stored_J - convected_side_J - convected_end_J; }
+  T base_J{};            // ∫∫ b (T - T∞) dx dt
+  T imbalance_J() const { return injected_J - stored_J - convected_side_J - convected_end_J - base_J; }
 };
 
 template <typename T>
@@ -114,6 +125,8 @@ struct RailSolution {
   std::vector<double> output_times_s;
   std::vector<double> sensor_positions_m;
   std::vector<T> sensor_temperature_C;  // [time][sensor], row-major
+  std::vector<T> heat_rate_W;           // Q_f at each output time (varies with a HeatRateModel)
+  std::vector<T> source_temperature_C;  // rail temperature under the block at each output time
   std::vector<double> node_positions_m;
   std::vector<std::vector<T>> profiles_C;  // one per profile time, at node_positions_m
   RailEnergy<T> energy;
@@ -131,10 +144,11 @@ struct RailSolution {
 template <typename T>
 RailSolution<T> simulate_rail(const RailGeometry& geometry, const RailNumerics& numerics,
                               const RailOutputs& outputs, const RailParams<T>& params,
-                              const AmbientTrace& ambient);
+                              const AmbientTrace& ambient, const HeatRateModel<T>& heat_rate = {});
 
-// Steady state under a constant ambient, at the nodes of the model's grid (`moving`
-// gives the cycle-averaged steady state, i.e. that of `averaged` on the full rail).
+// Steady state under a constant ambient and the constant RailParams::heat_rate_W, at the
+// nodes of the model's grid (`moving` gives the cycle-averaged steady state, i.e. that of
+// `averaged` on the full rail).
 template <typename T>
 RailSolution<T> steady_rail(const RailGeometry& geometry, const RailNumerics& numerics,
                             const std::vector<double>& sensor_positions_m, const RailParams<T>& params,
