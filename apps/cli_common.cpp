@@ -82,19 +82,7 @@ void GuideOptions::add_to(CLI::App& app) {
       ->delimiter(',')
       ->capture_default_str();
   app.add_option("--catalog", catalog_file, "Guide catalog TOML file (default: the built-in catalog)");
-  app.add_option_function<std::vector<std::string>>(
-         "--set",
-         [this](const std::vector<std::string>& items) {
-           for (const std::string& item : items) {
-             const auto eq = item.find('=');
-             if (eq == std::string::npos)
-               throw InvalidParameter("--set", fmt::format("'{}' is not FIELD=VALUE", item));
-             overrides[item.substr(0, eq)] =
-                 parse_number("--set", std::string_view(item).substr(eq + 1), "FIELD=VALUE with a number");
-           }
-         },
-         "Override a catalog value: --set conductivity_W_mK=36 (repeatable)")
-      ->delimiter(',');
+  add_assignments(app, "--set", overrides, "Override a catalog value: --set conductivity_W_mK=36 (repeatable)");
 }
 
 GuideSpec GuideOptions::resolve(const std::string& model) const {
@@ -138,6 +126,21 @@ nlohmann::json FrictionOptions::record() const {
   return {{"k1", k.k1},       {"k2", k.k2},         {"mu_st", k.mu_st},
           {"v_st_m_s", k.v_st_m_s}, {"mu_v", k.mu_v}, {"beta_per_K", k.beta_per_K},
           {"f0", k.f0},       {"nu_ref_mm2_s", k.nu_ref_mm2_s}, {"T_ref_C", k.T_ref_C}};
+}
+
+void add_assignments(CLI::App& app, const char* name, std::map<std::string, double>& values, const char* help) {
+  app.add_option_function<std::vector<std::string>>(
+         name,
+         [&values, name](const std::vector<std::string>& items) {
+           for (const std::string& item : items) {
+             const auto eq = item.find('=');
+             if (eq == std::string::npos)
+               throw InvalidParameter(name, fmt::format("'{}' is not NAME=VALUE", item));
+             values[item.substr(0, eq)] = parse_number(name, std::string_view(item).substr(eq + 1), "NAME=VALUE with a number");
+           }
+         },
+         help)
+      ->delimiter(',');
 }
 
 void add_list(CLI::App& app, const char* name, std::vector<double>& values, const char* help) {

@@ -59,6 +59,11 @@ std::vector<double> or_catalog(const std::vector<double>& given, const GuideSpec
 void setup_simulate(CLI::App& app, const std::vector<std::string>& argv);
 void setup_simulate_friction(CLI::App& parent, const std::vector<std::string>& argv);
 void setup_simulate_thermal(CLI::App& parent, const std::vector<std::string>& argv);
+void setup_generate(CLI::App& app, const std::vector<std::string>& argv);
+void setup_check(CLI::App& app);
+
+// NAME=VALUE options (repeatable, or comma-separated) collected into `values`.
+void add_assignments(CLI::App& app, const char* name, std::map<std::string, double>& values, const char* help);
 
 // A list option parsed with parse_list.
 void add_list(CLI::App& app, const char* name, std::vector<double>& values, const char* help);

@@ -14,6 +14,8 @@ int main(int argc, char** argv) {
   app.set_config("--config", "", "Read options from a TOML file");
   app.require_subcommand(1);
   lmcal::cli::setup_simulate(app, args);
+  lmcal::cli::setup_generate(app, args);
+  lmcal::cli::setup_check(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -47,8 +47,12 @@ struct FrictionLog {
   std::vector<LoadReport> reports;       // one per file loaded
 
   std::size_t size() const { return friction_N.size(); }
-  // The operating point of sample i for the friction law (ν_ref is per sample: viscosity40).
+  // The operating point of sample i for the friction law, direction included (ν_ref is per
+  // sample: viscosity40_mm2_s).
   FrictionConditions<double> conditions(std::size_t i) const;
+  // Appends one sample to every column.
+  void append(std::uint32_t run_index, std::uint32_t guide_index, double time, const FrictionConditions<double>& c,
+              double friction, double viscosity40);
 };
 
 FrictionLog load_friction_log(const std::filesystem::path& file);

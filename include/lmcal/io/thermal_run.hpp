@@ -20,8 +20,8 @@
 //   [run.sensors_m]                 # position of every tc column from the rail centre
 //   tc1_C = 0.0
 //   tc2_C = 0.05
-//   [run.guide]                     # optional overrides of catalog values
-//   conductivity_W_mK = 36
+//   [run.guide_overrides]           # optional overrides of catalog values (not [run.guide]:
+//   conductivity_W_mK = 36          #   TOML cannot have `guide` both a string and a table)
 //
 // Rules: time strictly increasing; an empty or NaN temperature cell is kept as NaN and
 // counted in report.missing (fits skip it); intervals longer than 1.5x the median step

@@ -1,0 +1,107 @@
+// lmcal check: load measurement files the way the fits will, and say what was found
+// (rows, runs, conversions, skipped rows, gaps) or exactly what is wrong with them.
+// lmcal resample: a thermal trace at a coarser step (keep every n-th record, or average
+// blocks of n).
+#include <fmt/format.h>
+
+#include <filesystem>
+#include <iostream>
+
+#include "cli_common.hpp"
+#include "lmcal/error.hpp"
+#include "lmcal/io/atomic_file.hpp"
+#include "lmcal/io/friction_log.hpp"
+#include "lmcal/io/resample.hpp"
+#include "lmcal/io/thermal_run.hpp"
+
+namespace lmcal::cli {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+void print_report(const LoadReport& r) {
+  std::cout << fmt::format("  {}: {} rows read, {} kept\n", r.file, r.rows_read, r.rows_kept);
+  for (const auto& [column, conversion] : r.conversions) std::cout << fmt::format("    converted {}: {}\n", column, conversion);
+  for (const auto& [reason, count] : r.skipped) std::cout << fmt::format("    skipped {} rows: {}\n", count, reason);
+  for (const auto& [column, count] : r.missing) std::cout << fmt::format("    {} missing samples in {}\n", count, column);
+  for (const auto& column : r.ignored_columns) std::cout << fmt::format("    ignored column {}\n", column);
+  if (r.time_gaps) std::cout << fmt::format("    {} gaps in time (> 1.5x the median step)\n", r.time_gaps);
+}
+
+void print_trace(const ThermalTrace& trace) {
+  if (trace.size() == 0) return;
+  std::cout << fmt::format("    {} records over {:.0f} s; ambient:", trace.size(), trace.time_s.back() - trace.time_s.front());
+  for (const auto& c : trace.ambient) std::cout << " " << c.name;
+  std::cout << "; rail:";
+  for (const auto& c : trace.rail) std::cout << " " << c.name;
+  std::cout << "\n";
+}
+
+void check_friction(const std::vector<std::string>& files) {
+  std::vector<fs::path> paths(files.begin(), files.end());
+  const FrictionLog log = load_friction_logs(paths);
+  std::cout << fmt::format("friction log: {} samples, {} runs, {} guides\n", log.size(), log.run_names.size(),
+                           log.guide_names.size());
+  for (const auto& r : log.reports) print_report(r);
+}
+
+void check_thermal(const std::vector<std::string>& files) {
+  for (const auto& file : files) {
+    if (fs::path(file).extension() == ".csv") {
+      const ThermalTrace trace = load_thermal_trace(file);
+      std::cout << "thermal trace:\n";
+      print_report(trace.report);
+      print_trace(trace);
+      continue;
+    }
+    const ThermalDataSet set = load_thermal_dataset(file);
+    std::cout << fmt::format("thermal data set '{}': {} runs\n", set.name, set.runs.size());
+    for (const auto& run : set.runs) {
+      std::cout << fmt::format("  run {}: {} at {} m/s, {} N\n", run.id, run.guide, run.velocity_m_s, run.load_N);
+      print_report(run.trace.report);
+      print_trace(run.trace);
+    }
+  }
+}
+
+struct ResampleOptions {
+  std::string input, output;
+  std::size_t every = 0, average = 0;
+};
+
+void run_resample(const ResampleOptions& o) {
+  if ((o.every == 0) == (o.average == 0))
+    throw InvalidParameter("--every/--average", "give exactly one of --every N or --average N (N >= 1)");
+  const ThermalTrace trace = load_thermal_trace(o.input);
+  const ThermalTrace coarse = o.every ? decimate(trace, o.every) : block_average(trace, o.average);
+  write_file_atomically(o.output, thermal_trace_csv(coarse, {fmt::format("resampled from {} ({} {})", o.input,
+                                                                          o.every ? "every" : "average of",
+                                                                          o.every ? o.every : o.average)}));
+  std::cout << fmt::format("{} records -> {} records in {}\n", trace.size(), coarse.size(), o.output);
+}
+
+}  // namespace
+
+void setup_check(CLI::App& app) {
+  CLI::App* check = app.add_subcommand("check", "Load measurement files and report what was found or what is wrong");
+  check->require_subcommand(1);
+  auto friction_files = std::make_shared<std::vector<std::string>>();
+  CLI::App* friction = check->add_subcommand("friction", "Friction log CSV file(s)");
+  friction->add_option("files", *friction_files, "Friction log CSV files")->required();
+  friction->callback([friction_files] { check_friction(*friction_files); });
+  auto thermal_files = std::make_shared<std::vector<std::string>>();
+  CLI::App* thermal = check->add_subcommand("thermal", "Thermal manifest(s) (.toml) or run CSV file(s)");
+  thermal->add_option("files", *thermal_files, "Manifests or thermal run CSVs")->required();
+  thermal->callback([thermal_files] { check_thermal(*thermal_files); });
+
+  auto o = std::make_shared<ResampleOptions>();
+  CLI::App* resample = app.add_subcommand("resample", "Coarsen a thermal run CSV (the paper kept every 120th record)");
+  resample->add_option("input", o->input, "Thermal run CSV")->required();
+  resample->add_option("-o,--output", o->output, "Output CSV")->required();
+  resample->add_option("--every", o->every, "Keep records 0, N, 2N, ...");
+  resample->add_option("--average", o->average, "Average consecutive blocks of N records");
+  resample->callback([o] { run_resample(*o); });
+}
+
+}  // namespace lmcal::cli

@@ -1,0 +1,126 @@
+// Loading speed of the CSV readers on files the size real rigs produce:
+//   - a 6 h thermal log at 50 Hz: 1.08 M rows x 6 columns (time_s, ambient1_C, ambient2_C,
+//     tc1_C, tc2_C, tc3_C), numbers as "%.3f", ~55 MB;
+//   - a friction log of 1 M samples with all eleven columns.
+// The files are generated once into a temporary folder (removed at exit). Throughput is
+// reported as bytes/s of CSV text. Target: >= 200 MB/s for the thermal log.
+// Run: build/bench/lmcal_io_bench
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <unistd.h>
+
+#include "lmcal/io/friction_log.hpp"
+#include "lmcal/io/thermal_run.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// A folder that lives as long as the benchmark binary.
+class ScratchDir {
+ public:
+  ScratchDir() : path_(fs::temp_directory_path() / ("lmcal_io_bench_" + std::to_string(::getpid()))) {
+    fs::create_directories(path_);
+  }
+  ~ScratchDir() {
+    std::error_code ignored;
+    fs::remove_all(path_, ignored);
+  }
+  const fs::path& path() const { return path_; }
+
+ private:
+  fs::path path_;
+};
+
+const ScratchDir& scratch() {
+  static const ScratchDir dir;
+  return dir;
+}
+
+void write(const fs::path& file, const std::string& text) {
+  std::ofstream(file, std::ios::binary).write(text.data(), static_cast<std::streamsize>(text.size()));
+}
+
+// Rail warming towards a plateau with a slow ambient drift and a little noise, like the
+// paper's logger records.
+const fs::path& thermal_log() {
+  static const fs::path file = [] {
+    constexpr int kRows = 6 * 3600 * 50;  // 6 h at 50 Hz
+    std::string text = "# synthetic 6 h log at 50 Hz (io_bench)\ntime_s,ambient1_C,ambient2_C,tc1_C,tc2_C,tc3_C\n";
+    text.reserve(56u << 20);
+    char line[128];
+    unsigned noise = 12345;
+    const auto jitter = [&] {
+      noise = noise * 1103515245u + 12345u;
+      return static_cast<double>((noise >> 16) & 0x3ff) / 1024.0 * 0.02 - 0.01;
+    };
+    for (int i = 0; i < kRows; ++i) {
+      const double t = i * 0.02;
+      const double ambient = 24.0 + 0.5 * std::sin(t / 7200.0);
+      const double rise = 1.0 - std::exp(-t / 4320.0);  // 72 min time constant (PHYSICS.md §4)
+      const int n = std::snprintf(line, sizeof line, "%.3f,%.3f,%.3f,%.3f,%.3f,%.3f\n", t, ambient + jitter(),
+                                  ambient + 0.1 + jitter(), ambient + 6.0 * rise + jitter(),
+                                  ambient + 4.0 * rise + jitter(), ambient + 2.5 * rise + jitter());
+      text.append(line, static_cast<std::size_t>(n));
+    }
+    const fs::path path = scratch().path() / "thermal_6h_50hz.csv";
+    write(path, text);
+    return path;
+  }();
+  return file;
+}
+
+const fs::path& friction_log() {
+  static const fs::path file = [] {
+    constexpr int kRows = 1000000;
+    std::string text =
+        "run,guide,time_s,velocity_m_s,load_N,preload_um,block_length_mm,temperature_C,friction_N,"
+        "viscosity40_mm2_s,direction\n";
+    char line[192];
+    const double speeds[] = {0.066, 0.083, 0.11};
+    for (int i = 0; i < kRows; ++i) {
+      const int run = i / (kRows / 3);
+      const double t = (i % (kRows / 3)) * 0.02;
+      const double temperature = 26.0 + 8.0 * (1.0 - std::exp(-t / 4320.0));
+      const int n =
+          std::snprintf(line, sizeof line, "v%d,SRN 35C,%.3f,%.3f,3000,4,120.2,%.3f,%.3f,99,%d\n", run, t,
+                        speeds[run % 3], temperature, 28.0 + 8.0 * run + 0.1 * std::sin(t), (i / 500) % 2 ? -1 : 1);
+      text.append(line, static_cast<std::size_t>(n));
+    }
+    const fs::path path = scratch().path() / "friction_1m.csv";
+    write(path, text);
+    return path;
+  }();
+  return file;
+}
+
+void BM_LoadThermalTrace(benchmark::State& state) {
+  const fs::path& file = thermal_log();
+  for (auto _ : state) {
+    lmcal::ThermalTrace trace = lmcal::load_thermal_trace(file);
+    benchmark::DoNotOptimize(trace.time_s.data());
+  }
+  state.SetBytesProcessed(state.iterations() * static_cast<std::int64_t>(fs::file_size(file)));
+  state.counters["rows"] = static_cast<double>(lmcal::load_thermal_trace(file).size());
+  state.counters["file_MB"] = static_cast<double>(fs::file_size(file)) / 1e6;
+}
+BENCHMARK(BM_LoadThermalTrace)->Unit(benchmark::kMillisecond)->MinTime(3.0);
+
+void BM_LoadFrictionLog(benchmark::State& state) {
+  const fs::path& file = friction_log();
+  for (auto _ : state) {
+    lmcal::FrictionLog log = lmcal::load_friction_log(file);
+    benchmark::DoNotOptimize(log.friction_N.data());
+  }
+  state.SetBytesProcessed(state.iterations() * static_cast<std::int64_t>(fs::file_size(file)));
+  state.counters["rows"] = static_cast<double>(lmcal::load_friction_log(file).size());
+  state.counters["file_MB"] = static_cast<double>(fs::file_size(file)) / 1e6;
+}
+BENCHMARK(BM_LoadFrictionLog)->Unit(benchmark::kMillisecond)->MinTime(3.0);
+
+}  // namespace

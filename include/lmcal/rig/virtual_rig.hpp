@@ -1,0 +1,119 @@
+// The virtual rig: friction logs and thermal data sets made by the physics core, with
+// the imperfections of a real rig and, on request, named physical effects that the
+// paper's baseline leaves out. Every true value goes to a truth file next to the data.
+//
+// Imperfections (all seeded, reproducible):
+//   friction: load-cell noise per sample, a zero offset per run, thermocouple noise on
+//             the logged temperature; conditions beyond the load cell's range are not
+//             measured (a 10 kgf cell on the paper's rig).
+//   thermal:  thermocouple bias (T-type class: uniform within ±0.5 K) and noise per
+//             sensor, two ambient sensors with their own biases, ambient drift and a
+//             slow wave, logger resolution 0.01 K.
+//
+// Effects (rig_effects() lists them with units and neutral values):
+//   friction: stribeck_exponent, viscous_load, direction_asymmetry, seal_drag,
+//             coulomb_temperature                           (friction_effects.hpp)
+//   thermal:  convection_velocity, base_loss, coupling, tc_lag, alpha_velocity,
+//             moving_source                                  (thermal_effects.hpp, solver)
+//
+// Determinism: the same config and seed give bit-identical output on any machine
+// (the random numbers come from std::mt19937_64, whose sequence the standard fixes, and
+// our own normal transform, not from std::normal_distribution).
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "lmcal/io/friction_log.hpp"
+#include "lmcal/io/thermal_run.hpp"
+#include "lmcal/models/friction_effects.hpp"
+
+namespace lmcal {
+
+struct ThermalRigEffects {
+  double convection_velocity = 0;  // c_V in h = h0 + c_V sqrt(V), W/m²K per sqrt(m/s)
+  double base_loss = 0;            // b, W/mK
+  double coupling = 0;             // 1: Q_f from the friction law at the rail temperature
+  double tc_lag = 0;               // thermocouple time constant, s
+  double alpha_velocity = 0;       // s_α in α = α0 + s_α (V - 0.1 m/s), per m/s
+  double moving_source = 0;        // 1: the block moves (truth on the full rail); 0: averaged
+};
+
+struct RigEffects {
+  FrictionEffects<double> friction;
+  ThermalRigEffects thermal;
+};
+
+struct RigEffectInfo {
+  std::string name;
+  std::string unit;
+  double neutral;
+  std::string description;
+};
+
+// The named effects, in a fixed order.
+const std::vector<RigEffectInfo>& rig_effects();
+// Sets an effect by name; InvalidParameter for an unknown name or a non-finite value.
+void set_rig_effect(RigEffects& effects, std::string_view name, double value);
+double rig_effect(const RigEffects& effects, std::string_view name);
+
+struct FrictionRigConfig {
+  FrictionConstants<double> constants = paper_friction_constants();
+  std::vector<std::string> guides{"SRG 25C", "SRN 35C", "SRG 45C"};
+  std::vector<double> preload_um{1.5, 2.5, 4.0};  // Normal, C1, C0
+  std::vector<double> load_N{1000, 2000, 3000};
+  std::vector<double> velocity_m_s{0.002, 0.005, 0.01, 0.02, 0.03, 0.05, 0.066, 0.083, 0.11, 0.15};
+  std::vector<double> temperature_C{22, 26, 32, 40};
+  std::vector<int> directions{+1, -1};
+  int runs = 10;                        // repeats of the whole sweep
+  double noise_N = 0.15;                // load-cell noise per sample, σ
+  double run_offset_N = 0.2;            // zero offset per run, σ
+  double temperature_noise_K = 0.1;     // σ of the logged temperature
+  double load_cell_range_N = 98.0665;   // 10 kgf: conditions above 95 % of it are skipped
+  double seconds_per_sample = 2.0;
+  std::uint64_t seed = 1;
+};
+
+struct ThermalRigConfig {
+  std::string guide = "SRN 35C";
+  std::map<std::string, double> guide_overrides;  // catalog field -> value
+  std::vector<double> velocity_m_s{0.066, 0.083, 0.11};
+  int repeats = 1;                      // runs per velocity
+  double load_N = 3000;
+  double stroke_m = 0.2;
+  double rail_length_m = 0.6;
+  std::vector<double> sensor_position_m{0.0, 0.05, 0.1};
+  double duration_s = 21600;
+  double record_every_s = 5;
+  FrictionConstants<double> constants = paper_friction_constants();
+  double alpha = 0.6;                   // true heat partition (for the true source model)
+  double h_W_m2K = 5.3;
+  double ambient_C = 24.0;
+  double ambient_drift_K_per_h = 0.25;
+  double ambient_wave_K = 0.3;          // amplitude of a slow wave (2 h period)
+  int ambient_sensors = 2;
+  double ambient_bias_K = 0.5;          // each ambient sensor: uniform within ±
+  double tc_bias_K = 0.5;               // each rail thermocouple: uniform within ±
+  double noise_K = 0.05;                // σ, every temperature channel
+  double friction_noise_N = 0.25;       // σ of the logged mean friction force
+  std::uint64_t seed = 1;
+};
+
+struct FrictionRigOutput {
+  FrictionLog log;
+  std::string truth_json;
+};
+
+struct ThermalRigOutput {
+  ThermalDataSet set;  // runs[i].file is "thermal/<id>.csv", relative to the data set's folder
+  std::string truth_json;
+};
+
+FrictionRigOutput generate_friction_log(const FrictionRigConfig& config, const RigEffects& effects);
+ThermalRigOutput generate_thermal_dataset(const ThermalRigConfig& config, const RigEffects& effects,
+                                          const std::string& name);
+
+}  // namespace lmcal

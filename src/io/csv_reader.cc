@@ -1,0 +1,463 @@
+#include "io/csv_reader.hpp"
+
+#include <fast_float/fast_float.h>
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include <algorithm>
+#include <bit>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <map>
+
+#include "lmcal/error.hpp"
+
+namespace lmcal::csv {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// Large enough that fread and the tail move are noise; a longer line grows the buffer.
+constexpr std::size_t kChunkBytes = std::size_t{1} << 20;
+constexpr double kAbsoluteZero_C = -273.15;
+
+bool is_space(char c) { return c == ' ' || c == '\t'; }
+
+std::string_view trim(std::string_view s) {
+  while (!s.empty() && is_space(s.front())) s.remove_prefix(1);
+  while (!s.empty() && is_space(s.back())) s.remove_suffix(1);
+  return s;
+}
+
+// Comments and blank lines carry no data, wherever they are.
+bool is_skipped(const char* begin, const char* end) {
+  if (begin != end && *begin == '#') return true;
+  while (begin != end && is_space(*begin)) ++begin;
+  return begin == end;
+}
+
+// "tc12" is a member of the family "tc"; "tcx" and "tc_1" are not.
+bool is_family_member(std::string_view base, std::string_view prefix) {
+  return base.starts_with(prefix) && std::all_of(base.begin() + static_cast<std::ptrdiff_t>(prefix.size()), base.end(),
+                                                 [](char c) { return c >= '0' && c <= '9'; });
+}
+
+// Exact mask of the bytes of `word` equal to `c`: the high bit of each such byte.
+std::uint64_t bytes_equal(std::uint64_t word, char c) {
+  constexpr std::uint64_t kLow7 = 0x7F7F7F7F7F7F7F7FULL;
+  const std::uint64_t x = word ^ (0x0101010101010101ULL * static_cast<unsigned char>(c));
+  return ~(((x & kLow7) + kLow7) | x | kLow7);  // high bit set where x's byte is zero
+}
+
+// Plain decimals ("-12.345", at most 15 digits) are nearly every cell of a log. Such a number
+// is m / 10^k with m < 2^53 and 10^k exact, so one IEEE division rounds it correctly: the
+// fast path fast_float itself takes (Clinger), without its generality. Anything else
+// (exponents, nan, inf, more digits) returns false and goes to fast_float.
+bool plain_decimal(const char* p, const char* end, double& out) {
+  static constexpr double kPow10[] = {1e0, 1e1, 1e2,  1e3,  1e4,  1e5,  1e6,  1e7,
+                                      1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15};
+  const bool negative = p != end && *p == '-';
+  p += negative;
+  std::uint64_t mantissa = 0;
+  int digits = 0;
+  int decimals = -1;  // digits after the point; -1: no point yet
+  for (; p != end; ++p) {
+    const unsigned d = static_cast<unsigned>(*p - '0');
+    if (d < 10) {
+      mantissa = 10 * mantissa + d;
+      ++digits;
+      decimals += decimals >= 0;
+    } else if (*p == '.' && decimals < 0) {
+      decimals = 0;
+    } else {
+      return false;
+    }
+  }
+  if (digits == 0 || digits > 15) return false;
+  double value = static_cast<double>(mantissa);
+  if (decimals > 0) value /= kPow10[decimals];
+  out = negative ? -value : value;
+  return true;
+}
+
+}  // namespace
+
+// ---- Reader -------------------------------------------------------------------------------
+
+Reader::Reader(const fs::path& file) : file_(file.string()) {
+  std::error_code ec;
+  if (fs::is_directory(file, ec)) throw InputError(file_, 0, 0, "cannot read: this is a folder, not a file");
+  stream_.reset(std::fopen(file.c_str(), "rb"));
+  if (!stream_) throw InputError(file_, 0, 0, fmt::format("cannot open file: {}", std::strerror(errno)));
+  file_size_ = fs::file_size(file, ec);
+  if (ec) file_size_ = 0;  // a pipe: estimated_rows() then only looks at the first chunk
+  buffer_.resize(kChunkBytes);
+}
+
+bool Reader::refill() {
+  if (at_eof_) return false;
+  // The unread tail is a partial line: keep it, at the front.
+  const std::size_t tail = end_ - pos_;
+  if (tail != 0 && pos_ != 0) std::memmove(buffer_.data(), buffer_.data() + pos_, tail);
+  pos_ = 0;
+  end_ = tail;
+  if (end_ == buffer_.size()) buffer_.resize(2 * buffer_.size());  // one line longer than the buffer
+  const std::size_t wanted = buffer_.size() - end_;
+  const std::size_t got = std::fread(buffer_.data() + end_, 1, wanted, stream_.get());
+  if (got < wanted) {
+    if (std::ferror(stream_.get())) throw InputError(file_, 0, 0, "read error");
+    at_eof_ = true;
+  }
+  end_ += got;
+  bytes_read_ += got;
+  return got != 0;
+}
+
+bool Reader::next_line() {
+  for (;;) {
+    const char* begin = buffer_.data() + pos_;
+    if (const void* nl = std::memchr(begin, '\n', end_ - pos_)) {
+      line_begin_ = begin;
+      line_end_ = static_cast<const char*>(nl);
+      pos_ = static_cast<std::size_t>(line_end_ - buffer_.data()) + 1;
+      break;
+    }
+    if (!refill()) {
+      if (pos_ == end_) return false;
+      // The last line, without a line break.
+      line_begin_ = buffer_.data() + pos_;
+      line_end_ = buffer_.data() + end_;
+      pos_ = end_;
+      break;
+    }
+  }
+  if (line_end_ != line_begin_ && line_end_[-1] == '\r') --line_end_;
+  ++line_;
+  return true;
+}
+
+void Reader::split() {
+  cells_.clear();
+  const char* p = line_begin_;
+  const char* const end = line_end_;
+  const char* start = p;
+  // Fast path, eight bytes at a time: commas found with bit tricks, one cell per comma.
+  // A quote anywhere sends the line to the general loop below, from its start.
+  for (; end - p >= 8; p += 8) {
+    std::uint64_t word;
+    std::memcpy(&word, p, 8);
+    if (bytes_equal(word, '"') != 0) {
+      cells_.clear();
+      split_quoted();
+      return;
+    }
+    for (std::uint64_t commas = bytes_equal(word, ','); commas != 0; commas &= commas - 1) {
+      // Byte order: the lowest set bit is the first comma (little-endian load).
+      const char* comma = p + std::countr_zero(commas) / 8;
+      cells_.emplace_back(start, static_cast<std::size_t>(comma - start));
+      start = comma + 1;
+    }
+  }
+  for (; p != end; ++p) {
+    if (*p == '"') {
+      cells_.clear();
+      split_quoted();
+      return;
+    }
+    if (*p == ',') {
+      cells_.emplace_back(start, static_cast<std::size_t>(p - start));
+      start = p + 1;
+    }
+  }
+  cells_.emplace_back(start, static_cast<std::size_t>(end - start));
+}
+
+void Reader::split_quoted() {
+  const char* p = line_begin_;
+  const char* const end = line_end_;
+  for (;;) {
+    const char* const start = p;
+    if (p != end && *p == '"') {
+      // Quoted: up to the closing quote; "" inside is an escaped quote.
+      ++p;
+      for (;;) {
+        p = static_cast<const char*>(std::memchr(p, '"', static_cast<std::size_t>(end - p)));
+        if (!p) fail_at(line_, column_of(start), "unterminated quote (a quoted cell cannot span lines)");
+        ++p;
+        if (p == end || *p != '"') break;
+        ++p;
+      }
+      if (p != end && *p != ',') fail_at(line_, column_of(p), "expected ',' after the closing quote");
+    } else {
+      while (p != end && *p != ',') ++p;
+    }
+    cells_.emplace_back(start, static_cast<std::size_t>(p - start));
+    if (p == end) break;
+    ++p;  // the ','
+  }
+}
+
+void Reader::read_header() {
+  refill();
+  // A UTF-8 byte-order mark (spreadsheet exports) is not part of the first header cell.
+  if (end_ >= 3 && std::memcmp(buffer_.data(), "\xEF\xBB\xBF", 3) == 0) pos_ = 3;
+  while (next_line()) {
+    if (is_skipped(line_begin_, line_end_)) continue;
+    header_line_ = line_;
+    split();
+    if (cells_.size() == 1) {
+      const std::string_view line(line_begin_, static_cast<std::size_t>(line_end_ - line_begin_));
+      const auto semicolons = std::count(line.begin(), line.end(), ';');
+      const auto tabs = std::count(line.begin(), line.end(), '\t');
+      if (semicolons + tabs > 0) {
+        fail_at(line_, 1,
+                fmt::format("expected comma-separated columns; this header looks {}-separated",
+                            semicolons >= tabs ? "';'" : "tab"));
+      }
+    }
+    std::string scratch;
+    for (std::size_t i = 0; i < cells_.size(); ++i) header_.emplace_back(text(i, scratch));
+    return;
+  }
+  fail_at(0, 0, "empty file; expected a header line");
+}
+
+bool Reader::next() {
+  while (next_line()) {
+    if (is_skipped(line_begin_, line_end_)) continue;
+    split();
+    if (cells_.size() > header_.size()) {
+      fail(header_.size(), fmt::format("expected {} cells as in the header, found {}", header_.size(), cells_.size()));
+    }
+    if (cells_.size() < header_.size()) {
+      fail_at(line_, column_of(line_end_),
+              fmt::format("expected {} cells as in the header, found {}", header_.size(), cells_.size()));
+    }
+    return true;
+  }
+  return false;
+}
+
+std::string_view Reader::text(std::size_t i, std::string& scratch) const {
+  std::string_view cell = trim(cells_[i]);
+  if (cell.size() < 2 || cell.front() != '"') return cell;
+  cell = cell.substr(1, cell.size() - 2);
+  if (cell.find('"') == std::string_view::npos) return cell;
+  scratch.clear();
+  for (std::size_t k = 0; k < cell.size(); ++k) {
+    scratch += cell[k];
+    if (cell[k] == '"') ++k;  // "" -> "
+  }
+  return scratch;
+}
+
+double Reader::number(const Column& column, bool allow_missing) const {
+  // The hot path: a plain decimal with nothing around it. Everything else, and every
+  // message, is out of line so that this stays small.
+  const std::string_view cell = cells_[column.cell];
+  double value = 0;
+  if (!plain_decimal(cell.data(), cell.data() + cell.size(), value)) {
+    value = parse_other(column, allow_missing);
+    if (std::isnan(value)) return value;  // missing, and allowed
+  }
+  value = to_internal(column.conversion, value);
+  if (!satisfies(column.rule, value)) fail_rule(column);
+  return value;
+}
+
+double Reader::parse_other(const Column& column, bool allow_missing) const {
+  const std::string_view found = trim(cells_[column.cell]);
+  if (found.empty()) {
+    if (allow_missing) return std::numeric_limits<double>::quiet_NaN();
+    fail(column.cell, fmt::format("column '{}': expected a number, found an empty cell", column.header));
+  }
+  const char* first = found.data();
+  const char* last = first + found.size();
+  // fast_float 3.9 does not take a leading '+' ("+1" in a direction column).
+  if (*first == '+' && last - first > 1 && (first[1] == '.' || (first[1] >= '0' && first[1] <= '9'))) ++first;
+  double value = 0;
+  const auto [end, ec] = fast_float::from_chars(first, last, value);
+  if (ec != std::errc() || end != last) fail_number(column, found, "a number");
+  if (std::isnan(value)) {
+    if (allow_missing) return value;
+    fail_number(column, found, "a number");
+  }
+  if (std::isinf(value)) fail_number(column, found, "a finite number");
+  return value;
+}
+
+bool Reader::satisfies(Rule rule, double value) {
+  switch (rule) {
+    case Rule::any: return true;
+    case Rule::non_negative: return value >= 0;
+    case Rule::positive: return value > 0;
+    case Rule::above_absolute_zero: return value > kAbsoluteZero_C;
+    case Rule::plus_or_minus_one: return value == 1 || value == -1;
+  }
+  return true;
+}
+
+void Reader::fail_rule(const Column& column) const {
+  // Messages quote the cell as written; the rule was checked in internal units.
+  const std::string_view found = trim(cells_[column.cell]);
+  const std::string_view h = column.header;
+  switch (column.rule) {
+    case Rule::any: break;
+    case Rule::non_negative:
+      fail(column.cell, fmt::format("{} = {} is negative; expected >= 0{}", h, found, column.hint));
+    case Rule::positive:
+      fail(column.cell, fmt::format("{} = {} is not positive; expected > 0{}", h, found, column.hint));
+    case Rule::above_absolute_zero:
+      fail(column.cell, fmt::format("{} = {} is not above absolute zero (-273.15 °C){}", h, found, column.hint));
+    case Rule::plus_or_minus_one: fail(column.cell, fmt::format("{} = {}: expected +1 or -1{}", h, found, column.hint));
+  }
+  fail(column.cell, fmt::format("{} = {} is out of range", h, found));
+}
+
+void Reader::fail_number(const Column& column, std::string_view found, const char* expected) const {
+  fail(column.cell, fmt::format("column '{}': expected {}, found '{}'", column.header, expected, found));
+}
+
+long Reader::column_of(const char* where) const {
+  // Characters, not bytes: UTF-8 continuation bytes (10xxxxxx) do not start a character.
+  long column = 1;
+  for (const char* p = line_begin_; p < where; ++p) column += (static_cast<unsigned char>(*p) & 0xC0) != 0x80;
+  return column;
+}
+
+void Reader::fail(std::size_t i, const std::string& what) const { fail_at(line_, column_of(cells_[i].data()), what); }
+
+void Reader::fail_at(long line, long column, const std::string& what) const {
+  throw InputError(file_, line, column, what);
+}
+
+std::size_t Reader::estimated_rows() const {
+  const char* rest = buffer_.data() + pos_;
+  const std::size_t rest_bytes = end_ - pos_;
+  const auto lines = static_cast<std::size_t>(std::count(rest, rest + rest_bytes, '\n'));
+  if (at_eof_) return lines + 1;
+  const std::uintmax_t consumed = bytes_read_ - rest_bytes;
+  if (lines == 0 || file_size_ <= consumed) return lines;
+  // A little above the extrapolation, so that one reserve() usually suffices.
+  const double rows =
+      static_cast<double>(file_size_ - consumed) * static_cast<double>(lines) / static_cast<double>(rest_bytes);
+  return static_cast<std::size_t>(rows * 1.03) + 16;
+}
+
+// ---- Names with units ---------------------------------------------------------------------
+
+UnitMatch match_unit(std::string_view name, std::string_view base, Quantity quantity) {
+  if (!name.starts_with(base)) return {};
+  if (name.size() == base.size()) return {UnitMatch::no_unit, {}, {}};
+  if (name[base.size()] != '_') return {};  // "loads_N" is not "load"
+  if (auto split = split_unit(name, quantity)) {
+    // "load_cell_N" is a force, but not the load: some other column.
+    if (split->name != base) return {};
+    return {UnitMatch::match, std::move(*split), {}};
+  }
+  return {UnitMatch::unknown_unit, {}, std::string(name.substr(base.size() + 1))};
+}
+
+std::string accepted_names(std::string_view base, Quantity quantity) {
+  std::vector<std::string> names;
+  for (const std::string& unit : unit_names(quantity)) names.push_back(fmt::format("{}_{}", base, unit));
+  return fmt::format("{}", fmt::join(names, ", "));
+}
+
+std::string canonical_name(std::string_view base, Quantity quantity) {
+  return fmt::format("{}_{}", base, unit_names(quantity).front());
+}
+
+// ---- Header binding -----------------------------------------------------------------------
+
+namespace {
+
+// The spec a header cell belongs to, with its base name and unit; nullopt for a column the
+// loader does not know. Throws for a known column without a unit or with an unknown one.
+std::optional<Column> classify(const Reader& reader, std::size_t cell, std::span<const ColumnSpec> specs) {
+  const std::string& header = reader.header()[cell];
+  for (std::size_t s = 0; s < specs.size(); ++s) {
+    const ColumnSpec& spec = specs[s];
+    Column column{.spec = s,
+                  .cell = cell,
+                  .header = header,
+                  .name = std::string(spec.name),
+                  .rule = spec.rule,
+                  .hint = spec.hint};
+    if (!spec.quantity) {
+      if (header == spec.name) return column;
+      continue;
+    }
+    // A family member's base is everything before the unit ("tc12" in "tc12_K").
+    const std::string_view base = spec.family ? std::string_view(header).substr(0, header.find('_')) : spec.name;
+    if (spec.family && !is_family_member(base, spec.name)) continue;
+    UnitMatch m = match_unit(header, base, *spec.quantity);
+    switch (m.kind) {
+      case UnitMatch::other: continue;
+      case UnitMatch::no_unit:
+        reader.fail(cell,
+                    fmt::format("column '{}' has no unit; accepted: {}", header, accepted_names(base, *spec.quantity)));
+      case UnitMatch::unknown_unit:
+        reader.fail(cell, fmt::format("column '{}': unknown unit '{}'; accepted: {}", header, m.unit,
+                                      accepted_names(base, *spec.quantity)));
+      case UnitMatch::match:
+        column.name = m.split.name;
+        column.conversion = m.split.conversion;
+        return column;
+    }
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
+std::vector<Column> bind_header(const Reader& reader, std::span<const ColumnSpec> specs, LoadReport& report) {
+  std::vector<Column> columns;
+  std::map<std::pair<std::size_t, std::string>, std::string> seen;  // (spec, base name) -> header
+  for (std::size_t cell = 0; cell < reader.header().size(); ++cell) {
+    std::optional<Column> column = classify(reader, cell, specs);
+    if (!column) {
+      report.ignored_columns.push_back(reader.header()[cell]);
+      continue;
+    }
+    const auto [it, inserted] = seen.emplace(std::pair(column->spec, column->name), column->header);
+    if (!inserted) {
+      reader.fail(
+          cell, fmt::format("duplicate column '{}': '{}' already gives {}", column->header, it->second, column->name));
+    }
+    if (const auto& quantity = specs[column->spec].quantity) {
+      const std::string unit = column->header.substr(column->name.size() + 1);
+      const std::string& internal = unit_names(*quantity).front();
+      if (unit != internal) report.conversions[column->header] = fmt::format("{} -> {}", unit, internal);
+    }
+    columns.push_back(std::move(*column));
+  }
+
+  for (std::size_t s = 0; s < specs.size(); ++s) {
+    const ColumnSpec& spec = specs[s];
+    if (!spec.required || find_column(columns, s)) continue;
+    std::string what;
+    if (!spec.quantity) {
+      what = fmt::format("missing column '{}'", spec.name);
+    } else if (spec.family) {
+      what = fmt::format("missing column '{}': expected one or more {}<n> columns (accepted units: {})",
+                         canonical_name(fmt::format("{}1", spec.name), *spec.quantity), spec.name,
+                         fmt::join(unit_names(*spec.quantity), ", "));
+    } else {
+      what = fmt::format("missing column '{}' (accepted units: {})", canonical_name(spec.name, *spec.quantity),
+                         accepted_names(spec.name, *spec.quantity));
+    }
+    reader.fail_at(reader.header_line(), 1, what);
+  }
+  return columns;
+}
+
+const Column* find_column(const std::vector<Column>& columns, std::size_t spec) {
+  const auto it = std::find_if(columns.begin(), columns.end(), [&](const Column& c) { return c.spec == spec; });
+  return it == columns.end() ? nullptr : &*it;
+}
+
+}  // namespace lmcal::csv

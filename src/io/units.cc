@@ -1,0 +1,81 @@
+#include "lmcal/io/units.hpp"
+
+#include <algorithm>
+#include <array>
+#include <span>
+
+namespace lmcal {
+
+namespace {
+
+struct UnitDef {
+  const char* name;
+  Conversion conversion;  // to the quantity's internal unit
+};
+
+// The single table of accepted units, the internal one first (scale 1, offset 0).
+// Exact definitions: 1 kgf = 9.80665 N (CGPM 1901), 1 lbf = 4.4482216152605 N (avoirdupois pound
+// times standard gravity), T[°C] = T[K] - 273.15, T[°C] = (T[°F] - 32) · 5/9.
+constexpr std::array<UnitDef, 4> kTime{{{"s", {1, 0}}, {"ms", {1e-3, 0}}, {"min", {60, 0}}, {"h", {3600, 0}}}};
+constexpr std::array<UnitDef, 3> kVelocity{{{"m_s", {1, 0}}, {"mm_s", {1e-3, 0}}, {"m_min", {1.0 / 60, 0}}}};
+constexpr std::array<UnitDef, 4> kForce{
+    {{"N", {1, 0}}, {"kN", {1e3, 0}}, {"kgf", {9.80665, 0}}, {"lbf", {4.4482216152605, 0}}}};
+constexpr std::array<UnitDef, 2> kPreload{{{"um", {1, 0}}, {"mm", {1e3, 0}}}};
+constexpr std::array<UnitDef, 2> kLengthMm{{{"mm", {1, 0}}, {"m", {1e3, 0}}}};
+constexpr std::array<UnitDef, 2> kDistanceM{{{"m", {1, 0}}, {"mm", {1e-3, 0}}}};
+constexpr std::array<UnitDef, 3> kTemperature{
+    {{"C", {1, 0}}, {"K", {1, -273.15}}, {"F", {5.0 / 9.0, -32.0 * 5.0 / 9.0}}}};
+constexpr std::array<UnitDef, 3> kViscosity{{{"mm2_s", {1, 0}}, {"cSt", {1, 0}}, {"m2_s", {1e6, 0}}}};
+
+std::span<const UnitDef> units_of(Quantity quantity) {
+  switch (quantity) {
+    case Quantity::time: return kTime;
+    case Quantity::velocity: return kVelocity;
+    case Quantity::force: return kForce;
+    case Quantity::preload: return kPreload;
+    case Quantity::length_mm: return kLengthMm;
+    case Quantity::distance_m: return kDistanceM;
+    case Quantity::temperature: return kTemperature;
+    case Quantity::viscosity: return kViscosity;
+  }
+  return {};
+}
+
+}  // namespace
+
+const std::vector<std::string>& unit_names(Quantity quantity) {
+  // One list per quantity, built once; indexed by the enum's value.
+  static const std::array<std::vector<std::string>, 8> names = [] {
+    std::array<std::vector<std::string>, 8> all;
+    for (std::size_t q = 0; q < all.size(); ++q) {
+      for (const UnitDef& unit : units_of(static_cast<Quantity>(q))) all[q].emplace_back(unit.name);
+    }
+    return all;
+  }();
+  return names.at(static_cast<std::size_t>(quantity));
+}
+
+std::optional<Conversion> unit_conversion(Quantity quantity, std::string_view unit) {
+  for (const UnitDef& def : units_of(quantity)) {
+    if (unit == def.name) return def.conversion;
+  }
+  return std::nullopt;
+}
+
+std::optional<SplitName> split_unit(std::string_view column, Quantity quantity) {
+  // Longest match, so that a unit that ends another one ("s" inside "m_s") cannot steal
+  // part of it. With the '_' separator required, today's tables never match twice; the
+  // rule keeps it that way when units are added.
+  const UnitDef* best = nullptr;
+  for (const UnitDef& def : units_of(quantity)) {
+    const std::string_view unit = def.name;
+    if (column.size() < unit.size() + 2) continue;  // at least one name character and '_'
+    if (!column.ends_with(unit) || column[column.size() - unit.size() - 1] != '_') continue;
+    if (!best || unit.size() > std::string_view(best->name).size()) best = &def;
+  }
+  if (!best) return std::nullopt;
+  const std::size_t unit_size = std::string_view(best->name).size();
+  return SplitName{std::string(column.substr(0, column.size() - unit_size - 1)), best->name, best->conversion};
+}
+
+}  // namespace lmcal

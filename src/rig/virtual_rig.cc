@@ -1,0 +1,346 @@
+#include "lmcal/rig/virtual_rig.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <nlohmann/json.hpp>
+#include <numbers>
+#include <random>
+
+#include "lmcal/error.hpp"
+#include "lmcal/io/catalog.hpp"
+#include "lmcal/models/rail_thermal.hpp"
+#include "lmcal/models/thermal_effects.hpp"
+
+namespace lmcal {
+
+namespace {
+
+// Reproducible random numbers: mt19937_64's sequence is fixed by the standard, and the
+// transforms below are ours (std::normal_distribution differs between libraries).
+class Rng {
+ public:
+  explicit Rng(std::uint64_t seed) : engine_(seed) {}
+  double uniform() { return static_cast<double>(engine_() >> 11) * 0x1.0p-53; }  // [0, 1)
+  double uniform(double lo, double hi) { return lo + (hi - lo) * uniform(); }
+  double normal() {  // Box-Muller
+    const double u1 = 1.0 - uniform(), u2 = uniform();
+    return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * std::numbers::pi * u2);
+  }
+
+ private:
+  std::mt19937_64 engine_;
+};
+
+// Independent streams per run from one seed (splitmix64).
+std::uint64_t derive_seed(std::uint64_t seed, std::uint64_t stream) {
+  std::uint64_t z = seed + 0x9E3779B97F4A7C15ull * (stream + 1);
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  return z ^ (z >> 31);
+}
+
+double round_to(double value, double resolution) { return std::round(value / resolution) * resolution; }
+
+struct EffectEntry {
+  RigEffectInfo info;
+  double& (*ref)(RigEffects&);
+};
+
+const std::vector<EffectEntry>& effect_table() {
+  static const std::vector<EffectEntry> table = {
+      {{"stribeck_exponent", "1", 1.0, "exponent δ of the Stribeck decay exp(-(V/V_St)^δ)"},
+       [](RigEffects& e) -> double& { return e.friction.stribeck_exponent; }},
+      {{"viscous_load", "1/kN", 0.0, "viscous coefficient grows with load: μv (1 + c P/kN)"},
+       [](RigEffects& e) -> double& { return e.friction.viscous_load_per_kN; }},
+      {{"direction_asymmetry", "1", 0.0, "friction (1 + a) forward, (1 - a) backward"},
+       [](RigEffects& e) -> double& { return e.friction.direction_asymmetry; }},
+      {{"seal_drag", "N s2/m2", 0.0, "quadratic seal drag c V²"},
+       [](RigEffects& e) -> double& { return e.friction.seal_drag_N_s2_m2; }},
+      {{"coulomb_temperature", "1/K", 0.0, "Coulomb term (1 + c (T - T_i))"},
+       [](RigEffects& e) -> double& { return e.friction.coulomb_temperature_per_K; }},
+      {{"convection_velocity", "W/m2K/sqrt(m/s)", 0.0, "forced convection h = h0 + c sqrt(V)"},
+       [](RigEffects& e) -> double& { return e.thermal.convection_velocity; }},
+      {{"base_loss", "W/mK", 0.0, "heat loss through the rail base to the bed (at ambient)"},
+       [](RigEffects& e) -> double& { return e.thermal.base_loss; }},
+      {{"coupling", "0/1", 0.0, "Q from the friction law at the rail temperature (two-way coupling)"},
+       [](RigEffects& e) -> double& { return e.thermal.coupling; }},
+      {{"tc_lag", "s", 0.0, "thermocouple first-order time constant"},
+       [](RigEffects& e) -> double& { return e.thermal.tc_lag; }},
+      {{"alpha_velocity", "1/(m/s)", 0.0, "α = α0 + s (V - 0.1 m/s)"},
+       [](RigEffects& e) -> double& { return e.thermal.alpha_velocity; }},
+      {{"moving_source", "0/1", 0.0, "the block moves (truth simulated with the moving source)"},
+       [](RigEffects& e) -> double& { return e.thermal.moving_source; }},
+  };
+  return table;
+}
+
+const EffectEntry& find_effect(std::string_view name) {
+  for (const auto& e : effect_table())
+    if (e.info.name == name) return e;
+  std::string known;
+  for (const auto& e : effect_table()) known += (known.empty() ? "" : ", ") + e.info.name;
+  throw InvalidParameter("effect", fmt::format("unknown effect '{}'; known: {}", name, known));
+}
+
+nlohmann::json effects_json(const RigEffects& effects) {
+  nlohmann::json j = nlohmann::json::object();
+  for (const auto& e : effect_table()) {
+    const double value = e.ref(const_cast<RigEffects&>(effects));
+    j[e.info.name] = {{"value", value}, {"unit", e.info.unit}, {"active", value != e.info.neutral}};
+  }
+  return j;
+}
+
+nlohmann::json constants_json(const FrictionConstants<double>& k) {
+  return {{"k1", k.k1},       {"k2", k.k2},         {"mu_st", k.mu_st},
+          {"v_st_m_s", k.v_st_m_s}, {"mu_v", k.mu_v}, {"beta_per_K", k.beta_per_K},
+          {"f0", k.f0},       {"nu_ref_mm2_s", k.nu_ref_mm2_s}, {"T_ref_C", k.T_ref_C}};
+}
+
+std::uint32_t index_of(std::vector<std::string>& names, const std::string& name) {
+  for (std::size_t i = 0; i < names.size(); ++i)
+    if (names[i] == name) return static_cast<std::uint32_t>(i);
+  names.push_back(name);
+  return static_cast<std::uint32_t>(names.size() - 1);
+}
+
+}  // namespace
+
+const std::vector<RigEffectInfo>& rig_effects() {
+  static const std::vector<RigEffectInfo> infos = [] {
+    std::vector<RigEffectInfo> v;
+    for (const auto& e : effect_table()) v.push_back(e.info);
+    return v;
+  }();
+  return infos;
+}
+
+void set_rig_effect(RigEffects& effects, std::string_view name, double value) {
+  require_finite(std::string(name).c_str(), value);
+  find_effect(name).ref(effects) = value;
+}
+
+double rig_effect(const RigEffects& effects, std::string_view name) {
+  return find_effect(name).ref(const_cast<RigEffects&>(effects));
+}
+
+FrictionRigOutput generate_friction_log(const FrictionRigConfig& config, const RigEffects& effects) {
+  validate(config.constants);
+  if (config.runs < 1) throw InvalidParameter("runs", config.runs, "at least 1");
+  require_non_negative("noise_N", config.noise_N);
+  require_non_negative("run_offset_N", config.run_offset_N);
+  require_non_negative("temperature_noise_K", config.temperature_noise_K);
+  require_positive("load_cell_range_N", config.load_cell_range_N);
+
+  FrictionRigOutput out;
+  FrictionLog& log = out.log;
+  nlohmann::json runs = nlohmann::json::array();
+  std::size_t out_of_range = 0;
+  for (int r = 0; r < config.runs; ++r) {
+    Rng rng(derive_seed(config.seed, static_cast<std::uint64_t>(r)));
+    const double offset_N = config.run_offset_N * rng.normal();
+    const std::string run_name = fmt::format("run{:02d}", r + 1);
+    runs.push_back({{"run", run_name}, {"zero_offset_N", offset_N}});
+    const std::uint32_t run_index = index_of(log.run_names, run_name);
+    double time_s = 0;
+    for (const auto& model : config.guides) {
+      const GuideSpec& spec = builtin_catalog().find(model);
+      const double Lb = require(spec, &GuideSpec::block_length_mm, "block_length_mm");
+      const std::uint32_t guide_index = index_of(log.guide_names, spec.model);
+      for (double pc : config.preload_um)
+        for (double P : config.load_N)
+          for (double T : config.temperature_C)
+            for (double V : config.velocity_m_s)
+              for (int direction : config.directions) {
+                const FrictionConditions<double> c{.load_N = P, .preload_um = pc, .block_length_mm = Lb,
+                                                   .velocity_m_s = V, .temperature_C = T,
+                                                   .direction = double(direction)};
+                validate(c);
+                const double F = friction_force_with_effects_N(config.constants, effects.friction, c);
+                // Draw the noise even for skipped conditions, so the sequence does not depend on them.
+                const double noise = config.noise_N * rng.normal();
+                const double temperature_noise = config.temperature_noise_K * rng.normal();
+                if (F > 0.95 * config.load_cell_range_N) {
+                  if (r == 0) ++out_of_range;
+                  continue;
+                }
+                FrictionConditions<double> logged = c;
+                logged.temperature_C = round_to(T + temperature_noise, 0.01);
+                log.append(run_index, guide_index, time_s, logged, round_to(F + offset_N + noise, 0.001),
+                           config.constants.nu_ref_mm2_s);
+                time_s += config.seconds_per_sample;
+              }
+    }
+  }
+  nlohmann::json truth = {
+      {"kind", "friction"},
+      {"generator", fmt::format("lmcal {} virtual rig", LMCAL_VERSION)},
+      {"seed", config.seed},
+      {"friction_constants", constants_json(config.constants)},
+      {"effects", effects_json(effects)},
+      {"noise_N", config.noise_N},
+      {"run_offset_sigma_N", config.run_offset_N},
+      {"temperature_noise_K", config.temperature_noise_K},
+      {"load_cell_range_N", config.load_cell_range_N},
+      {"conditions_beyond_load_cell_skipped", out_of_range},
+      {"runs", runs},
+      {"note", "friction_N = law with effects at the true temperature + zero_offset_N (per run) + noise; "
+               "temperature_C is the true temperature plus noise"}};
+  out.truth_json = truth.dump(2) + "\n";
+  return out;
+}
+
+ThermalRigOutput generate_thermal_dataset(const ThermalRigConfig& config, const RigEffects& effects,
+                                          const std::string& name) {
+  validate(config.constants);
+  if (config.repeats < 1) throw InvalidParameter("repeats", config.repeats, "at least 1");
+  if (config.ambient_sensors < 1) throw InvalidParameter("ambient_sensors", config.ambient_sensors, "at least 1");
+  require_positive("record_every_s", config.record_every_s);
+  require_positive("duration_s", config.duration_s);
+  require_non_negative("tc_lag", effects.thermal.tc_lag);
+  const GuideSpec spec = with_overrides(builtin_catalog().find(config.guide), config.guide_overrides);
+  const double Lb = require(spec, &GuideSpec::block_length_mm, "block_length_mm");
+  const double Lb1 = require(spec, &GuideSpec::contact_length_mm, "contact_length_mm");
+  const double pc = require(spec, &GuideSpec::preload_um, "preload_um");
+  const bool moving = effects.thermal.moving_source != 0;
+  const bool coupled = effects.thermal.coupling != 0;
+  // Truth numerics: converged (2 mm cells; 1 s steps for the moving block, 5 s otherwise).
+  const RailNumerics numerics{.source = moving ? SourceModel::moving : SourceModel::averaged,
+                              .scheme = TimeScheme::crank_nicolson,
+                              .half_rail_segments = static_cast<int>(std::lround(config.rail_length_m / 2 / 0.002)),
+                              .time_step_s = moving ? 1.0 : 5.0};
+
+  std::vector<double> times;
+  for (long i = 0;; ++i) {
+    const double t = static_cast<double>(i) * config.record_every_s;
+    if (t > config.duration_s + 1e-9) break;
+    times.push_back(t);
+  }
+
+  ThermalRigOutput out;
+  out.set.name = name;
+  out.set.description = "Synthetic: made by the lmcal virtual rig (see the truth file); not measured.";
+  nlohmann::json runs_truth = nlohmann::json::array();
+  std::size_t stream = 0;
+  for (double V : config.velocity_m_s) {
+    for (int r = 0; r < config.repeats; ++r, ++stream) {
+      Rng rng(derive_seed(config.seed, stream));
+      const std::string id = config.repeats == 1 ? fmt::format("v{:03.0f}", V * 1000)
+                                                 : fmt::format("v{:03.0f}_r{}", V * 1000, r + 1);
+      // The true ambient: drift plus a slow wave with a random phase.
+      const double phase = rng.uniform(0, 2 * std::numbers::pi);
+      AmbientTrace ambient;
+      for (double t : times) {
+        ambient.time_s.push_back(t);
+        ambient.temperature_C.push_back(config.ambient_C + config.ambient_drift_K_per_h * t / 3600 +
+                                        config.ambient_wave_K * std::sin(2 * std::numbers::pi * t / 7200 + phase));
+      }
+      const double T0 = ambient.temperature_C.front();
+      auto friction_at = [&](double T) {
+        const FrictionConditions<double> c{.load_N = config.load_N, .preload_um = pc, .block_length_mm = Lb,
+                                           .velocity_m_s = V, .temperature_C = T};
+        return friction_force_with_effects_N(config.constants, effects.friction, c);
+      };
+      const RailGeometry geometry{.rail_length_m = config.rail_length_m,
+                                  .area_m2 = require(spec, &GuideSpec::area_m2, "area_m2"),
+                                  .perimeter_m = require(spec, &GuideSpec::perimeter_m, "perimeter_m"),
+                                  .stroke_m = config.stroke_m,
+                                  .contact_length_m = Lb1 * 1e-3,
+                                  .velocity_m_s = V};
+      const RailParams<double> params{
+          .heat_partition = alpha_with_velocity(config.alpha, effects.thermal.alpha_velocity, V),
+          .heat_rate_W = friction_at(T0) * V,
+          .h_W_m2K = convection_with_velocity(config.h_W_m2K, effects.thermal.convection_velocity, V),
+          .conductivity_W_mK = require(spec, &GuideSpec::conductivity_W_mK, "conductivity_W_mK"),
+          .density_kg_m3 = require(spec, &GuideSpec::density_kg_m3, "density_kg_m3"),
+          .specific_heat_J_kgK = require(spec, &GuideSpec::specific_heat_J_kgK, "specific_heat_J_kgK"),
+          .initial_temperature_C = T0,
+          .base_loss_W_mK = effects.thermal.base_loss};
+      const RailOutputs outputs{
+          .duration_s = times.back(), .sensor_positions_m = config.sensor_position_m, .output_times_s = times};
+      const HeatRateModel<double> coupling = [&](const double& T) { return friction_at(T) * V; };
+      const auto sol = simulate_rail(geometry, numerics, outputs, params, ambient,
+                                     coupled ? coupling : HeatRateModel<double>{});
+
+      ThermalRun run;
+      run.id = id;
+      run.file = "thermal/" + id + ".csv";
+      run.guide = spec.model;
+      run.velocity_m_s = V;
+      run.load_N = config.load_N;
+      run.preload_um = pc;
+      run.stroke_m = config.stroke_m;
+      run.rail_length_m = config.rail_length_m;
+      run.guide_overrides = config.guide_overrides;
+      run.trace.time_s = times;
+      nlohmann::json ambient_truth = nlohmann::json::array(), tc_truth = nlohmann::json::array();
+      for (int a = 0; a < config.ambient_sensors; ++a) {
+        const double bias = rng.uniform(-config.ambient_bias_K, config.ambient_bias_K);
+        TemperatureChannel channel{fmt::format("ambient{}_C", a + 1), {}};
+        for (double T : ambient.temperature_C) channel.values.push_back(round_to(T + bias + config.noise_K * rng.normal(), 0.01));
+        ambient_truth.push_back({{"column", channel.name}, {"bias_K", bias}});
+        run.trace.ambient.push_back(std::move(channel));
+      }
+      for (std::size_t s = 0; s < config.sensor_position_m.size(); ++s) {
+        std::vector<double> truth(times.size());
+        for (std::size_t t = 0; t < times.size(); ++t) truth[t] = sol.temperature_C(t, s);
+        const auto lagged = first_order_lag(times, truth, effects.thermal.tc_lag);
+        const double bias = rng.uniform(-config.tc_bias_K, config.tc_bias_K);
+        TemperatureChannel channel{fmt::format("tc{}_C", s + 1), {}};
+        for (double T : lagged) channel.values.push_back(round_to(T + bias + config.noise_K * rng.normal(), 0.01));
+        run.sensor_position_m[channel.name] = config.sensor_position_m[s];
+        tc_truth.push_back({{"column", channel.name}, {"position_m", config.sensor_position_m[s]}, {"bias_K", bias},
+                            {"true_final_C", truth.back()}});
+        run.trace.rail.push_back(std::move(channel));
+      }
+      double mean_Q = 0;
+      for (double q : sol.heat_rate_W) mean_Q += q;
+      mean_Q /= static_cast<double>(sol.heat_rate_W.size());
+      run.mean_friction_N = round_to(mean_Q / V + config.friction_noise_N * rng.normal(), 0.01);
+      runs_truth.push_back({{"id", id},
+                            {"velocity_m_s", V},
+                            {"alpha", params.heat_partition},
+                            {"h_W_m2K", params.h_W_m2K},
+                            {"base_loss_W_mK", params.base_loss_W_mK},
+                            {"initial_temperature_C", T0},
+                            {"heat_rate_start_W", sol.heat_rate_W.front()},
+                            {"heat_rate_end_W", sol.heat_rate_W.back()},
+                            {"heat_rate_mean_W", mean_Q},
+                            {"mean_friction_true_N", mean_Q / V},
+                            {"ambient", {{"base_C", config.ambient_C},
+                                         {"drift_K_per_h", config.ambient_drift_K_per_h},
+                                         {"wave_K", config.ambient_wave_K},
+                                         {"wave_period_s", 7200},
+                                         {"wave_phase_rad", phase},
+                                         {"sensors", ambient_truth}}},
+                            {"thermocouples", tc_truth}});
+      out.set.runs.push_back(std::move(run));
+    }
+  }
+  nlohmann::json truth = {
+      {"kind", "thermal"},
+      {"generator", fmt::format("lmcal {} virtual rig", LMCAL_VERSION)},
+      {"seed", config.seed},
+      {"guide", spec.model},
+      {"friction_constants", constants_json(config.constants)},
+      {"effects", effects_json(effects)},
+      {"alpha_reference", config.alpha},
+      {"alpha_source_model", to_string(numerics.source)},
+      {"h_reference_W_m2K", config.h_W_m2K},
+      {"load_N", config.load_N},
+      {"preload_um", pc},
+      {"stroke_m", config.stroke_m},
+      {"rail_length_m", config.rail_length_m},
+      {"noise_K", config.noise_K},
+      {"friction_noise_N", config.friction_noise_N},
+      {"truth_numerics", {{"source", to_string(numerics.source)},
+                          {"scheme", to_string(numerics.scheme)},
+                          {"half_rail_segments", numerics.half_rail_segments},
+                          {"time_step_s", numerics.time_step_s}}},
+      {"runs", runs_truth}};
+  out.truth_json = truth.dump(2) + "\n";
+  return out;
+}
+
+}  // namespace lmcal

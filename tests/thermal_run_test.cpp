@@ -1,0 +1,330 @@
+// Tests for thermal traces and data-set manifests: missing samples and gaps in the report,
+// units, exact round trips of the writers, and a trace long enough to cross the reader's
+// chunk boundaries. Refused input is covered by the bad-input corpus (bad_input_test.cpp).
+#include "lmcal/io/thermal_run.hpp"
+
+#include "lmcal/error.hpp"
+
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <string>
+#include <unistd.h>
+
+namespace lmcal {
+namespace {
+
+namespace fs = std::filesystem;
+
+const fs::path kGood = fs::path(LMCAL_TEST_DATA_DIR) / "good";
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// A fresh folder per test, removed afterwards; files written into it.
+class ThermalRunTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / fmt::format("lmcal_thermal_run_test_{}_{}", ::getpid(),
+                                                   ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  fs::path write(const fs::path& name, const std::string& text) const {
+    const fs::path path = dir_ / name;
+    fs::create_directories(path.parent_path());
+    std::ofstream(path, std::ios::binary) << text;
+    return path;
+  }
+
+  fs::path dir_;
+};
+
+bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+
+void expect_same_values(const std::vector<double>& a, const std::vector<double>& b, const std::string& what) {
+  ASSERT_EQ(a.size(), b.size()) << what;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    // NaN payloads may differ; "missing" is what must survive.
+    const bool same = std::isnan(a[i]) ? std::isnan(b[i]) : same_bits(a[i], b[i]);
+    EXPECT_TRUE(same) << what << "[" << i << "]: " << a[i] << " vs " << b[i];
+  }
+}
+
+void expect_same_channels(const std::vector<TemperatureChannel>& a, const std::vector<TemperatureChannel>& b) {
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t c = 0; c < a.size(); ++c) {
+    EXPECT_EQ(a[c].name, b[c].name);
+    expect_same_values(a[c].values, b[c].values, a[c].name);
+  }
+}
+
+void expect_same_trace(const ThermalTrace& a, const ThermalTrace& b) {
+  expect_same_values(a.time_s, b.time_s, "time_s");
+  expect_same_channels(a.ambient, b.ambient);
+  expect_same_channels(a.rail, b.rail);
+}
+
+// Two ambient and two rail channels with awkward numbers, one missing sample each.
+ThermalTrace awkward_trace(std::size_t n, double step_s) {
+  ThermalTrace trace;
+  trace.ambient = {{"ambient1_C", {}}, {"ambient2_C", {}}};
+  trace.rail = {{"tc1_C", {}}, {"tc2_C", {}}};
+  for (std::size_t i = 0; i < n; ++i) {
+    const double x = static_cast<double>(i);
+    trace.time_s.push_back(x * step_s + 0.1);
+    trace.ambient[0].values.push_back(24 + x / 3);
+    trace.ambient[1].values.push_back(i == 1 ? kNaN : 24.1 + 0.1 * x);
+    trace.rail[0].values.push_back(i == 2 ? kNaN : 24 + std::sqrt(x));
+    trace.rail[1].values.push_back(i == 0 ? -0.0 : 24 - 1.0 / (x + 7));
+  }
+  return trace;
+}
+
+TEST_F(ThermalRunTest, KeepsMissingSamplesAsNaNAndCountsThem) {
+  const ThermalTrace trace = load_thermal_trace(kGood / "thermal" / "v066.csv");
+  EXPECT_EQ(trace.time_s, (std::vector<double>{0, 5, 10, 15, 20, 35, 40}));
+  ASSERT_EQ(trace.ambient.size(), 2u);
+  ASSERT_EQ(trace.rail.size(), 3u);
+  EXPECT_EQ(trace.ambient[1].name, "ambient2_C");
+  EXPECT_EQ(trace.rail[2].name, "tc3_C");
+  EXPECT_TRUE(std::isnan(trace.ambient[1].values[2]));  // empty cell
+  EXPECT_TRUE(std::isnan(trace.rail[0].values[3]));     // "nan"
+  EXPECT_EQ(trace.rail[0].values[4], 25.1);
+  EXPECT_EQ(trace.rail[2].values.back(), 24.4);
+
+  const LoadReport& r = trace.report;
+  EXPECT_EQ(r.rows_read, 7u);
+  EXPECT_EQ(r.rows_kept, 7u);
+  EXPECT_EQ(r.missing, (std::map<std::string, std::size_t>{{"ambient2_C", 1}, {"tc1_C", 1}}));
+  EXPECT_EQ(r.time_gaps, 1u);  // 20 s -> 35 s against a 5 s median step
+  EXPECT_TRUE(r.ignored_columns.empty());
+  EXPECT_TRUE(r.skipped.empty());
+}
+
+TEST_F(ThermalRunTest, ConvertsKelvinAndMinutesAndReadsCrlf) {
+  const ThermalTrace trace = load_thermal_trace(kGood / "thermal" / "v110.csv");
+  EXPECT_EQ(trace.time_s, (std::vector<double>{0, 30, 60}));
+  ASSERT_EQ(trace.ambient.size(), 1u);
+  ASSERT_EQ(trace.rail.size(), 1u);
+  EXPECT_EQ(trace.ambient[0].name, "ambient_K");  // the header as written
+  EXPECT_NEAR(trace.ambient[0].values[0], 24.0, 1e-12);
+  EXPECT_NEAR(trace.rail[0].values[2], 25.0, 1e-12);  // last line has no line break
+  const LoadReport& r = trace.report;
+  EXPECT_EQ(r.ignored_columns, (std::vector<std::string>{"note"}));
+  EXPECT_EQ(r.conversions, (std::map<std::string, std::string>{
+                               {"ambient_K", "K -> C"}, {"tc1_K", "K -> C"}, {"time_min", "min -> s"}}));
+  EXPECT_TRUE(r.missing.empty());  // the empty cell is in the ignored column
+}
+
+TEST_F(ThermalRunTest, GapsAreIntervalsLongerThanOneAndAHalfMedianSteps) {
+  // Steps 5, 5, 7.5 (exactly 1.5x: not a gap), 5, 7.6 (a gap), 5, 60 (a gap).
+  const ThermalTrace trace =
+      load_thermal_trace(write("gaps.csv",
+                               "time_s,ambient1_C,tc1_C\n0,1,1\n5,1,1\n10,1,1\n17.5,1,1\n22.5,1,1\n30.1,1,1\n35.1,1,1\n"
+                               "95.1,1,1\n"));
+  EXPECT_EQ(trace.report.time_gaps, 2u);
+}
+
+TEST_F(ThermalRunTest, WrittenTraceLoadsBackBitForBit) {
+  const ThermalTrace trace = awkward_trace(50, 5.0 / 3.0);
+  const std::string text = thermal_trace_csv(trace, {"made by thermal_run_test"});
+  EXPECT_EQ(text.substr(0, text.find('\n', text.find('\n') + 1)),
+            "# made by thermal_run_test\ntime_s,ambient1_C,ambient2_C,tc1_C,tc2_C");
+  const ThermalTrace back = load_thermal_trace(write("trace.csv", text));
+  expect_same_trace(trace, back);
+  EXPECT_EQ(back.report.missing, (std::map<std::string, std::size_t>{{"ambient2_C", 1}, {"tc1_C", 1}}));
+}
+
+TEST_F(ThermalRunTest, WriterUsesCanonicalUnits) {
+  ThermalTrace trace = load_thermal_trace(kGood / "thermal" / "v110.csv");
+  const std::string text = thermal_trace_csv(trace);
+  EXPECT_EQ(text.substr(0, text.find('\n')), "time_s,ambient_C,tc1_C");
+  const ThermalTrace back = load_thermal_trace(write("canonical.csv", text));
+  trace.ambient[0].name = "ambient_C";
+  trace.rail[0].name = "tc1_C";
+  expect_same_trace(trace, back);
+}
+
+TEST_F(ThermalRunTest, LongTraceCrossesChunkBoundariesIntact) {
+  // ~7 MB: several of the reader's 1 MiB chunks, plus one line longer than a chunk.
+  constexpr std::size_t kRows = 200000;
+  std::string text = "# long trace\ntime_s,ambient1_C,tc1_C,tc2_C,note\n";
+  for (std::size_t i = 0; i < kRows; ++i) {
+    const std::string note = i == 123457 ? std::string(3u << 20, 'x') : "";
+    text +=
+        fmt::format("{},{},{},{},{}\n", 5 * i, 20 + 0.001 * static_cast<double>(i % 1000),
+                    i % 997 == 0 ? "" : fmt::format("{:.3f}", 25 + 1e-3 * static_cast<double>(i % 5000)), -i % 7, note);
+  }
+  const fs::path file = write("long.csv", text);
+  const ThermalTrace trace = load_thermal_trace(file);
+  ASSERT_EQ(trace.size(), kRows);
+  std::size_t missing = 0;
+  for (std::size_t i = 0; i < kRows; ++i) {
+    ASSERT_EQ(trace.time_s[i], 5.0 * static_cast<double>(i)) << i;
+    ASSERT_EQ(trace.ambient[0].values[i], 20 + 0.001 * static_cast<double>(i % 1000)) << i;
+    if (i % 997 == 0) {
+      ASSERT_TRUE(std::isnan(trace.rail[0].values[i])) << i;
+      ++missing;
+    } else {
+      ASSERT_EQ(trace.rail[0].values[i], std::stod(fmt::format("{:.3f}", 25 + 1e-3 * static_cast<double>(i % 5000))))
+          << i;
+    }
+  }
+  EXPECT_EQ(trace.report.missing.at("tc1_C"), missing);
+  EXPECT_EQ(trace.report.time_gaps, 0u);
+  EXPECT_EQ(trace.report.bytes, static_cast<double>(text.size()));
+  EXPECT_EQ(trace.report.ignored_columns, (std::vector<std::string>{"note"}));
+}
+
+TEST_F(ThermalRunTest, NumbersReadExactlyLikeStrtod) {
+  // Plain decimals of every length up to 17 digits (the reader has a fast path up to 15),
+  // exponents, signs, spaces and leading zeros: each must give the correctly rounded double.
+  std::vector<std::string> cells = {"0",
+                                    "-0",
+                                    "007.50",
+                                    "+1.5",
+                                    " 2.25 ",
+                                    "1e-3",
+                                    "-1.5E+2",
+                                    ".5",
+                                    "5.",
+                                    "123456789012345",
+                                    "1234567890123456",
+                                    "0.000000000000001",
+                                    "0.1000000000000000055511151231257827"};
+  unsigned state = 1;
+  for (int i = 0; i < 3000; ++i) {
+    state = state * 1664525u + 1013904223u;
+    const double x = (static_cast<double>(state >> 8) / 16777216.0 - 0.3) *
+                     std::pow(10.0, i % 6 - 3);  // above -273.15: a temperature
+    cells.push_back(fmt::format("{:.{}f}", x, i % 16));
+  }
+  std::string text = "time_s,ambient1_C,tc1_C\n";
+  for (std::size_t i = 0; i < cells.size(); ++i) text += fmt::format("{},{},0\n", i, cells[i]);
+  const ThermalTrace trace = load_thermal_trace(write("numbers.csv", text));
+  ASSERT_EQ(trace.size(), cells.size());
+  for (std::size_t i = 0; i < cells.size(); ++i) {
+    EXPECT_TRUE(same_bits(trace.ambient[0].values[i], std::strtod(cells[i].c_str(), nullptr)))
+        << "'" << cells[i] << "'";
+  }
+}
+
+TEST_F(ThermalRunTest, ErrorsDeepInALongFileHaveTheRightLine) {
+  std::string text = "time_s,ambient1_C,tc1_C\n";
+  for (int i = 0; i < 100000; ++i) text += fmt::format("{},24.000,25.000\n", i);
+  text += "99999,24,25\n";  // line 100002: time repeats
+  try {
+    load_thermal_trace(write("late_error.csv", text));
+    FAIL() << "accepted a repeated time";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.line(), 100002);
+    EXPECT_EQ(e.column(), 1);
+  }
+}
+
+TEST_F(ThermalRunTest, DataSetLoadsUnitsSensorsAndOverrides) {
+  const ThermalDataSet set = load_thermal_dataset(kGood / "dataset.toml");
+  EXPECT_EQ(set.name, "loader-test");
+  EXPECT_EQ(set.description, "two short runs");
+  EXPECT_EQ(set.manifest, kGood / "dataset.toml");
+  ASSERT_EQ(set.runs.size(), 2u);
+
+  const ThermalRun& a = set.runs[0];
+  EXPECT_EQ(a.id, "v066");
+  EXPECT_EQ(a.file, kGood / "thermal/v066.csv");
+  EXPECT_EQ(a.guide, "SRN 35C");
+  EXPECT_DOUBLE_EQ(a.velocity_m_s, 0.066);    // velocity_mm_s = 66
+  EXPECT_DOUBLE_EQ(a.load_N, 300 * 9.80665);  // load_kgf = 300
+  EXPECT_EQ(a.preload_um, 4.0);
+  EXPECT_DOUBLE_EQ(a.rail_length_m, 0.6);  // rail_length_mm = 600
+  EXPECT_EQ(a.mean_friction_N, 28.2);
+  EXPECT_FALSE(a.contact_length_mm);
+  EXPECT_FALSE(a.block_length_mm);
+  ASSERT_EQ(a.sensor_position_m.size(), 3u);
+  EXPECT_EQ(a.sensor_position_m.at("tc1_C"), 0.0);
+  EXPECT_DOUBLE_EQ(a.sensor_position_m.at("tc2_C"), 0.05);
+  EXPECT_DOUBLE_EQ(a.sensor_position_m.at("tc3_C"), 0.1);  // given as "tc3"
+  EXPECT_EQ(a.guide_overrides, (std::map<std::string, double>{{"conductivity_W_mK", 36.0}}));
+  EXPECT_EQ(a.trace.size(), 7u);
+  EXPECT_EQ(a.trace.report.time_gaps, 1u);
+
+  const ThermalRun& b = set.runs[1];
+  EXPECT_EQ(b.guide, "srn35c");  // as written; the catalog finds it
+  EXPECT_EQ(b.velocity_m_s, 0.11);
+  EXPECT_EQ(b.contact_length_mm, 82.2);
+  EXPECT_EQ(b.block_length_mm, 120.2);
+  EXPECT_FALSE(b.preload_um);
+  EXPECT_EQ(b.sensor_position_m, (std::map<std::string, double>{{"tc1_K", 0.0}}));
+  EXPECT_TRUE(b.guide_overrides.empty());
+}
+
+TEST_F(ThermalRunTest, WrittenManifestLoadsBackIdentically) {
+  ThermalDataSet set;
+  set.name = "round \"trip\"";
+  set.description = "two runs\nwritten by thermal_run_test";
+  set.manifest = dir_ / "set.toml";
+  for (int k = 0; k < 2; ++k) {
+    ThermalRun run;
+    run.id = fmt::format("run{}", k);
+    run.file = dir_ / fmt::format("thermal/run {}.csv", k);
+    run.guide = k ? "SRG 45C" : "SRN 35C";
+    run.velocity_m_s = 0.1 + 0.2 * k + 1.0 / 3.0;
+    run.load_N = 3000.0 * k;
+    run.stroke_m = 0.2;
+    run.rail_length_m = 0.6 + 0.1 / 3.0;
+    if (k == 0) {
+      run.preload_um = 2.5;
+      run.contact_length_mm = 82.2;
+      run.block_length_mm = 120.2;
+      run.mean_friction_N = 44.1 + 1e-9;
+      run.guide_overrides = {{"conductivity_W_mK", 36.0}, {"perimeter_m", 0.14 / 3}};
+    }
+    run.trace = awkward_trace(20 + 10 * k, 5.0);
+    run.sensor_position_m = {{"tc1_C", -0.0}, {"tc2_C", -0.05 / 3}};
+    write(run.file.lexically_relative(dir_), thermal_trace_csv(run.trace));
+    set.runs.push_back(std::move(run));
+  }
+  const std::string manifest = thermal_manifest_toml(set, dir_);
+  EXPECT_NE(manifest.find("file = \"thermal/run 0.csv\""), std::string::npos) << manifest;
+  EXPECT_NE(manifest.find("[run.sensors_m]"), std::string::npos) << manifest;
+  EXPECT_NE(manifest.find("[run.guide_overrides]"), std::string::npos) << manifest;
+  write("set.toml", manifest);
+
+  const ThermalDataSet back = load_thermal_dataset(dir_ / "set.toml");
+  EXPECT_EQ(back.name, set.name);
+  EXPECT_EQ(back.description, set.description);
+  EXPECT_EQ(back.manifest, set.manifest);
+  ASSERT_EQ(back.runs.size(), set.runs.size());
+  for (std::size_t k = 0; k < set.runs.size(); ++k) {
+    const ThermalRun& a = set.runs[k];
+    const ThermalRun& b = back.runs[k];
+    EXPECT_EQ(b.id, a.id);
+    EXPECT_EQ(b.file, a.file);
+    EXPECT_EQ(b.guide, a.guide);
+    EXPECT_TRUE(same_bits(b.velocity_m_s, a.velocity_m_s));
+    EXPECT_TRUE(same_bits(b.load_N, a.load_N));
+    EXPECT_EQ(b.preload_um, a.preload_um);
+    EXPECT_TRUE(same_bits(b.stroke_m, a.stroke_m));
+    EXPECT_TRUE(same_bits(b.rail_length_m, a.rail_length_m));
+    EXPECT_EQ(b.contact_length_mm, a.contact_length_mm);
+    EXPECT_EQ(b.block_length_mm, a.block_length_mm);
+    EXPECT_EQ(b.mean_friction_N, a.mean_friction_N);
+    EXPECT_EQ(b.sensor_position_m, a.sensor_position_m);
+    for (const auto& [name, x] : a.sensor_position_m) {
+      EXPECT_TRUE(same_bits(b.sensor_position_m.at(name), x)) << name;  // -0.0 included
+    }
+    EXPECT_EQ(b.guide_overrides, a.guide_overrides);
+    expect_same_trace(a.trace, b.trace);
+  }
+  // Written again, the loaded set gives the same text.
+  EXPECT_EQ(thermal_manifest_toml(back, dir_), manifest);
+}
+
+}  // namespace
+}  // namespace lmcal

@@ -1,0 +1,148 @@
+#include "lmcal/rig/virtual_rig.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "lmcal/error.hpp"
+#include "lmcal/io/atomic_file.hpp"
+#include "lmcal/io/catalog.hpp"
+#include "lmcal/models/rail_thermal.hpp"
+
+namespace lmcal {
+namespace {
+
+FrictionRigConfig small_friction_rig() {
+  FrictionRigConfig c;
+  c.guides = {"SRN 35C"};
+  c.preload_um = {2.5, 4};
+  c.load_N = {1000, 3000};
+  c.velocity_m_s = {0.005, 0.05, 0.11};
+  c.temperature_C = {26, 40};
+  c.runs = 3;
+  return c;
+}
+
+ThermalRigConfig short_thermal_rig() {
+  ThermalRigConfig c;
+  c.velocity_m_s = {0.11};
+  c.duration_s = 1800;
+  c.record_every_s = 10;
+  return c;
+}
+
+TEST(VirtualRig, SameSeedSameDataOtherSeedOtherData) {
+  const auto a = generate_friction_log(small_friction_rig(), {});
+  const auto b = generate_friction_log(small_friction_rig(), {});
+  EXPECT_EQ(a.log.friction_N, b.log.friction_N);
+  EXPECT_EQ(a.truth_json, b.truth_json);
+  auto other = small_friction_rig();
+  other.seed = 2;
+  EXPECT_NE(generate_friction_log(other, {}).log.friction_N, a.log.friction_N);
+  const auto t1 = generate_thermal_dataset(short_thermal_rig(), {}, "x");
+  const auto t2 = generate_thermal_dataset(short_thermal_rig(), {}, "x");
+  EXPECT_EQ(t1.set.runs[0].trace.rail[0].values, t2.set.runs[0].trace.rail[0].values);
+}
+
+TEST(VirtualRig, NoiselessFrictionIsTheLawAndEffectsAddTheirTerm) {
+  auto config = small_friction_rig();
+  config.noise_N = config.run_offset_N = config.temperature_noise_K = 0;
+  RigEffects effects;
+  set_rig_effect(effects, "seal_drag", 200.0);
+  const auto clean = generate_friction_log(config, {}).log;
+  const auto sealed = generate_friction_log(config, effects).log;
+  ASSERT_EQ(clean.size(), 3u * 2 * 2 * 3 * 2 * 2);
+  for (std::size_t i = 0; i < clean.size(); ++i) {
+    const auto c = clean.conditions(i);
+    EXPECT_NEAR(clean.friction_N[i], friction_force_N(paper_friction_constants(), c), 0.0005 + 1e-12);
+    EXPECT_NEAR(sealed.friction_N[i] - clean.friction_N[i], 200 * c.velocity_m_s * c.velocity_m_s, 0.001 + 1e-12);
+  }
+}
+
+TEST(VirtualRig, FrictionNoiseAndRunOffsetsMatchTheTruthFile) {
+  auto config = small_friction_rig();
+  config.runs = 6;
+  config.temperature_noise_K = 0;
+  const auto made = generate_friction_log(config, {});
+  const auto truth = nlohmann::json::parse(made.truth_json);
+  std::vector<double> sum(6, 0), sum2(6, 0), count(6, 0);
+  for (std::size_t i = 0; i < made.log.size(); ++i) {
+    const double r = made.log.friction_N[i] - friction_force_N(paper_friction_constants(), made.log.conditions(i));
+    const auto run = made.log.run[i];
+    sum[run] += r;
+    sum2[run] += r * r;
+    count[run] += 1;
+  }
+  for (std::size_t run = 0; run < 6; ++run) {
+    const double mean = sum[run] / count[run];
+    const double sd = std::sqrt(sum2[run] / count[run] - mean * mean);
+    EXPECT_NEAR(mean, truth["runs"][run]["zero_offset_N"].get<double>(), 4 * 0.15 / std::sqrt(count[run]));
+    EXPECT_NEAR(sd, 0.15, 0.05);
+  }
+}
+
+TEST(VirtualRig, LoadCellRangeSkipsTheSameConditionsInEveryRun) {
+  FrictionRigConfig config;
+  config.guides = {"SRG 45C"};
+  config.velocity_m_s = {0.05, 0.15};
+  config.temperature_C = {22};
+  config.runs = 2;
+  const auto made = generate_friction_log(config, {});
+  const auto truth = nlohmann::json::parse(made.truth_json);
+  EXPECT_GT(truth["conditions_beyond_load_cell_skipped"].get<int>(), 0);
+  EXPECT_EQ(made.log.size() % 2, 0u);
+  for (double F : made.log.friction_N) EXPECT_LT(F, 0.95 * 98.0665 + 1.5);
+}
+
+// With bias and noise off, the thermocouples read the rail solver at their positions.
+TEST(VirtualRig, CleanThermocouplesReadTheRailModel) {
+  auto config = short_thermal_rig();
+  config.tc_bias_K = config.ambient_bias_K = config.noise_K = 0;
+  config.ambient_drift_K_per_h = config.ambient_wave_K = 0;
+  const auto made = generate_thermal_dataset(config, {}, "clean");
+  const auto& run = made.set.runs.at(0);
+  const auto& spec = builtin_catalog().find("SRN 35C");
+  const RailGeometry g{.rail_length_m = 0.6, .area_m2 = *spec.area_m2, .perimeter_m = *spec.perimeter_m,
+                       .stroke_m = 0.2, .contact_length_m = *spec.contact_length_mm * 1e-3, .velocity_m_s = 0.11};
+  FrictionConditions<double> c{.load_N = 3000, .preload_um = 4, .block_length_mm = 120.2, .velocity_m_s = 0.11,
+                               .temperature_C = 24.0};
+  const RailParams<double> p{.heat_partition = 0.6, .heat_rate_W = heat_rate_W(paper_friction_constants(), c),
+                             .initial_temperature_C = 24.0};
+  const RailOutputs out{.duration_s = 1800, .sensor_positions_m = {0.0, 0.05, 0.1}, .output_times_s = {1800}};
+  const auto sol = simulate_rail(g, {.source = SourceModel::averaged, .half_rail_segments = 400, .time_step_s = 5}, out,
+                                 p, AmbientTrace::constant(24.0));
+  for (std::size_t s = 0; s < 3; ++s) EXPECT_NEAR(run.trace.rail[s].values.back(), sol.temperature_C(0, s), 0.01);
+  EXPECT_EQ(run.trace.ambient.size(), 2u);
+  EXPECT_NEAR(run.trace.ambient[0].values.back(), 24.0, 1e-9);
+  EXPECT_NEAR(*run.mean_friction_N, p.heat_rate_W / 0.11, 4 * 0.25);
+}
+
+TEST(VirtualRig, ThermalEffectsLeaveTheirMark) {
+  auto config = short_thermal_rig();
+  config.noise_K = 0;
+  const auto base = generate_thermal_dataset(config, {}, "base");
+  auto hot_end = [](const ThermalRigOutput& o) { return o.set.runs[0].trace.rail[0].values.back(); };
+  RigEffects coupled;
+  set_rig_effect(coupled, "coupling", 1);
+  const auto c = generate_thermal_dataset(config, coupled, "coupled");
+  const auto truth = nlohmann::json::parse(c.truth_json);
+  EXPECT_LT(truth["runs"][0]["heat_rate_end_W"].get<double>(), truth["runs"][0]["heat_rate_start_W"].get<double>());
+  EXPECT_LT(hot_end(c), hot_end(base));
+  RigEffects lag;
+  set_rig_effect(lag, "tc_lag", 120);
+  EXPECT_LT(generate_thermal_dataset(config, lag, "lag").set.runs[0].trace.rail[0].values[30],
+            base.set.runs[0].trace.rail[0].values[30]);
+  RigEffects convective;
+  set_rig_effect(convective, "convection_velocity", 10);
+  EXPECT_LT(hot_end(generate_thermal_dataset(config, convective, "h")), hot_end(base));
+  RigEffects moving;
+  set_rig_effect(moving, "moving_source", 1);
+  EXPECT_NEAR(hot_end(generate_thermal_dataset(config, moving, "m")), hot_end(base), 0.2);
+  EXPECT_THROW(set_rig_effect(moving, "warp_drive", 1), InvalidParameter);
+}
+
+}  // namespace
+}  // namespace lmcal
