@@ -1,11 +1,12 @@
 #!/usr/bin/env bash
 # Regenerates measurements/cheng2017/, the bundled SYNTHETIC data set, with the virtual
 # rig. Same lmcal version and seeds, same bytes. Run from the repository root after
-# scripts/build.sh.
+# scripts/build.sh. Optional: an output folder instead of measurements/cheng2017 (the
+# tests regenerate the set elsewhere and compare), and LMCAL=path/to/lmcal.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-lmcal=build/lmcal
-out=measurements/cheng2017
+lmcal=${LMCAL:-build/lmcal}
+out=${1:-measurements/cheng2017}
 
 # Friction: three guides, three preload classes, loads 1-3 kN, 10 speeds, 4 temperatures,
 # both directions, 10 repeats. Effects the paper's law leaves out: seal drag and a

@@ -4,6 +4,8 @@
 # message, a non-zero exit and no output written. $LMCAL is the binary.
 set -uo pipefail
 : "${LMCAL:?set LMCAL to the lmcal binary}"
+SOURCE=$(cd "$(dirname "$0")/.." && pwd)
+DATA="$SOURCE/tests/data"
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 cd "$work"
@@ -57,6 +59,28 @@ check "material missing in the catalog" refused "conductivity_W_mK: the catalog 
   simulate thermal -o out/t --guide "SRG 25C"
 check "unknown source model" refused "unknown source model 'uniform'" simulate thermal -o out/t --source uniform
 check "unknown catalog field" refused "unknown guide field" simulate thermal -o out/t --set colour_mm=3
+
+# --- virtual rig, loaders and the bundled data set ---------------------------------------------
+"$LMCAL" generate friction -o rig --runs 2 --guides "SRN 35C" --effect seal_drag=100 >/dev/null
+check "generated friction log and truth" test -s rig/friction.csv -a -s rig/friction_truth.json
+check "generated log says it is synthetic" grep -q '^# SYNTHETIC' rig/friction.csv
+check "truth names the effect" grep -q '"seal_drag"' rig/friction_truth.json
+"$LMCAL" check friction rig/friction.csv > check.txt
+check "check reads the generated log" grep -q 'friction log: .* samples, 2 runs, 1 guides' check.txt
+"$LMCAL" generate thermal -o rig --velocity 0.11 --duration 1200 --record-every 10 >/dev/null
+"$LMCAL" check thermal rig/thermal.toml > check.txt
+check "check reads the generated manifest" grep -q "thermal data set 'synthetic': 1 runs" check.txt
+"$LMCAL" resample rig/thermal/v110.csv -o coarse.csv --every 12 >/dev/null
+check "resample keeps every 12th record" test "$(grep -vc '^#' coarse.csv)" -eq 12
+check "unknown effect" refused "unknown effect 'warp'" generate friction -o out --effect warp=1
+check "bad log refused by check" refused "friction_semicolon.csv:" check friction "$DATA/bad/friction_semicolon.csv"
+
+# The bundled set is exactly what the recorded commands make (the command lines aside).
+LMCAL="$LMCAL" bash "$SOURCE/scripts/make-bundled-data.sh" "$work/bundled" >/dev/null
+same_as_bundled() {
+  diff -r -q -I '^# Command:' "$SOURCE/measurements/cheng2017" "$work/bundled" -x README.md
+}
+check "bundled data set regenerates identically" same_as_bundled
 
 echo "$pass passed, $failures failed"
 exit $((failures > 0))

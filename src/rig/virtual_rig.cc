@@ -40,7 +40,12 @@ std::uint64_t derive_seed(std::uint64_t seed, std::uint64_t stream) {
   return z ^ (z >> 31);
 }
 
-double round_to(double value, double resolution) { return std::round(value / resolution) * resolution; }
+// Rounds to `decimals` places; dividing the integer by a power of ten gives the double
+// nearest to the decimal, so the CSV shows "22.08", not "22.080000000000002".
+double round_to(double value, int decimals) {
+  const double scale = std::pow(10.0, decimals);
+  return std::round(value * scale) / scale;
+}
 
 struct EffectEntry {
   RigEffectInfo info;
@@ -166,8 +171,8 @@ FrictionRigOutput generate_friction_log(const FrictionRigConfig& config, const R
                   continue;
                 }
                 FrictionConditions<double> logged = c;
-                logged.temperature_C = round_to(T + temperature_noise, 0.01);
-                log.append(run_index, guide_index, time_s, logged, round_to(F + offset_N + noise, 0.001),
+                logged.temperature_C = round_to(T + temperature_noise, 2);
+                log.append(run_index, guide_index, time_s, logged, round_to(F + offset_N + noise, 3),
                            config.constants.nu_ref_mm2_s);
                 time_s += config.seconds_per_sample;
               }
@@ -278,7 +283,7 @@ ThermalRigOutput generate_thermal_dataset(const ThermalRigConfig& config, const 
       for (int a = 0; a < config.ambient_sensors; ++a) {
         const double bias = rng.uniform(-config.ambient_bias_K, config.ambient_bias_K);
         TemperatureChannel channel{fmt::format("ambient{}_C", a + 1), {}};
-        for (double T : ambient.temperature_C) channel.values.push_back(round_to(T + bias + config.noise_K * rng.normal(), 0.01));
+        for (double T : ambient.temperature_C) channel.values.push_back(round_to(T + bias + config.noise_K * rng.normal(), 2));
         ambient_truth.push_back({{"column", channel.name}, {"bias_K", bias}});
         run.trace.ambient.push_back(std::move(channel));
       }
@@ -288,7 +293,7 @@ ThermalRigOutput generate_thermal_dataset(const ThermalRigConfig& config, const 
         const auto lagged = first_order_lag(times, truth, effects.thermal.tc_lag);
         const double bias = rng.uniform(-config.tc_bias_K, config.tc_bias_K);
         TemperatureChannel channel{fmt::format("tc{}_C", s + 1), {}};
-        for (double T : lagged) channel.values.push_back(round_to(T + bias + config.noise_K * rng.normal(), 0.01));
+        for (double T : lagged) channel.values.push_back(round_to(T + bias + config.noise_K * rng.normal(), 2));
         run.sensor_position_m[channel.name] = config.sensor_position_m[s];
         tc_truth.push_back({{"column", channel.name}, {"position_m", config.sensor_position_m[s]}, {"bias_K", bias},
                             {"true_final_C", truth.back()}});
@@ -297,7 +302,7 @@ ThermalRigOutput generate_thermal_dataset(const ThermalRigConfig& config, const 
       double mean_Q = 0;
       for (double q : sol.heat_rate_W) mean_Q += q;
       mean_Q /= static_cast<double>(sol.heat_rate_W.size());
-      run.mean_friction_N = round_to(mean_Q / V + config.friction_noise_N * rng.normal(), 0.01);
+      run.mean_friction_N = round_to(mean_Q / V + config.friction_noise_N * rng.normal(), 2);
       runs_truth.push_back({{"id", id},
                             {"velocity_m_s", V},
                             {"alpha", params.heat_partition},
