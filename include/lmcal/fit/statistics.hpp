@@ -1,0 +1,38 @@
+// Spread of repeated results, as the paper reports it (shared/PHYSICS.md §6), and the
+// quantiles that intervals need.
+//
+//   σ = sqrt( Σ (x_i - <x>)² / (N - 1) )              Eq. 1
+//   difference = |E1 - E2| / ((E1 + E2) / 2) · 100 %   Eq. 2
+//   95 % interval of the mean: <x> ± t(0.975, N - 1) · σ / √N
+//
+// Example: the paper's four α values 0.593, 0.61, 0.61, 0.586 give mean 0.5998,
+// σ = 0.0122 and half-width 0.019: "0.600 ± 0.019".
+// Trap: Eq. 2 is undefined when E1 + E2 = 0; it returns NaN there.
+#pragma once
+
+#include <cstddef>
+#include <span>
+
+namespace lmcal {
+
+double sample_standard_deviation(std::span<const double> values);  // Eq. 1; NaN for N < 2
+double percent_difference(double e1, double e2);                    // Eq. 2
+
+// Quantiles (Boost.Math): Student t with `dof` degrees of freedom, F(d1, d2), χ²(dof).
+double student_t_quantile(double probability, double dof);
+double fisher_f_quantile(double probability, double d1, double d2);
+double chi_squared_quantile(double probability, double dof);
+
+struct Spread {
+  std::size_t n = 0;
+  double mean = 0;
+  double sd = 0;          // Eq. 1
+  double half_width = 0;  // t(1 - (1 - confidence)/2, n - 1) · sd / √n
+  double low = 0, high = 0;
+  double min = 0, max = 0;
+};
+
+// Mean, Eq. 1 σ, Student-t interval of the mean, min and max. NaN values are left out.
+Spread spread(std::span<const double> values, double confidence = 0.95);
+
+}  // namespace lmcal

@@ -1,0 +1,82 @@
+#include "lmcal/fit/statistics.hpp"
+
+#include <boost/math/distributions/chi_squared.hpp>
+#include <boost/math/distributions/fisher_f.hpp>
+#include <boost/math/distributions/students_t.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "lmcal/error.hpp"
+
+namespace lmcal {
+
+namespace {
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+void require_probability(double p) {
+  if (!(p > 0 && p < 1)) throw InvalidParameter("probability", p, "a value in (0, 1)");
+}
+}  // namespace
+
+double sample_standard_deviation(std::span<const double> values) {
+  if (values.size() < 2) return kNaN;
+  double mean = 0;
+  for (double v : values) mean += v;
+  mean /= static_cast<double>(values.size());
+  double ss = 0;
+  for (double v : values) ss += (v - mean) * (v - mean);
+  return std::sqrt(ss / static_cast<double>(values.size() - 1));
+}
+
+double percent_difference(double e1, double e2) {
+  const double mean = 0.5 * (e1 + e2);
+  if (mean == 0) return kNaN;
+  return std::abs(e1 - e2) / std::abs(mean) * 100.0;
+}
+
+double student_t_quantile(double probability, double dof) {
+  require_probability(probability);
+  require_positive("dof", dof);
+  return boost::math::quantile(boost::math::students_t_distribution<double>(dof), probability);
+}
+
+double fisher_f_quantile(double probability, double d1, double d2) {
+  require_probability(probability);
+  require_positive("d1", d1);
+  require_positive("d2", d2);
+  return boost::math::quantile(boost::math::fisher_f_distribution<double>(d1, d2), probability);
+}
+
+double chi_squared_quantile(double probability, double dof) {
+  require_probability(probability);
+  require_positive("dof", dof);
+  return boost::math::quantile(boost::math::chi_squared_distribution<double>(dof), probability);
+}
+
+Spread spread(std::span<const double> values, double confidence) {
+  std::vector<double> finite;
+  for (double v : values)
+    if (!std::isnan(v)) finite.push_back(v);
+  Spread s;
+  s.n = finite.size();
+  if (finite.empty()) {
+    s.mean = s.sd = s.half_width = s.low = s.high = s.min = s.max = kNaN;
+    return s;
+  }
+  for (double v : finite) s.mean += v;
+  s.mean /= static_cast<double>(s.n);
+  s.min = *std::min_element(finite.begin(), finite.end());
+  s.max = *std::max_element(finite.begin(), finite.end());
+  s.sd = sample_standard_deviation(finite);
+  s.half_width = s.n < 2 ? kNaN
+                         : student_t_quantile(1 - (1 - confidence) / 2, static_cast<double>(s.n - 1)) * s.sd /
+                               std::sqrt(static_cast<double>(s.n));
+  s.low = s.mean - s.half_width;
+  s.high = s.mean + s.half_width;
+  return s;
+}
+
+}  // namespace lmcal
