@@ -16,6 +16,7 @@ int main(int argc, char** argv) {
   lmcal::cli::setup_simulate(app, args);
   lmcal::cli::setup_generate(app, args);
   lmcal::cli::setup_check(app);
+  lmcal::cli::setup_fit(app, args);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

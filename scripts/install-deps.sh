@@ -6,7 +6,7 @@ set -euo pipefail
 packages=(
   g++ cmake make                 # toolchain
   libceres-dev libeigen3-dev     # least squares, autodiff, covariance; linear algebra
-  libnlopt-cxx-dev               # global and derivative-free search
+  libnlopt-dev libnlopt-cxx-dev  # global and derivative-free search
   libcli11-dev libfmt-dev nlohmann-json3-dev libtomlplusplus-dev libfast-float-dev
   libboost-dev libssl-dev        # Student-t and F quantiles (Boost.Math); SHA-256 of inputs (OpenSSL)
   libgtest-dev libbenchmark-dev  # tests and benchmarks

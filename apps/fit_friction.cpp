@@ -1,0 +1,142 @@
+// lmcal fit friction LOG.csv…: the seven friction constants (any subset) and optional
+// effects from load-cell logs, with uncertainty, identifiability and spread across runs.
+//
+// Writes DIR/NAME.json (parameters, SE, intervals, correlation, identifiability, solver,
+// spread across runs, input hashes), DIR/NAME_samples.csv (measured / predicted /
+// residual per sample), DIR/NAME_conditions.csv (residual summary per condition), and a
+// one-screen summary on stdout.
+#include <fmt/format.h>
+
+#include <filesystem>
+#include <iostream>
+
+#include "cli_common.hpp"
+#include "lmcal/error.hpp"
+#include "lmcal/fit/friction_fit.hpp"
+#include "lmcal/io/atomic_file.hpp"
+#include "lmcal/io/hash.hpp"
+
+namespace lmcal::cli {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct FitFrictionOptions {
+  std::vector<std::string> files;
+  std::string name = "friction";
+  std::string output_dir = "fits";
+  std::vector<std::string> free;            // empty: all seven
+  std::map<std::string, double> fixed;      // held at these values
+  std::map<std::string, double> start;
+  std::vector<std::string> bounds;          // NAME=LO:HI
+  std::vector<std::string> effects;
+  std::string loss = "none";
+  double loss_scale = 1.345;
+  std::string weights = "none";
+  int starts = 8;
+  std::uint64_t seed = 1;
+  std::string profile = "auto";
+  bool run_fits = true;
+};
+
+std::size_t constant_index(const std::string& option, const std::string& name) {
+  for (std::size_t j = 0; j < kFrictionConstantNames.size(); ++j)
+    if (name == kFrictionConstantNames[j]) return j;
+  throw InvalidParameter(option, fmt::format("unknown constant '{}'; expected one of k1, k2, mu_st, v_st_m_s, mu_v, "
+                                             "beta_per_K, f0",
+                                             name));
+}
+
+double& constant_ref(FrictionConstants<double>& k, std::size_t j) {
+  double* members[] = {&k.k1, &k.k2, &k.mu_st, &k.v_st_m_s, &k.mu_v, &k.beta_per_K, &k.f0};
+  return *members[j];
+}
+
+FrictionFitOptions to_fit_options(const FitFrictionOptions& o) {
+  FrictionFitOptions f;
+  if (!o.free.empty()) {
+    f.free.fill(false);
+    for (const auto& name : o.free) f.free[constant_index("--free", name)] = true;
+  }
+  for (const auto& [name, value] : o.start) constant_ref(f.start, constant_index("--start", name)) = value;
+  for (const auto& [name, value] : o.fixed) {
+    const std::size_t j = constant_index("--fix", name);
+    constant_ref(f.start, j) = value;
+    f.free[j] = false;
+  }
+  for (const auto& item : o.bounds) {
+    const auto eq = item.find('='), colon = item.find(':', eq == std::string::npos ? 0 : eq);
+    if (eq == std::string::npos || colon == std::string::npos)
+      throw InvalidParameter("--bound", fmt::format("'{}' is not NAME=LOW:HIGH", item));
+    const auto range = parse_list("--bound", item.substr(eq + 1, colon - eq - 1) + "," + item.substr(colon + 1));
+    f.bounds[constant_index("--bound", item.substr(0, eq))] = {range[0], range[1]};
+  }
+  f.effects = o.effects;
+  if (o.loss == "none") f.fit.loss = RobustLoss::none;
+  else if (o.loss == "huber") f.fit.loss = RobustLoss::huber;
+  else if (o.loss == "cauchy") f.fit.loss = RobustLoss::cauchy;
+  else throw InvalidParameter("--loss", "unknown loss '" + o.loss + "'; expected none, huber or cauchy");
+  require_positive("--loss-scale", o.loss_scale);
+  f.fit.loss_scale = o.loss_scale;
+  if (o.weights == "none") f.weighting = FrictionWeighting::none;
+  else if (o.weights == "per-run") f.weighting = FrictionWeighting::per_run;
+  else if (o.weights == "per-condition") f.weighting = FrictionWeighting::per_condition;
+  else throw InvalidParameter("--weights", "unknown weighting '" + o.weights + "'; expected none, per-run or per-condition");
+  if (o.starts < 1) throw InvalidParameter("--starts", o.starts, "at least 1");
+  f.fit.starts = o.starts;
+  f.fit.seed = o.seed;
+  if (o.profile == "auto") f.fit.profile = ProfileMode::automatic;
+  else if (o.profile == "all") f.fit.profile = ProfileMode::all;
+  else if (o.profile == "none") f.fit.profile = ProfileMode::none;
+  else throw InvalidParameter("--profile", "unknown mode '" + o.profile + "'; expected auto, all or none");
+  f.per_run_fits = o.run_fits;
+  return f;
+}
+
+void run_fit_friction(const FitFrictionOptions& o, const std::vector<std::string>& argv) {
+  const FrictionFitOptions options = to_fit_options(o);
+  std::vector<fs::path> paths(o.files.begin(), o.files.end());
+  const FrictionLog log = load_friction_logs(paths);
+  FitProvenance provenance{o.name, {}, argv};
+  for (const auto& file : o.files) provenance.inputs.emplace_back(file, sha256_file(file));
+  const FrictionFitResult result = fit_friction(log, options);
+
+  const fs::path dir = o.output_dir;
+  OutputSet out;
+  out.add(dir / (o.name + ".json"), friction_fit_json(result, options, provenance));
+  out.add(dir / (o.name + "_samples.csv"), friction_fit_samples_csv(result, log));
+  out.add(dir / (o.name + "_conditions.csv"), friction_fit_conditions_csv(result));
+  out.commit();
+  std::cout << "friction fit '" << o.name << "': " << friction_fit_summary(result);
+  std::cout << fmt::format("wrote {0}.json, {0}_samples.csv and {0}_conditions.csv\n", (dir / o.name).string());
+}
+
+}  // namespace
+
+void setup_fit(CLI::App& app, const std::vector<std::string>& argv) {
+  CLI::App* fit = app.add_subcommand("fit", "Fit model parameters to measurements");
+  fit->require_subcommand(1);
+  auto o = std::make_shared<FitFrictionOptions>();
+  CLI::App* friction = fit->add_subcommand("friction", "Friction constants from load-cell logs");
+  friction->add_option("files", o->files, "Friction log CSV files")->required();
+  friction->add_option("--name", o->name, "Name of the fit (output file names)")->capture_default_str();
+  friction->add_option("-o,--output-dir", o->output_dir, "Output folder")->capture_default_str();
+  friction->add_option("--free", o->free, "Constants to fit (default all): k1,k2,mu_st,v_st_m_s,mu_v,beta_per_K,f0")
+      ->delimiter(',');
+  add_assignments(*friction, "--fix", o->fixed, "Hold a constant at a value: --fix k2=0.03");
+  add_assignments(*friction, "--start", o->start, "Start value: --start mu_st=1 (default: the paper's)");
+  friction->add_option("--bound", o->bounds, "Bounds: --bound k1=0:1 (repeatable)");
+  friction->add_option("--effect", o->effects, "Fit a named effect on top of the law (e.g. seal_drag)")->delimiter(',');
+  friction->add_option("--loss", o->loss, "Robust loss: none, huber or cauchy")->capture_default_str();
+  friction->add_option("--loss-scale", o->loss_scale, "Robust loss scale, in residual sigmas")->capture_default_str();
+  friction->add_option("--weights", o->weights, "Weights: none, per-run or per-condition (from the spread of repeats)")
+      ->capture_default_str();
+  friction->add_option("--starts", o->starts, "Multi-start local searches")->capture_default_str();
+  friction->add_option("--seed", o->seed, "Seed of the multi-start sequence")->capture_default_str();
+  friction->add_option("--profile", o->profile, "Profile-likelihood intervals: auto, all or none")->capture_default_str();
+  friction->add_flag("!--no-run-fits", o->run_fits, "Skip the per-run fits (spread across runs)");
+  friction->callback([o, &argv] { run_fit_friction(*o, argv); });
+}
+
+}  // namespace lmcal::cli

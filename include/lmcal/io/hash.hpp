@@ -1,0 +1,13 @@
+// SHA-256 of an input file (OpenSSL), recorded in every fit so a result names the exact
+// bytes it came from.
+#pragma once
+
+#include <filesystem>
+#include <string>
+
+namespace lmcal {
+
+// Lower-case hex digest; InputError if the file cannot be read.
+std::string sha256_file(const std::filesystem::path& file);
+
+}  // namespace lmcal

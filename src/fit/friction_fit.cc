@@ -1,0 +1,449 @@
+#include "lmcal/fit/friction_fit.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <tuple>
+
+#include "friction_model.hpp"
+#include "least_squares.hpp"
+#include "lmcal/error.hpp"
+#include "lmcal/io/csv_writer.hpp"
+
+namespace lmcal {
+
+using detail::EffectSpec;
+using detail::effect_member;
+using detail::effect_slot;
+using detail::FrictionData;
+using detail::FrictionModel;
+using detail::kConstantUnits;
+using detail::kEffects;
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+using ConditionKey = std::tuple<std::uint32_t, double, double, double, double, double>;
+
+ConditionKey condition_key(const FrictionLog& log, std::size_t i) {
+  return {log.guide[i], log.preload_um[i], log.load_N[i], std::round(log.temperature_C[i]), log.velocity_m_s[i],
+          static_cast<double>(log.direction[i])};
+}
+
+// σ per sample from the spread of repeats (see FrictionWeighting).
+std::vector<double> sample_sigmas(const FrictionLog& log, FrictionWeighting weighting) {
+  const std::size_t n = log.size();
+  std::vector<double> sigma(n, 1.0);
+  if (weighting == FrictionWeighting::none) return sigma;
+  std::map<ConditionKey, std::vector<std::size_t>> groups;
+  for (std::size_t i = 0; i < n; ++i) groups[condition_key(log, i)].push_back(i);
+  std::vector<double> deviation(n, kNaN);
+  std::map<ConditionKey, double> group_sd;
+  for (const auto& [key, members] : groups) {
+    if (members.size() < 2) continue;
+    double mean = 0;
+    for (std::size_t i : members) mean += log.friction_N[i];
+    mean /= static_cast<double>(members.size());
+    const double correction = std::sqrt(static_cast<double>(members.size()) / static_cast<double>(members.size() - 1));
+    for (std::size_t i : members) deviation[i] = (log.friction_N[i] - mean) * correction;
+    if (members.size() >= 3) {
+      std::vector<double> values;
+      for (std::size_t i : members) values.push_back(log.friction_N[i]);
+      group_sd[key] = sample_standard_deviation(values);
+    }
+  }
+  std::vector<double> all;
+  for (double d : deviation)
+    if (!std::isnan(d)) all.push_back(d);
+  if (all.size() < 3)
+    throw InvalidParameter("weighting", "weights from the spread of repeats need conditions measured at least twice");
+  const double pooled = std::sqrt(std::inner_product(all.begin(), all.end(), all.begin(), 0.0) / static_cast<double>(all.size()));
+  if (weighting == FrictionWeighting::per_run) {
+    std::map<std::uint32_t, std::pair<double, std::size_t>> by_run;
+    for (std::size_t i = 0; i < n; ++i)
+      if (!std::isnan(deviation[i])) {
+        by_run[log.run[i]].first += deviation[i] * deviation[i];
+        by_run[log.run[i]].second += 1;
+      }
+    for (std::size_t i = 0; i < n; ++i) {
+      const auto it = by_run.find(log.run[i]);
+      sigma[i] = it == by_run.end() || it->second.second < 3 ? pooled
+                                                             : std::sqrt(it->second.first / static_cast<double>(it->second.second));
+    }
+  } else {
+    // A condition's own σ from >= 3 repeats, floored at a quarter of the pooled σ (a few
+    // repeats can agree by chance), the pooled σ where it has fewer repeats.
+    for (std::size_t i = 0; i < n; ++i) {
+      const auto it = group_sd.find(condition_key(log, i));
+      sigma[i] = it == group_sd.end() ? pooled : std::max(it->second, 0.25 * pooled);
+    }
+  }
+  for (double& s : sigma)
+    if (!(s > 0)) s = pooled > 0 ? pooled : 1.0;
+  return sigma;
+}
+
+std::vector<detail::ParameterSpec> parameter_specs(const FrictionFitOptions& o, const std::vector<std::size_t>& slots) {
+  std::vector<detail::ParameterSpec> specs;
+  const double start[] = {o.start.k1, o.start.k2, o.start.mu_st, o.start.v_st_m_s, o.start.mu_v, o.start.beta_per_K, o.start.f0};
+  for (std::size_t j = 0; j < 7; ++j)
+    specs.push_back({kFrictionConstantNames[j], kConstantUnits[j], start[j], o.bounds[j].first, o.bounds[j].second, o.free[j]});
+  for (std::size_t slot : slots) {
+    const EffectSpec& e = kEffects[slot];
+    specs.push_back({e.name, e.unit, e.neutral, e.lower, e.upper, true});
+  }
+  return specs;
+}
+
+std::vector<std::size_t> effect_slots(const FrictionFitOptions& o) {
+  std::vector<std::size_t> slots;
+  for (const auto& name : o.effects) {
+    const std::size_t slot = effect_slot(name);
+    if (std::find(slots.begin(), slots.end(), slot) != slots.end())
+      throw InvalidParameter("effect", "effect '" + name + "' given twice");
+    slots.push_back(slot);
+  }
+  return slots;
+}
+
+}  // namespace
+
+const std::vector<std::string>& friction_effect_names() {
+  static const std::vector<std::string> names = [] {
+    std::vector<std::string> v;
+    for (const auto& e : kEffects) v.emplace_back(e.name);
+    return v;
+  }();
+  return names;
+}
+
+FrictionConstants<double> FrictionFitResult::constants() const {
+  const auto& p = fit.parameters;
+  LMCAL_ASSERT(p.size() >= 7, "a friction fit has seven constants");
+  return {p[0].value, p[1].value, p[2].value, p[3].value, p[4].value, p[5].value, p[6].value};
+}
+
+FrictionEffects<double> FrictionFitResult::effects() const {
+  FrictionEffects<double> e;
+  for (std::size_t j = 7; j < fit.parameters.size(); ++j)
+    effect_member(e, effect_slot(fit.parameters[j].name)) = fit.parameters[j].value;
+  return e;
+}
+
+FrictionFitResult fit_friction(const FrictionLog& log, const FrictionFitOptions& options) {
+  if (log.size() == 0) throw InvalidParameter("log", "the friction log has no samples");
+  validate(options.start);
+  const std::vector<std::size_t> slots = effect_slots(options);
+  const auto specs = parameter_specs(options, slots);
+
+  FrictionFitResult out;
+  out.sigma_N = sample_sigmas(log, options.weighting);
+  FrictionData data{&log, {}, {}, options.start.T_ref_C};
+  for (std::size_t i = 0; i < log.size(); ++i) {
+    data.samples.push_back(i);
+    data.inv_sigma.push_back(1.0 / out.sigma_N[i]);
+  }
+  const FrictionModel model(data, slots);
+  out.fit = detail::solve_least_squares(model, specs, options.fit);
+
+  // Predictions and goodness of fit, in newtons.
+  const FrictionConstants<double> k = out.constants();
+  const FrictionEffects<double> e = out.effects();
+  double ss = 0;
+  for (std::size_t i = 0; i < log.size(); ++i) {
+    FrictionConstants<double> ki = k;
+    ki.nu_ref_mm2_s = log.viscosity40_mm2_s[i];
+    ki.T_ref_C = options.start.T_ref_C;
+    const double predicted = slots.empty() ? friction_force_N(ki, log.conditions(i))
+                                           : friction_force_with_effects_N(ki, e, log.conditions(i));
+    out.predicted_N.push_back(predicted);
+    const double r = log.friction_N[i] - predicted;
+    ss += r * r;
+    const double relative = std::abs(r) / std::max(std::abs(log.friction_N[i]), 1e-9);
+    if (relative > out.max_relative_error) {
+      out.max_relative_error = relative;
+      out.max_relative_error_sample = i;
+    }
+  }
+  out.rmse_N = std::sqrt(ss / static_cast<double>(log.size()));
+
+  std::map<ConditionKey, std::vector<std::size_t>> groups;
+  for (std::size_t i = 0; i < log.size(); ++i) groups[condition_key(log, i)].push_back(i);
+  for (const auto& [key, members] : groups) {
+    ConditionResidual c{log.guide_names.empty() ? "" : log.guide_names[std::get<0>(key)],
+                        std::get<1>(key), std::get<2>(key), std::get<3>(key), std::get<4>(key), std::get<5>(key),
+                        members.size(), 0, 0, 0, 0, 0};
+    double ss_c = 0;
+    for (std::size_t i : members) {
+      c.measured_N += log.friction_N[i];
+      c.predicted_N += out.predicted_N[i];
+      ss_c += (log.friction_N[i] - out.predicted_N[i]) * (log.friction_N[i] - out.predicted_N[i]);
+    }
+    const double m = static_cast<double>(members.size());
+    c.measured_N /= m;
+    c.predicted_N /= m;
+    c.bias_N = c.measured_N - c.predicted_N;
+    c.rmse_N = std::sqrt(ss_c / m);
+    c.relative_error = std::abs(c.bias_N) / std::max(std::abs(c.measured_N), 1e-9);
+    out.conditions.push_back(c);
+  }
+
+  // Every run alone, from the pooled estimate, holding what the pooled fit held.
+  out.runs = log.run_names;
+  if (options.per_run_fits && log.run_names.size() >= 2) {
+    auto run_specs = specs;
+    for (std::size_t j = 0; j < specs.size(); ++j) {
+      run_specs[j].start = out.fit.parameters[j].value;
+      run_specs[j].free = specs[j].free && !out.fit.parameters[j].held_unidentifiable;
+      if (run_specs[j].free) run_specs[j].start = std::clamp(run_specs[j].start, specs[j].lower, specs[j].upper);
+    }
+    FitOptions run_options = options.fit;
+    run_options.starts = 1;
+    run_options.profile = ProfileMode::none;
+    std::vector<std::vector<double>> values(specs.size(), std::vector<double>(log.run_names.size(), kNaN));
+    for (std::uint32_t r = 0; r < log.run_names.size(); ++r) {
+      FrictionData run_data{&log, {}, {}, options.start.T_ref_C};
+      for (std::size_t i = 0; i < log.size(); ++i)
+        if (log.run[i] == r) {
+          run_data.samples.push_back(i);
+          run_data.inv_sigma.push_back(1.0 / out.sigma_N[i]);
+        }
+      if (run_data.samples.size() <= specs.size()) continue;
+      const FitResult run_fit = detail::solve_least_squares(FrictionModel(run_data, slots), run_specs, run_options);
+      if (!run_fit.solver.usable) continue;
+      for (std::size_t j = 0; j < specs.size(); ++j)
+        if (run_specs[j].free && !run_fit.parameters[j].held_unidentifiable) values[j][r] = run_fit.parameters[j].value;
+    }
+    const double runs = static_cast<double>(log.run_names.size());
+    for (std::size_t j = 0; j < specs.size(); ++j) {
+      if (!run_specs[j].free) continue;
+      RunSpread s;
+      s.parameter = specs[j].name;
+      s.per_run = values[j];
+      s.spread = spread(values[j], options.fit.confidence);
+      s.pooled_se = out.fit.parameters[j].se;
+      s.ratio = s.spread.sd / (s.pooled_se * std::sqrt(runs));
+      s.wider_than_pooled = s.ratio > 3;
+      out.spread.push_back(s);
+    }
+  }
+  return out;
+}
+
+// ---- output ---------------------------------------------------------------------------------
+
+namespace {
+
+nlohmann::json number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
+
+nlohmann::json fit_json(const FitResult& fit) {
+  nlohmann::json parameters = nlohmann::json::array();
+  std::vector<std::string> names;
+  for (const auto& p : fit.parameters) {
+    names.push_back(p.name);
+    parameters.push_back({{"name", p.name},
+                          {"unit", p.unit},
+                          {"value", number(p.value)},
+                          {"start", p.start},
+                          {"bounds", {p.lower, p.upper}},
+                          {"free", p.free},
+                          {"held_unidentifiable", p.held_unidentifiable},
+                          {"at_bound", p.at_bound},
+                          {"se", number(p.se)},
+                          {"ci95", {number(p.ci_low), number(p.ci_high)}},
+                          {"profile_ci95", {number(p.profile_low), number(p.profile_high)}},
+                          {"interval", p.interval}});
+  }
+  nlohmann::json correlation = nlohmann::json::array();
+  for (Eigen::Index i = 0; i < fit.correlation.rows(); ++i) {
+    nlohmann::json row = nlohmann::json::array();
+    for (Eigen::Index j = 0; j < fit.correlation.cols(); ++j) row.push_back(number(fit.correlation(i, j)));
+    correlation.push_back(row);
+  }
+  nlohmann::json issues = nlohmann::json::array();
+  for (const auto& issue : fit.identifiability.issues) {
+    nlohmann::json combo = nlohmann::json::object();
+    for (const auto& [name, w] : issue.combination) combo[name] = w;
+    issues.push_back({{"combination", combo},
+                      {"relative_se", number(issue.relative_se)},
+                      {"why", issue.why},
+                      {"measure", issue.measure},
+                      {"held", issue.held}});
+  }
+  const auto& s = fit.solver;
+  return {{"parameters", parameters},
+          {"correlation", {{"names", names}, {"matrix", correlation}}},
+          {"residuals", fit.residuals},
+          {"free_parameters", fit.free_parameters},
+          {"dof", fit.dof},
+          {"residual_variance", number(fit.residual_variance)},
+          {"identifiability",
+           {{"identifiable", fit.identifiability.identifiable},
+            {"condition_number", number(fit.identifiability.condition_number)},
+            {"issues", issues}}},
+          {"solver",
+           {{"converged", s.converged},
+            {"usable", s.usable},
+            {"iterations", s.iterations},
+            {"termination", s.termination},
+            {"initial_cost", s.initial_cost},
+            {"final_cost", s.final_cost},
+            {"starts", s.starts},
+            {"starts_agreed", s.starts_agreed},
+            {"covariance_ok", s.covariance_ok},
+            {"covariance_message", s.covariance_message},
+            {"seconds", s.seconds},
+            {"brief", s.brief}}},
+          {"warnings", fit.warnings}};
+}
+
+const char* to_string(FrictionWeighting w) {
+  switch (w) {
+    case FrictionWeighting::none: return "none";
+    case FrictionWeighting::per_run: return "per-run";
+    case FrictionWeighting::per_condition: return "per-condition";
+  }
+  return "?";
+}
+
+const char* to_string(RobustLoss l) {
+  switch (l) {
+    case RobustLoss::none: return "none";
+    case RobustLoss::huber: return "huber";
+    case RobustLoss::cauchy: return "cauchy";
+  }
+  return "?";
+}
+
+}  // namespace
+
+std::string friction_fit_json(const FrictionFitResult& r, const FrictionFitOptions& o, const FitProvenance& prov) {
+  nlohmann::json spread = nlohmann::json::array();
+  for (const auto& s : r.spread) {
+    nlohmann::json per_run = nlohmann::json::array();
+    for (double v : s.per_run) per_run.push_back(number(v));
+    spread.push_back({{"parameter", s.parameter},
+                      {"per_run", per_run},
+                      {"n", s.spread.n},
+                      {"mean", number(s.spread.mean)},
+                      {"sd_eq1", number(s.spread.sd)},
+                      {"ci95", {number(s.spread.low), number(s.spread.high)}},
+                      {"min", number(s.spread.min)},
+                      {"max", number(s.spread.max)},
+                      {"pooled_se", number(s.pooled_se)},
+                      {"ratio_to_pooled", number(s.ratio)},
+                      {"wider_than_pooled", s.wider_than_pooled}});
+  }
+  nlohmann::json inputs = nlohmann::json::array();
+  for (const auto& [file, hash] : prov.inputs) inputs.push_back({{"file", file}, {"sha256", hash}});
+  nlohmann::json j = {
+      {"kind", "friction fit"},
+      {"name", prov.name},
+      {"lmcal_version", LMCAL_VERSION},
+      {"command", prov.command},
+      {"inputs", inputs},
+      {"seed", o.fit.seed},
+      {"options",
+       {{"weighting", to_string(o.weighting)},
+        {"loss", to_string(o.fit.loss)},
+        {"loss_scale", o.fit.loss_scale},
+        {"starts", o.fit.starts},
+        {"effects", o.effects},
+        {"reference_temperature_C", o.start.T_ref_C}}},
+      {"runs", r.runs},
+      {"goodness",
+       {{"rmse_N", r.rmse_N},
+        {"max_relative_error", r.max_relative_error},
+        {"max_relative_error_sample", r.max_relative_error_sample},
+        {"conditions", r.conditions.size()}}},
+      {"spread_across_runs", spread}};
+  j.update(fit_json(r.fit));
+  return j.dump(2) + "\n";
+}
+
+std::string friction_fit_samples_csv(const FrictionFitResult& r, const FrictionLog& log) {
+  CsvText csv({"run", "guide", "velocity_m_s", "load_N", "preload_um", "block_length_mm", "temperature_C", "direction",
+               "measured_N", "predicted_N", "residual_N", "sigma_N"});
+  for (std::size_t i = 0; i < log.size(); ++i) {
+    csv.cell(log.run_names[log.run[i]]).cell(log.guide_names.empty() ? "" : log.guide_names[log.guide[i]]);
+    csv.cell(log.velocity_m_s[i]).cell(log.load_N[i]).cell(log.preload_um[i]).cell(log.block_length_mm[i]);
+    csv.cell(log.temperature_C[i]).cell(double(log.direction[i])).cell(log.friction_N[i]).cell(r.predicted_N[i]);
+    csv.cell(log.friction_N[i] - r.predicted_N[i]).cell(r.sigma_N[i]).end_row();
+  }
+  return csv.str();
+}
+
+std::string friction_fit_conditions_csv(const FrictionFitResult& r) {
+  CsvText csv({"guide", "preload_um", "load_N", "temperature_C", "velocity_m_s", "direction", "n", "measured_N",
+               "predicted_N", "bias_N", "rmse_N", "relative_error"});
+  for (const auto& c : r.conditions) {
+    csv.cell(c.guide).cell(c.preload_um).cell(c.load_N).cell(c.temperature_C).cell(c.velocity_m_s).cell(c.direction);
+    csv.cell(double(c.n)).cell(c.measured_N).cell(c.predicted_N).cell(c.bias_N).cell(c.rmse_N).cell(c.relative_error);
+    csv.end_row();
+  }
+  return csv.str();
+}
+
+std::string friction_fit_summary(const FrictionFitResult& r) {
+  const FitResult& f = r.fit;
+  std::string s;
+  std::size_t free = 0;
+  for (const auto& p : f.parameters) free += p.free ? 1 : 0;
+  s += fmt::format("{} samples, {} runs, {} of {} parameters asked free\n", f.residuals, r.runs.size(), free,
+                   f.parameters.size());
+  s += fmt::format("  {:<20} {:>12} {:>11}  {:<27} {}\n", "parameter", "value", "SE", "95% interval", "note");
+  for (const auto& p : f.parameters) {
+    std::string note;
+    if (!p.free) note = "held (given)";
+    else if (p.held_unidentifiable) note = "held: not identifiable";
+    else if (p.at_bound) note = "at a bound";
+    std::string interval = "";
+    if (p.interval == "profile") interval = fmt::format("[{:.5g}, {:.5g}] profile", p.profile_low, p.profile_high);
+    else if (p.interval == "linear") interval = fmt::format("[{:.5g}, {:.5g}]", p.ci_low, p.ci_high);
+    s += fmt::format("  {:<20} {:>12.6g} {:>11.3g}  {:<27} {}\n", p.name, p.value, p.se, interval, note);
+  }
+  if (f.identifiability.identifiable) {
+    s += fmt::format("identifiability: all requested parameters determined (condition number {:.3g})\n",
+                     f.identifiability.condition_number);
+  } else {
+    for (const auto& issue : f.identifiability.issues)
+      s += fmt::format("NOT IDENTIFIABLE: {}\n  -> held {}; to separate them: {}\n", issue.why,
+                       fmt::join(issue.held, ", "), issue.measure);
+  }
+  // The strongest correlations among fitted parameters.
+  std::vector<std::tuple<double, double, std::string, std::string>> pairs;
+  for (std::size_t i = 0; i < f.parameters.size(); ++i)
+    for (std::size_t j = i + 1; j < f.parameters.size(); ++j) {
+      const double c = f.correlation(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j));
+      if (std::isfinite(c)) pairs.emplace_back(std::abs(c), c, f.parameters[i].name, f.parameters[j].name);
+    }
+  std::sort(pairs.rbegin(), pairs.rend());
+  if (!pairs.empty()) {
+    s += "strongest correlations:";
+    for (std::size_t k = 0; k < std::min<std::size_t>(3, pairs.size()); ++k)
+      s += fmt::format(" {}/{} {:+.3f};", std::get<2>(pairs[k]), std::get<3>(pairs[k]), std::get<1>(pairs[k]));
+    s += "\n";
+  }
+  s += fmt::format("solver: {} after {} iterations; {} of {} starts reached the best minimum; covariance {}\n",
+                   f.solver.termination, f.solver.iterations, f.solver.starts_agreed, f.solver.starts,
+                   f.solver.covariance_ok ? "ok" : "FAILED");
+  s += fmt::format("goodness: RMSE {:.3f} N, max relative error {:.1f} % (sample {}), residual sigma {:.3g}\n", r.rmse_N,
+                   100 * r.max_relative_error, r.max_relative_error_sample, std::sqrt(f.residual_variance));
+  if (!r.spread.empty()) {
+    s += fmt::format("spread across {} runs (Eq. 1 sigma; ratio = sigma / (pooled SE * sqrt(runs)), ~1 if only noise):\n",
+                     r.runs.size());
+    for (const auto& sp : r.spread)
+      s += fmt::format("  {:<20} mean {:>11.5g}  sigma {:>9.3g}  [{:.5g}, {:.5g}]  min {:.5g} max {:.5g}  ratio {:.2f}{}\n",
+                       sp.parameter, sp.spread.mean, sp.spread.sd, sp.spread.low, sp.spread.high, sp.spread.min,
+                       sp.spread.max, sp.ratio, sp.wider_than_pooled ? "  WIDER: the model misses something run to run" : "");
+  }
+  for (const auto& w : f.warnings) s += "warning: " + w + "\n";
+  return s;
+}
+
+}  // namespace lmcal

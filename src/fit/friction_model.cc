@@ -1,0 +1,127 @@
+#include "friction_model.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "batched_autodiff.hpp"
+#include "lmcal/error.hpp"
+
+namespace lmcal::detail {
+
+std::size_t effect_slot(const std::string& name) {
+  for (std::size_t k = 0; k < std::size(kEffects); ++k)
+    if (name == kEffects[k].name) return k;
+  std::string known;
+  for (const auto& e : kEffects) known += (known.empty() ? "" : ", ") + std::string(e.name);
+  throw InvalidParameter("effect", fmt::format("unknown friction effect '{}'; known: {}", name, known));
+}
+
+namespace {
+
+// r_j = (F_measured - F_model(θ)) / σ for entry `rows[j]` of `data` (entry j when `rows` is
+// empty). θ = [k1, k2, μSt, V_St, μv, β, f0, effects...]: the one friction law, with Jets.
+struct FrictionResidual {
+  const FrictionData* data;
+  std::vector<std::size_t> rows;
+  std::vector<std::size_t> effect_slots;
+
+  template <typename T>
+  struct Prepared {
+    FrictionConstants<T> k;
+    FrictionEffects<T> e;
+  };
+
+  template <typename T>
+  Prepared<T> prepare(const T* th) const {
+    Prepared<T> p{{th[0], th[1], th[2], th[3], th[4], th[5], th[6], T(99.0), T(data->T_ref_C)}, {}};
+    for (std::size_t m = 0; m < effect_slots.size(); ++m) effect_member(p.e, effect_slots[m]) = th[7 + m];
+    return p;
+  }
+
+  template <typename T>
+  T operator()(Prepared<T>& p, std::size_t j) const {
+    const std::size_t entry = rows.empty() ? j : rows[j];
+    const std::size_t i = data->samples[entry];
+    const FrictionLog& log = *data->log;
+    p.k.nu_ref_mm2_s = T(log.viscosity40_mm2_s[i]);
+    const FrictionConditions<double> c = log.conditions(i);
+    const T predicted =
+        effect_slots.empty() ? T(friction_force_N(p.k, c)) : T(friction_force_with_effects_N(p.k, p.e, c));
+    return (log.friction_N[i] - predicted) * data->inv_sigma[entry];
+  }
+};
+
+Design describe(const FrictionData& d) {
+  Design design;
+  design.min_velocity = std::numeric_limits<double>::infinity();
+  for (std::size_t i : d.samples) {
+    design.preloads.insert(d.log->preload_um[i]);
+    design.temperatures.insert(std::round(d.log->temperature_C[i]));
+    design.loads.insert(d.log->load_N[i]);
+    design.block_lengths.insert(d.log->block_length_mm[i]);
+    if (d.log->velocity_m_s[i] < 0.03) ++design.low_speed;
+    design.min_velocity = std::min(design.min_velocity, d.log->velocity_m_s[i]);
+  }
+  return design;
+}
+
+}  // namespace
+
+FrictionModel::FrictionModel(const FrictionData& data, std::vector<std::size_t> effect_slots)
+    : data_(data), effect_slots_(std::move(effect_slots)), design_(describe(data)) {}
+
+std::unique_ptr<ceres::CostFunction> FrictionModel::cost_function(const std::vector<std::size_t>& rows,
+                                                                  const RowLoss& loss) const {
+  return std::make_unique<BatchedAutoDiffCostFunction<FrictionResidual>>(
+      FrictionResidual{&data_, rows, effect_slots_}, static_cast<int>(7 + effect_slots_.size()),
+      rows.empty() ? data_.samples.size() : rows.size(), loss);
+}
+
+void FrictionModel::explain(IdentifiabilityIssue& issue) const {
+  std::set<std::string> dominant;
+  for (const auto& [name, weight] : issue.combination)
+    if (std::abs(weight) >= 0.3) dominant.insert(name);
+  auto only = [&](std::initializer_list<const char*> names) {
+    for (const auto& d : dominant)
+      if (std::none_of(names.begin(), names.end(), [&](const char* n) { return d == n; })) return false;
+    return !dominant.empty();
+  };
+  const Design& d = design_;
+  if (dominant.count("beta_per_K") && d.temperatures.size() == 1) {
+    issue.why = fmt::format(
+        "all samples are at one temperature ({} C): beta only scales the viscosity, which mu_v and mu_st "
+        "absorb",
+        *d.temperatures.begin());
+    issue.measure = "repeat the sweep at a second temperature, at least 10 K away";
+  } else if (only({"k1", "k2"}) && d.preloads.size() == 1) {
+    issue.why =
+        fmt::format("one preload class (pc = {} um): k1 and k2 enter only as (k1 - k2 pc)", *d.preloads.begin());
+    issue.measure = "measure a second preload class (e.g. Normal and C0)";
+  } else if (only({"mu_st", "v_st_m_s"}) || (dominant.count("mu_st") && dominant.count("v_st_m_s"))) {
+    issue.why = d.low_speed == 0
+                    ? fmt::format(
+                          "no samples below 0.03 m/s (slowest {} m/s): the Stribeck term has decayed and "
+                          "only a combination of mu_st and v_st shows",
+                          d.min_velocity)
+                    : fmt::format("only {} samples below 0.03 m/s: too few to separate mu_st from v_st", d.low_speed);
+    issue.measure = "measure at several speeds between 0.002 and 0.03 m/s";
+  } else if ((dominant.count("f0") || dominant.count("k1") || dominant.count("k2")) && d.loads.size() == 1 &&
+             d.block_lengths.size() == 1) {
+    issue.why = fmt::format("one load ({} N) and one block length: the Coulomb term and f0 are both constant offsets",
+                            *d.loads.begin());
+    issue.measure = "measure at a second load, or with a second block size";
+  } else if (only({"k1", "k2"}) && d.loads.size() == 1) {
+    issue.why = "one load: the Coulomb term cannot be told apart from the other constant terms";
+    issue.measure = "measure at a second load";
+  } else {
+    std::string combo;
+    for (const auto& [name, weight] : issue.combination) combo += fmt::format(" {:+.2f}·{}", weight, name);
+    issue.why = "the data determine only the combination" + combo + " (relative to each parameter's size)";
+    issue.measure = "widen the range of speed, load, preload and temperature";
+  }
+}
+
+}  // namespace lmcal::detail

@@ -1,0 +1,72 @@
+// The friction least-squares model (private to the fit layer). Kept in its own
+// translation unit: the row loop over 10⁵ samples must be compiled where the compiler
+// still inlines the Jet arithmetic, not inside a large file.
+#pragma once
+
+#include <set>
+#include <string>
+#include <vector>
+
+#include "least_squares.hpp"
+#include "lmcal/io/friction_log.hpp"
+#include "lmcal/models/friction_effects.hpp"
+
+namespace lmcal::detail {
+
+struct EffectSpec {
+  const char* name;
+  const char* unit;
+  double neutral, lower, upper;
+};
+
+// The fittable friction effects, in FrictionEffects member order.
+inline constexpr EffectSpec kEffects[] = {
+    {"stribeck_exponent", "1", 1.0, 0.2, 5.0},
+    {"viscous_load", "1/kN", 0.0, -1.0, 1.0},
+    {"direction_asymmetry", "1", 0.0, -0.5, 0.5},
+    {"seal_drag", "N s2/m2", 0.0, -5000.0, 5000.0},
+    {"coulomb_temperature", "1/K", 0.0, -0.1, 0.1},
+};
+
+inline constexpr const char* kConstantUnits[] = {"1", "1/um", "N mm2/s / (um mm)", "m/s", "N/(mm um m/s mm2/s)", "1/K", "N/mm"};
+
+template <typename T>
+T& effect_member(FrictionEffects<T>& e, std::size_t slot) {
+  T* members[] = {&e.stribeck_exponent, &e.viscous_load_per_kN, &e.direction_asymmetry, &e.seal_drag_N_s2_m2,
+                  &e.coulomb_temperature_per_K};
+  return *members[slot];
+}
+
+// The slot of a named effect in FrictionEffects; InvalidParameter for an unknown name.
+std::size_t effect_slot(const std::string& name);
+
+// What the residuals need, one entry per sample.
+struct FrictionData {
+  const FrictionLog* log;
+  std::vector<std::size_t> samples;  // indices into the log
+  std::vector<double> inv_sigma;     // per entry of `samples`
+  double T_ref_C = 40.0;
+};
+
+// Design facts that decide what the data can determine.
+struct Design {
+  std::set<double> preloads, temperatures, loads, block_lengths;
+  std::size_t low_speed = 0;  // samples with V < 0.03 m/s, where the Stribeck term is felt
+  double min_velocity = 0;
+};
+
+class FrictionModel : public LeastSquaresModel {
+ public:
+  FrictionModel(const FrictionData& data, std::vector<std::size_t> effect_slots);
+  std::size_t num_residuals() const override { return data_.samples.size(); }
+  std::unique_ptr<ceres::CostFunction> cost_function(const std::vector<std::size_t>& rows,
+                                                     const RowLoss& loss) const override;
+  void explain(IdentifiabilityIssue& issue) const override;
+
+ private:
+  const FrictionData& data_;
+  std::vector<std::size_t> effect_slots_;
+  Design design_;
+};
+
+}  // namespace lmcal::detail

@@ -1,0 +1,478 @@
+#include "least_squares.hpp"
+
+#include <fmt/format.h>
+#include <nlopt.hpp>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cmath>
+#include <limits>
+#include <numeric>
+
+#include "lmcal/error.hpp"
+#include "lmcal/fit/statistics.hpp"
+
+namespace lmcal {
+
+const ParameterEstimate& FitResult::parameter(const std::string& name) const {
+  for (const auto& p : parameters)
+    if (p.name == name) return p;
+  throw InvalidParameter("parameter", "no parameter named '" + name + "' in this fit");
+}
+
+std::vector<double> FitResult::values() const {
+  std::vector<double> v;
+  for (const auto& p : parameters) v.push_back(p.value);
+  return v;
+}
+
+namespace detail {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// The residual block of `cost` on `theta` with its loss, bounds and held parameters.
+void build_problem(ceres::Problem& problem, const ceres::CostFunction& cost, const std::vector<ParameterSpec>& specs,
+                   const std::vector<bool>& held, double* theta, bool bounded) {
+  const int p = static_cast<int>(specs.size());
+  problem.AddResidualBlock(const_cast<ceres::CostFunction*>(&cost), nullptr, theta);
+  std::vector<int> constant;
+  for (int j = 0; j < p; ++j)
+    if (held[j]) constant.push_back(j);
+  if (static_cast<int>(constant.size()) == p) {
+    problem.SetParameterBlockConstant(theta);
+    return;
+  }
+  if (!constant.empty()) problem.SetManifold(theta, new ceres::SubsetManifold(p, constant));
+  for (int j = 0; j < p && bounded; ++j) {
+    if (held[j]) continue;
+    problem.SetParameterLowerBound(theta, j, specs[j].lower);
+    problem.SetParameterUpperBound(theta, j, specs[j].upper);
+  }
+}
+
+ceres::Problem::Options problem_options() {
+  ceres::Problem::Options o;
+  o.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  return o;
+}
+
+// One Ceres solve over a fixed cost function, held parameters constant.
+struct Polish {
+  std::vector<double> theta;
+  ceres::Solver::Summary summary;
+};
+
+Polish solve(const ceres::CostFunction& cost, const std::vector<ParameterSpec>& specs, const std::vector<bool>& held,
+             std::vector<double> theta, bool bounded) {
+  Polish out;
+  ceres::Problem problem(problem_options());
+  build_problem(problem, cost, specs, held, theta.data(), bounded);
+  ceres::Solver::Options solver;
+  solver.minimizer_type = ceres::TRUST_REGION;
+  solver.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+  // Tall problems (10⁵ rows, a handful of parameters): JᵀJ once per iteration is far cheaper
+  // than a QR of J, and identifiability is settled before the covariance is trusted.
+  solver.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
+  solver.max_num_iterations = 200;
+  solver.function_tolerance = 1e-10;
+  solver.gradient_tolerance = 1e-10;
+  solver.parameter_tolerance = 1e-9;
+  solver.num_threads = 1;
+  solver.logging_type = ceres::SILENT;
+  ceres::Solve(solver, &problem, &out.summary);
+  out.theta = std::move(theta);
+  return out;
+}
+
+bool inside_bounds(const std::vector<ParameterSpec>& specs, const std::vector<bool>& held, const std::vector<double>& theta) {
+  for (std::size_t j = 0; j < specs.size(); ++j)
+    if (!held[j] && !(theta[j] >= specs[j].lower && theta[j] <= specs[j].upper)) return false;
+  return true;
+}
+
+// Bounds make Ceres project its steps (about twice the Jacobian evaluations), so the polish
+// first runs without them and repeats with them only when the minimum lies outside.
+Polish polish(const ceres::CostFunction& cost, const std::vector<ParameterSpec>& specs, const std::vector<bool>& held,
+              const std::vector<double>& theta) {
+  if (inside_bounds(specs, held, theta)) {
+    Polish free = solve(cost, specs, held, theta, false);
+    if (free.summary.IsSolutionUsable() && inside_bounds(specs, held, free.theta)) return free;
+  }
+  std::vector<double> start = theta;
+  for (std::size_t j = 0; j < specs.size(); ++j)
+    if (!held[j]) start[j] = std::clamp(start[j], specs[j].lower, specs[j].upper);
+  return solve(cost, specs, held, start, true);
+}
+
+// Ceres' covariance (JᵀJ)⁻¹ at `theta` (unscaled; held rows and columns zero). Returns false,
+// with a message, when the Jacobian is rank deficient there.
+bool covariance_at(const ceres::CostFunction& cost, const std::vector<ParameterSpec>& specs,
+                   const std::vector<bool>& held, std::vector<double> theta, Eigen::MatrixXd& covariance,
+                   std::string& message) {
+  const int p = static_cast<int>(specs.size());
+  covariance = Eigen::MatrixXd::Zero(p, p);
+  if (std::all_of(held.begin(), held.end(), [](bool h) { return h; })) return true;
+  ceres::Problem problem(problem_options());
+  build_problem(problem, cost, specs, held, theta.data(), false);
+  ceres::Covariance::Options covariance_options;
+  covariance_options.algorithm_type = ceres::DENSE_SVD;
+  covariance_options.num_threads = 1;
+  ceres::Covariance c(covariance_options);
+  const std::vector<std::pair<const double*, const double*>> blocks = {{theta.data(), theta.data()}};
+  if (!c.Compute(blocks, &problem)) {
+    message = "ceres::Covariance failed: the Jacobian is rank deficient at the solution";
+    return false;
+  }
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> block(p, p);
+  c.GetCovarianceBlock(theta.data(), theta.data(), block.data());
+  covariance = block;
+  return true;
+}
+
+// NLopt objective ½ Σ r² over a (sub)set of rows, in scaled free coordinates u = θ / scale.
+struct LocalSearch {
+  const ceres::CostFunction* cost;
+  std::vector<double> full;
+  std::vector<int> free;
+  std::vector<double> scale;
+  Eigen::VectorXd r;
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> J;
+
+  static double objective(unsigned n, const double* u, double* grad, void* data) {
+    auto& s = *static_cast<LocalSearch*>(data);
+    for (unsigned k = 0; k < n; ++k) s.full[s.free[k]] = u[k] * s.scale[k];
+    const double* parameters[] = {s.full.data()};
+    double* jacobians[] = {s.J.data()};
+    if (!s.cost->Evaluate(parameters, s.r.data(), grad ? jacobians : nullptr) || !s.r.allFinite())
+      return std::numeric_limits<double>::max();
+    if (grad) {
+      const Eigen::VectorXd g = s.J.transpose() * s.r;
+      for (unsigned k = 0; k < n; ++k) grad[k] = g[s.free[k]] * s.scale[k];
+    }
+    return 0.5 * s.r.squaredNorm();
+  }
+};
+
+double radical_inverse(std::uint64_t index, unsigned base) {
+  double result = 0, f = 1.0 / base;
+  while (index > 0) {
+    result += f * static_cast<double>(index % base);
+    index /= base;
+    f /= base;
+  }
+  return result;
+}
+
+// The k-th start: Halton point over the bounds (log-uniform where the bounds span > 100x).
+std::vector<double> halton_start(const std::vector<ParameterSpec>& specs, const std::vector<bool>& held,
+                                 const std::vector<double>& base, std::uint64_t index) {
+  static constexpr unsigned kPrimes[] = {2, 3, 5, 7, 11, 13, 17, 19, 23, 29, 31, 37, 41, 43, 47, 53};
+  std::vector<double> theta = base;
+  std::size_t dim = 0;
+  for (std::size_t j = 0; j < specs.size(); ++j) {
+    if (held[j]) continue;
+    const double h = radical_inverse(index, kPrimes[dim++ % std::size(kPrimes)]);
+    const double lo = specs[j].lower, hi = specs[j].upper;
+    theta[j] = lo > 0 && hi / lo > 100 ? lo * std::pow(hi / lo, h) : lo + h * (hi - lo);
+  }
+  return theta;
+}
+
+double relative_scale(const ParameterSpec& spec, double value) {
+  const double s = std::max(std::abs(value), std::abs(spec.start));
+  return s > 0 ? s : 0.1 * (spec.upper - spec.lower);
+}
+
+struct MultiStart {
+  std::vector<double> best;
+  int starts = 0, agreed = 0;
+};
+
+MultiStart multi_start(const LeastSquaresModel& model, const std::vector<ParameterSpec>& specs,
+                       const std::vector<bool>& held, const std::vector<double>& start, const FitOptions& options) {
+  MultiStart out{start, 0, 0};
+  std::vector<int> free;
+  for (std::size_t j = 0; j < specs.size(); ++j)
+    if (!held[j]) free.push_back(static_cast<int>(j));
+  if (free.empty() || options.starts < 1) return out;
+
+  const std::size_t n = model.num_residuals();
+  std::vector<std::size_t> rows;
+  const std::size_t m = std::min(n, std::max<std::size_t>(options.subsample, 1));
+  for (std::size_t k = 0; k < m; ++k) rows.push_back(k * n / m);  // evenly spread
+  const auto cost = model.cost_function(rows, RowLoss{options.loss, options.loss_scale});
+
+  LocalSearch search{cost.get(), start, free, {}, Eigen::VectorXd(rows.size()), {}};
+  search.J.resize(static_cast<Eigen::Index>(rows.size()), static_cast<Eigen::Index>(specs.size()));
+  std::vector<double> lower, upper;
+  for (int j : free) {
+    search.scale.push_back(relative_scale(specs[j], start[j]));
+    lower.push_back(specs[j].lower / search.scale.back());
+    upper.push_back(specs[j].upper / search.scale.back());
+  }
+
+  std::vector<std::pair<double, std::vector<double>>> ends;
+  for (int k = 0; k < options.starts; ++k) {
+    std::vector<double> theta = k == 0 ? start : halton_start(specs, held, start, options.seed * 7919 + k);
+    std::vector<double> u;
+    for (std::size_t i = 0; i < free.size(); ++i)
+      u.push_back(std::clamp(theta[free[i]] / search.scale[i], lower[i], upper[i]));
+    search.full = theta;
+    nlopt::opt opt(nlopt::LD_LBFGS, static_cast<unsigned>(free.size()));
+    opt.set_lower_bounds(lower);
+    opt.set_upper_bounds(upper);
+    opt.set_min_objective(&LocalSearch::objective, &search);
+    opt.set_ftol_rel(1e-10);
+    opt.set_xtol_rel(1e-8);
+    opt.set_maxeval(250);
+    double f = std::numeric_limits<double>::max();
+    try {
+      opt.optimize(u, f);
+    } catch (const std::exception&) {
+      // NLopt gives up on roundoff-limited or failed searches; keep the point it reached.
+      f = LocalSearch::objective(static_cast<unsigned>(u.size()), u.data(), nullptr, &search);
+    }
+    for (std::size_t i = 0; i < free.size(); ++i) theta[free[i]] = u[i] * search.scale[i];
+    ends.emplace_back(f, theta);
+  }
+  const auto best = std::min_element(ends.begin(), ends.end(), [](auto& a, auto& b) { return a.first < b.first; });
+  out.best = best->second;
+  out.starts = options.starts;
+  for (const auto& [f, theta] : ends)
+    if (f - best->first <= 1e-3 * std::abs(best->first) + 1e-12) ++out.agreed;
+  return out;
+}
+
+bool at_bound(const ParameterSpec& s, double v) {
+  const double tol = 1e-7 * (s.upper - s.lower);
+  return v - s.lower <= tol || s.upper - v <= tol;
+}
+
+}  // namespace
+
+Eigen::VectorXd evaluate_residuals(const LeastSquaresModel& model, const std::vector<double>& theta,
+                                   const RowLoss& loss, Eigen::MatrixXd* jacobian, const std::vector<std::size_t>& rows) {
+  const auto cost = model.cost_function(rows, loss);
+  const std::size_t n = rows.empty() ? model.num_residuals() : rows.size();
+  Eigen::VectorXd r(static_cast<Eigen::Index>(n));
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> J(static_cast<Eigen::Index>(n),
+                                                                           static_cast<Eigen::Index>(theta.size()));
+  const double* parameters[] = {theta.data()};
+  double* jacobians[] = {J.data()};
+  LMCAL_ASSERT(cost->Evaluate(parameters, r.data(), jacobian ? jacobians : nullptr), "residual evaluation failed");
+  if (jacobian) *jacobian = J;
+  return r;
+}
+
+FitResult solve_least_squares(const LeastSquaresModel& model, const std::vector<ParameterSpec>& specs,
+                              const FitOptions& options) {
+  const auto clock_start = std::chrono::steady_clock::now();
+  const std::size_t p = specs.size();
+  const std::size_t n = model.num_residuals();
+  for (const auto& s : specs) {
+    require_finite(s.name.c_str(), s.start);
+    if (s.free && !(s.lower < s.upper && std::isfinite(s.lower) && std::isfinite(s.upper)))
+      throw InvalidParameter(s.name, fmt::format("bounds [{}, {}] must be finite with lower < upper", s.lower, s.upper));
+    if (s.free && (s.start < s.lower || s.start > s.upper))
+      throw InvalidParameter(s.name, s.start, fmt::format("a start inside the bounds [{}, {}]", s.lower, s.upper));
+  }
+  std::vector<bool> held(p);
+  std::vector<double> start(p);
+  for (std::size_t j = 0; j < p; ++j) {
+    held[j] = !specs[j].free;
+    start[j] = specs[j].start;
+  }
+
+  FitResult result;
+  result.residuals = n;
+  const RowLoss loss{options.loss, options.loss_scale};
+  const auto cost = model.cost_function({}, loss);
+
+  // 1-2. Multi-start, then polish.
+  const MultiStart ms = multi_start(model, specs, held, start, options);
+  result.solver.starts = ms.starts;
+  result.solver.starts_agreed = ms.agreed;
+  std::vector<double> theta = ms.best;
+  // Large problems: converge on a tenth of the residuals first, so that the polish over all
+  // of them starts next to the minimum and needs only a step or two.
+  if (n > 20000) {
+    std::vector<std::size_t> rows;
+    for (std::size_t k = 0; k < n / 10; ++k) rows.push_back(k * 10);
+    theta = polish(*model.cost_function(rows, loss), specs, held, theta).theta;
+  }
+
+  // 3-4. Covariance at the solution; a direction the data cannot determine is held and the
+  // rest refitted. The weakest direction is the top eigenvector of the relatively scaled
+  // covariance, or (when Ceres finds the Jacobian rank deficient) the null vector of JᵀJ.
+  Polish fit;
+  Eigen::MatrixXd unscaled_covariance;
+  std::string covariance_message;
+  bool covariance_ok = false;
+  bool first_analysis = true;
+  for (std::size_t round = 0; round <= p; ++round) {
+    fit = polish(*cost, specs, held, theta);
+    theta = fit.theta;
+    covariance_message.clear();
+    covariance_ok = covariance_at(*cost, specs, held, theta, unscaled_covariance, covariance_message);
+    std::vector<std::size_t> free;
+    for (std::size_t j = 0; j < p; ++j)
+      if (!held[j]) free.push_back(j);
+    if (free.empty()) break;
+    const double dof = static_cast<double>(n) - static_cast<double>(free.size());
+    const double s2 = dof > 0 ? 2.0 * fit.summary.final_cost / dof : kNaN;
+    const auto m = static_cast<Eigen::Index>(free.size());
+    Eigen::VectorXd scale(m);
+    for (Eigen::Index k = 0; k < m; ++k) scale[k] = relative_scale(specs[free[k]], theta[free[k]]);
+    // variance (relative) along each eigen-direction, largest first
+    Eigen::VectorXd variance;
+    Eigen::MatrixXd directions;
+    if (covariance_ok) {
+      Eigen::MatrixXd c(m, m);
+      for (Eigen::Index a = 0; a < m; ++a)
+        for (Eigen::Index b = 0; b < m; ++b)
+          c(a, b) = unscaled_covariance(static_cast<Eigen::Index>(free[a]), static_cast<Eigen::Index>(free[b])) /
+                    (scale[a] * scale[b]);
+      const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(c);
+      variance = eig.eigenvalues().reverse().cwiseMax(0.0);
+      directions = eig.eigenvectors().rowwise().reverse();
+    } else {
+      Eigen::MatrixXd J;
+      evaluate_residuals(model, theta, loss, &J);
+      Eigen::MatrixXd Js(J.rows(), m);
+      for (Eigen::Index k = 0; k < m; ++k) Js.col(k) = J.col(static_cast<Eigen::Index>(free[k])) * scale[k];
+      const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(Js.transpose() * Js);
+      variance = eig.eigenvalues().cwiseMax(0.0).cwiseInverse();  // 1/0 = inf: undetermined
+      directions = eig.eigenvectors();
+    }
+    if (first_analysis) {
+      result.identifiability.condition_number = std::sqrt(variance[0] / variance[m - 1]);
+      first_analysis = false;
+    }
+    const double worst_se = std::sqrt(s2 * variance[0]);
+    if (!(worst_se > options.identifiability_threshold) || std::isnan(s2)) break;
+
+    IdentifiabilityIssue issue;
+    issue.relative_se = worst_se;
+    Eigen::VectorXd v = directions.col(0);
+    Eigen::Index dominant = 0;
+    v.cwiseAbs().maxCoeff(&dominant);
+    if (v[dominant] < 0) v = -v;
+    for (Eigen::Index k = 0; k < m; ++k)
+      if (std::abs(v[k]) >= 0.05) issue.combination.emplace_back(specs[free[k]].name, v[k]);
+    model.explain(issue);
+    const std::size_t hold = free[static_cast<std::size_t>(dominant)];
+    issue.held.push_back(specs[hold].name);
+    held[hold] = true;
+    theta[hold] = specs[hold].start;
+    result.identifiability.identifiable = false;
+    result.identifiability.issues.push_back(std::move(issue));
+  }
+
+  const auto& summary = fit.summary;
+  result.solver.converged = summary.termination_type == ceres::CONVERGENCE;
+  result.solver.usable = summary.IsSolutionUsable();
+  result.solver.iterations = static_cast<int>(summary.iterations.size()) - 1;
+  result.solver.termination = ceres::TerminationTypeToString(summary.termination_type);
+  result.solver.brief = summary.BriefReport();
+  result.solver.initial_cost = summary.initial_cost;
+  result.solver.final_cost = summary.final_cost;
+  result.solver.covariance_ok = covariance_ok;
+  result.solver.covariance_message = covariance_message;
+
+  std::size_t free_count = 0;
+  for (std::size_t j = 0; j < p; ++j) free_count += held[j] ? 0 : 1;
+  result.free_parameters = free_count;
+  result.dof = static_cast<double>(n) - static_cast<double>(free_count);
+  result.residual_variance = result.dof > 0 ? 2.0 * summary.final_cost / result.dof : kNaN;
+  const double s2 = result.residual_variance;
+  result.covariance = covariance_ok ? Eigen::MatrixXd(unscaled_covariance * s2) : Eigen::MatrixXd::Constant(p, p, kNaN);
+  result.correlation = Eigen::MatrixXd::Constant(p, p, kNaN);
+  for (std::size_t i = 0; i < p; ++i)
+    for (std::size_t j = 0; j < p; ++j) {
+      const double d = result.covariance(i, i) * result.covariance(j, j);
+      if (d > 0) result.correlation(i, j) = result.covariance(i, j) / std::sqrt(d);
+    }
+
+  const double t = result.dof > 0 ? student_t_quantile(1 - (1 - options.confidence) / 2, result.dof) : kNaN;
+  const double profile_threshold =
+      result.dof > 0 ? 0.5 * s2 * fisher_f_quantile(options.confidence, 1, result.dof) : kNaN;
+  for (std::size_t j = 0; j < p; ++j) {
+    ParameterEstimate e;
+    e.name = specs[j].name;
+    e.unit = specs[j].unit;
+    e.value = theta[j];
+    e.start = specs[j].start;
+    e.lower = specs[j].lower;
+    e.upper = specs[j].upper;
+    e.free = specs[j].free;
+    e.held_unidentifiable = specs[j].free && held[j];
+    e.profile_low = e.profile_high = kNaN;
+    if (held[j]) {
+      e.se = e.ci_low = e.ci_high = kNaN;
+      e.interval = "none";
+    } else {
+      e.at_bound = at_bound(specs[j], theta[j]);
+      e.se = std::sqrt(result.covariance(j, j));
+      e.ci_low = e.value - t * e.se;
+      e.ci_high = e.value + t * e.se;
+      if (e.at_bound) result.warnings.push_back(fmt::format("{} = {} sits on a bound [{}, {}]", e.name, e.value, e.lower, e.upper));
+    }
+    result.parameters.push_back(e);
+  }
+
+  // Profile likelihood where the linear interval is unreliable (or everywhere, if asked).
+  if (options.profile != ProfileMode::none && result.dof > 0 && free_count > 1) {
+    for (std::size_t j = 0; j < p; ++j) {
+      ParameterEstimate& e = result.parameters[j];
+      if (held[j]) continue;
+      const bool unreliable = e.at_bound || !std::isfinite(e.se) || e.ci_low < e.lower || e.ci_high > e.upper ||
+                              e.se > 0.3 * relative_scale(specs[j], e.value);
+      if (options.profile == ProfileMode::automatic && !unreliable) continue;
+      std::vector<bool> held_j = held;
+      held_j[j] = true;
+      auto excess = [&](double value) {
+        std::vector<double> th = theta;
+        th[j] = value;
+        return polish(*cost, specs, held_j, th).summary.final_cost - summary.final_cost;
+      };
+      auto bound_side = [&](double direction) {
+        const double limit = direction > 0 ? specs[j].upper : specs[j].lower;
+        double step = std::isfinite(e.se) && e.se > 0 ? t * e.se : 0.1 * (specs[j].upper - specs[j].lower);
+        double inside = e.value;
+        for (int k = 0; k < 40; ++k) {
+          const double trial = std::clamp(e.value + direction * step, specs[j].lower, specs[j].upper);
+          if (excess(trial) > profile_threshold) {
+            double a = inside, b = trial;  // a inside, b outside: bisect
+            for (int m = 0; m < 30 && std::abs(b - a) > 1e-6 * std::abs(step); ++m) {
+              const double mid = 0.5 * (a + b);
+              (excess(mid) > profile_threshold ? b : a) = mid;
+            }
+            return 0.5 * (a + b);
+          }
+          if (trial == limit) return limit;
+          inside = trial;
+          step *= 2;
+        }
+        return limit;
+      };
+      e.profile_low = bound_side(-1);
+      e.profile_high = bound_side(+1);
+      e.interval = "profile";
+    }
+  }
+
+  if (!result.solver.converged)
+    result.warnings.push_back("the solver stopped without converging: " + summary.message);
+  if (!covariance_ok && free_count > 0) result.warnings.push_back(covariance_message);
+  if (ms.starts > 1 && ms.agreed * 2 < ms.starts)
+    result.warnings.push_back(fmt::format("only {} of {} starts reached the best minimum", ms.agreed, ms.starts));
+  result.solver.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - clock_start).count();
+  return result;
+}
+
+}  // namespace detail
+}  // namespace lmcal

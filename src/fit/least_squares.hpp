@@ -1,0 +1,57 @@
+// The least-squares engine behind every lmcal fit (private: Ceres and NLopt stay here).
+//
+//   1. multi-start: `starts` local searches with NLopt (bounded L-BFGS on a subsample of
+//      the residuals, gradient from the model's own autodiff cost function), from the
+//      given start and from a Halton sequence over the bounds;
+//   2. polish: Ceres Levenberg-Marquardt on all residuals from the best start, with
+//      bounds, held parameters (SubsetManifold) and an optional robust loss (row by row);
+//   3. uncertainty: ceres::Covariance (dense SVD) scaled by s², t intervals, correlation;
+//   4. identifiability: the eigen-directions of the relatively scaled covariance (or the
+//      null space of JᵀJ when Ceres finds the Jacobian rank deficient); a direction the
+//      data cannot determine is named (via the model's explain()) and the parameter that
+//      dominates it is held at its start, then 2-4 repeat;
+//   5. profile-likelihood intervals where the linear interval is unreliable.
+#pragma once
+
+#include <ceres/ceres.h>
+
+#include <Eigen/Core>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "batched_autodiff.hpp"
+#include "lmcal/fit/fit_result.hpp"
+
+namespace lmcal::detail {
+
+struct ParameterSpec {
+  std::string name;
+  std::string unit;
+  double start = 0;
+  double lower = 0, upper = 0;
+  bool free = true;
+};
+
+// A whitened residual vector r(θ) over one parameter block holding all parameters.
+class LeastSquaresModel {
+ public:
+  virtual ~LeastSquaresModel() = default;
+  virtual std::size_t num_residuals() const = 0;
+  // A cost function over the residual rows given (all rows when `rows` is empty), each row
+  // passed through the robust loss.
+  virtual std::unique_ptr<ceres::CostFunction> cost_function(const std::vector<std::size_t>& rows,
+                                                             const RowLoss& loss) const = 0;
+  // Why the data cannot determine `issue.combination`, and what to measure; fills why/measure.
+  virtual void explain(IdentifiabilityIssue& issue) const { (void)issue; }
+};
+
+FitResult solve_least_squares(const LeastSquaresModel& model, const std::vector<ParameterSpec>& parameters,
+                              const FitOptions& options);
+
+// Residuals r(θ) and, if `jacobian` is given, ∂r/∂θ (rows x parameters), over `rows`.
+Eigen::VectorXd evaluate_residuals(const LeastSquaresModel& model, const std::vector<double>& theta,
+                                   const RowLoss& loss = {}, Eigen::MatrixXd* jacobian = nullptr,
+                                   const std::vector<std::size_t>& rows = {});
+
+}  // namespace lmcal::detail
