@@ -1,6 +1,7 @@
 // lmcal: calibration toolkit for roller linear-motion guideways.
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
+#include <glog/logging.h>
 
 #include <iostream>
 
@@ -9,6 +10,8 @@
 
 int main(int argc, char** argv) {
   const std::vector<std::string> args(argv, argv + argc);
+  // Ceres logs through glog; lmcal reports numerical trouble in its results instead.
+  FLAGS_minloglevel = google::GLOG_FATAL;
   CLI::App app{"lmcal: calibrate the friction and thermal models of roller LM guides (Cheng et al. 2017)"};
   app.set_version_flag("--version", std::string("lmcal ") + LMCAL_VERSION);
   app.set_config("--config", "", "Read options from a TOML file");

@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # The main job: installs what is missing, builds (Release) and runs lmcal on the
-# bundled case. For now that is a check of the bundled (synthetic) measurements and a
-# simulation of the paper's SRN 35C rail case (Cheng et al. 2017, Tables 2-3); outputs
-# go to fits/simulation/.
+# bundled case: a check of the bundled (synthetic) measurements, the friction fit
+# (fits/cheng2017/) and a simulation of the paper's SRN 35C rail case (Cheng et al. 2017,
+# Tables 2-3; fits/simulation/).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/build.sh
@@ -13,6 +13,10 @@ echo
 echo "== Bundled measurements (measurements/cheng2017, synthetic: see its README) =="
 "$lmcal" check friction measurements/cheng2017/friction.csv
 "$lmcal" check thermal measurements/cheng2017/thermal.toml
+
+echo
+echo "== Friction constants fitted to the bundled friction log (fits/cheng2017/) =="
+"$lmcal" fit friction measurements/cheng2017/friction.csv -o fits/cheng2017 --name friction
 
 echo
 echo "== Friction law (Eqs. 3-7) over speed, load, preload and temperature (Figs. 4-7) =="

@@ -75,6 +75,19 @@ check "resample keeps every 12th record" test "$(grep -vc '^#' coarse.csv)" -eq 
 check "unknown effect" refused "unknown effect 'warp'" generate friction -o out --effect warp=1
 check "bad log refused by check" refused "friction_semicolon.csv:" check friction "$DATA/bad/friction_semicolon.csv"
 
+# --- friction fit ------------------------------------------------------------------------------
+"$LMCAL" generate friction -o fitdata --runs 3 --guides "SRN 35C" --run-offset 0 >/dev/null
+"$LMCAL" fit friction fitdata/friction.csv -o fitout --name f > fit.txt
+check "fit writes json, samples and conditions" test -s fitout/f.json -a -s fitout/f_samples.csv -a -s fitout/f_conditions.csv
+check "fit json records the input hash" grep -q '"sha256": "[0-9a-f]\{64\}"' fitout/f.json
+check "fit summary shows all seven constants" test "$(grep -cE '^  (k1|k2|mu_st|v_st_m_s|mu_v|beta_per_K|f0) +[-0-9]' fit.txt)" -eq 7
+check "fit summary reports the spread across runs" grep -q 'spread across 3 runs' fit.txt
+"$LMCAL" generate friction -o onepc --runs 2 --guides "SRN 35C" --preload 4 >/dev/null
+"$LMCAL" fit friction onepc/friction.csv -o fitout --name onepc > fit.txt
+check "one preload class: k1/k2 named unidentifiable" grep -q 'NOT IDENTIFIABLE: one preload class' fit.txt
+check "unknown constant refused" refused "unknown constant 'k3'" fit friction fitdata/friction.csv -o out --fix k3=1
+check "bad loss refused" refused "unknown loss 'l1'" fit friction fitdata/friction.csv -o out --loss l1
+
 # The bundled set is exactly what the recorded commands make (the command lines aside).
 LMCAL="$LMCAL" bash "$SOURCE/scripts/make-bundled-data.sh" "$work/bundled" >/dev/null
 same_as_bundled() {

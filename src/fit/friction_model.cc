@@ -57,14 +57,18 @@ struct FrictionResidual {
 Design describe(const FrictionData& d) {
   Design design;
   design.min_velocity = std::numeric_limits<double>::infinity();
+  double t_min = std::numeric_limits<double>::infinity(), t_max = -t_min;
   for (std::size_t i : d.samples) {
     design.preloads.insert(d.log->preload_um[i]);
     design.temperatures.insert(std::round(d.log->temperature_C[i]));
+    t_min = std::min(t_min, d.log->temperature_C[i]);
+    t_max = std::max(t_max, d.log->temperature_C[i]);
     design.loads.insert(d.log->load_N[i]);
     design.block_lengths.insert(d.log->block_length_mm[i]);
     if (d.log->velocity_m_s[i] < 0.03) ++design.low_speed;
     design.min_velocity = std::min(design.min_velocity, d.log->velocity_m_s[i]);
   }
+  design.temperature_span_K = t_max - t_min;
   return design;
 }
 
@@ -122,6 +126,31 @@ void FrictionModel::explain(IdentifiabilityIssue& issue) const {
     issue.why = "the data determine only the combination" + combo + " (relative to each parameter's size)";
     issue.measure = "widen the range of speed, load, preload and temperature";
   }
+}
+
+}  // namespace lmcal::detail
+
+namespace lmcal::detail {
+
+// The three designs the paper's law cannot be fitted from, found before any fit. (Jitter
+// in a logged temperature would otherwise "determine" β from noise.)
+std::vector<IdentifiabilityIssue> FrictionModel::design_issues(const std::vector<std::string>& free) const {
+  auto is_free = [&](const char* name) { return std::find(free.begin(), free.end(), name) != free.end(); };
+  std::vector<IdentifiabilityIssue> issues;
+  auto add = [&](std::vector<std::pair<std::string, double>> combination, const char* hold) {
+    IdentifiabilityIssue issue;
+    issue.combination = std::move(combination);
+    issue.relative_se = std::numeric_limits<double>::infinity();
+    explain(issue);
+    issue.held = {hold};
+    issues.push_back(std::move(issue));
+  };
+  const Design& d = design_;
+  if (is_free("beta_per_K") && d.temperature_span_K < 3.0)
+    add({{"beta_per_K", 1.0}, {"mu_v", -0.5}, {"mu_st", 0.5}}, "beta_per_K");
+  if (is_free("k1") && is_free("k2") && d.preloads.size() == 1) add({{"k2", 1.0}, {"k1", 0.5}}, "k2");
+  if (is_free("mu_st") && is_free("v_st_m_s") && d.low_speed == 0) add({{"v_st_m_s", 1.0}, {"mu_st", 0.5}}, "v_st_m_s");
+  return issues;
 }
 
 }  // namespace lmcal::detail

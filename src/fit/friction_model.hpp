@@ -51,6 +51,7 @@ struct FrictionData {
 // Design facts that decide what the data can determine.
 struct Design {
   std::set<double> preloads, temperatures, loads, block_lengths;
+  double temperature_span_K = 0;  // max - min of the logged temperatures
   std::size_t low_speed = 0;  // samples with V < 0.03 m/s, where the Stribeck term is felt
   double min_velocity = 0;
 };
@@ -62,6 +63,7 @@ class FrictionModel : public LeastSquaresModel {
   std::unique_ptr<ceres::CostFunction> cost_function(const std::vector<std::size_t>& rows,
                                                      const RowLoss& loss) const override;
   void explain(IdentifiabilityIssue& issue) const override;
+  std::vector<IdentifiabilityIssue> design_issues(const std::vector<std::string>& free) const override;
 
  private:
   const FrictionData& data_;

@@ -292,6 +292,20 @@ FitResult solve_least_squares(const LeastSquaresModel& model, const std::vector<
   const RowLoss loss{options.loss, options.loss_scale};
   const auto cost = model.cost_function({}, loss);
 
+  // 0. What the design of the data rules out: held from the start.
+  {
+    std::vector<std::string> free_names;
+    for (std::size_t j = 0; j < p; ++j)
+      if (!held[j]) free_names.push_back(specs[j].name);
+    for (IdentifiabilityIssue& issue : model.design_issues(free_names)) {
+      for (const auto& name : issue.held)
+        for (std::size_t j = 0; j < p; ++j)
+          if (specs[j].name == name) held[j] = true;
+      result.identifiability.identifiable = false;
+      result.identifiability.issues.push_back(std::move(issue));
+    }
+  }
+
   // 1-2. Multi-start, then polish.
   const MultiStart ms = multi_start(model, specs, held, start, options);
   result.solver.starts = ms.starts;

@@ -44,6 +44,12 @@ class LeastSquaresModel {
                                                              const RowLoss& loss) const = 0;
   // Why the data cannot determine `issue.combination`, and what to measure; fills why/measure.
   virtual void explain(IdentifiabilityIssue& issue) const { (void)issue; }
+  // What the design of the data rules out before any fit (e.g. one temperature: no β); each
+  // issue names in `held` the parameters to hold. `free` are the parameters asked free.
+  virtual std::vector<IdentifiabilityIssue> design_issues(const std::vector<std::string>& free) const {
+    (void)free;
+    return {};
+  }
 };
 
 FitResult solve_least_squares(const LeastSquaresModel& model, const std::vector<ParameterSpec>& parameters,

@@ -1,0 +1,234 @@
+#include "lmcal/fit/friction_fit.hpp"
+
+#include <ceres/cost_function.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "fit/friction_model.hpp"
+#include "lmcal/rig/virtual_rig.hpp"
+
+namespace lmcal {
+namespace {
+
+// A compact rig: two guides, three preloads, three loads, speeds down to 2 mm/s, three
+// temperatures, both directions.
+FrictionRigConfig compact_rig(std::uint64_t seed, int runs = 2) {
+  FrictionRigConfig c;
+  c.guides = {"SRG 25C", "SRN 35C"};
+  c.velocity_m_s = {0.002, 0.005, 0.01, 0.02, 0.04, 0.066, 0.11};
+  c.temperature_C = {22, 30, 40};
+  c.runs = runs;
+  c.run_offset_N = 0;  // independent errors: what the intervals assume
+  c.seed = seed;
+  return c;
+}
+
+double truth(std::size_t j) {
+  const auto k = paper_friction_constants();
+  const double values[] = {k.k1, k.k2, k.mu_st, k.v_st_m_s, k.mu_v, k.beta_per_K, k.f0};
+  return values[j];
+}
+
+bool covers(const ParameterEstimate& p, double value) {
+  if (p.interval == "profile") return value >= p.profile_low && value <= p.profile_high;
+  return value >= p.ci_low && value <= p.ci_high;
+}
+
+TEST(FrictionFit, RecoversThePapersConstantsWithinTheirIntervals) {
+  const auto log = generate_friction_log(compact_rig(11, 3), {}).log;
+  const auto result = fit_friction(log, {});
+  ASSERT_TRUE(result.fit.solver.usable);
+  EXPECT_TRUE(result.fit.solver.covariance_ok);
+  EXPECT_TRUE(result.fit.identifiability.identifiable);
+  EXPECT_EQ(result.fit.solver.starts_agreed, result.fit.solver.starts);
+  for (std::size_t j = 0; j < 7; ++j) {
+    const auto& p = result.fit.parameters[j];
+    EXPECT_TRUE(covers(p, truth(j))) << p.name << " = " << p.value << " ± " << p.se << ", true " << truth(j);
+    EXPECT_LT(p.se, 0.2 * std::abs(truth(j))) << p.name;  // determined, not just covered
+  }
+  // The residual σ is the rig's load-cell noise; the RMSE is in newtons.
+  EXPECT_NEAR(std::sqrt(result.fit.residual_variance), 0.15, 0.02);
+  EXPECT_NEAR(result.rmse_N, 0.15, 0.02);
+  // Correlation matrix: symmetric with a unit diagonal.
+  for (Eigen::Index i = 0; i < 7; ++i) {
+    EXPECT_NEAR(result.fit.correlation(i, i), 1.0, 1e-12);
+    for (Eigen::Index j = 0; j < 7; ++j) EXPECT_NEAR(result.fit.correlation(i, j), result.fit.correlation(j, i), 1e-12);
+  }
+}
+
+// Over 150 replicates, the 95 % intervals contain the truth 90-98 % of the time.
+TEST(FrictionFit, IntervalsCoverTheTruthAtTheirNominalRate) {
+  FrictionFitOptions options;
+  options.per_run_fits = false;
+  options.fit.starts = 2;
+  int covered = 0, total = 0;
+  std::array<int, 7> per_parameter{};
+  const int replicates = 150;
+  for (int r = 0; r < replicates; ++r) {
+    auto rig = compact_rig(1000 + r, 1);
+    rig.guides = {"SRN 35C"};
+    rig.load_N = {1000, 3000};
+    rig.directions = {1};
+    const auto log = generate_friction_log(rig, {}).log;
+    const auto result = fit_friction(log, options);
+    ASSERT_TRUE(result.fit.solver.usable) << r;
+    for (std::size_t j = 0; j < 7; ++j) {
+      const bool c = covers(result.fit.parameters[j], truth(j));
+      per_parameter[j] += c;
+      covered += c;
+      ++total;
+    }
+  }
+  const double rate = double(covered) / total;
+  EXPECT_GE(rate, 0.90);
+  EXPECT_LE(rate, 0.98);
+  for (std::size_t j = 0; j < 7; ++j)
+    EXPECT_GE(per_parameter[j], 0.85 * replicates) << kFrictionConstantNames[j] << " covered " << per_parameter[j];
+}
+
+TEST(FrictionFit, OnePreloadClassReportsK1AndK2Inseparable) {
+  auto rig = compact_rig(5);
+  rig.preload_um = {2.5};
+  const auto log = generate_friction_log(rig, {}).log;
+  const auto result = fit_friction(log, {});
+  const auto& id = result.fit.identifiability;
+  ASSERT_FALSE(id.identifiable);
+  ASSERT_EQ(id.issues.size(), 1u);
+  const auto& issue = id.issues[0];
+  EXPECT_NE(issue.why.find("one preload class"), std::string::npos) << issue.why;
+  EXPECT_NE(issue.measure.find("second preload"), std::string::npos);
+  ASSERT_EQ(issue.held.size(), 1u);
+  EXPECT_TRUE(issue.held[0] == "k1" || issue.held[0] == "k2");
+  // The held one is reported as such, with no interval that looks fine.
+  const auto& held = result.fit.parameter(issue.held[0]);
+  EXPECT_TRUE(held.held_unidentifiable);
+  EXPECT_TRUE(std::isnan(held.se));
+  EXPECT_EQ(held.interval, "none");
+  // The rest is still fitted and the Coulomb combination k1 - k2·pc is right.
+  const double combination = result.fit.parameter("k1").value - result.fit.parameter("k2").value * 2.5;
+  EXPECT_NEAR(combination, 0.315 - 0.03 * 2.5, 0.01);
+  EXPECT_TRUE(result.fit.solver.covariance_ok);
+}
+
+TEST(FrictionFit, OneTemperatureReportsBetaAndNoLowSpeedReportsStribeck) {
+  auto rig = compact_rig(6);
+  rig.temperature_C = {26};
+  auto result = fit_friction(generate_friction_log(rig, {}).log, {});
+  ASSERT_FALSE(result.fit.identifiability.identifiable);
+  EXPECT_NE(result.fit.identifiability.issues[0].why.find("one temperature"), std::string::npos)
+      << result.fit.identifiability.issues[0].why;
+
+  rig = compact_rig(7);
+  rig.velocity_m_s = {0.066, 0.083, 0.11, 0.15};
+  result = fit_friction(generate_friction_log(rig, {}).log, {});
+  ASSERT_FALSE(result.fit.identifiability.identifiable);
+  bool stribeck = false;
+  for (const auto& issue : result.fit.identifiability.issues)
+    stribeck |= issue.why.find("no samples below 0.03 m/s") != std::string::npos;
+  EXPECT_TRUE(stribeck);
+}
+
+// ∂r/∂θ from the Jets equals central finite differences, with effects and with a robust loss.
+TEST(FrictionFit, ResidualDerivativesEqualFiniteDifferences) {
+  RigEffects truth_effects;
+  set_rig_effect(truth_effects, "seal_drag", 100);
+  const auto log = generate_friction_log(compact_rig(8, 1), truth_effects).log;
+  detail::FrictionData data{&log, {}, {}, 40.0};
+  for (std::size_t i = 0; i < log.size(); i += 7) {
+    data.samples.push_back(i);
+    data.inv_sigma.push_back(1 / 0.15);
+  }
+  for (const auto& loss : {detail::RowLoss{}, detail::RowLoss{RobustLoss::huber, 1.345}, detail::RowLoss{RobustLoss::cauchy, 2.0}}) {
+    const detail::FrictionModel model(data, {detail::effect_slot("seal_drag"), detail::effect_slot("stribeck_exponent")});
+    const auto cost = model.cost_function({}, loss);
+    const std::vector<double> theta = {0.3, 0.02, 1.4, 0.017, 0.0032, 0.065, 0.03, 80.0, 1.1};
+    const std::size_t n = data.samples.size(), p = theta.size();
+    std::vector<double> r(n), J(n * p), plus(n), minus(n);
+    const double* at[] = {theta.data()};
+    double* jacobians[] = {J.data()};
+    ASSERT_TRUE(cost->Evaluate(at, r.data(), jacobians));
+    for (std::size_t j = 0; j < p; ++j) {
+      auto tp = theta, tm = theta;
+      const double h = 1e-6 * std::abs(theta[j]);
+      tp[j] += h;
+      tm[j] -= h;
+      const double* at_plus[] = {tp.data()};
+      const double* at_minus[] = {tm.data()};
+      ASSERT_TRUE(cost->Evaluate(at_plus, plus.data(), nullptr));
+      ASSERT_TRUE(cost->Evaluate(at_minus, minus.data(), nullptr));
+      for (std::size_t i = 0; i < n; ++i) {
+        const double fd = (plus[i] - minus[i]) / (2 * h);
+        EXPECT_NEAR(J[i * p + j], fd, 1e-6 * std::max(1.0, std::abs(fd))) << "row " << i << " parameter " << j;
+      }
+    }
+  }
+}
+
+// 2 % gross outliers: the Huber loss keeps the constants inside their intervals; plain least
+// squares does not.
+TEST(FrictionFit, RobustLossResistsGrossOutliers) {
+  auto log = generate_friction_log(compact_rig(9, 3), {}).log;
+  for (std::size_t i = 0; i < log.size(); i += 50) log.friction_N[i] += 8.0;  // 2 %, ~50 σ
+  FrictionFitOptions robust;
+  robust.fit.loss = RobustLoss::huber;
+  const auto result = fit_friction(log, robust);
+  ASSERT_TRUE(result.fit.solver.usable);
+  for (std::size_t j = 0; j < 7; ++j)
+    EXPECT_TRUE(covers(result.fit.parameters[j], truth(j)))
+        << result.fit.parameters[j].name << " = " << result.fit.parameters[j].value << ", true " << truth(j);
+  const auto plain = fit_friction(log, {});
+  int missed = 0;
+  for (std::size_t j = 0; j < 7; ++j) missed += !covers(plain.fit.parameters[j], truth(j));
+  EXPECT_GT(missed, 0) << "the outliers should bias plain least squares";
+}
+
+TEST(FrictionFit, FitsANamedEffectOnTopOfTheLaw) {
+  RigEffects effects;
+  set_rig_effect(effects, "seal_drag", 150);
+  const auto log = generate_friction_log(compact_rig(10, 3), effects).log;
+  FrictionFitOptions options;
+  options.effects = {"seal_drag"};
+  const auto result = fit_friction(log, options);
+  const auto& drag = result.fit.parameter("seal_drag");
+  EXPECT_TRUE(covers(drag, 150.0)) << drag.value << " ± " << drag.se;
+  EXPECT_NEAR(result.effects().seal_drag_N_s2_m2, drag.value, 0);
+  EXPECT_THROW(
+      [&] {
+        FrictionFitOptions bad;
+        bad.effects = {"warp"};
+        fit_friction(log, bad);
+      }(),
+      InvalidParameter);
+}
+
+TEST(FrictionFit, SpreadAcrossRunsUsesEquationOneAndFlagsRunToRunDifferences) {
+  auto rig = compact_rig(12, 6);
+  const auto clean = fit_friction(generate_friction_log(rig, {}).log, {});
+  ASSERT_EQ(clean.spread.size(), 7u);
+  for (const auto& s : clean.spread) {
+    EXPECT_EQ(s.spread.n, 6u) << s.parameter;
+    EXPECT_FALSE(s.wider_than_pooled) << s.parameter << " ratio " << s.ratio;
+    EXPECT_LT(s.ratio, 2.5) << s.parameter;
+  }
+  rig.run_offset_N = 1.0;  // a load-cell zero that moves by run: the model has no term for it
+  const auto offset = fit_friction(generate_friction_log(rig, {}).log, {});
+  bool flagged = false;
+  for (const auto& s : offset.spread) flagged |= s.wider_than_pooled;
+  EXPECT_TRUE(flagged);
+}
+
+TEST(FrictionFit, WeightsFromTheSpreadOfRepeats) {
+  auto rig = compact_rig(13, 4);
+  rig.noise_N = 0.3;
+  const auto log = generate_friction_log(rig, {}).log;
+  FrictionFitOptions options;
+  options.weighting = FrictionWeighting::per_run;
+  const auto result = fit_friction(log, options);
+  for (double s : result.sigma_N) EXPECT_NEAR(s, 0.3, 0.06);
+  // Whitened by the right σ, the residual variance is about 1.
+  EXPECT_NEAR(result.fit.residual_variance, 1.0, 0.15);
+}
+
+}  // namespace
+}  // namespace lmcal
