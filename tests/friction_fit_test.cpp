@@ -232,3 +232,53 @@ TEST(FrictionFit, WeightsFromTheSpreadOfRepeats) {
 
 }  // namespace
 }  // namespace lmcal
+
+#include <ceres/covariance.h>
+#include <ceres/problem.h>
+
+namespace lmcal {
+namespace {
+
+// The engine's (JᵀJ)⁻¹ from a rank-revealing QR is what ceres::Covariance computes.
+TEST(FrictionFit, CovarianceEqualsCeresCovariance) {
+  const auto log = generate_friction_log(compact_rig(14, 1), {}).log;
+  detail::FrictionData data{&log, {}, {}, 40.0};
+  for (std::size_t i = 0; i < log.size(); ++i) {
+    data.samples.push_back(i);
+    data.inv_sigma.push_back(1 / 0.15);
+  }
+  const detail::FrictionModel model(data, {});
+  std::vector<double> theta = {0.31, 0.031, 1.5, 0.0152, 0.00301, 0.0668, 0.0291};
+  const std::vector<bool> held = {false, true, false, false, false, false, false};  // k2 held, as a fit may
+  Eigen::MatrixXd J, ours;
+  std::string message;
+  detail::evaluate_residuals(model, theta, {}, &J);
+  ASSERT_TRUE(detail::covariance_from_jacobian(J, held, ours, message)) << message;
+
+  const auto cost = model.cost_function({}, {});
+  ceres::Problem::Options po;
+  po.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  ceres::Problem problem(po);
+  problem.AddResidualBlock(cost.get(), nullptr, theta.data());
+  problem.SetManifold(theta.data(), new ceres::SubsetManifold(7, {1}));
+  ceres::Covariance::Options co;
+  co.algorithm_type = ceres::DENSE_SVD;
+  ceres::Covariance covariance(co);
+  const std::vector<std::pair<const double*, const double*>> blocks = {{theta.data(), theta.data()}};
+  ASSERT_TRUE(covariance.Compute(blocks, &problem));
+  Eigen::Matrix<double, 7, 7, Eigen::RowMajor> theirs;
+  covariance.GetCovarianceBlock(theta.data(), theta.data(), theirs.data());
+  for (int a = 0; a < 7; ++a)
+    for (int b = 0; b < 7; ++b)
+      EXPECT_NEAR(ours(a, b), theirs(a, b), 1e-8 * std::sqrt(std::abs(theirs(a, a) * theirs(b, b))) + 1e-300)
+          << a << "," << b;
+
+  // A column that no residual depends on: rank deficient, reported, not a crash.
+  Eigen::MatrixXd deficient = J;
+  deficient.col(3).setZero();
+  EXPECT_FALSE(detail::covariance_from_jacobian(deficient, std::vector<bool>(7, false), ours, message));
+  EXPECT_NE(message.find("rank deficient"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace lmcal

@@ -7,7 +7,9 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <set>
+#include <numeric>
 #include <tuple>
+#include <unordered_map>
 
 #include "friction_model.hpp"
 #include "least_squares.hpp"
@@ -35,16 +37,62 @@ ConditionKey condition_key(const FrictionLog& log, std::size_t i) {
           static_cast<double>(log.direction[i])};
 }
 
+struct ConditionKeyHash {
+  std::size_t operator()(const ConditionKey& k) const {
+    std::size_t h = std::get<0>(k);
+    auto mix = [&](double v) { h = h * 1000003u ^ std::hash<double>{}(v); };
+    mix(std::get<1>(k)), mix(std::get<2>(k)), mix(std::get<3>(k)), mix(std::get<4>(k)), mix(std::get<5>(k));
+    return h;
+  }
+};
+
+// Samples grouped by condition (guide, preload, load, temperature to 1 K, speed, direction),
+// groups in key order.
+struct ConditionGroups {
+  std::vector<ConditionKey> keys;
+  std::vector<std::vector<std::size_t>> members;
+  std::vector<std::size_t> group_of;  // per sample
+};
+
+ConditionGroups group_conditions(const FrictionLog& log) {
+  std::unordered_map<ConditionKey, std::size_t, ConditionKeyHash> index;
+  ConditionGroups g;
+  std::vector<std::size_t> first_group(log.size());
+  for (std::size_t i = 0; i < log.size(); ++i) {
+    const auto [it, inserted] = index.try_emplace(condition_key(log, i), g.keys.size());
+    if (inserted) {
+      g.keys.push_back(it->first);
+      g.members.emplace_back();
+    }
+    g.members[it->second].push_back(i);
+    first_group[i] = it->second;
+  }
+  // Key order, so that outputs do not depend on the hash.
+  std::vector<std::size_t> order(g.keys.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return g.keys[a] < g.keys[b]; });
+  std::vector<std::size_t> rank(order.size());
+  ConditionGroups sorted;
+  for (std::size_t r = 0; r < order.size(); ++r) {
+    rank[order[r]] = r;
+    sorted.keys.push_back(g.keys[order[r]]);
+    sorted.members.push_back(std::move(g.members[order[r]]));
+  }
+  sorted.group_of.resize(log.size());
+  for (std::size_t i = 0; i < log.size(); ++i) sorted.group_of[i] = rank[first_group[i]];
+  return sorted;
+}
+
 // σ per sample from the spread of repeats (see FrictionWeighting).
 std::vector<double> sample_sigmas(const FrictionLog& log, FrictionWeighting weighting) {
   const std::size_t n = log.size();
   std::vector<double> sigma(n, 1.0);
   if (weighting == FrictionWeighting::none) return sigma;
-  std::map<ConditionKey, std::vector<std::size_t>> groups;
-  for (std::size_t i = 0; i < n; ++i) groups[condition_key(log, i)].push_back(i);
+  const ConditionGroups groups = group_conditions(log);
   std::vector<double> deviation(n, kNaN);
-  std::map<ConditionKey, double> group_sd;
-  for (const auto& [key, members] : groups) {
+  std::vector<double> group_sd(groups.keys.size(), kNaN);
+  for (std::size_t g = 0; g < groups.keys.size(); ++g) {
+    const auto& members = groups.members[g];
     if (members.size() < 2) continue;
     double mean = 0;
     for (std::size_t i : members) mean += log.friction_N[i];
@@ -54,7 +102,7 @@ std::vector<double> sample_sigmas(const FrictionLog& log, FrictionWeighting weig
     if (members.size() >= 3) {
       std::vector<double> values;
       for (std::size_t i : members) values.push_back(log.friction_N[i]);
-      group_sd[key] = sample_standard_deviation(values);
+      group_sd[g] = sample_standard_deviation(values);
     }
   }
   std::vector<double> all;
@@ -79,8 +127,8 @@ std::vector<double> sample_sigmas(const FrictionLog& log, FrictionWeighting weig
     // A condition's own σ from >= 3 repeats, floored at a quarter of the pooled σ (a few
     // repeats can agree by chance), the pooled σ where it has fewer repeats.
     for (std::size_t i = 0; i < n; ++i) {
-      const auto it = group_sd.find(condition_key(log, i));
-      sigma[i] = it == group_sd.end() ? pooled : std::max(it->second, 0.25 * pooled);
+      const double sd = group_sd[groups.group_of[i]];
+      sigma[i] = std::isnan(sd) ? pooled : std::max(sd, 0.25 * pooled);
     }
   }
   for (double& s : sigma)
@@ -172,9 +220,10 @@ FrictionFitResult fit_friction(const FrictionLog& log, const FrictionFitOptions&
   }
   out.rmse_N = std::sqrt(ss / static_cast<double>(log.size()));
 
-  std::map<ConditionKey, std::vector<std::size_t>> groups;
-  for (std::size_t i = 0; i < log.size(); ++i) groups[condition_key(log, i)].push_back(i);
-  for (const auto& [key, members] : groups) {
+  const ConditionGroups groups = group_conditions(log);
+  for (std::size_t g = 0; g < groups.keys.size(); ++g) {
+    const ConditionKey& key = groups.keys[g];
+    const auto& members = groups.members[g];
     ConditionResidual c{log.guide_names.empty() ? "" : log.guide_names[std::get<0>(key)],
                         std::get<1>(key), std::get<2>(key), std::get<3>(key), std::get<4>(key), std::get<5>(key),
                         members.size(), 0, 0, 0, 0, 0};

@@ -108,30 +108,49 @@ Polish polish(const ceres::CostFunction& cost, const std::vector<ParameterSpec>&
   return solve(cost, specs, held, start, true);
 }
 
-// Ceres' covariance (JᵀJ)⁻¹ at `theta` (unscaled; held rows and columns zero). Returns false,
-// with a message, when the Jacobian is rank deficient there.
-bool covariance_at(const ceres::CostFunction& cost, const std::vector<ParameterSpec>& specs,
-                   const std::vector<bool>& held, std::vector<double> theta, Eigen::MatrixXd& covariance,
-                   std::string& message) {
-  const int p = static_cast<int>(specs.size());
+}  // namespace
+
+// (JᵀJ)⁻¹ over the free parameters (held rows and columns zero) from a rank-revealing QR
+// of the autodiff Jacobian J at the solution: J P = Q R, (JᵀJ)⁻¹ = P (RᵀR)⁻¹ Pᵀ. This is the
+// quantity ceres::Covariance computes (a test checks they agree); Ceres' dense SVD of a
+// 10⁵-row J cost most of the friction fit's time budget. Returns false, with a message, when
+// J is rank deficient.
+bool covariance_from_jacobian(const Eigen::MatrixXd& J, const std::vector<bool>& held, Eigen::MatrixXd& covariance,
+                              std::string& message) {
+  const auto p = J.cols();
   covariance = Eigen::MatrixXd::Zero(p, p);
-  if (std::all_of(held.begin(), held.end(), [](bool h) { return h; })) return true;
-  ceres::Problem problem(problem_options());
-  build_problem(problem, cost, specs, held, theta.data(), false);
-  ceres::Covariance::Options covariance_options;
-  covariance_options.algorithm_type = ceres::DENSE_SVD;
-  covariance_options.num_threads = 1;
-  ceres::Covariance c(covariance_options);
-  const std::vector<std::pair<const double*, const double*>> blocks = {{theta.data(), theta.data()}};
-  if (!c.Compute(blocks, &problem)) {
-    message = "ceres::Covariance failed: the Jacobian is rank deficient at the solution";
+  std::vector<Eigen::Index> free;
+  for (Eigen::Index j = 0; j < p; ++j)
+    if (!held[static_cast<std::size_t>(j)]) free.push_back(j);
+  if (free.empty()) return true;
+  const auto m = static_cast<Eigen::Index>(free.size());
+  Eigen::MatrixXd Jf(J.rows(), m);
+  for (Eigen::Index k = 0; k < m; ++k) Jf.col(k) = J.col(free[k]);
+  // Column scaling keeps the rank decision about directions, not about units.
+  const Eigen::VectorXd norms = Jf.colwise().norm().transpose();
+  for (Eigen::Index k = 0; k < m; ++k) {
+    if (!(norms[k] > 0)) {
+      message = "the Jacobian is rank deficient at the solution: a parameter has no effect on any residual";
+      return false;
+    }
+    Jf.col(k) /= norms[k];
+  }
+  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(Jf);
+  qr.setThreshold(1e-10);
+  if (qr.rank() < m) {
+    message = fmt::format("the Jacobian is rank deficient at the solution (rank {} of {})", qr.rank(), m);
     return false;
   }
-  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> block(p, p);
-  c.GetCovarianceBlock(theta.data(), theta.data(), block.data());
-  covariance = block;
+  const Eigen::MatrixXd R = qr.matrixR().topLeftCorner(m, m).triangularView<Eigen::Upper>();
+  const Eigen::MatrixXd Rinv = R.triangularView<Eigen::Upper>().solve(Eigen::MatrixXd::Identity(m, m));
+  const Eigen::MatrixXd permuted = Rinv * Rinv.transpose();
+  const Eigen::MatrixXd scaled = qr.colsPermutation() * permuted * qr.colsPermutation().transpose();
+  for (Eigen::Index a = 0; a < m; ++a)
+    for (Eigen::Index b = 0; b < m; ++b) covariance(free[a], free[b]) = scaled(a, b) / (norms[a] * norms[b]);
   return true;
 }
+
+namespace {
 
 // NLopt objective ½ Σ r² over a (sub)set of rows, in scaled free coordinates u = θ / scale.
 struct LocalSearch {
@@ -321,7 +340,7 @@ FitResult solve_least_squares(const LeastSquaresModel& model, const std::vector<
 
   // 3-4. Covariance at the solution; a direction the data cannot determine is held and the
   // rest refitted. The weakest direction is the top eigenvector of the relatively scaled
-  // covariance, or (when Ceres finds the Jacobian rank deficient) the null vector of JᵀJ.
+  // covariance, or (when the Jacobian is rank deficient) the null vector of JᵀJ.
   Polish fit;
   Eigen::MatrixXd unscaled_covariance;
   std::string covariance_message;
@@ -331,7 +350,9 @@ FitResult solve_least_squares(const LeastSquaresModel& model, const std::vector<
     fit = polish(*cost, specs, held, theta);
     theta = fit.theta;
     covariance_message.clear();
-    covariance_ok = covariance_at(*cost, specs, held, theta, unscaled_covariance, covariance_message);
+    Eigen::MatrixXd J;
+    evaluate_residuals(model, theta, loss, &J);
+    covariance_ok = covariance_from_jacobian(J, held, unscaled_covariance, covariance_message);
     std::vector<std::size_t> free;
     for (std::size_t j = 0; j < p; ++j)
       if (!held[j]) free.push_back(j);
@@ -354,8 +375,6 @@ FitResult solve_least_squares(const LeastSquaresModel& model, const std::vector<
       variance = eig.eigenvalues().reverse().cwiseMax(0.0);
       directions = eig.eigenvectors().rowwise().reverse();
     } else {
-      Eigen::MatrixXd J;
-      evaluate_residuals(model, theta, loss, &J);
       Eigen::MatrixXd Js(J.rows(), m);
       for (Eigen::Index k = 0; k < m; ++k) Js.col(k) = J.col(static_cast<Eigen::Index>(free[k])) * scale[k];
       const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(Js.transpose() * Js);

@@ -5,7 +5,8 @@
 //      given start and from a Halton sequence over the bounds;
 //   2. polish: Ceres Levenberg-Marquardt on all residuals from the best start, with
 //      bounds, held parameters (SubsetManifold) and an optional robust loss (row by row);
-//   3. uncertainty: ceres::Covariance (dense SVD) scaled by s², t intervals, correlation;
+//   3. uncertainty: (JᵀJ)⁻¹ from a rank-revealing QR of the autodiff Jacobian (what
+//      ceres::Covariance computes; tested against it), scaled by s², t intervals, correlation;
 //   4. identifiability: the eigen-directions of the relatively scaled covariance (or the
 //      null space of JᵀJ when Ceres finds the Jacobian rank deficient); a direction the
 //      data cannot determine is named (via the model's explain()) and the parameter that
@@ -54,6 +55,11 @@ class LeastSquaresModel {
 
 FitResult solve_least_squares(const LeastSquaresModel& model, const std::vector<ParameterSpec>& parameters,
                               const FitOptions& options);
+
+// (JᵀJ)⁻¹ over the parameters not held (rows/columns of held ones zero); false with a message
+// when J is rank deficient.
+bool covariance_from_jacobian(const Eigen::MatrixXd& J, const std::vector<bool>& held, Eigen::MatrixXd& covariance,
+                              std::string& message);
 
 // Residuals r(θ) and, if `jacobian` is given, ∂r/∂θ (rows x parameters), over `rows`.
 Eigen::VectorXd evaluate_residuals(const LeastSquaresModel& model, const std::vector<double>& theta,

@@ -5,8 +5,8 @@
 // reported here as data, never thrown.
 //
 // Intervals: `ci_low/ci_high` are linear, value ± t(0.975, n - p) · SE with
-// SE² = s² · [(JᵀJ)⁻¹]_jj and s² = Σr² / (n - p) (covariance from Ceres, scaled by the
-// residual variance). Where the linear interval is unreliable (a bound inside it, or a
+// SE² = s² · [(JᵀJ)⁻¹]_jj and s² = Σr² / (n - p) (the covariance ceres::Covariance would
+// give, from the autodiff Jacobian at the solution, scaled by the residual variance). Where the linear interval is unreliable (a bound inside it, or a
 // weakly determined, strongly nonlinear parameter), `profile_low/high` hold the
 // profile-likelihood interval {θ_j : S(θ_j) - S_min <= s² · F(0.95; 1, n - p)}, and
 // `interval` says which one to quote.
