@@ -137,6 +137,7 @@ void setup_fit(CLI::App& app, const std::vector<std::string>& argv) {
   friction->add_option("--profile", o->profile, "Profile-likelihood intervals: auto, all or none")->capture_default_str();
   friction->add_flag("!--no-run-fits", o->run_fits, "Skip the per-run fits (spread across runs)");
   friction->callback([o, &argv] { run_fit_friction(*o, argv); });
+  setup_fit_thermal(*fit, argv);
 }
 
 }  // namespace lmcal::cli

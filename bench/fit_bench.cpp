@@ -1,8 +1,9 @@
-// Friction fit speed target (issue 4): 100 k samples, all seven constants, multi-start
+// Fit speed targets. Friction (issue 4): 100 k samples, all seven constants, multi-start
 // and covariance included, under 0.15 s on one core (numpy/scipy least_squares: ~0.3 s).
 #include <benchmark/benchmark.h>
 
 #include "lmcal/fit/friction_fit.hpp"
+#include "lmcal/fit/thermal_fit.hpp"
 #include "lmcal/rig/virtual_rig.hpp"
 
 namespace {
@@ -30,5 +31,33 @@ void BM_FrictionFit100k(benchmark::State& state) {
 }
 
 BENCHMARK(BM_FrictionFit100k)->Unit(benchmark::kMillisecond)->MinTime(2.0);
+
+}  // namespace
+
+namespace {
+
+// Thermal fit speed target (issue 5): α for 4 runs of 6 h at 5 s resolution (500 nodes)
+// under 0.2 s.
+lmcal::ThermalDataSet four_runs() {
+  lmcal::ThermalRigConfig rig;
+  rig.velocity_m_s = {0.066, 0.083, 0.11, 0.11};
+  return lmcal::generate_thermal_dataset(rig, {}, "bench").set;
+}
+
+void BM_ThermalAlpha4Runs(benchmark::State& state) {
+  static const lmcal::ThermalDataSet data = four_runs();
+  lmcal::ThermalFitOptions options;
+  options.half_rail_segments = 499;  // 500 nodes
+  options.time_step_s = 5;
+  options.per_run_fits = false;
+  options.compare_sources = false;
+  for (auto _ : state) {
+    const auto result = lmcal::fit_thermal(data, options);
+    benchmark::DoNotOptimize(result.joint.parameters.data());
+  }
+  state.counters["records"] = static_cast<double>(data.runs[0].trace.size());
+}
+
+BENCHMARK(BM_ThermalAlpha4Runs)->Unit(benchmark::kMillisecond)->MinTime(2.0);
 
 }  // namespace

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The main job: installs what is missing, builds (Release) and runs lmcal on the
-# bundled case: a check of the bundled (synthetic) measurements, the friction fit
-# (fits/cheng2017/) and a simulation of the paper's SRN 35C rail case (Cheng et al. 2017,
+# bundled case: a check of the bundled (synthetic) measurements, the friction and thermal
+# fits (fits/cheng2017/) and a simulation of the paper's SRN 35C rail case (Cheng et al. 2017,
 # Tables 2-3; fits/simulation/).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -17,6 +17,11 @@ echo "== Bundled measurements (measurements/cheng2017, synthetic: see its README
 echo
 echo "== Friction constants fitted to the bundled friction log (fits/cheng2017/) =="
 "$lmcal" fit friction measurements/cheng2017/friction.csv -o fits/cheng2017 --name friction
+
+echo
+echo "== Heat partition alpha fitted to the bundled thermal runs, heat from the friction fit =="
+"$lmcal" fit thermal measurements/cheng2017/thermal.toml --friction fits/cheng2017/friction.json \
+  -o fits/cheng2017 --name thermal
 
 echo
 echo "== Friction law (Eqs. 3-7) over speed, load, preload and temperature (Figs. 4-7) =="

@@ -88,6 +88,16 @@ check "one preload class: k1/k2 named unidentifiable" grep -q 'NOT IDENTIFIABLE:
 check "unknown constant refused" refused "unknown constant 'k3'" fit friction fitdata/friction.csv -o out --fix k3=1
 check "bad loss refused" refused "unknown loss 'l1'" fit friction fitdata/friction.csv -o out --loss l1
 
+# --- thermal fit -------------------------------------------------------------------------------
+"$LMCAL" generate thermal -o thermaldata --velocity 0.083,0.11 --duration 7200 --record-every 30 >/dev/null
+"$LMCAL" fit thermal thermaldata/thermal.toml --friction fitout/f.json -o fitout --name t > thermal.txt
+check "thermal fit writes json, samples and the alpha curve" test -s fitout/t.json -a -s fitout/t_samples.csv -a -s fitout/t_alpha_curve.csv
+check "thermal fit reports alpha across runs" grep -q '^alpha across runs: ' thermal.txt
+check "thermal fit compares source models" grep -q 'alpha(paper) / alpha(averaged)' thermal.txt
+check "alpha curve has the runs' rows" test "$(grep -c '^v110,' fitout/t_alpha_curve.csv)" -eq 46
+check "not a friction fit refused" refused "expected a friction fit" fit thermal thermaldata/thermal.toml --friction thermaldata/thermal_truth.json -o out
+check "unknown ambient column refused" refused "no ambient column 'ambient9_C'" fit thermal thermaldata/thermal.toml --ambient ambient9_C -o out
+
 # The bundled set is exactly what the recorded commands make (the command lines aside).
 LMCAL="$LMCAL" bash "$SOURCE/scripts/make-bundled-data.sh" "$work/bundled" >/dev/null
 same_as_bundled() {

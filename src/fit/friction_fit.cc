@@ -143,7 +143,7 @@ std::vector<detail::ParameterSpec> parameter_specs(const FrictionFitOptions& o, 
     specs.push_back({kFrictionConstantNames[j], kConstantUnits[j], start[j], o.bounds[j].first, o.bounds[j].second, o.free[j]});
   for (std::size_t slot : slots) {
     const EffectSpec& e = kEffects[slot];
-    specs.push_back({e.name, e.unit, e.neutral, e.lower, e.upper, true});
+    specs.push_back({e.name, e.unit, e.neutral, e.lower, e.upper, true, e.scale});
   }
   return specs;
 }

@@ -64,6 +64,7 @@ ceres::Problem::Options problem_options() {
 struct Polish {
   std::vector<double> theta;
   ceres::Solver::Summary summary;
+  Eigen::VectorXd residuals;  // at theta, when known (linear solve)
 };
 
 Polish solve(const ceres::CostFunction& cost, const std::vector<ParameterSpec>& specs, const std::vector<bool>& held,
@@ -108,6 +109,43 @@ Polish polish(const ceres::CostFunction& cost, const std::vector<ParameterSpec>&
   return solve(cost, specs, held, start, true);
 }
 
+}  // namespace
+
+// For a model linear in its free parameters: the exact least-squares solution in one
+// Gauss-Newton step from `theta`, min ‖r(θ) + J Δ‖ by a rank-revealing QR. Fills J. Falls back
+// to the Ceres polish when the solution leaves the bounds or J is rank deficient.
+namespace {
+Polish linear_solve(const LeastSquaresModel& model, const ceres::CostFunction& cost,
+                    const std::vector<ParameterSpec>& specs, const std::vector<bool>& held, std::vector<double> theta,
+                    const RowLoss& loss, Eigen::MatrixXd& J) {
+  const Eigen::VectorXd r0 = evaluate_residuals(model, theta, loss, &J);
+  std::vector<Eigen::Index> free;
+  for (std::size_t j = 0; j < specs.size(); ++j)
+    if (!held[j]) free.push_back(static_cast<Eigen::Index>(j));
+  Eigen::MatrixXd Jf(J.rows(), static_cast<Eigen::Index>(free.size()));
+  for (std::size_t k = 0; k < free.size(); ++k) Jf.col(static_cast<Eigen::Index>(k)) = J.col(free[k]);
+  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(Jf);
+  if (qr.rank() == Jf.cols()) {
+    const Eigen::VectorXd step = qr.solve(-r0);
+    std::vector<double> solved = theta;
+    for (std::size_t k = 0; k < free.size(); ++k) solved[static_cast<std::size_t>(free[k])] += step[static_cast<Eigen::Index>(k)];
+    if (inside_bounds(specs, held, solved)) {
+      Polish out;
+      out.theta = solved;
+      const Eigen::VectorXd r = r0 + Jf * step;  // exact: the residuals are linear in the step
+      out.residuals = r;
+      out.summary.termination_type = ceres::CONVERGENCE;
+      out.summary.initial_cost = 0.5 * r0.squaredNorm();
+      out.summary.final_cost = 0.5 * r.squaredNorm();
+      out.summary.iterations.resize(2);
+      out.summary.message = "linear in the free parameters: exact in one Gauss-Newton step";
+      return out;
+    }
+  }
+  Polish out = polish(cost, specs, held, theta);
+  evaluate_residuals(model, out.theta, loss, &J);
+  return out;
+}
 }  // namespace
 
 // (JᵀJ)⁻¹ over the free parameters (held rows and columns zero) from a rank-revealing QR
@@ -202,6 +240,7 @@ std::vector<double> halton_start(const std::vector<ParameterSpec>& specs, const 
 }
 
 double relative_scale(const ParameterSpec& spec, double value) {
+  if (spec.scale > 0) return spec.scale;
   const double s = std::max(std::abs(value), std::abs(spec.start));
   return s > 0 ? s : 0.1 * (spec.upper - spec.lower);
 }
@@ -288,7 +327,7 @@ Eigen::VectorXd evaluate_residuals(const LeastSquaresModel& model, const std::ve
 }
 
 FitResult solve_least_squares(const LeastSquaresModel& model, const std::vector<ParameterSpec>& specs,
-                              const FitOptions& options) {
+                              const FitOptions& options, FinalState* final_state) {
   const auto clock_start = std::chrono::steady_clock::now();
   const std::size_t p = specs.size();
   const std::size_t n = model.num_residuals();
@@ -325,14 +364,15 @@ FitResult solve_least_squares(const LeastSquaresModel& model, const std::vector<
     }
   }
 
-  // 1-2. Multi-start, then polish.
-  const MultiStart ms = multi_start(model, specs, held, start, options);
+  // 1-2. Multi-start, then polish (a linear model has one minimum: neither is needed).
+  const bool linear = model.linear(held) && options.loss == RobustLoss::none;
+  const MultiStart ms = linear ? MultiStart{start, 1, 1} : multi_start(model, specs, held, start, options);
   result.solver.starts = ms.starts;
   result.solver.starts_agreed = ms.agreed;
   std::vector<double> theta = ms.best;
   // Large problems: converge on a tenth of the residuals first, so that the polish over all
   // of them starts next to the minimum and needs only a step or two.
-  if (n > 20000) {
+  if (n > 20000 && !linear) {
     std::vector<std::size_t> rows;
     for (std::size_t k = 0; k < n / 10; ++k) rows.push_back(k * 10);
     theta = polish(*model.cost_function(rows, loss), specs, held, theta).theta;
@@ -342,16 +382,23 @@ FitResult solve_least_squares(const LeastSquaresModel& model, const std::vector<
   // rest refitted. The weakest direction is the top eigenvector of the relatively scaled
   // covariance, or (when the Jacobian is rank deficient) the null vector of JᵀJ.
   Polish fit;
+  Eigen::MatrixXd last_jacobian;
+  Eigen::VectorXd last_residuals;
   Eigen::MatrixXd unscaled_covariance;
   std::string covariance_message;
   bool covariance_ok = false;
   bool first_analysis = true;
   for (std::size_t round = 0; round <= p; ++round) {
-    fit = polish(*cost, specs, held, theta);
+    Eigen::MatrixXd& J = last_jacobian;
+    if (linear && model.linear(held)) {
+      fit = linear_solve(model, *cost, specs, held, theta, loss, J);
+      last_residuals = fit.residuals;
+    } else {
+      fit = polish(*cost, specs, held, theta);
+      last_residuals = evaluate_residuals(model, fit.theta, loss, &J);
+    }
     theta = fit.theta;
     covariance_message.clear();
-    Eigen::MatrixXd J;
-    evaluate_residuals(model, theta, loss, &J);
     covariance_ok = covariance_from_jacobian(J, held, unscaled_covariance, covariance_message);
     std::vector<std::size_t> free;
     for (std::size_t j = 0; j < p; ++j)
@@ -503,6 +550,12 @@ FitResult solve_least_squares(const LeastSquaresModel& model, const std::vector<
   if (!covariance_ok && free_count > 0) result.warnings.push_back(covariance_message);
   if (ms.starts > 1 && ms.agreed * 2 < ms.starts)
     result.warnings.push_back(fmt::format("only {} of {} starts reached the best minimum", ms.agreed, ms.starts));
+  if (final_state) {
+    if (last_residuals.size() == 0 || last_jacobian.rows() == 0 || theta != fit.theta)
+      last_residuals = evaluate_residuals(model, theta, loss, &last_jacobian);
+    final_state->residuals = std::move(last_residuals);
+    final_state->jacobian = std::move(last_jacobian);
+  }
   result.solver.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - clock_start).count();
   return result;
 }

@@ -32,6 +32,9 @@ struct ParameterSpec {
   double start = 0;
   double lower = 0, upper = 0;
   bool free = true;
+  // Typical size, for judging what the data determine (SE / scale). 0: the larger of |value|
+  // and |start|. Give it for parameters whose natural value is near zero (offsets, effects).
+  double scale = 0;
 };
 
 // A whitened residual vector r(θ) over one parameter block holding all parameters.
@@ -45,6 +48,12 @@ class LeastSquaresModel {
                                                              const RowLoss& loss) const = 0;
   // Why the data cannot determine `issue.combination`, and what to measure; fills why/measure.
   virtual void explain(IdentifiabilityIssue& issue) const { (void)issue; }
+  // True when the residuals are linear in the parameters not held (so one Gauss-Newton step
+  // is exact): the engine then skips the multi-start and the iterations.
+  virtual bool linear(const std::vector<bool>& held) const {
+    (void)held;
+    return false;
+  }
   // What the design of the data rules out before any fit (e.g. one temperature: no β); each
   // issue names in `held` the parameters to hold. `free` are the parameters asked free.
   virtual std::vector<IdentifiabilityIssue> design_issues(const std::vector<std::string>& free) const {
@@ -53,8 +62,14 @@ class LeastSquaresModel {
   }
 };
 
+// The residuals and Jacobian at the final estimate, for callers that derive more from them.
+struct FinalState {
+  Eigen::VectorXd residuals;
+  Eigen::MatrixXd jacobian;
+};
+
 FitResult solve_least_squares(const LeastSquaresModel& model, const std::vector<ParameterSpec>& parameters,
-                              const FitOptions& options);
+                              const FitOptions& options, FinalState* final_state = nullptr);
 
 // (JᵀJ)⁻¹ over the parameters not held (rows/columns of held ones zero); false with a message
 // when J is rank deficient.

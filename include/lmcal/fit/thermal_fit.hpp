@@ -1,0 +1,117 @@
+// Fit the heat partition α (and optionally h, per-sensor offsets and the initial rail
+// temperature) to rail thermocouple traces, through the rail solver of rail_thermal.hpp:
+//
+//   r = (T_measured(t, x_s) - offset_s - T_model(t, x_s; α, h, T0)) / σ
+//
+// with T_model driven by the run's measured ambient (mean of the ambient sensors, or one
+// named), Q_f from the friction law with fitted constants (a friction fit) or from the
+// run's measured mean friction force, and the chosen source model. Derivatives come from
+// the templated solver with ceres::Jet. Without free h (or coupling) the model is linear
+// in α, the offsets and T0, and the fit is one exact Gauss-Newton step.
+//
+// Runs are fitted jointly (one α for all) and one by one; the per-run α give the spread
+// across runs as the paper reports it (mean, Eq. 1 σ, 95 % t interval), and Eq. 2 compares
+// the two ambient sensors and repeated runs at the same conditions.
+//
+// Trap: α belongs to the source model it was fitted with (`paper` puts L1/Lb1 times the
+// power into the rail, so its α is about Lb1/L1 times the `averaged` one).
+#pragma once
+
+#include <limits>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "lmcal/fit/fit_result.hpp"
+#include "lmcal/fit/statistics.hpp"
+#include "lmcal/io/thermal_run.hpp"
+#include "lmcal/models/friction_effects.hpp"
+#include "lmcal/models/rail_thermal.hpp"
+
+namespace lmcal {
+
+enum class HeatInput {
+  automatic,        // friction law when constants are given, else the measured mean friction
+  friction_law,     // Q = F(constants, effects; run conditions at the ambient at the start) · V
+  measured_friction // Q = mean_friction_N · V from the manifest
+};
+
+struct ThermalFitOptions {
+  FitOptions fit{.starts = 0};  // α is bounded and (without h) linear: no multi-start needed
+  SourceModel source = SourceModel::averaged;
+  TimeScheme scheme = TimeScheme::crank_nicolson;
+  int half_rail_segments = 100;
+  double time_step_s = 30;
+  std::size_t every = 1;                     // use every n-th record of the traces
+  std::string ambient = "mean";              // "mean" of the ambient sensors, or a column name
+  HeatInput heat = HeatInput::automatic;
+  std::optional<FrictionConstants<double>> friction;  // from a friction fit
+  FrictionEffects<double> friction_effects;
+  double alpha_start = 0.6, alpha_lower = 0.0, alpha_upper = 1.0;
+  bool fit_h = false;                        // one h for all runs
+  double h_W_m2K = 5.3, h_lower = 0.5, h_upper = 50.0;
+  bool fit_offsets = false;                  // one offset per thermocouple and run
+  bool fit_initial_temperature = false;      // one T0 per run
+  bool per_run_fits = true;
+  bool compare_sources = true;               // also fit with `paper` (or `averaged`) and report the α ratio
+  // α error curve (the paper's Fig. 11): RMSE at spot 1 (first sensor) for α on a grid.
+  double curve_from = 0.1, curve_to = 1.0;
+  int curve_points = 46;
+};
+
+struct SensorGoodness {
+  std::string run, sensor;
+  double position_m = 0;
+  std::size_t n = 0;
+  double rmse_K = 0;
+  double max_error_K = 0;
+  double max_error_percent = 0;  // max |error| / (measured rise at the end) · 100
+};
+
+struct RunInfo {
+  std::string id;
+  double velocity_m_s = 0, load_N = 0, heat_rate_W = 0, initial_temperature_C = 0;
+  std::string heat_source;  // "friction law" or "measured mean friction"
+  double ambient_difference_percent = 0;  // Eq. 2 between the first two ambient sensors' rise
+};
+
+struct ThermalFitResult {
+  FitResult joint;                  // α (and h, offsets, T0) over all runs
+  std::vector<FitResult> per_run;   // each run alone
+  std::vector<RunInfo> runs;
+  Spread alpha_spread;              // over the per-run α
+  std::vector<std::pair<std::string, double>> repeat_differences;  // Eq. 2 of α between repeats ("v110_r1/v110_r2")
+  std::vector<SensorGoodness> goodness;
+  double max_error_percent = 0;
+  struct CurvePoint {
+    std::string run;
+    double alpha, rmse_K, max_error_K;
+  };
+  std::vector<CurvePoint> alpha_curve;
+  struct Sample {
+    std::size_t run, sensor;
+    double time_s, measured_C, simulated_C;
+  };
+  // The same data fitted with the other source model (paper <-> averaged): its α, and the
+  // ratio α_paper / α_averaged, which PHYSICS.md §7 expects near Lb1/L1.
+  std::string other_source;
+  double other_source_alpha = std::numeric_limits<double>::quiet_NaN();
+  double alpha_ratio_paper_over_averaged = std::numeric_limits<double>::quiet_NaN();
+  double contact_over_stroke = std::numeric_limits<double>::quiet_NaN();  // Lb1 / L1 of the first run
+  std::vector<Sample> samples;                         // joint fit, every fitted record
+  std::vector<std::vector<std::string>> sensor_names;  // [run][sensor]
+};
+
+ThermalFitResult fit_thermal(const ThermalDataSet& data, const ThermalFitOptions& options);
+
+// Reads constants and effects from a friction fit JSON (`lmcal fit friction` output).
+void read_friction_fit(const std::string& json_file, ThermalFitOptions& options);
+
+std::string thermal_fit_json(const ThermalFitResult& result, const ThermalFitOptions& options,
+                             const std::vector<std::pair<std::string, std::string>>& inputs,
+                             const std::vector<std::string>& command, const std::string& name);
+std::string thermal_fit_samples_csv(const ThermalFitResult& result);
+std::string thermal_fit_curve_csv(const ThermalFitResult& result);
+std::string thermal_fit_summary(const ThermalFitResult& result);
+
+}  // namespace lmcal

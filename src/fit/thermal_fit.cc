@@ -1,0 +1,498 @@
+#include "lmcal/fit/thermal_fit.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+
+#include "lmcal/error.hpp"
+#include "lmcal/io/catalog.hpp"
+#include "lmcal/io/csv_writer.hpp"
+#include "thermal_model.hpp"
+
+namespace lmcal {
+
+using detail::ParameterSpec;
+using detail::PreparedRun;
+using detail::ThermalLayout;
+using detail::ThermalModel;
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+double mean_of_finite(const std::vector<double>& values, std::size_t from, std::size_t to) {
+  double sum = 0;
+  std::size_t n = 0;
+  for (std::size_t i = from; i < std::min(to, values.size()); ++i)
+    if (!std::isnan(values[i])) {
+      sum += values[i];
+      ++n;
+    }
+  return n ? sum / static_cast<double>(n) : kNaN;
+}
+
+// The change of a channel over the run: mean of its last ten records minus its first ten.
+double rise(const std::vector<double>& values) {
+  const std::size_t n = values.size(), k = std::min<std::size_t>(10, n);
+  return mean_of_finite(values, n - k, n) - mean_of_finite(values, 0, k);
+}
+
+struct Prepared {
+  PreparedRun run;
+  RunInfo info;
+  std::vector<double> rise_K;  // measured rise of every sensor
+};
+
+Prepared prepare_run(const ThermalRun& run, const ThermalFitOptions& o) {
+  const ThermalTrace& trace = run.trace;
+  if (trace.size() < 2) throw InvalidParameter(run.id, "a thermal run needs at least two records");
+  if (o.every < 1) throw InvalidParameter("every", 0.0, "at least 1");
+  const GuideSpec spec = with_overrides(builtin_catalog().find(run.guide), run.guide_overrides);
+  Prepared out;
+  PreparedRun& pr = out.run;
+  pr.id = run.id;
+  const double Lb1 = run.contact_length_mm ? *run.contact_length_mm : require(spec, &GuideSpec::contact_length_mm, "contact_length_mm");
+  pr.geometry = {.rail_length_m = run.rail_length_m,
+                 .area_m2 = require(spec, &GuideSpec::area_m2, "area_m2"),
+                 .perimeter_m = require(spec, &GuideSpec::perimeter_m, "perimeter_m"),
+                 .stroke_m = run.stroke_m,
+                 .contact_length_m = Lb1 * 1e-3,
+                 .velocity_m_s = run.velocity_m_s};
+
+  // Ambient: the mean of the ambient sensors (NaN left out), or the one named.
+  const double t0 = trace.time_s.front();
+  for (std::size_t i = 0; i < trace.size(); ++i) {
+    double T = kNaN;
+    if (o.ambient == "mean") {
+      double sum = 0;
+      int count = 0;
+      for (const auto& c : trace.ambient)
+        if (!std::isnan(c.values[i])) {
+          sum += c.values[i];
+          ++count;
+        }
+      if (count) T = sum / count;
+    } else {
+      const auto it = std::find_if(trace.ambient.begin(), trace.ambient.end(), [&](auto& c) { return c.name == o.ambient; });
+      if (it == trace.ambient.end())
+        throw InvalidParameter("ambient", fmt::format("run {} has no ambient column '{}'", run.id, o.ambient));
+      T = it->values[i];
+    }
+    if (std::isnan(T)) continue;
+    pr.ambient.time_s.push_back(trace.time_s[i] - t0);
+    pr.ambient.temperature_C.push_back(T);
+  }
+  if (pr.ambient.time_s.empty() || pr.ambient.time_s.front() > 0 || pr.ambient.time_s.back() < trace.time_s.back() - t0)
+    throw InvalidParameter(run.id, "the ambient record must cover the run from its first to its last record");
+
+  for (const auto& channel : trace.rail) {
+    pr.sensor_names.push_back(channel.name);
+    pr.sensor_positions_m.push_back(run.sensor_position_m.at(channel.name));
+    out.rise_K.push_back(rise(channel.values));
+  }
+  for (std::size_t i = 0; i < trace.size(); i += o.every) {
+    pr.times_s.push_back(trace.time_s[i] - t0);
+    std::vector<double> row;
+    for (const auto& channel : trace.rail) row.push_back(channel.values[i]);
+    pr.measured.push_back(std::move(row));
+  }
+
+  // Initial rail temperature: the thermocouples' first reading.
+  std::vector<double> first;
+  for (const auto& channel : trace.rail) first.push_back(channel.values.front());
+  double T0 = mean_of_finite(first, 0, first.size());
+  if (std::isnan(T0)) T0 = pr.ambient.temperature_C.front();
+
+  // Heat: the friction law at the start (the rail and grease at the ambient, which the two
+  // ambient sensors measure better than one biased thermocouple), or the measured mean friction.
+  HeatInput heat = o.heat;
+  if (heat == HeatInput::automatic)
+    heat = o.friction || !run.mean_friction_N ? HeatInput::friction_law : HeatInput::measured_friction;
+  double Q = 0;
+  if (heat == HeatInput::measured_friction) {
+    if (!run.mean_friction_N)
+      throw InvalidParameter(run.id, "the run has no mean_friction_N in the manifest; give a friction fit (--friction)");
+    Q = *run.mean_friction_N * run.velocity_m_s;
+    out.info.heat_source = "measured mean friction";
+  } else {
+    const FrictionConstants<double> k = o.friction ? *o.friction : paper_friction_constants();
+    const FrictionConditions<double> c{
+        .load_N = run.load_N,
+        .preload_um = run.preload_um ? *run.preload_um : require(spec, &GuideSpec::preload_um, "preload_um"),
+        .block_length_mm = run.block_length_mm ? *run.block_length_mm : require(spec, &GuideSpec::block_length_mm, "block_length_mm"),
+        .velocity_m_s = run.velocity_m_s,
+        .temperature_C = pr.ambient.temperature_C.front()};
+    Q = friction_force_with_effects_N(k, o.friction_effects, c) * run.velocity_m_s;
+    out.info.heat_source = o.friction ? "friction law (fitted constants)" : "friction law (the paper's constants)";
+  }
+  pr.params = {.heat_partition = o.alpha_start,
+               .heat_rate_W = Q,
+               .h_W_m2K = o.h_W_m2K,
+               .conductivity_W_mK = require(spec, &GuideSpec::conductivity_W_mK, "conductivity_W_mK"),
+               .density_kg_m3 = require(spec, &GuideSpec::density_kg_m3, "density_kg_m3"),
+               .specific_heat_J_kgK = require(spec, &GuideSpec::specific_heat_J_kgK, "specific_heat_J_kgK"),
+               .initial_temperature_C = T0};
+  out.info.id = run.id;
+  out.info.velocity_m_s = run.velocity_m_s;
+  out.info.load_N = run.load_N;
+  out.info.heat_rate_W = Q;
+  out.info.initial_temperature_C = T0;
+  out.info.ambient_difference_percent =
+      trace.ambient.size() >= 2 ? percent_difference(rise(trace.ambient[0].values), rise(trace.ambient[1].values)) : kNaN;
+  return out;
+}
+
+// Parameters and their layout for the runs given.
+std::pair<ThermalLayout, std::vector<ParameterSpec>> layout_for(const std::vector<PreparedRun>& runs,
+                                                                const ThermalFitOptions& o) {
+  ThermalLayout layout;
+  std::vector<ParameterSpec> specs = {{"alpha", "1", o.alpha_start, o.alpha_lower, o.alpha_upper, true}};
+  layout.alpha = 0;
+  if (o.fit_h) {
+    layout.h = static_cast<int>(specs.size());
+    specs.push_back({"h_W_m2K", "W/m2K", o.h_W_m2K, o.h_lower, o.h_upper, true});
+  }
+  for (const auto& run : runs) {
+    std::vector<int> offsets(run.sensor_names.size(), -1);
+    for (std::size_t s = 0; s < offsets.size() && o.fit_offsets; ++s) {
+      offsets[s] = static_cast<int>(specs.size());
+      specs.push_back({fmt::format("offset {} {}", run.id, run.sensor_names[s]), "K", 0.0, -5.0, 5.0, true, 1.0});
+    }
+    layout.offsets.push_back(offsets);
+    int initial = -1;
+    if (o.fit_initial_temperature) {
+      initial = static_cast<int>(specs.size());
+      const double T0 = run.params.initial_temperature_C;
+      specs.push_back({fmt::format("T0 {}", run.id), "C", T0, T0 - 10, T0 + 10, true, 1.0});
+    }
+    layout.initial.push_back(initial);
+  }
+  layout.size = static_cast<int>(specs.size());
+  return {layout, specs};
+}
+
+RailNumerics numerics_of(const ThermalFitOptions& o) {
+  return {.source = o.source, .scheme = o.scheme, .half_rail_segments = o.half_rail_segments, .time_step_s = o.time_step_s};
+}
+
+FitResult fit_runs(const std::vector<PreparedRun>& runs, const ThermalFitOptions& o) {
+  auto [layout, specs] = layout_for(runs, o);
+  const ThermalModel model(runs, layout, numerics_of(o));
+  return detail::solve_least_squares(model, specs, o.fit);
+}
+
+}  // namespace
+
+ThermalFitResult fit_thermal(const ThermalDataSet& data, const ThermalFitOptions& o) {
+  if (data.runs.empty()) throw InvalidParameter("runs", "the data set has no runs");
+  validate(numerics_of(o));
+  ThermalFitResult result;
+  std::vector<PreparedRun> runs;
+  std::vector<std::vector<double>> rises;
+  for (const auto& run : data.runs) {
+    Prepared p = prepare_run(run, o);
+    runs.push_back(std::move(p.run));
+    result.runs.push_back(p.info);
+    rises.push_back(std::move(p.rise_K));
+  }
+
+  // Joint fit, and every run alone.
+  auto [layout, specs] = layout_for(runs, o);
+  const ThermalModel model(runs, layout, numerics_of(o));
+  detail::FinalState final_state;
+  result.joint = detail::solve_least_squares(model, specs, o.fit, &final_state);
+  std::vector<double> alphas;
+  if (o.per_run_fits && runs.size() >= 2) {
+    for (const auto& run : runs) {
+      result.per_run.push_back(fit_runs({run}, o));
+      alphas.push_back(result.per_run.back().parameter("alpha").value);
+    }
+    result.alpha_spread = spread(alphas, o.fit.confidence);
+    // Eq. 2 between repeated runs at the same conditions.
+    for (std::size_t a = 0; a < runs.size(); ++a)
+      for (std::size_t b = a + 1; b < runs.size(); ++b)
+        if (data.runs[a].velocity_m_s == data.runs[b].velocity_m_s && data.runs[a].load_N == data.runs[b].load_N &&
+            data.runs[a].guide == data.runs[b].guide)
+          result.repeat_differences.emplace_back(runs[a].id + "/" + runs[b].id, percent_difference(alphas[a], alphas[b]));
+  }
+
+  // Source-model dependence: the same data with `paper` against `averaged`.
+  if (o.compare_sources && o.source != SourceModel::moving) {
+    ThermalFitOptions other = o;
+    other.source = o.source == SourceModel::paper ? SourceModel::averaged : SourceModel::paper;
+    other.per_run_fits = other.compare_sources = false;
+    auto [other_layout, other_specs] = layout_for(runs, other);
+    const ThermalModel other_model(runs, other_layout, numerics_of(other));
+    const FitResult other_fit = detail::solve_least_squares(other_model, other_specs, other.fit);
+    result.other_source = std::string(to_string(other.source));
+    result.other_source_alpha = other_fit.parameter("alpha").value;
+    const double own = result.joint.parameter("alpha").value;
+    result.alpha_ratio_paper_over_averaged =
+        o.source == SourceModel::paper ? own / result.other_source_alpha : result.other_source_alpha / own;
+    result.contact_over_stroke = runs[0].geometry.contact_length_m / runs[0].geometry.stroke_m;
+  }
+
+  // Measured against the model, per sensor, from the final residuals r = measured - model
+  // (σ = 1). The model is linear in α, so the α error curve (the paper's Fig. 11) follows from
+  // the Jacobian column of α: r(α) = r(α̂) + ∂r/∂α · (α - α̂). With a robust loss the residuals
+  // are transformed, so the model is simulated again instead.
+  const std::vector<double> theta = result.joint.values();
+  const auto& rows = model.rows();
+  std::vector<double> error(rows.size()), d_alpha(rows.size());
+  if (o.fit.loss == RobustLoss::none) {
+    for (std::size_t k = 0; k < rows.size(); ++k) {
+      error[k] = final_state.residuals[static_cast<Eigen::Index>(k)];
+      d_alpha[k] = final_state.jacobian(static_cast<Eigen::Index>(k), layout.alpha);
+    }
+  } else {
+    std::vector<double> at_zero = theta, at_one = theta;
+    at_zero[static_cast<std::size_t>(layout.alpha)] = 0.0;
+    at_one[static_cast<std::size_t>(layout.alpha)] = 1.0;
+    const auto fitted = model.simulate(theta), zero = model.simulate(at_zero), one = model.simulate(at_one);
+    for (std::size_t k = 0; k < rows.size(); ++k) {
+      const auto& w = rows[k];
+      const int offset = layout.offsets[w.run][w.sensor];
+      error[k] = runs[w.run].measured[w.time][w.sensor] - fitted[w.run][w.time][w.sensor] -
+                 (offset >= 0 ? theta[static_cast<std::size_t>(offset)] : 0.0);
+      d_alpha[k] = -(one[w.run][w.time][w.sensor] - zero[w.run][w.time][w.sensor]);
+    }
+  }
+  for (std::size_t r = 0; r < runs.size(); ++r) {
+    const auto& pr = runs[r];
+    for (std::size_t s = 0; s < pr.sensor_names.size(); ++s) {
+      SensorGoodness g{pr.id, pr.sensor_names[s], pr.sensor_positions_m[s], 0, 0, 0, 0};
+      double ss = 0;
+      for (std::size_t k = 0; k < rows.size(); ++k) {
+        if (rows[k].run != r || rows[k].sensor != s) continue;
+        const double measured = pr.measured[rows[k].time][s];
+        ss += error[k] * error[k];
+        g.max_error_K = std::max(g.max_error_K, std::abs(error[k]));
+        ++g.n;
+        result.samples.push_back({r, s, pr.times_s[rows[k].time], measured, measured - error[k]});
+      }
+      g.rmse_K = g.n ? std::sqrt(ss / static_cast<double>(g.n)) : kNaN;
+      g.max_error_percent = 100 * g.max_error_K / std::max(std::abs(rises[r][s]), 1e-9);
+      result.max_error_percent = std::max(result.max_error_percent, g.max_error_percent);
+      result.goodness.push_back(g);
+    }
+  }
+  const double alpha_hat = theta[static_cast<std::size_t>(layout.alpha)];
+  for (std::size_t r = 0; r < runs.size(); ++r) {
+    for (int c = 0; c < o.curve_points; ++c) {
+      const double alpha = o.curve_from + (o.curve_to - o.curve_from) * c / std::max(1, o.curve_points - 1);
+      double ss = 0, worst = 0;
+      std::size_t n = 0;
+      for (std::size_t k = 0; k < rows.size(); ++k) {
+        if (rows[k].run != r || rows[k].sensor != 0) continue;
+        const double e = error[k] + d_alpha[k] * (alpha - alpha_hat);
+        ss += e * e;
+        worst = std::max(worst, std::abs(e));
+        ++n;
+      }
+      result.alpha_curve.push_back({runs[r].id, alpha, n ? std::sqrt(ss / static_cast<double>(n)) : kNaN, worst});
+    }
+  }
+  for (const auto& pr : runs) result.sensor_names.push_back(pr.sensor_names);
+  return result;
+}
+
+void read_friction_fit(const std::string& json_file, ThermalFitOptions& options) {
+  std::ifstream in(json_file);
+  if (!in) throw InputError(json_file, 0, 0, "cannot open friction fit file");
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(in);
+  } catch (const nlohmann::json::parse_error& e) {
+    throw InputError(json_file, 0, static_cast<long>(e.byte), "not valid JSON: " + std::string(e.what()));
+  }
+  if (j.value("kind", "") != "friction fit")
+    throw InputError(json_file, 0, 0, "expected a friction fit (\"kind\": \"friction fit\") written by lmcal fit friction");
+  FrictionConstants<double> k = paper_friction_constants();
+  FrictionEffects<double> e;
+  std::map<std::string, double*> slots = {{"k1", &k.k1},       {"k2", &k.k2},       {"mu_st", &k.mu_st},
+                                          {"v_st_m_s", &k.v_st_m_s}, {"mu_v", &k.mu_v}, {"beta_per_K", &k.beta_per_K},
+                                          {"f0", &k.f0},
+                                          {"stribeck_exponent", &e.stribeck_exponent},
+                                          {"viscous_load", &e.viscous_load_per_kN},
+                                          {"direction_asymmetry", &e.direction_asymmetry},
+                                          {"seal_drag", &e.seal_drag_N_s2_m2},
+                                          {"coulomb_temperature", &e.coulomb_temperature_per_K}};
+  for (const auto& p : j.at("parameters")) {
+    const auto it = slots.find(p.at("name").get<std::string>());
+    if (it != slots.end() && p.at("value").is_number()) *it->second = p.at("value").get<double>();
+  }
+  options.friction = k;
+  options.friction_effects = e;
+}
+
+// ---- output ---------------------------------------------------------------------------------
+
+namespace {
+
+nlohmann::json number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
+
+nlohmann::json parameters_json(const FitResult& fit) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const auto& p : fit.parameters)
+    out.push_back({{"name", p.name},
+                   {"unit", p.unit},
+                   {"value", number(p.value)},
+                   {"se", number(p.se)},
+                   {"ci95", {number(p.ci_low), number(p.ci_high)}},
+                   {"profile_ci95", {number(p.profile_low), number(p.profile_high)}},
+                   {"interval", p.interval},
+                   {"at_bound", p.at_bound},
+                   {"held_unidentifiable", p.held_unidentifiable}});
+  return out;
+}
+
+nlohmann::json fit_summary_json(const FitResult& fit) {
+  nlohmann::json issues = nlohmann::json::array();
+  for (const auto& i : fit.identifiability.issues) issues.push_back({{"why", i.why}, {"measure", i.measure}, {"held", i.held}});
+  nlohmann::json correlation = nlohmann::json::array();
+  for (Eigen::Index a = 0; a < fit.correlation.rows(); ++a) {
+    nlohmann::json row = nlohmann::json::array();
+    for (Eigen::Index b = 0; b < fit.correlation.cols(); ++b) row.push_back(number(fit.correlation(a, b)));
+    correlation.push_back(row);
+  }
+  return {{"parameters", parameters_json(fit)},
+          {"correlation", correlation},
+          {"residuals", fit.residuals},
+          {"residual_sigma_K", number(std::sqrt(fit.residual_variance))},
+          {"identifiability", {{"identifiable", fit.identifiability.identifiable}, {"issues", issues}}},
+          {"solver",
+           {{"converged", fit.solver.converged},
+            {"termination", fit.solver.termination},
+            {"iterations", fit.solver.iterations},
+            {"covariance_ok", fit.solver.covariance_ok},
+            {"seconds", fit.solver.seconds}}},
+          {"warnings", fit.warnings}};
+}
+
+}  // namespace
+
+std::string thermal_fit_json(const ThermalFitResult& r, const ThermalFitOptions& o,
+                             const std::vector<std::pair<std::string, std::string>>& inputs,
+                             const std::vector<std::string>& command, const std::string& name) {
+  nlohmann::json runs = nlohmann::json::array();
+  for (std::size_t i = 0; i < r.runs.size(); ++i) {
+    const auto& info = r.runs[i];
+    nlohmann::json run = {{"id", info.id},
+                          {"velocity_m_s", info.velocity_m_s},
+                          {"load_N", info.load_N},
+                          {"heat_rate_W", info.heat_rate_W},
+                          {"heat_source", info.heat_source},
+                          {"initial_temperature_C", info.initial_temperature_C},
+                          {"ambient_sensors_percent_difference_eq2", number(info.ambient_difference_percent)}};
+    if (i < r.per_run.size()) run["fit"] = fit_summary_json(r.per_run[i]);
+    runs.push_back(run);
+  }
+  nlohmann::json goodness = nlohmann::json::array();
+  for (const auto& g : r.goodness)
+    goodness.push_back({{"run", g.run},
+                        {"sensor", g.sensor},
+                        {"position_m", g.position_m},
+                        {"n", g.n},
+                        {"rmse_K", number(g.rmse_K)},
+                        {"max_error_K", number(g.max_error_K)},
+                        {"max_error_percent", number(g.max_error_percent)}});
+  nlohmann::json repeats = nlohmann::json::array();
+  for (const auto& [pair, d] : r.repeat_differences) repeats.push_back({{"runs", pair}, {"alpha_percent_difference_eq2", number(d)}});
+  nlohmann::json in = nlohmann::json::array();
+  for (const auto& [file, hash] : inputs) in.push_back({{"file", file}, {"sha256", hash}});
+  const auto& s = r.alpha_spread;
+  nlohmann::json j = {{"kind", "thermal fit"},
+                      {"name", name},
+                      {"lmcal_version", LMCAL_VERSION},
+                      {"command", command},
+                      {"inputs", in},
+                      {"options",
+                       {{"source", to_string(o.source)},
+                        {"scheme", to_string(o.scheme)},
+                        {"half_rail_segments", o.half_rail_segments},
+                        {"time_step_s", o.time_step_s},
+                        {"every", o.every},
+                        {"ambient", o.ambient},
+                        {"fit_h", o.fit_h},
+                        {"fit_offsets", o.fit_offsets},
+                        {"fit_initial_temperature", o.fit_initial_temperature}}},
+                      {"joint", fit_summary_json(r.joint)},
+                      {"alpha_across_runs",
+                       {{"n", s.n},
+                        {"mean", number(s.mean)},
+                        {"sd_eq1", number(s.sd)},
+                        {"ci95", {number(s.low), number(s.high)}},
+                        {"half_width", number(s.half_width)},
+                        {"min", number(s.min)},
+                        {"max", number(s.max)}}},
+                      {"repeats", repeats},
+                      {"source_comparison",
+                       {{"other_source", r.other_source},
+                        {"other_source_alpha", number(r.other_source_alpha)},
+                        {"alpha_paper_over_averaged", number(r.alpha_ratio_paper_over_averaged)},
+                        {"contact_over_stroke", number(r.contact_over_stroke)}}},
+                      {"runs", runs},
+                      {"goodness", goodness},
+                      {"max_error_percent", number(r.max_error_percent)}};
+  return j.dump(2) + "\n";
+}
+
+std::string thermal_fit_samples_csv(const ThermalFitResult& r) {
+  CsvText csv({"run", "sensor", "time_s", "measured_C", "simulated_C", "residual_K"});
+  for (const auto& s : r.samples) {
+    csv.cell(r.runs[s.run].id).cell(r.sensor_names[s.run][s.sensor]).cell(s.time_s).cell(s.measured_C);
+    csv.cell(s.simulated_C).cell(s.measured_C - s.simulated_C).end_row();
+  }
+  return csv.str();
+}
+
+std::string thermal_fit_curve_csv(const ThermalFitResult& r) {
+  CsvText csv({"run", "alpha", "rmse_K", "max_error_K"});
+  for (const auto& p : r.alpha_curve) csv.cell(p.run).cell(p.alpha).cell(p.rmse_K).cell(p.max_error_K).end_row();
+  return csv.str();
+}
+
+std::string thermal_fit_summary(const ThermalFitResult& r) {
+  std::string s;
+  s += fmt::format("{} runs, {} records; joint fit over all runs:\n", r.runs.size(), r.joint.residuals);
+  for (const auto& p : r.joint.parameters) {
+    const std::string interval = p.interval == "profile" ? fmt::format("[{:.4g}, {:.4g}] profile", p.profile_low, p.profile_high)
+                                 : p.interval == "linear" ? fmt::format("[{:.4g}, {:.4g}]", p.ci_low, p.ci_high)
+                                                          : std::string("held");
+    s += fmt::format("  {:<24} {:>10.5g} ± {:<9.3g} {}{}\n", p.name, p.value, p.se, interval, p.at_bound ? "  at a bound" : "");
+  }
+  s += fmt::format("  residual sigma {:.3f} K; {}\n", std::sqrt(r.joint.residual_variance), r.joint.solver.termination);
+  for (const auto& issue : r.joint.identifiability.issues)
+    s += fmt::format("  NOT IDENTIFIABLE: {} -> held {}; {}\n", issue.why, fmt::join(issue.held, ", "), issue.measure);
+  if (!r.per_run.empty()) {
+    s += "per run:\n";
+    for (std::size_t i = 0; i < r.per_run.size(); ++i) {
+      const auto& p = r.per_run[i].parameter("alpha");
+      s += fmt::format("  {:<10} V {:.3f} m/s  Q {:.2f} W  alpha {:.4f} ± {:.4f}  ambient sensors differ {:.1f} % (Eq. 2)\n",
+                       r.runs[i].id, r.runs[i].velocity_m_s, r.runs[i].heat_rate_W, p.value, p.se,
+                       r.runs[i].ambient_difference_percent);
+    }
+    const auto& sp = r.alpha_spread;
+    s += fmt::format("alpha across runs: {:.3f} ± {:.3f} (mean ± 95 % t half-width; Eq. 1 sigma {:.4f}, n {}, min {:.3f}, max {:.3f})\n",
+                     sp.mean, sp.half_width, sp.sd, sp.n, sp.min, sp.max);
+    for (const auto& [pair, d] : r.repeat_differences) s += fmt::format("  repeats {}: alpha differs {:.1f} % (Eq. 2)\n", pair, d);
+  }
+  s += "goodness per sensor (joint fit):\n";
+  for (const auto& g : r.goodness)
+    s += fmt::format("  {:<10} {:<8} x {:.3f} m  RMSE {:.3f} K  max error {:.3f} K ({:.1f} % of the rise)\n", g.run, g.sensor,
+                     g.position_m, g.rmse_K, g.max_error_K, g.max_error_percent);
+  s += fmt::format("max error {:.1f} % of the measured rise (the paper reports 12 %)\n", r.max_error_percent);
+  if (!r.other_source.empty())
+    s += fmt::format(
+        "source model: alpha with `{}` is {:.4f}; alpha(paper) / alpha(averaged) = {:.3f} (Lb1/L1 = {:.3f}: the paper's "
+        "source puts L1/Lb1 times the block's power into the rail, so its alpha is smaller by about that factor)\n",
+        r.other_source, r.other_source_alpha, r.alpha_ratio_paper_over_averaged, r.contact_over_stroke);
+  for (const auto& w : r.joint.warnings) s += "warning: " + w + "\n";
+  return s;
+}
+
+}  // namespace lmcal

@@ -1,0 +1,193 @@
+#include "thermal_model.hpp"
+
+#include <ceres/jet.h>
+#include <fmt/format.h>
+
+#include <cmath>
+#include <set>
+
+#include "lmcal/error.hpp"
+
+namespace lmcal::detail {
+
+namespace {
+
+// The global parameters run r depends on: α, h, its sensors' offsets, its T0.
+std::vector<int> local_parameters(const ThermalLayout& layout, std::size_t r) {
+  std::vector<int> local{layout.alpha};
+  if (layout.h >= 0) local.push_back(layout.h);
+  for (int o : layout.offsets[r])
+    if (o >= 0) local.push_back(o);
+  if (layout.initial[r] >= 0) local.push_back(layout.initial[r]);
+  return local;
+}
+
+// Simulated temperatures of run r, [time][sensor], with the parameters given by `param`
+// (global index -> scalar) and the run's fixed values elsewhere.
+template <typename T, typename Param>
+std::vector<std::vector<T>> simulate_run(const PreparedRun& run, const RailNumerics& numerics,
+                                         const ThermalLayout& layout, std::size_t r, const Param& param) {
+  RailParams<T> p{.heat_partition = param(layout.alpha),
+                  .heat_rate_W = T(run.params.heat_rate_W),
+                  .h_W_m2K = layout.h >= 0 ? param(layout.h) : T(run.params.h_W_m2K),
+                  .conductivity_W_mK = T(run.params.conductivity_W_mK),
+                  .density_kg_m3 = T(run.params.density_kg_m3),
+                  .specific_heat_J_kgK = T(run.params.specific_heat_J_kgK),
+                  .initial_temperature_C = layout.initial[r] >= 0 ? param(layout.initial[r])
+                                                                  : T(run.params.initial_temperature_C),
+                  .base_loss_W_mK = T(run.params.base_loss_W_mK)};
+  const RailOutputs outputs{.duration_s = run.times_s.back(),
+                            .sensor_positions_m = run.sensor_positions_m,
+                            .output_times_s = run.times_s};
+  const RailSolution<T> sol = simulate_rail(run.geometry, numerics, outputs, p, run.ambient);
+  std::vector<std::vector<T>> out(run.times_s.size(), std::vector<T>(run.sensor_positions_m.size()));
+  for (std::size_t t = 0; t < run.times_s.size(); ++t)
+    for (std::size_t s = 0; s < run.sensor_positions_m.size(); ++s) out[t][s] = sol.temperature_C(t, s);
+  return out;
+}
+
+class ThermalCost final : public ceres::CostFunction {
+ public:
+  ThermalCost(const ThermalModel& model, std::vector<std::size_t> rows, RowLoss loss)
+      : model_(model), rows_(std::move(rows)), loss_(loss) {
+    mutable_parameter_block_sizes()->push_back(model.layout().size);
+    set_num_residuals(static_cast<int>(rows_.empty() ? model.num_residuals() : rows_.size()));
+  }
+
+  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
+    const double* theta = parameters[0];
+    const std::size_t n = model_.num_residuals();
+    const auto P = static_cast<std::size_t>(model_.layout().size);
+    const bool subset = !rows_.empty();
+    std::vector<double> all_r, all_J;
+    double* r = residuals;
+    double* J = jacobians && jacobians[0] ? jacobians[0] : nullptr;
+    if (subset) {
+      all_r.resize(n);
+      r = all_r.data();
+      if (J) {
+        all_J.resize(n * P);
+        J = all_J.data();
+      }
+    }
+    if (J) std::fill(J, J + n * P, 0.0);
+    std::size_t row = 0;
+    for (std::size_t run = 0; run < model_.runs().size(); ++run) {
+      const std::vector<int> local = local_parameters(model_.layout(), run);
+      bool ok = true;
+      if (!J) ok = evaluate_run<double>(run, theta, local, r, nullptr, row);
+      else if (local.size() <= 1) ok = evaluate_run<ceres::Jet<double, 1>>(run, theta, local, r, J, row);
+      else if (local.size() <= 2) ok = evaluate_run<ceres::Jet<double, 2>>(run, theta, local, r, J, row);
+      else if (local.size() <= 4) ok = evaluate_run<ceres::Jet<double, 4>>(run, theta, local, r, J, row);
+      else if (local.size() <= 8) ok = evaluate_run<ceres::Jet<double, 8>>(run, theta, local, r, J, row);
+      else LMCAL_ASSERT(false, "a thermal run depends on at most 8 fitted parameters");
+      if (!ok) return false;
+    }
+    if (subset) {
+      for (std::size_t k = 0; k < rows_.size(); ++k) {
+        residuals[k] = all_r[rows_[k]];
+        if (J) std::copy_n(all_J.data() + rows_[k] * P, P, jacobians[0] + k * P);
+      }
+    }
+    return true;
+  }
+
+ private:
+  template <typename T>
+  bool evaluate_run(std::size_t run, const double* theta, const std::vector<int>& local, double* r, double* J,
+                    std::size_t& row) const {
+    const ThermalLayout& layout = model_.layout();
+    const auto P = static_cast<std::size_t>(layout.size);
+    auto param = [&](int global) {
+      if constexpr (std::is_same_v<T, double>) {
+        return theta[global];
+      } else {
+        for (std::size_t k = 0; k < local.size(); ++k)
+          if (local[k] == global) return T(theta[global], static_cast<int>(k));
+        return T(theta[global]);
+      }
+    };
+    const PreparedRun& pr = model_.runs()[run];
+    const auto simulated = simulate_run<T>(pr, model_.numerics(), layout, run, param);
+    const auto& rows = model_.rows();
+    for (; row < rows.size() && rows[row].run == run; ++row) {
+      const auto& w = rows[row];
+      const int offset_index = layout.offsets[run][w.sensor];
+      T residual = pr.measured[w.time][w.sensor] - simulated[w.time][w.sensor];
+      if (offset_index >= 0) residual -= param(offset_index);
+      residual = robust_residual(residual, loss_);
+      if constexpr (std::is_same_v<T, double>) {
+        r[row] = residual;
+        if (!std::isfinite(r[row])) return false;
+      } else {
+        r[row] = residual.a;
+        if (!std::isfinite(r[row])) return false;
+        for (std::size_t k = 0; k < local.size(); ++k) J[row * P + static_cast<std::size_t>(local[k])] = residual.v[k];
+      }
+    }
+    return true;
+  }
+
+  const ThermalModel& model_;
+  std::vector<std::size_t> rows_;
+  RowLoss loss_;
+};
+
+}  // namespace
+
+ThermalModel::ThermalModel(const std::vector<PreparedRun>& runs, ThermalLayout layout, RailNumerics numerics)
+    : runs_(runs), layout_(std::move(layout)), numerics_(numerics) {
+  for (std::size_t r = 0; r < runs_.size(); ++r) {
+    first_row_.push_back(rows_.size());
+    for (std::size_t t = 0; t < runs_[r].times_s.size(); ++t)
+      for (std::size_t s = 0; s < runs_[r].sensor_positions_m.size(); ++s)
+        if (!std::isnan(runs_[r].measured[t][s])) rows_.push_back({r, t, s});
+  }
+}
+
+std::unique_ptr<ceres::CostFunction> ThermalModel::cost_function(const std::vector<std::size_t>& rows,
+                                                                 const RowLoss& loss) const {
+  return std::make_unique<ThermalCost>(*this, rows, loss);
+}
+
+// Temperatures are linear in α (Q fixed), in the initial temperature and in the offsets;
+// h enters the operator and is not.
+bool ThermalModel::linear(const std::vector<bool>& held) const {
+  return layout_.h < 0 || held[static_cast<std::size_t>(layout_.h)];
+}
+
+void ThermalModel::explain(IdentifiabilityIssue& issue) const {
+  std::set<std::string> names;
+  for (const auto& [name, weight] : issue.combination)
+    if (std::abs(weight) >= 0.3) names.insert(name);
+  const bool alpha = names.count("alpha") > 0, h = names.count("h_W_m2K") > 0;
+  bool offsets = false, initial = false;
+  for (const auto& n : names) {
+    offsets |= n.rfind("offset", 0) == 0;
+    initial |= n.rfind("T0", 0) == 0;
+  }
+  if (alpha && h) {
+    issue.why = "α and h trade off: a larger α with a larger h gives the same temperatures at these sensors and times";
+    issue.measure = "record the whole warm-up and the cool-down after the block stops, or sensors farther from the stroke";
+  } else if (offsets && initial) {
+    issue.why = "a thermocouple offset and the initial temperature shift the same reading the same way";
+    issue.measure = "log the rail at rest against a reference thermometer before the run";
+  } else if (offsets && alpha) {
+    issue.why = "the offsets absorb the heating: the records do not show the warm-up clearly enough";
+    issue.measure = "start logging before the block moves and run until the rail is close to steady state";
+  } else {
+    std::string combo;
+    for (const auto& [name, weight] : issue.combination) combo += fmt::format(" {:+.2f}·{}", weight, name);
+    issue.why = "the records determine only the combination" + combo;
+    issue.measure = "longer runs, more sensors along the rail, or runs at other speeds";
+  }
+}
+
+std::vector<std::vector<std::vector<double>>> ThermalModel::simulate(const std::vector<double>& theta) const {
+  std::vector<std::vector<std::vector<double>>> out;
+  for (std::size_t r = 0; r < runs_.size(); ++r)
+    out.push_back(simulate_run<double>(runs_[r], numerics_, layout_, r, [&](int g) { return theta[g]; }));
+  return out;
+}
+
+}  // namespace lmcal::detail

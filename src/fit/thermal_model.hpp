@@ -1,0 +1,64 @@
+// The thermal least-squares model (private to the fit layer): rail thermocouple residuals
+// through the templated rail solver, one simulation per run, Jets seeded only with the
+// parameters that run depends on (α, h, its offsets, its T0).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "least_squares.hpp"
+#include "lmcal/models/rail_thermal.hpp"
+
+namespace lmcal::detail {
+
+// One run, ready to simulate: geometry, fixed physical parameters, ambient, and the
+// measured temperatures at the fitted records.
+struct PreparedRun {
+  std::string id;
+  RailGeometry geometry;
+  RailParams<double> params;  // α, h and T0 are starting values; Q, k, ρ, c fixed
+  AmbientTrace ambient;
+  std::vector<double> times_s;                // fitted records
+  std::vector<std::string> sensor_names;
+  std::vector<double> sensor_positions_m;
+  std::vector<std::vector<double>> measured;  // [time][sensor], NaN = missing
+};
+
+// Where each kind of parameter sits in the global parameter vector (-1: not fitted).
+struct ThermalLayout {
+  int alpha = 0;
+  int h = -1;
+  std::vector<std::vector<int>> offsets;  // [run][sensor]
+  std::vector<int> initial;               // [run]
+  int size = 1;
+};
+
+class ThermalModel : public LeastSquaresModel {
+ public:
+  ThermalModel(const std::vector<PreparedRun>& runs, ThermalLayout layout, RailNumerics numerics);
+  std::size_t num_residuals() const override { return rows_.size(); }
+  std::unique_ptr<ceres::CostFunction> cost_function(const std::vector<std::size_t>& rows,
+                                                     const RowLoss& loss) const override;
+  bool linear(const std::vector<bool>& held) const override;
+  void explain(IdentifiabilityIssue& issue) const override;
+
+  // Simulated temperature at every (run, record, sensor) of the data for parameters θ.
+  std::vector<std::vector<std::vector<double>>> simulate(const std::vector<double>& theta) const;
+
+  struct Row {
+    std::size_t run, time, sensor;
+  };
+  const std::vector<Row>& rows() const { return rows_; }
+  const std::vector<PreparedRun>& runs() const { return runs_; }
+  const ThermalLayout& layout() const { return layout_; }
+  const RailNumerics& numerics() const { return numerics_; }
+
+ private:
+  const std::vector<PreparedRun>& runs_;
+  ThermalLayout layout_;
+  RailNumerics numerics_;
+  std::vector<Row> rows_;                     // measured (not NaN) samples, run by run
+  std::vector<std::size_t> first_row_;        // per run, into rows_
+};
+
+}  // namespace lmcal::detail

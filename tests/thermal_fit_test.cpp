@@ -1,0 +1,150 @@
+#include "lmcal/fit/thermal_fit.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "fit/thermal_model.hpp"
+#include "lmcal/rig/virtual_rig.hpp"
+
+namespace lmcal {
+namespace {
+
+// Clean runs at the paper's speeds: no noise, no bias, averaged source, known α = 0.6.
+ThermalRigConfig clean_rig(double duration_s = 4 * 3600.0) {
+  ThermalRigConfig c;
+  c.duration_s = duration_s;
+  c.record_every_s = 30;
+  c.noise_K = c.tc_bias_K = c.ambient_bias_K = 0;
+  c.friction_noise_N = 0;
+  return c;
+}
+
+ThermalFitOptions options_for_rig() {
+  ThermalFitOptions o;
+  o.heat = HeatInput::friction_law;  // the rig's truth: the paper's law at the initial temperature
+  o.half_rail_segments = 150;        // the rig's 2 mm grid
+  o.time_step_s = 5;
+  o.compare_sources = false;
+  return o;
+}
+
+TEST(ThermalFit, RecoversAlphaWithinOnePercentOnCleanData) {
+  const auto data = generate_thermal_dataset(clean_rig(), {}, "clean").set;
+  const auto result = fit_thermal(data, options_for_rig());
+  const auto& alpha = result.joint.parameter("alpha");
+  EXPECT_NEAR(alpha.value, 0.6, 0.006);
+  EXPECT_TRUE(result.joint.solver.converged);
+  EXPECT_EQ(result.per_run.size(), 3u);
+  for (const auto& run : result.per_run) EXPECT_NEAR(run.parameter("alpha").value, 0.6, 0.006);
+  EXPECT_LT(result.max_error_percent, 1.0);
+  // Three per-run α, their Eq. 1 spread and interval.
+  EXPECT_EQ(result.alpha_spread.n, 3u);
+  EXPECT_NEAR(result.alpha_spread.mean, 0.6, 0.006);
+  // The α error curve (Fig. 11) of each run has its minimum at the grid point next to 0.6.
+  for (const auto& run : result.runs) {
+    double best_alpha = -1, best = 1e9;
+    for (const auto& p : result.alpha_curve)
+      if (p.run == run.id && p.rmse_K < best) {
+        best = p.rmse_K;
+        best_alpha = p.alpha;
+      }
+    EXPECT_NEAR(best_alpha, 0.6, 0.011) << run.id;
+  }
+}
+
+TEST(ThermalFit, NoisyBiasedRunsGiveAnIntervalThatContainsTheTruth) {
+  auto rig = clean_rig();
+  rig.noise_K = 0.05;
+  rig.tc_bias_K = 0.5;
+  rig.seed = 3;
+  const auto data = generate_thermal_dataset(rig, {}, "noisy").set;
+  auto o = options_for_rig();
+  o.fit_offsets = true;  // thermocouple bias is a per-sensor offset
+  o.fit_initial_temperature = true;
+  o.per_run_fits = false;
+  const auto result = fit_thermal(data, o);
+  const auto& alpha = result.joint.parameter("alpha");
+  EXPECT_LE(alpha.ci_low, 0.6);
+  EXPECT_GE(alpha.ci_high, 0.6);
+  EXPECT_NEAR(alpha.value, 0.6, 0.03);
+}
+
+TEST(ThermalFit, FitsHTooAndTheSourceModelRatioIsAboutContactOverStroke) {
+  const auto data = generate_thermal_dataset(clean_rig(), {}, "clean").set;
+  auto o = options_for_rig();
+  o.fit_h = true;
+  o.h_W_m2K = 8.0;  // start away from the truth, 5.3
+  o.per_run_fits = false;
+  o.compare_sources = true;
+  const auto result = fit_thermal(data, o);
+  EXPECT_NEAR(result.joint.parameter("h_W_m2K").value, 5.3, 0.1);
+  EXPECT_NEAR(result.joint.parameter("alpha").value, 0.6, 0.01);
+  // PHYSICS.md §7: `paper` injects L1/Lb1 times the power, so its α is smaller by about Lb1/L1.
+  EXPECT_NEAR(result.alpha_ratio_paper_over_averaged, result.contact_over_stroke, 0.1 * result.contact_over_stroke);
+}
+
+// ∂r/∂θ through the templated solver equals central finite differences.
+TEST(ThermalFit, ResidualDerivativesEqualFiniteDifferences) {
+  auto rig = clean_rig(3600);
+  rig.velocity_m_s = {0.083, 0.11};
+  rig.noise_K = 0.05;
+  const auto data = generate_thermal_dataset(rig, {}, "d").set;
+  std::vector<detail::PreparedRun> runs;
+  for (const auto& run : data.runs) {
+    detail::PreparedRun pr;
+    pr.id = run.id;
+    pr.geometry = {.rail_length_m = 0.6, .area_m2 = 8.88e-4, .perimeter_m = 0.14, .stroke_m = 0.2,
+                   .contact_length_m = 0.0822, .velocity_m_s = run.velocity_m_s};
+    pr.params = {.heat_partition = 0.6, .heat_rate_W = 4.0, .initial_temperature_C = 24.0};
+    pr.ambient = {run.trace.time_s, run.trace.ambient[0].values};
+    for (std::size_t t = 0; t < run.trace.size(); t += 12) {
+      pr.times_s.push_back(run.trace.time_s[t]);
+      pr.measured.push_back({run.trace.rail[0].values[t], run.trace.rail[1].values[t]});
+    }
+    pr.sensor_names = {"tc1_C", "tc2_C"};
+    pr.sensor_positions_m = {0.0, 0.05};
+    runs.push_back(pr);
+  }
+  // α, h, two offsets of the first run, T0 of the second.
+  detail::ThermalLayout layout{0, 1, {{2, 3}, {-1, -1}}, {-1, 4}, 5};
+  const detail::ThermalModel model(runs, layout, {.half_rail_segments = 40, .time_step_s = 60});
+  const std::vector<double> theta = {0.55, 6.0, 0.2, -0.1, 24.3};
+  const auto cost = model.cost_function({}, {});
+  const std::size_t n = model.num_residuals(), p = theta.size();
+  std::vector<double> r(n), J(n * p), plus(n), minus(n);
+  const double* at[] = {theta.data()};
+  double* jacobians[] = {J.data()};
+  ASSERT_TRUE(cost->Evaluate(at, r.data(), jacobians));
+  for (std::size_t j = 0; j < p; ++j) {
+    auto tp = theta, tm = theta;
+    const double h = 1e-5 * std::max(1.0, std::abs(theta[j]));
+    tp[j] += h;
+    tm[j] -= h;
+    const double* a_plus[] = {tp.data()};
+    const double* a_minus[] = {tm.data()};
+    ASSERT_TRUE(cost->Evaluate(a_plus, plus.data(), nullptr));
+    ASSERT_TRUE(cost->Evaluate(a_minus, minus.data(), nullptr));
+    for (std::size_t i = 0; i < n; ++i)
+      EXPECT_NEAR(J[i * p + j], (plus[i] - minus[i]) / (2 * h), 1e-6 * std::max(1.0, std::abs(J[i * p + j])))
+          << "row " << i << " parameter " << j;
+  }
+  EXPECT_TRUE(model.linear({false, true, false, false, false}));
+  EXPECT_FALSE(model.linear({false, false, false, false, false}));
+}
+
+TEST(ThermalFit, ReportsEquationTwoBetweenAmbientSensorsAndRepeats) {
+  auto rig = clean_rig(3600);
+  rig.velocity_m_s = {0.11};
+  rig.repeats = 2;
+  rig.ambient_bias_K = 0;
+  const auto data = generate_thermal_dataset(rig, {}, "r").set;
+  const auto result = fit_thermal(data, options_for_rig());
+  ASSERT_EQ(result.repeat_differences.size(), 1u);
+  EXPECT_EQ(result.repeat_differences[0].first, "v110_r1/v110_r2");
+  EXPECT_LT(result.repeat_differences[0].second, 1.0);  // same conditions, clean: α agrees
+  for (const auto& run : result.runs) EXPECT_NEAR(run.ambient_difference_percent, 0.0, 1e-9);  // unbiased sensors
+}
+
+}  // namespace
+}  // namespace lmcal
