@@ -20,6 +20,7 @@ int main(int argc, char** argv) {
   lmcal::cli::setup_generate(app, args);
   lmcal::cli::setup_check(app);
   lmcal::cli::setup_fit(app, args);
+  lmcal::cli::setup_diagnose(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -81,6 +81,7 @@ TEST(FrictionFit, IntervalsCoverTheTruthAtTheirNominalRate) {
     }
   }
   const double rate = double(covered) / total;
+  RecordProperty("coverage_percent", std::to_string(100 * rate));
   EXPECT_GE(rate, 0.90);
   EXPECT_LE(rate, 0.98);
   for (std::size_t j = 0; j < 7; ++j)

@@ -141,9 +141,10 @@ std::vector<detail::ParameterSpec> parameter_specs(const FrictionFitOptions& o, 
   const double start[] = {o.start.k1, o.start.k2, o.start.mu_st, o.start.v_st_m_s, o.start.mu_v, o.start.beta_per_K, o.start.f0};
   for (std::size_t j = 0; j < 7; ++j)
     specs.push_back({kFrictionConstantNames[j], kConstantUnits[j], start[j], o.bounds[j].first, o.bounds[j].second, o.free[j]});
-  for (std::size_t slot : slots) {
-    const EffectSpec& e = kEffects[slot];
-    specs.push_back({e.name, e.unit, e.neutral, e.lower, e.upper, true, e.scale});
+  for (std::size_t m = 0; m < slots.size(); ++m) {
+    const EffectSpec& e = kEffects[slots[m]];
+    const double start = m < o.effect_start.size() ? std::clamp(o.effect_start[m], e.lower, e.upper) : e.neutral;
+    specs.push_back({e.name, e.unit, start, e.lower, e.upper, true, e.scale});
   }
   return specs;
 }
@@ -197,7 +198,18 @@ FrictionFitResult fit_friction(const FrictionLog& log, const FrictionFitOptions&
     data.inv_sigma.push_back(1.0 / out.sigma_N[i]);
   }
   const FrictionModel model(data, slots);
-  out.fit = detail::solve_least_squares(model, specs, options.fit);
+  detail::FinalState final_state;
+  out.fit = detail::solve_least_squares(model, specs, options.fit, options.cross_validate ? &final_state : nullptr);
+  if (options.cross_validate && log.run_names.size() >= 2 && options.fit.loss == RobustLoss::none) {
+    std::vector<std::size_t> group(log.size());
+    for (std::size_t i = 0; i < log.size(); ++i) group[i] = log.run[i];
+    std::vector<bool> held;
+    for (const auto& p : out.fit.parameters) held.push_back(!p.free || p.held_unidentifiable);
+    const Eigen::VectorXd held_out = detail::leave_group_out_residuals(final_state, group, held);
+    double ss = 0;
+    for (std::size_t i = 0; i < log.size(); ++i) ss += std::pow(held_out[static_cast<Eigen::Index>(i)] * out.sigma_N[i], 2);
+    out.cv_rmse_N = std::sqrt(ss / static_cast<double>(log.size()));
+  }
 
   // Predictions and goodness of fit, in newtons.
   const FrictionConstants<double> k = out.constants();

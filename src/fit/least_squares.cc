@@ -560,5 +560,38 @@ FitResult solve_least_squares(const LeastSquaresModel& model, const std::vector<
   return result;
 }
 
+Eigen::VectorXd leave_group_out_residuals(const FinalState& state, const std::vector<std::size_t>& group_of_row,
+                                          const std::vector<bool>& held) {
+  const Eigen::MatrixXd& J = state.jacobian;
+  const Eigen::VectorXd& r = state.residuals;
+  std::vector<Eigen::Index> free;
+  for (std::size_t j = 0; j < held.size(); ++j)
+    if (!held[j]) free.push_back(static_cast<Eigen::Index>(j));
+  const auto m = static_cast<Eigen::Index>(free.size());
+  const std::size_t groups = group_of_row.empty() ? 0 : *std::max_element(group_of_row.begin(), group_of_row.end()) + 1;
+  std::vector<Eigen::MatrixXd> H_g(groups, Eigen::MatrixXd::Zero(m, m));
+  std::vector<Eigen::VectorXd> b_g(groups, Eigen::VectorXd::Zero(m));
+  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(m, m);
+  Eigen::VectorXd row(m);
+  for (Eigen::Index i = 0; i < J.rows(); ++i) {
+    for (Eigen::Index k = 0; k < m; ++k) row[k] = J(i, free[static_cast<std::size_t>(k)]);
+    const std::size_t g = group_of_row[static_cast<std::size_t>(i)];
+    H_g[g].selfadjointView<Eigen::Lower>().rankUpdate(row);
+    b_g[g] += row * r[i];
+  }
+  for (auto& h : H_g) {
+    h = h.selfadjointView<Eigen::Lower>();
+    H += h;
+  }
+  std::vector<Eigen::VectorXd> step(groups);
+  for (std::size_t g = 0; g < groups; ++g) step[g] = (H - H_g[g]).ldlt().solve(b_g[g]);
+  Eigen::VectorXd out = r;
+  for (Eigen::Index i = 0; i < J.rows(); ++i) {
+    const std::size_t g = group_of_row[static_cast<std::size_t>(i)];
+    for (Eigen::Index k = 0; k < m; ++k) out[i] += J(i, free[static_cast<std::size_t>(k)]) * step[g][k];
+  }
+  return out;
+}
+
 }  // namespace detail
 }  // namespace lmcal

@@ -71,6 +71,14 @@ struct FinalState {
 FitResult solve_least_squares(const LeastSquaresModel& model, const std::vector<ParameterSpec>& parameters,
                               const FitOptions& options, FinalState* final_state = nullptr);
 
+// Leave-one-group-out residuals without refitting: with group g removed, one Gauss-Newton
+// step from the full-data optimum, Δθ = (JᵀJ - J_gᵀJ_g)⁻¹ J_gᵀ r_g (the gradient of the rest
+// is -J_gᵀ r_g there), and group g's residuals become r_g - J_g Δθ... with r = data - model,
+// ∂r/∂θ = J: r_g + J_g Δθ. Returns every row's held-out residual. `held` parameters stay.
+// Exact for models linear in θ; otherwise the usual one-step approximation of refitting.
+Eigen::VectorXd leave_group_out_residuals(const FinalState& state, const std::vector<std::size_t>& group_of_row,
+                                          const std::vector<bool>& held);
+
 // (JᵀJ)⁻¹ over the parameters not held (rows/columns of held ones zero); false with a message
 // when J is rank deficient.
 bool covariance_from_jacobian(const Eigen::MatrixXd& J, const std::vector<bool>& held, Eigen::MatrixXd& covariance,

@@ -56,6 +56,27 @@ double chi_squared_quantile(double probability, double dof) {
   return boost::math::quantile(boost::math::chi_squared_distribution<double>(dof), probability);
 }
 
+double student_t_two_sided_p(double t, double dof) {
+  require_positive("dof", dof);
+  if (std::isnan(t)) return kNaN;
+  return 2 * boost::math::cdf(boost::math::complement(boost::math::students_t_distribution<double>(dof), std::abs(t)));
+}
+
+double fisher_f_upper_p(double f, double d1, double d2) {
+  require_positive("d1", d1);
+  require_positive("d2", d2);
+  if (std::isnan(f)) return kNaN;
+  if (f <= 0) return 1.0;
+  return boost::math::cdf(boost::math::complement(boost::math::fisher_f_distribution<double>(d1, d2), f));
+}
+
+double chi_squared_upper_p(double x, double dof) {
+  require_positive("dof", dof);
+  if (std::isnan(x)) return kNaN;
+  if (x <= 0) return 1.0;
+  return boost::math::cdf(boost::math::complement(boost::math::chi_squared_distribution<double>(dof), x));
+}
+
 Spread spread(std::span<const double> values, double confidence) {
   std::vector<double> finite;
   for (double v : values)

@@ -20,6 +20,7 @@
 #pragma once
 
 #include <array>
+#include <limits>
 #include <string>
 #include <utility>
 #include <vector>
@@ -46,8 +47,10 @@ struct FrictionFitOptions {
   std::array<bool, 7> free{true, true, true, true, true, true, true};
   std::array<std::pair<double, double>, 7> bounds{{{0, 2}, {-0.2, 0.2}, {0, 50}, {1e-4, 0.5}, {0, 0.1}, {0, 0.2}, {-1, 1}}};
   std::vector<std::string> effects;  // effects to fit on top of the law (names from friction_effect_names())
+  std::vector<double> effect_start;  // their start values (default: neutral), in the order of `effects`
   FrictionWeighting weighting = FrictionWeighting::none;
   bool per_run_fits = true;
+  bool cross_validate = false;  // leave-one-run-out prediction RMSE (one-step, no refits)
 };
 
 struct ConditionResidual {
@@ -75,6 +78,7 @@ struct FrictionFitResult {
   std::vector<double> predicted_N;
   std::vector<double> sigma_N;
   double rmse_N = 0;
+  double cv_rmse_N = std::numeric_limits<double>::quiet_NaN();  // leave-one-run-out, when asked
   double max_relative_error = 0;  // max over samples of |measured - predicted| / |measured|
   std::size_t max_relative_error_sample = 0;
   std::vector<ConditionResidual> conditions;

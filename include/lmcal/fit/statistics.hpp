@@ -22,6 +22,10 @@ double percent_difference(double e1, double e2);                    // Eq. 2
 double student_t_quantile(double probability, double dof);
 double fisher_f_quantile(double probability, double d1, double d2);
 double chi_squared_quantile(double probability, double dof);
+// Upper tail probabilities P(X > x).
+double student_t_two_sided_p(double t, double dof);
+double fisher_f_upper_p(double f, double d1, double d2);
+double chi_squared_upper_p(double x, double dof);
 
 struct Spread {
   std::size_t n = 0;

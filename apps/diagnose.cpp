@@ -1,0 +1,65 @@
+// lmcal diagnose friction LOG.csv…: what the published friction law gets wrong on these
+// data, the named cause, and the gain on held-out runs (friction_diagnosis.hpp).
+// Writes DIR/NAME.json and prints the verdict in plain words.
+#include <fmt/format.h>
+
+#include <filesystem>
+#include <iostream>
+
+#include "cli_common.hpp"
+#include "lmcal/diagnose/friction_diagnosis.hpp"
+#include "lmcal/io/atomic_file.hpp"
+
+namespace lmcal::cli {
+
+namespace {
+
+struct DiagnoseFrictionOptions {
+  std::vector<std::string> files;
+  std::string name = "friction_diagnosis";
+  std::string output_dir = "fits";
+  FrictionDiagnosisOptions diagnosis;
+};
+
+void print(const FrictionDiagnosis& d) {
+  std::cout << fmt::format("baseline: residual RMSE {:.3f} N, Durbin-Watson {:.2f}; residuals against covariates:\n",
+                           d.baseline.rmse_N, d.baseline.durbin_watson);
+  for (const auto& c : d.baseline.covariates)
+    std::cout << fmt::format("  {:<16} strength {:.3f}  p {:.2g}{}\n", c.covariate, c.correlation, c.p_value,
+                             c.p_value < 1e-3 ? "  <- structured" : "");
+  for (std::size_t r = 0; r < d.rounds.size(); ++r) {
+    std::cout << fmt::format("candidates, step {} (held-out RMSE gain against the model so far):\n", r + 1);
+    for (const auto& c : d.rounds[r])
+      std::cout << fmt::format("  {:<20} {:>10.4g} ± {:<9.3g} LRT p {:<8.2g} held-out {:.4f} N ({:+.1f} %)  {}{}\n", c.effect,
+                               c.value, c.se, c.lrt_p, c.cv_rmse_N, c.cv_gain_percent, c.accepted ? "ACCEPTED: " : "", c.reason);
+  }
+  std::cout << "verdict: " << d.verdict << "\n  " << d.summary << "\n";
+}
+
+void run_diagnose_friction(const DiagnoseFrictionOptions& o) {
+  std::vector<std::filesystem::path> paths(o.files.begin(), o.files.end());
+  const FrictionLog log = load_friction_logs(paths);
+  const FrictionDiagnosis d = diagnose_friction(log, o.diagnosis);
+  const auto file = std::filesystem::path(o.output_dir) / (o.name + ".json");
+  write_file_atomically(file, friction_diagnosis_json(d));
+  print(d);
+  std::cout << "wrote " << file.string() << "\n";
+}
+
+}  // namespace
+
+void setup_diagnose(CLI::App& app) {
+  CLI::App* diagnose = app.add_subcommand("diagnose", "Find what the model gets wrong and why");
+  diagnose->require_subcommand(1);
+  auto o = std::make_shared<DiagnoseFrictionOptions>();
+  CLI::App* friction = diagnose->add_subcommand("friction", "Friction law against load-cell logs");
+  friction->add_option("files", o->files, "Friction log CSV files")->required();
+  friction->add_option("--name", o->name, "Name of the output")->capture_default_str();
+  friction->add_option("-o,--output-dir", o->output_dir, "Output folder")->capture_default_str();
+  friction->add_option("--min-gain", o->diagnosis.min_cv_gain_percent, "Least held-out RMSE gain to accept a cause, %")
+      ->capture_default_str();
+  friction->add_option("--lrt-p", o->diagnosis.lrt_p, "Significance level of the likelihood-ratio test")->capture_default_str();
+  friction->callback([o] { run_diagnose_friction(*o); });
+}
+
+}  // namespace lmcal::cli

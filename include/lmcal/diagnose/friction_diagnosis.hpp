@@ -1,0 +1,83 @@
+// What the friction law gets wrong on measured data, the named physical cause, and what
+// modelling it gains on data it was not fitted to.
+//
+//   1. baseline: the published law fitted to the log; residual bias and RMSE per run,
+//      Durbin-Watson within runs, and the correlation of the residuals with every covariate
+//      (speed, load, preload, block length, temperature, direction, run order, time), tested
+//      on condition means (one value per condition, so repeated samples of a condition do
+//      not count as independent evidence);
+//   2. candidates: each named effect of friction_effects.hpp added on its own and fitted;
+//      scored by leave-one-run-out prediction RMSE (each run predicted from the others by one
+//      Gauss-Newton step from the full fit, no refits), AICc, BIC and a likelihood-ratio test;
+//   3. forward selection: the best candidate is accepted only if it is significant (LRT
+//      p < 0.001 and a lower BIC) and lowers the held-out RMSE by at least 2 %; then the
+//      rest are tried on top of it, until nothing more passes;
+//   4. verdict: the accepted causes with magnitude and interval, held-out RMSE before and
+//      after, how the constants shift once the cause is modelled, and what remains. If the
+//      residuals stay structured and no candidate passes: "unexplained", with the covariate
+//      they follow. Otherwise "no significant discrepancy".
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "lmcal/fit/friction_fit.hpp"
+
+namespace lmcal {
+
+struct CovariateTest {
+  std::string covariate;
+  double correlation = 0;  // Pearson, over condition means
+  double p_value = 1;
+  std::size_t n = 0;       // condition means (or runs, for run order)
+};
+
+struct ResidualDiagnostics {
+  double rmse_N = 0;
+  double sigma = 0;                         // residual σ of the whitened fit
+  double durbin_watson = 2;                 // within runs, in time order
+  std::vector<std::pair<std::string, double>> run_bias_N;
+  std::vector<CovariateTest> covariates;    // strongest first
+  bool structured = false;                  // a covariate significant at p < 0.001
+};
+
+struct CandidateScore {
+  std::string effect;
+  double value = 0, se = 0, ci_low = 0, ci_high = 0;
+  double aicc = 0, bic = 0;
+  double lrt_statistic = 0, lrt_p = 1;
+  double cv_rmse_N = 0;       // leave-one-run-out
+  double cv_gain_percent = 0; // against the current model
+  bool accepted = false;
+  std::string reason;         // why it was or was not accepted
+};
+
+struct ParameterShift {
+  std::string name;
+  double baseline = 0, extended = 0;
+};
+
+struct FrictionDiagnosisOptions {
+  FrictionFitOptions fit;             // the baseline fit
+  double lrt_p = 1e-3;
+  double min_cv_gain_percent = 2.0;
+  double structure_p = 1e-3;
+  std::size_t max_effects = 3;
+};
+
+struct FrictionDiagnosis {
+  std::string verdict;          // "no significant discrepancy", "explained", "unexplained"
+  std::string summary;          // the verdict in plain words
+  ResidualDiagnostics baseline;
+  ResidualDiagnostics final;
+  std::vector<std::vector<CandidateScore>> rounds;  // the candidates of every forward step
+  std::vector<CandidateScore> accepted;
+  double cv_rmse_before_N = 0, cv_rmse_after_N = 0, cv_gain_percent = 0;
+  std::vector<ParameterShift> shifts;
+  std::string unexplained_covariate;  // when the verdict is "unexplained"
+};
+
+FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagnosisOptions& options);
+std::string friction_diagnosis_json(const FrictionDiagnosis& d);
+
+}  // namespace lmcal

@@ -1,0 +1,351 @@
+#include "lmcal/diagnose/friction_diagnosis.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <numeric>
+#include <tuple>
+
+#include "lmcal/error.hpp"
+#include "lmcal/fit/statistics.hpp"
+
+namespace lmcal {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+std::vector<double> predict(const FrictionFitResult& fit, const FrictionLog& log, double T_ref_C) {
+  const FrictionEffects<double> e = fit.effects();
+  std::vector<double> out(log.size());
+  for (std::size_t i = 0; i < log.size(); ++i) {
+    FrictionConstants<double> k = fit.constants();
+    k.nu_ref_mm2_s = log.viscosity40_mm2_s[i];
+    k.T_ref_C = T_ref_C;
+    out[i] = friction_force_with_effects_N(k, e, log.conditions(i));
+  }
+  return out;
+}
+
+// A fit of the law plus `effects`, started at `start` (one start: the diagnosis refits many times).
+FrictionFitResult fit_with(const FrictionLog& log, const FrictionDiagnosisOptions& o, const std::vector<std::string>& effects,
+                           const FrictionConstants<double>& start, const std::vector<double>& effect_start = {}) {
+  FrictionFitOptions f = o.fit;
+  f.effects = effects;
+  f.effect_start = effect_start;
+  f.start = start;
+  for (std::size_t j = 0; j < 7; ++j) {
+    double* v[] = {&f.start.k1, &f.start.k2, &f.start.mu_st, &f.start.v_st_m_s, &f.start.mu_v, &f.start.beta_per_K, &f.start.f0};
+    *v[j] = std::clamp(*v[j], f.bounds[j].first, f.bounds[j].second);
+  }
+  f.per_run_fits = false;
+  f.cross_validate = true;
+  f.fit.starts = 0;  // warm-started from the previous model's estimate: no multi-start
+  f.fit.profile = ProfileMode::none;
+  return fit_friction(log, f);
+}
+
+// One-way ANOVA of the condition-mean residuals grouped by a covariate's value (binned
+// into ten quantile bins when it has more values): finds structure of any shape.
+CovariateTest anova(const std::string& name, const std::vector<double>& covariate, const std::vector<double>& residual) {
+  CovariateTest t{name, 0, 1, residual.size()};
+  std::vector<double> sorted = covariate;
+  std::sort(sorted.begin(), sorted.end());
+  sorted.erase(std::unique(sorted.begin(), sorted.end()), sorted.end());
+  auto group_of = [&](double v) -> std::size_t {
+    const auto pos = static_cast<std::size_t>(std::lower_bound(sorted.begin(), sorted.end(), v) - sorted.begin());
+    return sorted.size() <= 12 ? pos : pos * 10 / sorted.size();
+  };
+  const std::size_t groups = std::min<std::size_t>(sorted.size(), sorted.size() <= 12 ? sorted.size() : 10);
+  if (groups < 2 || residual.size() <= groups) return t;
+  std::vector<double> sum(groups, 0), count(groups, 0);
+  double total = 0;
+  for (std::size_t i = 0; i < residual.size(); ++i) {
+    sum[group_of(covariate[i])] += residual[i];
+    count[group_of(covariate[i])] += 1;
+    total += residual[i];
+  }
+  const double grand = total / static_cast<double>(residual.size());
+  double between = 0, within = 0;
+  for (std::size_t g = 0; g < groups; ++g)
+    if (count[g] > 0) between += count[g] * std::pow(sum[g] / count[g] - grand, 2);
+  for (std::size_t i = 0; i < residual.size(); ++i) {
+    const std::size_t g = group_of(covariate[i]);
+    within += std::pow(residual[i] - sum[g] / count[g], 2);
+  }
+  const double d1 = static_cast<double>(groups - 1), d2 = static_cast<double>(residual.size() - groups);
+  const double F = (between / d1) / std::max(within / d2, 1e-300);
+  t.p_value = fisher_f_upper_p(F, d1, d2);
+  t.correlation = std::sqrt(between / std::max(between + within, 1e-300));  // η: share of the variation explained
+  return t;
+}
+
+ResidualDiagnostics diagnose_residuals(const FrictionLog& log, const std::vector<double>& predicted, double sigma,
+                                       double structure_p) {
+  ResidualDiagnostics d;
+  d.sigma = sigma;
+  const std::size_t n = log.size();
+  std::vector<double> e(n);
+  double ss = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    e[i] = log.friction_N[i] - predicted[i];
+    ss += e[i] * e[i];
+  }
+  d.rmse_N = std::sqrt(ss / static_cast<double>(n));
+
+  // Per run: bias; within runs in file (time) order: Durbin-Watson.
+  std::vector<double> run_sum(log.run_names.size(), 0), run_count(log.run_names.size(), 0);
+  double dw_num = 0, dw_den = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    run_sum[log.run[i]] += e[i];
+    run_count[log.run[i]] += 1;
+    dw_den += e[i] * e[i];
+    if (i > 0 && log.run[i] == log.run[i - 1]) dw_num += (e[i] - e[i - 1]) * (e[i] - e[i - 1]);
+  }
+  d.durbin_watson = dw_den > 0 ? dw_num / dw_den : kNaN;
+  std::vector<double> run_bias;
+  for (std::size_t r = 0; r < run_sum.size(); ++r) {
+    run_bias.push_back(run_count[r] > 0 ? run_sum[r] / run_count[r] : kNaN);
+    d.run_bias_N.emplace_back(log.run_names[r], run_bias.back());
+  }
+
+  // Condition means: one residual per (guide, preload, load, temperature to 1 K, speed, direction).
+  // Covariates take their nominal (condition) values: grouping by the logged temperature
+  // itself would find the thermocouple's noise (errors in variables), not a missing term.
+  using Key = std::tuple<std::uint32_t, double, double, double, double, double>;
+  std::map<Key, std::array<double, 9>> groups;  // sums: e, V, P, pc, Lb, T, dir, time, count
+  for (std::size_t i = 0; i < n; ++i) {
+    auto& g = groups[{log.guide[i], log.preload_um[i], log.load_N[i], std::round(log.temperature_C[i]), log.velocity_m_s[i],
+                      double(log.direction[i])}];
+    const double values[] = {e[i], log.velocity_m_s[i], log.load_N[i], log.preload_um[i], log.block_length_mm[i],
+                             std::round(log.temperature_C[i]), double(log.direction[i]),
+                             std::isnan(log.time_s[i]) ? 0.0 : log.time_s[i], 1.0};
+    for (std::size_t k = 0; k < 9; ++k) g[k] += values[k];
+  }
+  std::array<std::vector<double>, 8> columns;
+  for (const auto& [key, g] : groups)
+    for (std::size_t k = 0; k < 8; ++k) columns[k].push_back(g[k] / g[8]);
+  const char* names[] = {"velocity_m_s", "load_N", "preload_um", "block_length_mm", "temperature_C", "direction", "time_s"};
+  for (std::size_t k = 0; k < 7; ++k) {
+    if (k == 6 && std::all_of(log.time_s.begin(), log.time_s.end(), [](double t) { return std::isnan(t); })) continue;
+    d.covariates.push_back(anova(names[k], columns[k + 1], columns[0]));
+  }
+  // Run order: a trend of the run biases (random zero offsets per run are not a trend).
+  if (run_bias.size() >= 4) {
+    std::vector<double> index(run_bias.size());
+    std::iota(index.begin(), index.end(), 0.0);
+    const double mi = (index.size() - 1) / 2.0;
+    const double mb = std::accumulate(run_bias.begin(), run_bias.end(), 0.0) / static_cast<double>(run_bias.size());
+    double sxy = 0, sxx = 0, syy = 0;
+    for (std::size_t r = 0; r < run_bias.size(); ++r) {
+      sxy += (index[r] - mi) * (run_bias[r] - mb);
+      sxx += (index[r] - mi) * (index[r] - mi);
+      syy += (run_bias[r] - mb) * (run_bias[r] - mb);
+    }
+    const double rho = syy > 0 ? sxy / std::sqrt(sxx * syy) : 0.0;
+    const double dof = static_cast<double>(run_bias.size() - 2);
+    const double t = rho * std::sqrt(dof / std::max(1 - rho * rho, 1e-12));
+    d.covariates.push_back({"run order", rho, student_t_two_sided_p(t, dof), run_bias.size()});
+  }
+  std::sort(d.covariates.begin(), d.covariates.end(), [](auto& a, auto& b) { return a.p_value < b.p_value; });
+  d.structured = !d.covariates.empty() && d.covariates.front().p_value < structure_p;
+  return d;
+}
+
+struct Scored {
+  FrictionFitResult fit;
+  double ss = 0;
+};
+
+double sum_of_squares(const FrictionLog& log, const std::vector<double>& predicted) {
+  double ss = 0;
+  for (std::size_t i = 0; i < log.size(); ++i) ss += std::pow(log.friction_N[i] - predicted[i], 2);
+  return ss;
+}
+
+// AICc and BIC of a Gaussian least-squares fit with k parameters.
+std::pair<double, double> information_criteria(double ss, std::size_t n, std::size_t k) {
+  const double N = static_cast<double>(n), K = static_cast<double>(k);
+  const double aic = N * std::log(ss / N) + 2 * K;
+  return {aic + 2 * K * (K + 1) / std::max(N - K - 1, 1.0), N * std::log(ss / N) + K * std::log(N)};
+}
+
+}  // namespace
+
+FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagnosisOptions& o) {
+  if (log.run_names.size() < 3) throw InvalidParameter("runs", "a diagnosis needs at least three runs (it holds one out at a time)");
+  FrictionDiagnosis d;
+  const std::size_t n = log.size();
+
+  // 1. The baseline and its residuals.
+  FrictionFitOptions base_options = o.fit;
+  base_options.per_run_fits = false;
+  base_options.cross_validate = true;
+  base_options.fit.profile = ProfileMode::none;
+  const FrictionFitResult baseline = fit_friction(log, base_options);
+  const double T_ref = o.fit.start.T_ref_C;
+  d.baseline = diagnose_residuals(log, predict(baseline, log, T_ref), std::sqrt(baseline.fit.residual_variance), o.structure_p);
+
+  // 2-3. Candidates, forward.
+  std::vector<std::string> accepted;
+  FrictionFitResult current = baseline;
+  double current_ss = sum_of_squares(log, predict(baseline, log, T_ref));
+  double current_cv = baseline.cv_rmse_N;
+  d.cv_rmse_before_N = current_cv;
+  while (accepted.size() < o.max_effects) {
+    std::vector<CandidateScore> round;
+    std::vector<FrictionFitResult> fits;
+    for (const auto& effect : friction_effect_names()) {
+      if (std::find(accepted.begin(), accepted.end(), effect) != accepted.end()) continue;
+      std::vector<std::string> effects = accepted;
+      effects.push_back(effect);
+      std::vector<double> effect_start;
+      for (std::size_t j = 7; j < current.fit.parameters.size(); ++j) effect_start.push_back(current.fit.parameters[j].value);
+      FrictionFitResult fit = fit_with(log, o, effects, current.constants(), effect_start);
+      const double ss = sum_of_squares(log, predict(fit, log, T_ref));
+      CandidateScore c;
+      c.effect = effect;
+      const auto& p = fit.fit.parameter(effect);
+      c.value = p.value;
+      c.se = p.se;
+      c.ci_low = p.ci_low;
+      c.ci_high = p.ci_high;
+      const std::size_t k = fit.fit.free_parameters;
+      std::tie(c.aicc, c.bic) = information_criteria(ss, n, k);
+      const auto [aicc0, bic0] = information_criteria(current_ss, n, current.fit.free_parameters);
+      c.lrt_statistic = static_cast<double>(n) * std::log(current_ss / ss);
+      c.lrt_p = chi_squared_upper_p(c.lrt_statistic, 1);
+      c.cv_rmse_N = fit.cv_rmse_N;
+      c.cv_gain_percent = 100 * (1 - c.cv_rmse_N / current_cv);
+      const bool significant = c.lrt_p < o.lrt_p && c.bic < bic0;
+      const bool better = c.cv_gain_percent >= o.min_cv_gain_percent;
+      c.reason = significant && better ? "significant and better on held-out runs"
+                 : !significant        ? fmt::format("not significant (LRT p = {:.2g}, BIC {:+.1f})", c.lrt_p, c.bic - bic0)
+                                       : fmt::format("held-out RMSE gain {:.1f} % < {:.1f} %", c.cv_gain_percent, o.min_cv_gain_percent);
+      (void)aicc0;
+      round.push_back(c);
+      fits.push_back(std::move(fit));
+    }
+    // The best passing candidate by held-out gain.
+    std::size_t best = round.size();
+    for (std::size_t i = 0; i < round.size(); ++i) {
+      const bool passes = round[i].reason == "significant and better on held-out runs";
+      if (passes && (best == round.size() || round[i].cv_gain_percent > round[best].cv_gain_percent)) best = i;
+    }
+    if (best == round.size()) {
+      d.rounds.push_back(round);
+      break;
+    }
+    round[best].accepted = true;
+    accepted.push_back(round[best].effect);
+    current = fits[best];
+    current_ss = sum_of_squares(log, predict(current, log, T_ref));
+    current_cv = round[best].cv_rmse_N;
+    d.rounds.push_back(round);
+  }
+
+  // 4. Verdict.
+  d.final = diagnose_residuals(log, predict(current, log, T_ref), std::sqrt(current.fit.residual_variance), o.structure_p);
+  d.cv_rmse_after_N = current_cv;
+  d.cv_gain_percent = 100 * (1 - current_cv / d.cv_rmse_before_N);
+  for (const auto& name : accepted) {
+    CandidateScore c;
+    for (const auto& round : d.rounds)
+      for (const auto& cand : round)
+        if (cand.effect == name && cand.accepted) c = cand;
+    const auto& p = current.fit.parameter(name);  // the final fit's estimate and interval
+    c.value = p.value;
+    c.se = p.se;
+    c.ci_low = p.ci_low;
+    c.ci_high = p.ci_high;
+    d.accepted.push_back(c);
+  }
+  for (std::size_t j = 0; j < 7; ++j)
+    d.shifts.push_back({kFrictionConstantNames[j], baseline.fit.parameters[j].value, current.fit.parameters[j].value});
+
+  std::string remains = d.final.structured
+                            ? fmt::format("the residuals still follow {} (p = {:.2g})", d.final.covariates.front().covariate,
+                                          d.final.covariates.front().p_value)
+                            : "no structure left beyond the noise";
+  if (!accepted.empty()) {
+    d.verdict = "explained";
+    std::string causes;
+    for (const auto& c : d.accepted)
+      causes += fmt::format("{}{} = {:.4g} (95 % [{:.4g}, {:.4g}])", causes.empty() ? "" : "; ", c.effect, c.value, c.ci_low, c.ci_high);
+    std::string shift;
+    for (const auto& s : d.shifts)
+      if (std::abs(s.extended - s.baseline) > 0.02 * std::max(std::abs(s.baseline), 1e-12))
+        shift += fmt::format("{}{} {:.4g} -> {:.4g}", shift.empty() ? "" : ", ", s.name, s.baseline, s.extended);
+    d.summary = fmt::format(
+        "The published law misses: {}. Modelled, the held-out (leave-one-run-out) RMSE goes from {:.3f} N to {:.3f} N "
+        "({:.1f} % better). Constants that move: {}. What remains: {}.",
+        causes, d.cv_rmse_before_N, d.cv_rmse_after_N, d.cv_gain_percent, shift.empty() ? "none by more than 2 %" : shift,
+        remains);
+    if (d.final.structured) d.unexplained_covariate = d.final.covariates.front().covariate;
+  } else if (d.baseline.structured) {
+    d.verdict = "unexplained";
+    d.unexplained_covariate = d.baseline.covariates.front().covariate;
+    d.summary = fmt::format(
+        "Unexplained: the residuals of the published law follow {} (p = {:.2g}), but no effect of the library explains "
+        "them on held-out runs. Held-out RMSE {:.3f} N.",
+        d.unexplained_covariate, d.baseline.covariates.front().p_value, d.cv_rmse_before_N);
+  } else {
+    d.verdict = "no significant discrepancy";
+    d.summary = fmt::format(
+        "No significant discrepancy: the published law fits to the noise (residual RMSE {:.3f} N, held-out {:.3f} N) and "
+        "no effect of the library improves it.",
+        d.baseline.rmse_N, d.cv_rmse_before_N);
+  }
+  return d;
+}
+
+std::string friction_diagnosis_json(const FrictionDiagnosis& d) {
+  auto number = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
+  auto diagnostics = [&](const ResidualDiagnostics& r) {
+    nlohmann::json covariates = nlohmann::json::array();
+    for (const auto& c : r.covariates)
+      covariates.push_back({{"covariate", c.covariate}, {"strength", number(c.correlation)}, {"p", number(c.p_value)}, {"n", c.n}});
+    nlohmann::json runs = nlohmann::json::object();
+    for (const auto& [run, bias] : r.run_bias_N) runs[run] = number(bias);
+    return nlohmann::json{{"rmse_N", number(r.rmse_N)},         {"sigma", number(r.sigma)},
+                          {"durbin_watson", number(r.durbin_watson)}, {"run_bias_N", runs},
+                          {"covariates", covariates},            {"structured", r.structured}};
+  };
+  auto candidate = [&](const CandidateScore& c) {
+    return nlohmann::json{{"effect", c.effect},         {"value", number(c.value)},       {"se", number(c.se)},
+                          {"ci95", {number(c.ci_low), number(c.ci_high)}},
+                          {"aicc", number(c.aicc)},     {"bic", number(c.bic)},           {"lrt", number(c.lrt_statistic)},
+                          {"lrt_p", number(c.lrt_p)},   {"cv_rmse_N", number(c.cv_rmse_N)},
+                          {"cv_gain_percent", number(c.cv_gain_percent)}, {"accepted", c.accepted}, {"reason", c.reason}};
+  };
+  nlohmann::json rounds = nlohmann::json::array();
+  for (const auto& round : d.rounds) {
+    nlohmann::json r = nlohmann::json::array();
+    for (const auto& c : round) r.push_back(candidate(c));
+    rounds.push_back(r);
+  }
+  nlohmann::json accepted = nlohmann::json::array();
+  for (const auto& c : d.accepted) accepted.push_back(candidate(c));
+  nlohmann::json shifts = nlohmann::json::array();
+  for (const auto& s : d.shifts) shifts.push_back({{"parameter", s.name}, {"baseline", s.baseline}, {"extended", s.extended}});
+  return nlohmann::json{{"kind", "friction diagnosis"},
+                        {"lmcal_version", LMCAL_VERSION},
+                        {"verdict", d.verdict},
+                        {"summary", d.summary},
+                        {"causes", accepted},
+                        {"cv_rmse_before_N", number(d.cv_rmse_before_N)},
+                        {"cv_rmse_after_N", number(d.cv_rmse_after_N)},
+                        {"cv_gain_percent", number(d.cv_gain_percent)},
+                        {"parameter_shifts", shifts},
+                        {"unexplained_covariate", d.unexplained_covariate},
+                        {"baseline_residuals", diagnostics(d.baseline)},
+                        {"final_residuals", diagnostics(d.final)},
+                        {"rounds", rounds}}
+             .dump(2) +
+         "\n";
+}
+
+}  // namespace lmcal
