@@ -204,7 +204,8 @@ FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagno
       effects.push_back(effect);
       std::vector<double> effect_start;
       for (std::size_t j = 7; j < current.fit.parameters.size(); ++j) effect_start.push_back(current.fit.parameters[j].value);
-      FrictionFitResult fit = fit_with(log, o, effects, current.constants(), effect_start);
+      // From the given start (not the baseline's estimate: a misspecified fit may sit on a bound).
+      FrictionFitResult fit = fit_with(log, o, effects, o.fit.start, effect_start);
       const double ss = sum_of_squares(log, predict(fit, log, T_ref));
       CandidateScore c;
       c.effect = effect;

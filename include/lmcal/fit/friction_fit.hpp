@@ -45,7 +45,9 @@ struct FrictionFitOptions {
   FitOptions fit;
   FrictionConstants<double> start = paper_friction_constants();  // start values; held constants keep them
   std::array<bool, 7> free{true, true, true, true, true, true, true};
-  std::array<std::pair<double, double>, 7> bounds{{{0, 2}, {-0.2, 0.2}, {0, 50}, {1e-4, 0.5}, {0, 0.1}, {0, 0.2}, {-1, 1}}};
+  // Wide enough that a misspecified law finds its optimum inside (a bound hit makes the
+  // projected solve slow and the estimate hard to read).
+  std::array<std::pair<double, double>, 7> bounds{{{0, 5}, {-1, 1}, {0, 50}, {1e-4, 0.5}, {0, 0.1}, {0, 0.2}, {-1, 1}}};
   std::vector<std::string> effects;  // effects to fit on top of the law (names from friction_effect_names())
   std::vector<double> effect_start;  // their start values (default: neutral), in the order of `effects`
   FrictionWeighting weighting = FrictionWeighting::none;
