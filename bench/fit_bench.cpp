@@ -3,6 +3,7 @@
 #include <benchmark/benchmark.h>
 
 #include "lmcal/fit/friction_fit.hpp"
+#include "lmcal/diagnose/friction_diagnosis.hpp"
 #include "lmcal/fit/thermal_fit.hpp"
 #include "lmcal/rig/virtual_rig.hpp"
 
@@ -59,5 +60,28 @@ void BM_ThermalAlpha4Runs(benchmark::State& state) {
 }
 
 BENCHMARK(BM_ThermalAlpha4Runs)->Unit(benchmark::kMillisecond)->MinTime(2.0);
+
+}  // namespace
+
+namespace {
+
+// Friction diagnosis speed target (issue 6): 100 k samples, every candidate, held-out scoring,
+// under 5 s.
+void BM_FrictionDiagnosis100k(benchmark::State& state) {
+  static const lmcal::FrictionLog log = [] {
+    lmcal::FrictionRigConfig rig;
+    rig.runs = 47;
+    lmcal::RigEffects effects;
+    lmcal::set_rig_effect(effects, "seal_drag", 60);
+    return lmcal::generate_friction_log(rig, effects).log;
+  }();
+  for (auto _ : state) {
+    const auto d = lmcal::diagnose_friction(log, {});
+    benchmark::DoNotOptimize(d.accepted.data());
+  }
+  state.counters["samples"] = static_cast<double>(log.size());
+}
+
+BENCHMARK(BM_FrictionDiagnosis100k)->Unit(benchmark::kMillisecond)->Iterations(2);
 
 }  // namespace

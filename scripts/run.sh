@@ -19,6 +19,10 @@ echo "== Friction constants fitted to the bundled friction log (fits/cheng2017/)
 "$lmcal" fit friction measurements/cheng2017/friction.csv -o fits/cheng2017 --name friction
 
 echo
+echo "== What the published friction law gets wrong on the bundled log, and why =="
+"$lmcal" diagnose friction measurements/cheng2017/friction.csv -o fits/cheng2017 --name friction_diagnosis
+
+echo
 echo "== Heat partition alpha fitted to the bundled thermal runs, heat from the friction fit =="
 "$lmcal" fit thermal measurements/cheng2017/thermal.toml --friction fits/cheng2017/friction.json \
   -o fits/cheng2017 --name thermal

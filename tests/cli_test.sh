@@ -88,6 +88,13 @@ check "one preload class: k1/k2 named unidentifiable" grep -q 'NOT IDENTIFIABLE:
 check "unknown constant refused" refused "unknown constant 'k3'" fit friction fitdata/friction.csv -o out --fix k3=1
 check "bad loss refused" refused "unknown loss 'l1'" fit friction fitdata/friction.csv -o out --loss l1
 
+# --- friction diagnosis ------------------------------------------------------------------------
+"$LMCAL" generate friction -o drag --runs 3 --guides "SRN 35C" --effect seal_drag=100 >/dev/null
+"$LMCAL" diagnose friction drag/friction.csv -o fitout --name d > diag.txt
+check "diagnosis names the hidden seal drag" grep -q 'The published law misses: seal_drag' diag.txt
+check "diagnosis writes its json" grep -q '"verdict": "explained"' fitout/d.json
+check "diagnosis needs three runs" refused "at least three runs" diagnose friction onepc/friction.csv --name x -o out
+
 # --- thermal fit -------------------------------------------------------------------------------
 "$LMCAL" generate thermal -o thermaldata --velocity 0.083,0.11 --duration 7200 --record-every 30 >/dev/null
 "$LMCAL" fit thermal thermaldata/thermal.toml --friction fitout/f.json -o fitout --name t > thermal.txt

@@ -18,18 +18,6 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-std::vector<double> predict(const FrictionFitResult& fit, const FrictionLog& log, double T_ref_C) {
-  const FrictionEffects<double> e = fit.effects();
-  std::vector<double> out(log.size());
-  for (std::size_t i = 0; i < log.size(); ++i) {
-    FrictionConstants<double> k = fit.constants();
-    k.nu_ref_mm2_s = log.viscosity40_mm2_s[i];
-    k.T_ref_C = T_ref_C;
-    out[i] = friction_force_with_effects_N(k, e, log.conditions(i));
-  }
-  return out;
-}
-
 // A fit of the law plus `effects`, started at `start` (one start: the diagnosis refits many times).
 FrictionFitResult fit_with(const FrictionLog& log, const FrictionDiagnosisOptions& o, const std::vector<std::string>& effects,
                            const FrictionConstants<double>& start, const std::vector<double>& effect_start = {}) {
@@ -43,6 +31,7 @@ FrictionFitResult fit_with(const FrictionLog& log, const FrictionDiagnosisOption
   }
   f.per_run_fits = false;
   f.cross_validate = true;
+  f.zero_offset_per_run = true;
   f.fit.starts = 0;  // warm-started from the previous model's estimate: no multi-start
   f.fit.profile = ProfileMode::none;
   return fit_friction(log, f);
@@ -83,8 +72,11 @@ CovariateTest anova(const std::string& name, const std::vector<double>& covariat
   return t;
 }
 
-ResidualDiagnostics diagnose_residuals(const FrictionLog& log, const std::vector<double>& predicted, double sigma,
-                                       double structure_p) {
+// `fit` profiled one zero offset per run: its predictions include them, and the offsets
+// themselves are tested for a trend over the runs.
+ResidualDiagnostics diagnose_residuals(const FrictionLog& log, const FrictionFitResult& fit, double structure_p) {
+  const std::vector<double>& predicted = fit.predicted_N;
+  const double sigma = std::sqrt(fit.fit.residual_variance);
   ResidualDiagnostics d;
   d.sigma = sigma;
   const std::size_t n = log.size();
@@ -96,21 +88,15 @@ ResidualDiagnostics diagnose_residuals(const FrictionLog& log, const std::vector
   }
   d.rmse_N = std::sqrt(ss / static_cast<double>(n));
 
-  // Per run: bias; within runs in file (time) order: Durbin-Watson.
-  std::vector<double> run_sum(log.run_names.size(), 0), run_count(log.run_names.size(), 0);
+  // Within runs in file (time) order: Durbin-Watson. Per run: the zero offset.
   double dw_num = 0, dw_den = 0;
   for (std::size_t i = 0; i < n; ++i) {
-    run_sum[log.run[i]] += e[i];
-    run_count[log.run[i]] += 1;
     dw_den += e[i] * e[i];
     if (i > 0 && log.run[i] == log.run[i - 1]) dw_num += (e[i] - e[i - 1]) * (e[i] - e[i - 1]);
   }
   d.durbin_watson = dw_den > 0 ? dw_num / dw_den : kNaN;
-  std::vector<double> run_bias;
-  for (std::size_t r = 0; r < run_sum.size(); ++r) {
-    run_bias.push_back(run_count[r] > 0 ? run_sum[r] / run_count[r] : kNaN);
-    d.run_bias_N.emplace_back(log.run_names[r], run_bias.back());
-  }
+  const std::vector<double>& run_bias = fit.run_offset_N;
+  for (std::size_t r = 0; r < run_bias.size(); ++r) d.run_bias_N.emplace_back(log.run_names[r], run_bias[r]);
 
   // Condition means: one residual per (guide, preload, load, temperature to 1 K, speed, direction).
   // Covariates take their nominal (condition) values: grouping by the logged temperature
@@ -133,7 +119,7 @@ ResidualDiagnostics diagnose_residuals(const FrictionLog& log, const std::vector
     if (k == 6 && std::all_of(log.time_s.begin(), log.time_s.end(), [](double t) { return std::isnan(t); })) continue;
     d.covariates.push_back(anova(names[k], columns[k + 1], columns[0]));
   }
-  // Run order: a trend of the run biases (random zero offsets per run are not a trend).
+  // Run order: a trend of the runs' zero offsets (random offsets per run are not a trend).
   if (run_bias.size() >= 4) {
     std::vector<double> index(run_bias.size());
     std::iota(index.begin(), index.end(), 0.0);
@@ -184,15 +170,15 @@ FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagno
   FrictionFitOptions base_options = o.fit;
   base_options.per_run_fits = false;
   base_options.cross_validate = true;
+  base_options.zero_offset_per_run = true;
   base_options.fit.profile = ProfileMode::none;
   const FrictionFitResult baseline = fit_friction(log, base_options);
-  const double T_ref = o.fit.start.T_ref_C;
-  d.baseline = diagnose_residuals(log, predict(baseline, log, T_ref), std::sqrt(baseline.fit.residual_variance), o.structure_p);
+  d.baseline = diagnose_residuals(log, baseline, o.structure_p);
 
   // 2-3. Candidates, forward.
   std::vector<std::string> accepted;
   FrictionFitResult current = baseline;
-  double current_ss = sum_of_squares(log, predict(baseline, log, T_ref));
+  double current_ss = sum_of_squares(log, baseline.predicted_N);
   double current_cv = baseline.cv_rmse_N;
   d.cv_rmse_before_N = current_cv;
   while (accepted.size() < o.max_effects) {
@@ -206,7 +192,7 @@ FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagno
       for (std::size_t j = 7; j < current.fit.parameters.size(); ++j) effect_start.push_back(current.fit.parameters[j].value);
       // From the given start (not the baseline's estimate: a misspecified fit may sit on a bound).
       FrictionFitResult fit = fit_with(log, o, effects, o.fit.start, effect_start);
-      const double ss = sum_of_squares(log, predict(fit, log, T_ref));
+      const double ss = sum_of_squares(log, fit.predicted_N);
       CandidateScore c;
       c.effect = effect;
       const auto& p = fit.fit.parameter(effect);
@@ -243,13 +229,13 @@ FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagno
     round[best].accepted = true;
     accepted.push_back(round[best].effect);
     current = fits[best];
-    current_ss = sum_of_squares(log, predict(current, log, T_ref));
+    current_ss = sum_of_squares(log, current.predicted_N);
     current_cv = round[best].cv_rmse_N;
     d.rounds.push_back(round);
   }
 
   // 4. Verdict.
-  d.final = diagnose_residuals(log, predict(current, log, T_ref), std::sqrt(current.fit.residual_variance), o.structure_p);
+  d.final = diagnose_residuals(log, current, o.structure_p);
   d.cv_rmse_after_N = current_cv;
   d.cv_gain_percent = 100 * (1 - current_cv / d.cv_rmse_before_N);
   for (const auto& name : accepted) {

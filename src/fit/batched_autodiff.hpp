@@ -15,7 +15,9 @@
 #include <ceres/cost_function.h>
 #include <ceres/jet.h>
 
+#include <algorithm>
 #include <array>
+#include <vector>
 #include <cmath>
 #include <cstddef>
 #include <utility>
@@ -57,8 +59,14 @@ T robust_residual(const T& r, const RowLoss& loss) {
 template <typename RowFunctor>
 class BatchedAutoDiffCostFunction final : public ceres::CostFunction {
  public:
-  BatchedAutoDiffCostFunction(RowFunctor functor, int num_parameters, std::size_t rows, RowLoss loss = {})
-      : functor_(std::move(functor)), rows_(rows), loss_(loss) {
+  // `groups` (one id per row, optional): residuals and their derivatives are centred within
+  // each group, which profiles out one free offset per group (e.g. a load cell's zero per
+  // run). Not combined with a robust loss.
+  BatchedAutoDiffCostFunction(RowFunctor functor, int num_parameters, std::size_t rows, RowLoss loss = {},
+                              std::vector<std::size_t> groups = {})
+      : functor_(std::move(functor)), rows_(rows), loss_(loss), groups_(std::move(groups)) {
+    LMCAL_ASSERT(groups_.empty() || (groups_.size() == rows && loss.kind == RobustLoss::none),
+                 "group centring needs one group per row and no robust loss");
     LMCAL_ASSERT(num_parameters >= 1 && num_parameters <= 16, "1 to 16 parameters");
     mutable_parameter_block_sizes()->push_back(num_parameters);
     set_num_residuals(static_cast<int>(rows));
@@ -66,16 +74,19 @@ class BatchedAutoDiffCostFunction final : public ceres::CostFunction {
 
   bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
     const double* theta = parameters[0];
+    bool ok = true;
     if (jacobians == nullptr || jacobians[0] == nullptr) {
       auto prepared = functor_.prepare(theta);
-      for (std::size_t i = 0; i < rows_; ++i) {
+      for (std::size_t i = 0; i < rows_ && ok; ++i) {
         residuals[i] = robust_residual(functor_(prepared, i), loss_);
-        if (!std::isfinite(residuals[i])) return false;
+        ok = std::isfinite(residuals[i]);
       }
-      return true;
-    }
-    return parameter_block_sizes()[0] <= 8 ? evaluate_jets<8>(theta, residuals, jacobians[0])
+    } else {
+      ok = parameter_block_sizes()[0] <= 8 ? evaluate_jets<8>(theta, residuals, jacobians[0])
                                            : evaluate_jets<16>(theta, residuals, jacobians[0]);
+    }
+    if (ok && !groups_.empty()) centre(residuals, jacobians ? jacobians[0] : nullptr);
+    return ok;
   }
 
  private:
@@ -96,9 +107,28 @@ class BatchedAutoDiffCostFunction final : public ceres::CostFunction {
     return true;
   }
 
+  void centre(double* residuals, double* jacobian) const {
+    const std::size_t p = static_cast<std::size_t>(parameter_block_sizes()[0]);
+    const std::size_t groups = *std::max_element(groups_.begin(), groups_.end()) + 1;
+    std::vector<double> sum(groups * (p + 1), 0.0), count(groups, 0.0);
+    for (std::size_t i = 0; i < rows_; ++i) {
+      double* s = &sum[groups_[i] * (p + 1)];
+      s[0] += residuals[i];
+      for (std::size_t j = 0; jacobian && j < p; ++j) s[j + 1] += jacobian[i * p + j];
+      count[groups_[i]] += 1;
+    }
+    for (std::size_t i = 0; i < rows_; ++i) {
+      const double* s = &sum[groups_[i] * (p + 1)];
+      const double n = count[groups_[i]];
+      residuals[i] -= s[0] / n;
+      for (std::size_t j = 0; jacobian && j < p; ++j) jacobian[i * p + j] -= s[j + 1] / n;
+    }
+  }
+
   RowFunctor functor_;
   std::size_t rows_;
   RowLoss loss_;
+  std::vector<std::size_t> groups_;
 };
 
 }  // namespace lmcal::detail

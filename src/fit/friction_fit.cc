@@ -192,7 +192,9 @@ FrictionFitResult fit_friction(const FrictionLog& log, const FrictionFitOptions&
 
   FrictionFitResult out;
   out.sigma_N = sample_sigmas(log, options.weighting);
-  FrictionData data{&log, {}, {}, options.start.T_ref_C};
+  if (options.zero_offset_per_run && options.fit.loss != RobustLoss::none)
+    throw InvalidParameter("zero_offset_per_run", "per-run offsets and a robust loss cannot be combined");
+  FrictionData data{&log, {}, {}, options.start.T_ref_C, options.zero_offset_per_run};
   for (std::size_t i = 0; i < log.size(); ++i) {
     data.samples.push_back(i);
     data.inv_sigma.push_back(1.0 / out.sigma_N[i]);
@@ -228,6 +230,27 @@ FrictionFitResult fit_friction(const FrictionLog& log, const FrictionFitOptions&
     if (relative > out.max_relative_error) {
       out.max_relative_error = relative;
       out.max_relative_error_sample = i;
+    }
+  }
+  // Per-run mean residual: the zero offset of each run (profiled out when asked).
+  std::vector<double> run_sum(log.run_names.size(), 0.0), run_count(log.run_names.size(), 0.0);
+  for (std::size_t i = 0; i < log.size(); ++i) {
+    run_sum[log.run[i]] += log.friction_N[i] - out.predicted_N[i];
+    run_count[log.run[i]] += 1;
+  }
+  for (std::size_t r = 0; r < run_sum.size(); ++r) out.run_offset_N.push_back(run_count[r] > 0 ? run_sum[r] / run_count[r] : kNaN);
+  if (options.zero_offset_per_run) {
+    ss = 0;
+    out.max_relative_error = 0;
+    for (std::size_t i = 0; i < log.size(); ++i) {
+      out.predicted_N[i] += out.run_offset_N[log.run[i]];
+      const double r = log.friction_N[i] - out.predicted_N[i];
+      ss += r * r;
+      const double relative = std::abs(r) / std::max(std::abs(log.friction_N[i]), 1e-9);
+      if (relative > out.max_relative_error) {
+        out.max_relative_error = relative;
+        out.max_relative_error_sample = i;
+      }
     }
   }
   out.rmse_N = std::sqrt(ss / static_cast<double>(log.size()));
@@ -268,7 +291,7 @@ FrictionFitResult fit_friction(const FrictionLog& log, const FrictionFitOptions&
     run_options.profile = ProfileMode::none;
     std::vector<std::vector<double>> values(specs.size(), std::vector<double>(log.run_names.size(), kNaN));
     for (std::uint32_t r = 0; r < log.run_names.size(); ++r) {
-      FrictionData run_data{&log, {}, {}, options.start.T_ref_C};
+      FrictionData run_data{&log, {}, {}, options.start.T_ref_C, options.zero_offset_per_run};
       for (std::size_t i = 0; i < log.size(); ++i)
         if (log.run[i] == r) {
           run_data.samples.push_back(i);

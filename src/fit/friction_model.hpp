@@ -47,6 +47,7 @@ struct FrictionData {
   std::vector<std::size_t> samples;  // indices into the log
   std::vector<double> inv_sigma;     // per entry of `samples`
   double T_ref_C = 40.0;
+  bool zero_offset_per_run = false;  // profile out one offset per run (centred residuals)
 };
 
 // Design facts that decide what the data can determine.

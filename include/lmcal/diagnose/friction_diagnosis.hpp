@@ -1,7 +1,10 @@
 // What the friction law gets wrong on measured data, the named physical cause, and what
 // modelling it gains on data it was not fitted to.
 //
-//   1. baseline: the published law fitted to the log; residual bias and RMSE per run,
+//   Each run's load-cell zero is a nuisance offset, profiled out of every fit (the residuals
+//   are centred within runs); a trend of those offsets over the runs is tested separately.
+//
+//   1. baseline: the published law fitted to the log; the zero offset of every run,
 //      Durbin-Watson within runs, and the correlation of the residuals with every covariate
 //      (speed, load, preload, block length, temperature, direction, run order, time), tested
 //      on condition means (one value per condition, so repeated samples of a condition do

@@ -53,6 +53,9 @@ struct FrictionFitOptions {
   FrictionWeighting weighting = FrictionWeighting::none;
   bool per_run_fits = true;
   bool cross_validate = false;  // leave-one-run-out prediction RMSE (one-step, no refits)
+  // Profile out one zero offset per run (the load cell's zero moves between runs): residuals
+  // are centred within each run. Not with a robust loss.
+  bool zero_offset_per_run = false;
 };
 
 struct ConditionResidual {
@@ -81,6 +84,7 @@ struct FrictionFitResult {
   std::vector<double> sigma_N;
   double rmse_N = 0;
   double cv_rmse_N = std::numeric_limits<double>::quiet_NaN();  // leave-one-run-out, when asked
+  std::vector<double> run_offset_N;  // per run: mean of measured - predicted (the profiled offset)
   double max_relative_error = 0;  // max over samples of |measured - predicted| / |measured|
   std::size_t max_relative_error_sample = 0;
   std::vector<ConditionResidual> conditions;
