@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "fit/friction_model.hpp"
+#include "support/finite_differences.hpp"
 #include "lmcal/rig/virtual_rig.hpp"
 
 namespace lmcal {
@@ -143,26 +144,9 @@ TEST(FrictionFit, ResidualDerivativesEqualFiniteDifferences) {
   for (const auto& loss : {detail::RowLoss{}, detail::RowLoss{RobustLoss::huber, 1.345}, detail::RowLoss{RobustLoss::cauchy, 2.0}}) {
     const detail::FrictionModel model(data, {detail::effect_slot("seal_drag"), detail::effect_slot("stribeck_exponent")});
     const auto cost = model.cost_function({}, loss);
-    const std::vector<double> theta = {0.3, 0.02, 1.4, 0.017, 0.0032, 0.065, 0.03, 80.0, 1.1};
-    const std::size_t n = data.samples.size(), p = theta.size();
-    std::vector<double> r(n), J(n * p), plus(n), minus(n);
-    const double* at[] = {theta.data()};
-    double* jacobians[] = {J.data()};
-    ASSERT_TRUE(cost->Evaluate(at, r.data(), jacobians));
-    for (std::size_t j = 0; j < p; ++j) {
-      auto tp = theta, tm = theta;
-      const double h = 1e-6 * std::abs(theta[j]);
-      tp[j] += h;
-      tm[j] -= h;
-      const double* at_plus[] = {tp.data()};
-      const double* at_minus[] = {tm.data()};
-      ASSERT_TRUE(cost->Evaluate(at_plus, plus.data(), nullptr));
-      ASSERT_TRUE(cost->Evaluate(at_minus, minus.data(), nullptr));
-      for (std::size_t i = 0; i < n; ++i) {
-        const double fd = (plus[i] - minus[i]) / (2 * h);
-        EXPECT_NEAR(J[i * p + j], fd, 1e-6 * std::max(1.0, std::abs(fd))) << "row " << i << " parameter " << j;
-      }
-    }
+    // Relative step 1e-6 of |θ| (the constants are small numbers).
+    test::expect_jacobian_matches_central_differences(*cost, {0.3, 0.02, 1.4, 0.017, 0.0032, 0.065, 0.03, 80.0, 1.1},
+                                                      1e-6, 1e-6);
   }
 }
 

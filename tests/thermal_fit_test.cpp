@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "fit/thermal_model.hpp"
+#include "support/finite_differences.hpp"
 #include "lmcal/rig/virtual_rig.hpp"
 
 namespace lmcal {
@@ -109,26 +110,8 @@ TEST(ThermalFit, ResidualDerivativesEqualFiniteDifferences) {
   // α, h, two offsets of the first run, T0 of the second.
   detail::ThermalLayout layout{0, 1, {{2, 3}, {-1, -1}}, {-1, 4}, 5};
   const detail::ThermalModel model(runs, layout, {.half_rail_segments = 40, .time_step_s = 60});
-  const std::vector<double> theta = {0.55, 6.0, 0.2, -0.1, 24.3};
-  const auto cost = model.cost_function({}, {});
-  const std::size_t n = model.num_residuals(), p = theta.size();
-  std::vector<double> r(n), J(n * p), plus(n), minus(n);
-  const double* at[] = {theta.data()};
-  double* jacobians[] = {J.data()};
-  ASSERT_TRUE(cost->Evaluate(at, r.data(), jacobians));
-  for (std::size_t j = 0; j < p; ++j) {
-    auto tp = theta, tm = theta;
-    const double h = 1e-5 * std::max(1.0, std::abs(theta[j]));
-    tp[j] += h;
-    tm[j] -= h;
-    const double* a_plus[] = {tp.data()};
-    const double* a_minus[] = {tm.data()};
-    ASSERT_TRUE(cost->Evaluate(a_plus, plus.data(), nullptr));
-    ASSERT_TRUE(cost->Evaluate(a_minus, minus.data(), nullptr));
-    for (std::size_t i = 0; i < n; ++i)
-      EXPECT_NEAR(J[i * p + j], (plus[i] - minus[i]) / (2 * h), 1e-6 * std::max(1.0, std::abs(J[i * p + j])))
-          << "row " << i << " parameter " << j;
-  }
+  test::expect_jacobian_matches_central_differences(*model.cost_function({}, {}), {0.55, 6.0, 0.2, -0.1, 24.3}, 1e-5,
+                                                    1e-6);
   EXPECT_TRUE(model.linear({false, true, false, false, false}));
   EXPECT_FALSE(model.linear({false, false, false, false, false}));
 }

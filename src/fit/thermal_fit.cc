@@ -11,9 +11,12 @@
 #include "lmcal/error.hpp"
 #include "lmcal/io/catalog.hpp"
 #include "lmcal/io/csv_writer.hpp"
+#include "fit_json.hpp"
 #include "thermal_model.hpp"
 
 namespace lmcal {
+
+using detail::number;
 
 using detail::ParameterSpec;
 using detail::PreparedRun;
@@ -331,49 +334,6 @@ void read_friction_fit(const std::string& json_file, ThermalFitOptions& options)
 
 // ---- output ---------------------------------------------------------------------------------
 
-namespace {
-
-nlohmann::json number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
-
-nlohmann::json parameters_json(const FitResult& fit) {
-  nlohmann::json out = nlohmann::json::array();
-  for (const auto& p : fit.parameters)
-    out.push_back({{"name", p.name},
-                   {"unit", p.unit},
-                   {"value", number(p.value)},
-                   {"se", number(p.se)},
-                   {"ci95", {number(p.ci_low), number(p.ci_high)}},
-                   {"profile_ci95", {number(p.profile_low), number(p.profile_high)}},
-                   {"interval", p.interval},
-                   {"at_bound", p.at_bound},
-                   {"held_unidentifiable", p.held_unidentifiable}});
-  return out;
-}
-
-nlohmann::json fit_summary_json(const FitResult& fit) {
-  nlohmann::json issues = nlohmann::json::array();
-  for (const auto& i : fit.identifiability.issues) issues.push_back({{"why", i.why}, {"measure", i.measure}, {"held", i.held}});
-  nlohmann::json correlation = nlohmann::json::array();
-  for (Eigen::Index a = 0; a < fit.correlation.rows(); ++a) {
-    nlohmann::json row = nlohmann::json::array();
-    for (Eigen::Index b = 0; b < fit.correlation.cols(); ++b) row.push_back(number(fit.correlation(a, b)));
-    correlation.push_back(row);
-  }
-  return {{"parameters", parameters_json(fit)},
-          {"correlation", correlation},
-          {"residuals", fit.residuals},
-          {"residual_sigma_K", number(std::sqrt(fit.residual_variance))},
-          {"identifiability", {{"identifiable", fit.identifiability.identifiable}, {"issues", issues}}},
-          {"solver",
-           {{"converged", fit.solver.converged},
-            {"termination", fit.solver.termination},
-            {"iterations", fit.solver.iterations},
-            {"covariance_ok", fit.solver.covariance_ok},
-            {"seconds", fit.solver.seconds}}},
-          {"warnings", fit.warnings}};
-}
-
-}  // namespace
 
 std::string thermal_fit_json(const ThermalFitResult& r, const ThermalFitOptions& o,
                              const std::vector<std::pair<std::string, std::string>>& inputs,
@@ -388,7 +348,7 @@ std::string thermal_fit_json(const ThermalFitResult& r, const ThermalFitOptions&
                           {"heat_source", info.heat_source},
                           {"initial_temperature_C", info.initial_temperature_C},
                           {"ambient_sensors_percent_difference_eq2", number(info.ambient_difference_percent)}};
-    if (i < r.per_run.size()) run["fit"] = fit_summary_json(r.per_run[i]);
+    if (i < r.per_run.size()) run["fit"] = detail::fit_json(r.per_run[i]);
     runs.push_back(run);
   }
   nlohmann::json goodness = nlohmann::json::array();
@@ -420,7 +380,7 @@ std::string thermal_fit_json(const ThermalFitResult& r, const ThermalFitOptions&
                         {"fit_h", o.fit_h},
                         {"fit_offsets", o.fit_offsets},
                         {"fit_initial_temperature", o.fit_initial_temperature}}},
-                      {"joint", fit_summary_json(r.joint)},
+                      {"joint", detail::fit_json(r.joint)},
                       {"alpha_across_runs",
                        {{"n", s.n},
                         {"mean", number(s.mean)},

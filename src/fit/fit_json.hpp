@@ -1,0 +1,15 @@
+// JSON of a FitResult, shared by every fit's output (private to the fit layer).
+#pragma once
+
+#include <nlohmann/json.hpp>
+
+#include "lmcal/fit/fit_result.hpp"
+
+namespace lmcal::detail {
+
+// A number, or null when it is not finite (NaN SE of a held parameter, say).
+nlohmann::json number(double v);
+// Parameters, correlation, identifiability, solver and warnings.
+nlohmann::json fit_json(const FitResult& fit);
+
+}  // namespace lmcal::detail
