@@ -48,21 +48,16 @@ std::size_t constant_index(const std::string& option, const std::string& name) {
                                              name));
 }
 
-double& constant_ref(FrictionConstants<double>& k, std::size_t j) {
-  double* members[] = {&k.k1, &k.k2, &k.mu_st, &k.v_st_m_s, &k.mu_v, &k.beta_per_K, &k.f0};
-  return *members[j];
-}
-
 FrictionFitOptions to_fit_options(const FitFrictionOptions& o) {
   FrictionFitOptions f;
   if (!o.free.empty()) {
     f.free.fill(false);
     for (const auto& name : o.free) f.free[constant_index("--free", name)] = true;
   }
-  for (const auto& [name, value] : o.start) constant_ref(f.start, constant_index("--start", name)) = value;
+  for (const auto& [name, value] : o.start) fittable_constant(f.start, constant_index("--start", name)) = value;
   for (const auto& [name, value] : o.fixed) {
     const std::size_t j = constant_index("--fix", name);
-    constant_ref(f.start, j) = value;
+    fittable_constant(f.start, j) = value;
     f.free[j] = false;
   }
   for (const auto& item : o.bounds) {

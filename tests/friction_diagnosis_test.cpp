@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "lmcal/rig/virtual_rig.hpp"
@@ -98,9 +99,9 @@ TEST(FrictionDiagnosis, ReportedGainIsCloseToTheTruthsGain) {
   const double truth_gain = 100 * (1 - truth_rmse / d.cv_rmse_before_N);
   EXPECT_NEAR(d.cv_gain_percent, truth_gain, 3.0);
   // The constants move back to the truth once the cause is modelled.
-  for (const auto& shift : d.shifts) {
-    if (shift.name == "mu_v") EXPECT_NEAR(shift.extended, 0.003, 0.0001);
-  }
+  const auto mu_v = std::find_if(d.shifts.begin(), d.shifts.end(), [](const auto& s) { return s.name == "mu_v"; });
+  ASSERT_NE(mu_v, d.shifts.end());
+  EXPECT_NEAR(mu_v->extended, 0.003, 0.0001);
 }
 
 }  // namespace

@@ -59,8 +59,7 @@ TEST(Friction, JetDerivativesEqualFiniteDifferences) {
   for (double v : {0.005, 0.03, 0.11}) {
     const auto c = srn35c_conditions(v);
     FrictionConstants<Jet> kj = k.cast<Jet>();
-    Jet* members[] = {&kj.k1, &kj.k2, &kj.mu_st, &kj.v_st_m_s, &kj.mu_v, &kj.beta_per_K, &kj.f0};
-    for (int i = 0; i < 7; ++i) members[i]->v[i] = 1.0;
+    for (std::size_t i = 0; i < 7; ++i) fittable_constant(kj, i).v[i] = 1.0;
     FrictionConditions<Jet> cj = c.cast<Jet>();
     cj.temperature_C.v[7] = 1.0;
     const Jet F = friction_force_N(kj, cj);
@@ -69,12 +68,11 @@ TEST(Friction, JetDerivativesEqualFiniteDifferences) {
     auto perturbed = [&](int i, double step) {
       auto kp = k;
       auto cp = c;
-      double* m[] = {&kp.k1, &kp.k2, &kp.mu_st, &kp.v_st_m_s, &kp.mu_v, &kp.beta_per_K, &kp.f0, &cp.temperature_C};
-      *m[i] += step;
+      (i < 7 ? fittable_constant(kp, static_cast<std::size_t>(i)) : cp.temperature_C) += step;
       return friction_force_N(kp, cp);
     };
     for (int i = 0; i < 8; ++i) {
-      const double base = i < 7 ? *(&k.k1 + i) : c.temperature_C;
+      const double base = i < 7 ? fittable_constant(k, static_cast<std::size_t>(i)) : c.temperature_C;
       const double step = 1e-6 * std::max(1.0, std::abs(base));
       const double fd = (perturbed(i, step) - perturbed(i, -step)) / (2 * step);
       EXPECT_NEAR(F.v[i], fd, 1e-6 * std::max(1.0, std::abs(fd))) << "parameter " << i << " at V = " << v;

@@ -25,10 +25,8 @@ FrictionFitResult fit_with(const FrictionLog& log, const FrictionDiagnosisOption
   f.effects = effects;
   f.effect_start = effect_start;
   f.start = start;
-  for (std::size_t j = 0; j < 7; ++j) {
-    double* v[] = {&f.start.k1, &f.start.k2, &f.start.mu_st, &f.start.v_st_m_s, &f.start.mu_v, &f.start.beta_per_K, &f.start.f0};
-    *v[j] = std::clamp(*v[j], f.bounds[j].first, f.bounds[j].second);
-  }
+  for (std::size_t j = 0; j < 7; ++j)
+    fittable_constant(f.start, j) = std::clamp(fittable_constant(f.start, j), f.bounds[j].first, f.bounds[j].second);
   f.per_run_fits = false;
   f.cross_validate = true;
   f.zero_offset_per_run = true;

@@ -142,9 +142,8 @@ std::vector<double> sample_sigmas(const FrictionLog& log, FrictionWeighting weig
 
 std::vector<detail::ParameterSpec> parameter_specs(const FrictionFitOptions& o, const std::vector<std::size_t>& slots) {
   std::vector<detail::ParameterSpec> specs;
-  const double start[] = {o.start.k1, o.start.k2, o.start.mu_st, o.start.v_st_m_s, o.start.mu_v, o.start.beta_per_K, o.start.f0};
   for (std::size_t j = 0; j < 7; ++j)
-    specs.push_back({kFrictionConstantNames[j], kConstantUnits[j], start[j], o.bounds[j].first, o.bounds[j].second, o.free[j]});
+    specs.push_back({kFrictionConstantNames[j], kConstantUnits[j], fittable_constant(o.start, j), o.bounds[j].first, o.bounds[j].second, o.free[j]});
   for (std::size_t m = 0; m < slots.size(); ++m) {
     const EffectSpec& e = kEffects[slots[m]];
     const double start = m < o.effect_start.size() ? std::clamp(o.effect_start[m], e.lower, e.upper) : e.neutral;
@@ -178,7 +177,9 @@ const std::vector<std::string>& friction_effect_names() {
 FrictionConstants<double> FrictionFitResult::constants() const {
   const auto& p = fit.parameters;
   LMCAL_ASSERT(p.size() >= 7, "a friction fit has seven constants");
-  return {p[0].value, p[1].value, p[2].value, p[3].value, p[4].value, p[5].value, p[6].value};
+  FrictionConstants<double> k = paper_friction_constants();
+  for (std::size_t j = 0; j < 7; ++j) fittable_constant(k, j) = p[j].value;
+  return k;
 }
 
 FrictionEffects<double> FrictionFitResult::effects() const {

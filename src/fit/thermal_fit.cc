@@ -12,6 +12,8 @@
 #include "lmcal/io/catalog.hpp"
 #include "lmcal/io/csv_writer.hpp"
 #include "fit_json.hpp"
+#include "friction_model.hpp"
+#include "lmcal/fit/friction_fit.hpp"
 #include "thermal_model.hpp"
 
 namespace lmcal {
@@ -129,7 +131,7 @@ Prepared prepare_run(const ThermalRun& run, const ThermalFitOptions& o) {
         .block_length_mm = run.block_length_mm ? *run.block_length_mm : require(spec, &GuideSpec::block_length_mm, "block_length_mm"),
         .velocity_m_s = run.velocity_m_s,
         .temperature_C = pr.ambient.temperature_C.front()};
-    Q = friction_force_with_effects_N(k, o.friction_effects, c) * run.velocity_m_s;
+    Q = heat_rate_with_effects_W(k, o.friction_effects, c);
     out.info.heat_source = o.friction ? "friction law (fitted constants)" : "friction law (the paper's constants)";
   }
   pr.params = {.heat_partition = o.alpha_start,
@@ -316,17 +318,18 @@ void read_friction_fit(const std::string& json_file, ThermalFitOptions& options)
     throw InputError(json_file, 0, 0, "expected a friction fit (\"kind\": \"friction fit\") written by lmcal fit friction");
   FrictionConstants<double> k = paper_friction_constants();
   FrictionEffects<double> e;
-  std::map<std::string, double*> slots = {{"k1", &k.k1},       {"k2", &k.k2},       {"mu_st", &k.mu_st},
-                                          {"v_st_m_s", &k.v_st_m_s}, {"mu_v", &k.mu_v}, {"beta_per_K", &k.beta_per_K},
-                                          {"f0", &k.f0},
-                                          {"stribeck_exponent", &e.stribeck_exponent},
-                                          {"viscous_load", &e.viscous_load_per_kN},
-                                          {"direction_asymmetry", &e.direction_asymmetry},
-                                          {"seal_drag", &e.seal_drag_N_s2_m2},
-                                          {"coulomb_temperature", &e.coulomb_temperature_per_K}};
-  for (const auto& p : j.at("parameters")) {
-    const auto it = slots.find(p.at("name").get<std::string>());
-    if (it != slots.end() && p.at("value").is_number()) *it->second = p.at("value").get<double>();
+  if (!j.contains("parameters") || !j["parameters"].is_array())
+    throw InputError(json_file, 0, 0, "expected a \"parameters\" array");
+  const auto& effects = friction_effect_names();
+  for (const auto& p : j["parameters"]) {
+    const std::string name = p.value("name", "");
+    if (!p.contains("value") || !p["value"].is_number()) continue;  // null: not estimated
+    const double value = p["value"].get<double>();
+    const auto c = std::find(kFrictionConstantNames.begin(), kFrictionConstantNames.end(), name);
+    if (c != kFrictionConstantNames.end())
+      fittable_constant(k, static_cast<std::size_t>(c - kFrictionConstantNames.begin())) = value;
+    else if (std::find(effects.begin(), effects.end(), name) != effects.end())
+      detail::effect_member(e, detail::effect_slot(name)) = value;
   }
   options.friction = k;
   options.friction_effects = e;

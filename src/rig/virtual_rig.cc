@@ -242,10 +242,10 @@ ThermalRigOutput generate_thermal_dataset(const ThermalRigConfig& config, const 
                                         config.ambient_wave_K * std::sin(2 * std::numbers::pi * t / 7200 + phase));
       }
       const double T0 = ambient.temperature_C.front();
-      auto friction_at = [&](double T) {
+      auto heat_at = [&](double T) {
         const FrictionConditions<double> c{.load_N = config.load_N, .preload_um = pc, .block_length_mm = Lb,
                                            .velocity_m_s = V, .temperature_C = T};
-        return friction_force_with_effects_N(config.constants, effects.friction, c);
+        return heat_rate_with_effects_W(config.constants, effects.friction, c);
       };
       const RailGeometry geometry{.rail_length_m = config.rail_length_m,
                                   .area_m2 = require(spec, &GuideSpec::area_m2, "area_m2"),
@@ -255,7 +255,7 @@ ThermalRigOutput generate_thermal_dataset(const ThermalRigConfig& config, const 
                                   .velocity_m_s = V};
       const RailParams<double> params{
           .heat_partition = alpha_with_velocity(config.alpha, effects.thermal.alpha_velocity, V),
-          .heat_rate_W = friction_at(T0) * V,
+          .heat_rate_W = heat_at(T0),
           .h_W_m2K = convection_with_velocity(config.h_W_m2K, effects.thermal.convection_velocity, V),
           .conductivity_W_mK = require(spec, &GuideSpec::conductivity_W_mK, "conductivity_W_mK"),
           .density_kg_m3 = require(spec, &GuideSpec::density_kg_m3, "density_kg_m3"),
@@ -264,7 +264,7 @@ ThermalRigOutput generate_thermal_dataset(const ThermalRigConfig& config, const 
           .base_loss_W_mK = effects.thermal.base_loss};
       const RailOutputs outputs{
           .duration_s = times.back(), .sensor_positions_m = config.sensor_position_m, .output_times_s = times};
-      const HeatRateModel<double> coupling = [&](const double& T) { return friction_at(T) * V; };
+      const HeatRateModel<double> coupling = heat_at;
       const auto sol = simulate_rail(geometry, numerics, outputs, params, ambient,
                                      coupled ? coupling : HeatRateModel<double>{});
 

@@ -61,6 +61,17 @@ struct FrictionConstants {
 inline constexpr std::array<const char*, 7> kFrictionConstantNames = {
     "k1", "k2", "mu_st", "v_st_m_s", "mu_v", "beta_per_K", "f0"};
 
+// The j-th fittable constant, in the order of kFrictionConstantNames (j < 7).
+template <typename T>
+T& fittable_constant(FrictionConstants<T>& k, std::size_t j) {
+  T* members[] = {&k.k1, &k.k2, &k.mu_st, &k.v_st_m_s, &k.mu_v, &k.beta_per_K, &k.f0};
+  return *members[j];
+}
+template <typename T>
+const T& fittable_constant(const FrictionConstants<T>& k, std::size_t j) {
+  return fittable_constant(const_cast<FrictionConstants<T>&>(k), j);
+}
+
 // The identified constants of Eq. 8, with ν_i = 99 mm²/s at T_i = 40 °C.
 inline FrictionConstants<double> paper_friction_constants() {
   return {.k1 = 0.315,

@@ -75,4 +75,10 @@ auto friction_force_with_effects_N(const FrictionConstants<P>& k, const Friction
   return without_direction + direction_correction_N(c, without_direction, e.direction_asymmetry);
 }
 
+// Eqs. 9-10 with the effects: Q_f = F · V, W.
+template <typename P, typename C, typename E>
+auto heat_rate_with_effects_W(const FrictionConstants<P>& k, const FrictionEffects<E>& e, const FrictionConditions<C>& c) {
+  return friction_force_with_effects_N(k, e, c) * c.velocity_m_s;
+}
+
 }  // namespace lmcal
