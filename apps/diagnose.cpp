@@ -31,7 +31,7 @@ void print(const FrictionDiagnosis& d) {
     std::cout << fmt::format("candidates, step {} (held-out RMSE gain against the model so far):\n", r + 1);
     for (const auto& c : d.rounds[r])
       std::cout << fmt::format("  {:<20} {:>10.4g} ± {:<9.3g} LRT p {:<8.2g} held-out {:.4f} N ({:+.1f} %)  {}{}\n", c.effect,
-                               c.value, c.se, c.lrt_p, c.cv_rmse_N, c.cv_gain_percent, c.accepted ? "ACCEPTED: " : "", c.reason);
+                               c.value, c.se, c.lrt_p, c.cv_rmse, c.cv_gain_percent, c.accepted ? "ACCEPTED: " : "", c.reason);
   }
   std::cout << "verdict: " << d.verdict << "\n  " << d.summary << "\n";
 }

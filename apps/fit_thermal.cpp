@@ -83,6 +83,10 @@ void setup_fit_thermal(CLI::App& fit, const std::vector<std::string>& argv) {
   app->add_option("--h", o->fit.h_W_m2K, "Convection coefficient (start value with --fit-h), W/m2K")->capture_default_str();
   app->add_flag("--fit-offsets", o->fit.fit_offsets, "Also fit one offset per thermocouple and run");
   app->add_flag("--fit-initial", o->fit.fit_initial_temperature, "Also fit the initial rail temperature of each run");
+  std::string known;
+  for (const auto& [name, what] : thermal_extension_names()) known += fmt::format("\n    {}: {}", name, what);
+  app->add_option("--extension", o->fit.extensions, "Add a mechanism of the extension library (repeatable):" + known);
+  app->add_flag("--cross-validate", o->fit.cross_validate, "Also report the leave-one-run-out prediction RMSE");
   app->add_flag("!--no-run-fits", o->fit.per_run_fits, "Skip the per-run fits");
   app->add_flag("!--no-source-comparison", o->fit.compare_sources, "Skip the paper/averaged comparison");
   app->callback([o, &argv] { run_fit_thermal(*o, argv); });

@@ -108,7 +108,7 @@ TEST(ThermalFit, ResidualDerivativesEqualFiniteDifferences) {
     runs.push_back(pr);
   }
   // α, h, two offsets of the first run, T0 of the second.
-  detail::ThermalLayout layout{0, 1, {{2, 3}, {-1, -1}}, {-1, 4}, 5};
+  detail::ThermalLayout layout{.alpha = 0, .h = 1, .offsets = {{2, 3}, {-1, -1}}, .initial = {-1, 4}, .size = 5};
   const detail::ThermalModel model(runs, layout, {.half_rail_segments = 40, .time_step_s = 60});
   test::expect_jacobian_matches_central_differences(*model.cost_function({}, {}), {0.55, 6.0, 0.2, -0.1, 24.3}, 1e-5,
                                                     1e-6);

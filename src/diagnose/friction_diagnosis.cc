@@ -11,6 +11,7 @@
 
 #include "lmcal/error.hpp"
 #include "lmcal/fit/statistics.hpp"
+#include "selection.hpp"
 
 namespace lmcal {
 
@@ -33,41 +34,6 @@ FrictionFitResult fit_with(const FrictionLog& log, const FrictionDiagnosisOption
   f.fit.starts = 0;  // warm-started from the previous model's estimate: no multi-start
   f.fit.profile = ProfileMode::none;
   return fit_friction(log, f);
-}
-
-// One-way ANOVA of the condition-mean residuals grouped by a covariate's value (binned
-// into ten quantile bins when it has more values): finds structure of any shape.
-CovariateTest anova(const std::string& name, const std::vector<double>& covariate, const std::vector<double>& residual) {
-  CovariateTest t{name, 0, 1, residual.size()};
-  std::vector<double> sorted = covariate;
-  std::sort(sorted.begin(), sorted.end());
-  sorted.erase(std::unique(sorted.begin(), sorted.end()), sorted.end());
-  auto group_of = [&](double v) -> std::size_t {
-    const auto pos = static_cast<std::size_t>(std::lower_bound(sorted.begin(), sorted.end(), v) - sorted.begin());
-    return sorted.size() <= 12 ? pos : pos * 10 / sorted.size();
-  };
-  const std::size_t groups = std::min<std::size_t>(sorted.size(), sorted.size() <= 12 ? sorted.size() : 10);
-  if (groups < 2 || residual.size() <= groups) return t;
-  std::vector<double> sum(groups, 0), count(groups, 0);
-  double total = 0;
-  for (std::size_t i = 0; i < residual.size(); ++i) {
-    sum[group_of(covariate[i])] += residual[i];
-    count[group_of(covariate[i])] += 1;
-    total += residual[i];
-  }
-  const double grand = total / static_cast<double>(residual.size());
-  double between = 0, within = 0;
-  for (std::size_t g = 0; g < groups; ++g)
-    if (count[g] > 0) between += count[g] * std::pow(sum[g] / count[g] - grand, 2);
-  for (std::size_t i = 0; i < residual.size(); ++i) {
-    const std::size_t g = group_of(covariate[i]);
-    within += std::pow(residual[i] - sum[g] / count[g], 2);
-  }
-  const double d1 = static_cast<double>(groups - 1), d2 = static_cast<double>(residual.size() - groups);
-  const double F = (between / d1) / std::max(within / d2, 1e-300);
-  t.p_value = fisher_f_upper_p(F, d1, d2);
-  t.correlation = std::sqrt(between / std::max(between + within, 1e-300));  // η: share of the variation explained
-  return t;
 }
 
 // `fit` profiled one zero offset per run: its predictions include them, and the offsets
@@ -115,7 +81,7 @@ ResidualDiagnostics diagnose_residuals(const FrictionLog& log, const FrictionFit
   const char* names[] = {"velocity_m_s", "load_N", "preload_um", "block_length_mm", "temperature_C", "direction", "time_s"};
   for (std::size_t k = 0; k < 7; ++k) {
     if (k == 6 && std::all_of(log.time_s.begin(), log.time_s.end(), [](double t) { return std::isnan(t); })) continue;
-    d.covariates.push_back(anova(names[k], columns[k + 1], columns[0]));
+    d.covariates.push_back(detail::anova(names[k], columns[k + 1], columns[0]));
   }
   // Run order: a trend of the runs' zero offsets (random offsets per run are not a trend).
   if (run_bias.size() >= 4) {
@@ -139,22 +105,10 @@ ResidualDiagnostics diagnose_residuals(const FrictionLog& log, const FrictionFit
   return d;
 }
 
-struct Scored {
-  FrictionFitResult fit;
-  double ss = 0;
-};
-
 double sum_of_squares(const FrictionLog& log, const std::vector<double>& predicted) {
   double ss = 0;
   for (std::size_t i = 0; i < log.size(); ++i) ss += std::pow(log.friction_N[i] - predicted[i], 2);
   return ss;
-}
-
-// AICc and BIC of a Gaussian least-squares fit with k parameters.
-std::pair<double, double> information_criteria(double ss, std::size_t n, std::size_t k) {
-  const double N = static_cast<double>(n), K = static_cast<double>(k);
-  const double aic = N * std::log(ss / N) + 2 * K;
-  return {aic + 2 * K * (K + 1) / std::max(N - K - 1, 1.0), N * std::log(ss / N) + K * std::log(N)};
 }
 
 }  // namespace
@@ -174,69 +128,36 @@ FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagno
   d.baseline = diagnose_residuals(log, baseline, o.structure_p);
 
   // 2-3. Candidates, forward.
-  std::vector<std::string> accepted;
-  FrictionFitResult current = baseline;
-  double current_ss = sum_of_squares(log, baseline.predicted_N);
-  double current_cv = baseline.cv_rmse_N;
-  d.cv_rmse_before_N = current_cv;
-  while (accepted.size() < o.max_effects) {
-    std::vector<CandidateScore> round;
-    std::vector<FrictionFitResult> fits;
-    for (const auto& effect : friction_effect_names()) {
-      if (std::find(accepted.begin(), accepted.end(), effect) != accepted.end()) continue;
-      std::vector<std::string> effects = accepted;
-      effects.push_back(effect);
-      std::vector<double> effect_start;
-      for (std::size_t j = 7; j < current.fit.parameters.size(); ++j) effect_start.push_back(current.fit.parameters[j].value);
-      // From the given start (not the baseline's estimate: a misspecified fit may sit on a bound).
-      FrictionFitResult fit = fit_with(log, o, effects, o.fit.start, effect_start);
-      const double ss = sum_of_squares(log, fit.predicted_N);
-      CandidateScore c;
-      c.effect = effect;
+  auto fit_candidate = [&](const std::vector<std::string>& effects, const FrictionFitResult& current) {
+    std::vector<double> effect_start;
+    for (std::size_t j = 7; j < current.fit.parameters.size(); ++j) effect_start.push_back(current.fit.parameters[j].value);
+    // From the given start (not the current estimate: a misspecified fit may sit on a bound).
+    return fit_with(log, o, effects, o.fit.start, effect_start);
+  };
+  auto summarise = [&](const FrictionFitResult& fit, const std::string& effect) {
+    detail::ModelFit m{.ss = sum_of_squares(log, fit.predicted_N),
+                       .n = static_cast<double>(n),
+                       .n_eff = static_cast<double>(n),
+                       .k = fit.fit.free_parameters,
+                       .cv_rmse = fit.cv_rmse_N};
+    CandidateScore c;
+    if (!effect.empty()) {
       const auto& p = fit.fit.parameter(effect);
-      c.value = p.value;
-      c.se = p.se;
-      c.ci_low = p.ci_low;
-      c.ci_high = p.ci_high;
-      const std::size_t k = fit.fit.free_parameters;
-      std::tie(c.aicc, c.bic) = information_criteria(ss, n, k);
-      const auto [aicc0, bic0] = information_criteria(current_ss, n, current.fit.free_parameters);
-      c.lrt_statistic = static_cast<double>(n) * std::log(current_ss / ss);
-      c.lrt_p = chi_squared_upper_p(c.lrt_statistic, 1);
-      c.cv_rmse_N = fit.cv_rmse_N;
-      c.cv_gain_percent = 100 * (1 - c.cv_rmse_N / current_cv);
-      const bool significant = c.lrt_p < o.lrt_p && c.bic < bic0;
-      const bool better = c.cv_gain_percent >= o.min_cv_gain_percent;
-      c.reason = significant && better ? "significant and better on held-out runs"
-                 : !significant        ? fmt::format("not significant (LRT p = {:.2g}, BIC {:+.1f})", c.lrt_p, c.bic - bic0)
-                                       : fmt::format("held-out RMSE gain {:.1f} % < {:.1f} %", c.cv_gain_percent, o.min_cv_gain_percent);
-      (void)aicc0;
-      round.push_back(c);
-      fits.push_back(std::move(fit));
+      c = {.value = p.value, .se = p.se, .ci_low = p.ci_low, .ci_high = p.ci_high};
+      if (p.held_unidentifiable) m.problem = "not identifiable from these data";
     }
-    // The best passing candidate by held-out gain.
-    std::size_t best = round.size();
-    for (std::size_t i = 0; i < round.size(); ++i) {
-      const bool passes = round[i].reason == "significant and better on held-out runs";
-      if (passes && (best == round.size() || round[i].cv_gain_percent > round[best].cv_gain_percent)) best = i;
-    }
-    if (best == round.size()) {
-      d.rounds.push_back(round);
-      break;
-    }
-    round[best].accepted = true;
-    accepted.push_back(round[best].effect);
-    current = fits[best];
-    current_ss = sum_of_squares(log, current.predicted_N);
-    current_cv = round[best].cv_rmse_N;
-    d.rounds.push_back(round);
-  }
+    return std::make_pair(m, c);
+  };
+  const detail::SelectionRules rules{.lrt_p = o.lrt_p, .min_cv_gain_percent = o.min_cv_gain_percent, .max_effects = o.max_effects};
+  auto selection = detail::forward_select(friction_effect_names(), baseline, fit_candidate, summarise, rules);
+  const FrictionFitResult& current = selection.current;
+  d.rounds = std::move(selection.rounds);
 
   // 4. Verdict.
   d.final = diagnose_residuals(log, current, o.structure_p);
-  d.cv_rmse_after_N = current_cv;
-  d.cv_gain_percent = 100 * (1 - current_cv / d.cv_rmse_before_N);
-  for (const auto& name : accepted) {
+  d.cv_rmse_before_N = baseline.cv_rmse_N;
+  d.cv_rmse_after_N = current.cv_rmse_N;
+  for (const auto& name : selection.accepted) {
     CandidateScore c;
     for (const auto& round : d.rounds)
       for (const auto& cand : round)
@@ -251,39 +172,21 @@ FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagno
   for (std::size_t j = 0; j < 7; ++j)
     d.shifts.push_back({kFrictionConstantNames[j], baseline.fit.parameters[j].value, current.fit.parameters[j].value});
 
-  std::string remains = d.final.structured
-                            ? fmt::format("the residuals still follow {} (p = {:.2g})", d.final.covariates.front().covariate,
-                                          d.final.covariates.front().p_value)
-                            : "no structure left beyond the noise";
-  if (!accepted.empty()) {
-    d.verdict = "explained";
-    std::string causes;
-    for (const auto& c : d.accepted)
-      causes += fmt::format("{}{} = {:.4g} (95 % [{:.4g}, {:.4g}])", causes.empty() ? "" : "; ", c.effect, c.value, c.ci_low, c.ci_high);
-    std::string shift;
-    for (const auto& s : d.shifts)
-      if (std::abs(s.extended - s.baseline) > 0.02 * std::max(std::abs(s.baseline), 1e-12))
-        shift += fmt::format("{}{} {:.4g} -> {:.4g}", shift.empty() ? "" : ", ", s.name, s.baseline, s.extended);
-    d.summary = fmt::format(
-        "The published law misses: {}. Modelled, the held-out (leave-one-run-out) RMSE goes from {:.3f} N to {:.3f} N "
-        "({:.1f} % better). Constants that move: {}. What remains: {}.",
-        causes, d.cv_rmse_before_N, d.cv_rmse_after_N, d.cv_gain_percent, shift.empty() ? "none by more than 2 %" : shift,
-        remains);
-    if (d.final.structured) d.unexplained_covariate = d.final.covariates.front().covariate;
-  } else if (d.baseline.structured) {
-    d.verdict = "unexplained";
-    d.unexplained_covariate = d.baseline.covariates.front().covariate;
-    d.summary = fmt::format(
-        "Unexplained: the residuals of the published law follow {} (p = {:.2g}), but no effect of the library explains "
-        "them on held-out runs. Held-out RMSE {:.3f} N.",
-        d.unexplained_covariate, d.baseline.covariates.front().p_value, d.cv_rmse_before_N);
-  } else {
-    d.verdict = "no significant discrepancy";
-    d.summary = fmt::format(
-        "No significant discrepancy: the published law fits to the noise (residual RMSE {:.3f} N, held-out {:.3f} N) and "
-        "no effect of the library improves it.",
-        d.baseline.rmse_N, d.cv_rmse_before_N);
-  }
+  const detail::Verdict v = detail::make_verdict({.model = "The published law",
+                                                  .unit = "N",
+                                                  .accepted = d.accepted,
+                                                  .shifts = d.shifts,
+                                                  .cv_before = d.cv_rmse_before_N,
+                                                  .cv_after = d.cv_rmse_after_N,
+                                                  .baseline_rmse = d.baseline.rmse_N,
+                                                  .baseline_structured = d.baseline.structured,
+                                                  .final_structured = d.final.structured,
+                                                  .baseline_top = d.baseline.covariates.empty() ? CovariateTest{} : d.baseline.covariates.front(),
+                                                  .final_top = d.final.covariates.empty() ? CovariateTest{} : d.final.covariates.front()});
+  d.verdict = v.verdict;
+  d.summary = v.summary;
+  d.unexplained_covariate = v.unexplained_covariate;
+  d.cv_gain_percent = v.cv_gain_percent;
   return d;
 }
 
@@ -303,7 +206,7 @@ std::string friction_diagnosis_json(const FrictionDiagnosis& d) {
     return nlohmann::json{{"effect", c.effect},         {"value", number(c.value)},       {"se", number(c.se)},
                           {"ci95", {number(c.ci_low), number(c.ci_high)}},
                           {"aicc", number(c.aicc)},     {"bic", number(c.bic)},           {"lrt", number(c.lrt_statistic)},
-                          {"lrt_p", number(c.lrt_p)},   {"cv_rmse_N", number(c.cv_rmse_N)},
+                          {"lrt_p", number(c.lrt_p)},   {"cv_rmse_N", number(c.cv_rmse)},
                           {"cv_gain_percent", number(c.cv_gain_percent)}, {"accepted", c.accepted}, {"reason", c.reason}};
   };
   nlohmann::json rounds = nlohmann::json::array();

@@ -110,7 +110,7 @@ Prepared prepare_run(const ThermalRun& run, const ThermalFitOptions& o) {
   std::vector<double> first;
   for (const auto& channel : trace.rail) first.push_back(channel.values.front());
   double T0 = mean_of_finite(first, 0, first.size());
-  if (std::isnan(T0)) T0 = pr.ambient.temperature_C.front();
+  if (std::isnan(T0) || o.fit_offsets) T0 = pr.ambient.temperature_C.front();
 
   // Heat: the friction law at the start (the rail and grease at the ambient, which the two
   // ambient sensors measure better than one biased thermocouple), or the measured mean friction.
@@ -123,7 +123,8 @@ Prepared prepare_run(const ThermalRun& run, const ThermalFitOptions& o) {
       throw InvalidParameter(run.id, "the run has no mean_friction_N in the manifest; give a friction fit (--friction)");
     Q = *run.mean_friction_N * run.velocity_m_s;
     out.info.heat_source = "measured mean friction";
-  } else {
+  }
+  {
     const FrictionConstants<double> k = o.friction ? *o.friction : paper_friction_constants();
     const FrictionConditions<double> c{
         .load_N = run.load_N,
@@ -131,8 +132,13 @@ Prepared prepare_run(const ThermalRun& run, const ThermalFitOptions& o) {
         .block_length_mm = run.block_length_mm ? *run.block_length_mm : require(spec, &GuideSpec::block_length_mm, "block_length_mm"),
         .velocity_m_s = run.velocity_m_s,
         .temperature_C = pr.ambient.temperature_C.front()};
-    Q = heat_rate_with_effects_W(k, o.friction_effects, c);
-    out.info.heat_source = o.friction ? "friction law (fitted constants)" : "friction law (the paper's constants)";
+    pr.friction = k;
+    pr.friction_effects = o.friction_effects;
+    pr.conditions = c;  // the coupling extension scales Q_f by the law's change from here
+    if (heat != HeatInput::measured_friction) {
+      Q = heat_rate_with_effects_W(k, o.friction_effects, c);
+      out.info.heat_source = o.friction ? "friction law (fitted constants)" : "friction law (the paper's constants)";
+    }
   }
   pr.params = {.heat_partition = o.alpha_start,
                .heat_rate_W = Q,
@@ -161,6 +167,19 @@ std::pair<ThermalLayout, std::vector<ParameterSpec>> layout_for(const std::vecto
     layout.h = static_cast<int>(specs.size());
     specs.push_back({"h_W_m2K", "W/m2K", o.h_W_m2K, o.h_lower, o.h_upper, true});
   }
+  for (const auto& name : o.extensions) {
+    const detail::ThermalExtension& e = detail::thermal_extension(name);
+    if (std::find(layout.extensions.begin(), layout.extensions.end(), &e) != layout.extensions.end())
+      throw InvalidParameter("extension", fmt::format("'{}' is given twice", name));
+    layout.extensions.push_back(&e);
+    layout.extension_first.push_back(static_cast<int>(specs.size()));
+    for (const auto& p : e.parameters) {
+      double start = p.start;
+      for (const auto& [given, value] : o.extension_start)
+        if (given == p.name) start = std::clamp(value, p.lower, p.upper);
+      specs.push_back({p.name, p.unit, start, p.lower, p.upper, true, p.scale});
+    }
+  }
   for (const auto& run : runs) {
     std::vector<int> offsets(run.sensor_names.size(), -1);
     for (std::size_t s = 0; s < offsets.size() && o.fit_offsets; ++s) {
@@ -180,17 +199,62 @@ std::pair<ThermalLayout, std::vector<ParameterSpec>> layout_for(const std::vecto
   return {layout, specs};
 }
 
+// The source model: the option's, unless an extension switches it.
+SourceModel source_of(const ThermalFitOptions& o) {
+  SourceModel source = o.source;
+  for (const auto& name : o.extensions)
+    if (const auto switched = detail::thermal_extension(name).source) source = *switched;
+  return source;
+}
+
 RailNumerics numerics_of(const ThermalFitOptions& o) {
-  return {.source = o.source, .scheme = o.scheme, .half_rail_segments = o.half_rail_segments, .time_step_s = o.time_step_s};
+  return {.source = source_of(o), .scheme = o.scheme, .half_rail_segments = o.half_rail_segments, .time_step_s = o.time_step_s};
+}
+
+void check_jet_size(const ThermalModel& model) {
+  if (model.max_local_parameters() > 8)
+    throw InvalidParameter("thermal fit", fmt::format("one run's simulation would depend on {} fitted parameters; at most 8 "
+                                                      "(fewer extensions, or no offsets or initial temperatures)",
+                                                      model.max_local_parameters()));
 }
 
 FitResult fit_runs(const std::vector<PreparedRun>& runs, const ThermalFitOptions& o) {
   auto [layout, specs] = layout_for(runs, o);
   const ThermalModel model(runs, layout, numerics_of(o));
+  check_jet_size(model);
   return detail::solve_least_squares(model, specs, o.fit);
 }
 
+// Each run predicted by the global parameters fitted to the others (one Gauss-Newton step
+// from the joint optimum); the run's own offsets and T0 cannot be learnt from the others and
+// stay at their joint values.
+double leave_one_run_out_rmse(const ThermalModel& model, const FitResult& joint, const detail::FinalState& state) {
+  const auto& rows = model.rows();
+  const ThermalLayout& layout = model.layout();
+  std::vector<std::size_t> group(rows.size());
+  for (std::size_t k = 0; k < rows.size(); ++k) group[k] = rows[k].run;
+  std::vector<bool> held;
+  for (const auto& p : joint.parameters) held.push_back(!p.free || p.held_unidentifiable);
+  double ss = 0;
+  for (std::size_t r = 0; r < model.runs().size(); ++r) {
+    std::vector<bool> held_r = held;
+    for (int o : layout.offsets[r])
+      if (o >= 0) held_r[static_cast<std::size_t>(o)] = true;
+    if (layout.initial[r] >= 0) held_r[static_cast<std::size_t>(layout.initial[r])] = true;
+    const Eigen::VectorXd held_out = detail::leave_group_out_residuals(state, group, held_r);
+    for (std::size_t k = 0; k < rows.size(); ++k)
+      if (rows[k].run == r) ss += held_out[static_cast<Eigen::Index>(k)] * held_out[static_cast<Eigen::Index>(k)];
+  }
+  return std::sqrt(ss / static_cast<double>(rows.size()));
+}
+
 }  // namespace
+
+std::vector<std::pair<std::string, std::string>> thermal_extension_names() {
+  std::vector<std::pair<std::string, std::string>> names;
+  for (const auto& e : detail::thermal_extensions()) names.emplace_back(e.name, e.description);
+  return names;
+}
 
 ThermalFitResult fit_thermal(const ThermalDataSet& data, const ThermalFitOptions& o) {
   if (data.runs.empty()) throw InvalidParameter("runs", "the data set has no runs");
@@ -208,8 +272,11 @@ ThermalFitResult fit_thermal(const ThermalDataSet& data, const ThermalFitOptions
   // Joint fit, and every run alone.
   auto [layout, specs] = layout_for(runs, o);
   const ThermalModel model(runs, layout, numerics_of(o));
+  check_jet_size(model);
   detail::FinalState final_state;
   result.joint = detail::solve_least_squares(model, specs, o.fit, &final_state);
+  if (o.cross_validate && runs.size() >= 2 && o.fit.loss == RobustLoss::none)
+    result.cv_rmse_K = leave_one_run_out_rmse(model, result.joint, final_state);
   std::vector<double> alphas;
   if (o.per_run_fits && runs.size() >= 2) {
     for (const auto& run : runs) {
@@ -226,7 +293,7 @@ ThermalFitResult fit_thermal(const ThermalDataSet& data, const ThermalFitOptions
   }
 
   // Source-model dependence: the same data with `paper` against `averaged`.
-  if (o.compare_sources && o.source != SourceModel::moving) {
+  if (o.compare_sources && source_of(o) == o.source && o.source != SourceModel::moving) {
     ThermalFitOptions other = o;
     other.source = o.source == SourceModel::paper ? SourceModel::averaged : SourceModel::paper;
     other.per_run_fits = other.compare_sources = false;
@@ -382,7 +449,9 @@ std::string thermal_fit_json(const ThermalFitResult& r, const ThermalFitOptions&
                         {"ambient", o.ambient},
                         {"fit_h", o.fit_h},
                         {"fit_offsets", o.fit_offsets},
-                        {"fit_initial_temperature", o.fit_initial_temperature}}},
+                        {"fit_initial_temperature", o.fit_initial_temperature},
+                        {"extensions", o.extensions}}},
+                      {"cv_rmse_K", number(r.cv_rmse_K)},
                       {"joint", detail::fit_json(r.joint)},
                       {"alpha_across_runs",
                        {{"n", s.n},
@@ -429,6 +498,7 @@ std::string thermal_fit_summary(const ThermalFitResult& r) {
     s += fmt::format("  {:<24} {:>10.5g} ± {:<9.3g} {}{}\n", p.name, p.value, p.se, interval, p.at_bound ? "  at a bound" : "");
   }
   s += fmt::format("  residual sigma {:.3f} K; {}\n", std::sqrt(r.joint.residual_variance), r.joint.solver.termination);
+  if (std::isfinite(r.cv_rmse_K)) s += fmt::format("  leave-one-run-out prediction RMSE {:.4f} K\n", r.cv_rmse_K);
   for (const auto& issue : r.joint.identifiability.issues)
     s += fmt::format("  NOT IDENTIFIABLE: {} -> held {}; {}\n", issue.why, fmt::join(issue.held, ", "), issue.measure);
   if (!r.per_run.empty()) {

@@ -3,19 +3,24 @@
 #include <ceres/jet.h>
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <set>
 
 #include "lmcal/error.hpp"
+#include "lmcal/models/thermal_effects.hpp"
 
 namespace lmcal::detail {
 
 namespace {
 
-// The global parameters run r depends on: α, h, its sensors' offsets, its T0.
+// The global parameters run r depends on: α, h, the extensions', its sensors' offsets, its T0.
 std::vector<int> local_parameters(const ThermalLayout& layout, std::size_t r) {
   std::vector<int> local{layout.alpha};
   if (layout.h >= 0) local.push_back(layout.h);
+  for (std::size_t e = 0; e < layout.extensions.size(); ++e)
+    for (std::size_t j = 0; j < layout.extensions[e]->parameters.size(); ++j)
+      local.push_back(layout.extension_first[e] + static_cast<int>(j));
   for (int o : layout.offsets[r])
     if (o >= 0) local.push_back(o);
   if (layout.initial[r] >= 0) local.push_back(layout.initial[r]);
@@ -36,13 +41,28 @@ std::vector<std::vector<T>> simulate_run(const PreparedRun& run, const RailNumer
                   .initial_temperature_C = layout.initial[r] >= 0 ? param(layout.initial[r])
                                                                   : T(run.params.initial_temperature_C),
                   .base_loss_W_mK = T(run.params.base_loss_W_mK)};
+  ThermalRunSetup<T> setup{.velocity_m_s = run.geometry.velocity_m_s,
+                           .friction = &run.friction,
+                           .friction_effects = &run.friction_effects,
+                           .conditions = run.conditions,
+                           .params = p};
+  for (std::size_t e = 0; e < layout.extensions.size(); ++e) {
+    std::vector<T> values;
+    for (std::size_t j = 0; j < layout.extensions[e]->parameters.size(); ++j)
+      values.push_back(param(layout.extension_first[e] + static_cast<int>(j)));
+    layout.extensions[e]->apply(setup, values.data());
+  }
   const RailOutputs outputs{.duration_s = run.times_s.back(),
                             .sensor_positions_m = run.sensor_positions_m,
                             .output_times_s = run.times_s};
-  const RailSolution<T> sol = simulate_rail(run.geometry, numerics, outputs, p, run.ambient);
+  const RailSolution<T> sol = simulate_rail(run.geometry, numerics, outputs, setup.params, run.ambient, setup.heat_rate);
   std::vector<std::vector<T>> out(run.times_s.size(), std::vector<T>(run.sensor_positions_m.size()));
-  for (std::size_t t = 0; t < run.times_s.size(); ++t)
-    for (std::size_t s = 0; s < run.sensor_positions_m.size(); ++s) out[t][s] = sol.temperature_C(t, s);
+  for (std::size_t s = 0; s < run.sensor_positions_m.size(); ++s) {
+    std::vector<T> series(run.times_s.size());
+    for (std::size_t t = 0; t < run.times_s.size(); ++t) series[t] = sol.temperature_C(t, s);
+    if (setup.lagged) series = first_order_lag(run.times_s, series, setup.sensor_lag_s);
+    for (std::size_t t = 0; t < run.times_s.size(); ++t) out[t][s] = series[t];
+  }
   return out;
 }
 
@@ -75,12 +95,18 @@ class ThermalCost final : public ceres::CostFunction {
     for (std::size_t run = 0; run < model_.runs().size(); ++run) {
       const std::vector<int> local = local_parameters(model_.layout(), run);
       bool ok = true;
-      if (!J) ok = evaluate_run<double>(run, theta, local, r, nullptr, row);
-      else if (local.size() <= 1) ok = evaluate_run<ceres::Jet<double, 1>>(run, theta, local, r, J, row);
-      else if (local.size() <= 2) ok = evaluate_run<ceres::Jet<double, 2>>(run, theta, local, r, J, row);
-      else if (local.size() <= 4) ok = evaluate_run<ceres::Jet<double, 4>>(run, theta, local, r, J, row);
-      else if (local.size() <= 8) ok = evaluate_run<ceres::Jet<double, 8>>(run, theta, local, r, J, row);
-      else LMCAL_ASSERT(false, "a thermal run depends on at most 8 fitted parameters");
+      // A trial step outside the physical range (α(V) outside [0, 1], h <= 0) is rejected,
+      // not thrown through Ceres.
+      try {
+        if (!J) ok = evaluate_run<double>(run, theta, local, r, nullptr, row);
+        else if (local.size() <= 1) ok = evaluate_run<ceres::Jet<double, 1>>(run, theta, local, r, J, row);
+        else if (local.size() <= 2) ok = evaluate_run<ceres::Jet<double, 2>>(run, theta, local, r, J, row);
+        else if (local.size() <= 4) ok = evaluate_run<ceres::Jet<double, 4>>(run, theta, local, r, J, row);
+        else if (local.size() <= 8) ok = evaluate_run<ceres::Jet<double, 8>>(run, theta, local, r, J, row);
+        else LMCAL_ASSERT(false, "a thermal run depends on at most 8 fitted parameters (checked by the fit)");
+      } catch (const InvalidParameter&) {
+        return false;
+      }
       if (!ok) return false;
     }
     if (subset) {
@@ -153,7 +179,18 @@ std::unique_ptr<ceres::CostFunction> ThermalModel::cost_function(const std::vect
 // Temperatures are linear in α (Q fixed), in the initial temperature and in the offsets;
 // h enters the operator and is not.
 bool ThermalModel::linear(const std::vector<bool>& held) const {
+  for (std::size_t e = 0; e < layout_.extensions.size(); ++e) {
+    if (layout_.extensions[e]->linear) continue;
+    for (std::size_t j = 0; j < layout_.extensions[e]->parameters.size(); ++j)
+      if (!held[static_cast<std::size_t>(layout_.extension_first[e]) + j]) return false;
+  }
   return layout_.h < 0 || held[static_cast<std::size_t>(layout_.h)];
+}
+
+std::size_t ThermalModel::max_local_parameters() const {
+  std::size_t most = 0;
+  for (std::size_t r = 0; r < runs_.size(); ++r) most = std::max(most, local_parameters(layout_, r).size());
+  return most;
 }
 
 void ThermalModel::explain(IdentifiabilityIssue& issue) const {
@@ -166,7 +203,17 @@ void ThermalModel::explain(IdentifiabilityIssue& issue) const {
     offsets |= n.rfind("offset", 0) == 0;
     initial |= n.rfind("T0", 0) == 0;
   }
-  if (alpha && h) {
+  const ThermalExtension* extension = nullptr;
+  for (const auto* e : layout_.extensions)
+    for (const auto& p : e->parameters)
+      if (names.count(p.name)) extension = e;
+  if (extension) {
+    std::string combo;
+    for (const auto& [name, weight] : issue.combination) combo += fmt::format(" {:+.2f}·{}", weight, name);
+    issue.why = fmt::format("the records do not separate {} ({}) from the rest: they determine only{}", extension->name,
+                            extension->description, combo);
+    issue.measure = extension->measure;
+  } else if (alpha && h) {
     issue.why = "α and h trade off: a larger α with a larger h gives the same temperatures at these sensors and times";
     issue.measure = "record the whole warm-up and the cool-down after the block stops, or sensors farther from the stroke";
   } else if (offsets && initial) {

@@ -1,12 +1,13 @@
 // The thermal least-squares model (private to the fit layer): rail thermocouple residuals
 // through the templated rail solver, one simulation per run, Jets seeded only with the
-// parameters that run depends on (α, h, its offsets, its T0).
+// parameters that run depends on (α, h, the extensions', its offsets, its T0).
 #pragma once
 
 #include <string>
 #include <vector>
 
 #include "least_squares.hpp"
+#include "thermal_extension.hpp"
 #include "lmcal/models/rail_thermal.hpp"
 
 namespace lmcal::detail {
@@ -22,12 +23,18 @@ struct PreparedRun {
   std::vector<std::string> sensor_names;
   std::vector<double> sensor_positions_m;
   std::vector<std::vector<double>> measured;  // [time][sensor], NaN = missing
+  // Behind the heat rate (the coupling extension evaluates the law at the rail temperature).
+  FrictionConstants<double> friction = paper_friction_constants();
+  FrictionEffects<double> friction_effects;
+  FrictionConditions<double> conditions;  // at the temperature Q_f was evaluated at
 };
 
 // Where each kind of parameter sits in the global parameter vector (-1: not fitted).
 struct ThermalLayout {
   int alpha = 0;
   int h = -1;
+  std::vector<const ThermalExtension*> extensions;
+  std::vector<int> extension_first;       // [extension]: index of its first parameter
   std::vector<std::vector<int>> offsets;  // [run][sensor]
   std::vector<int> initial;               // [run]
   int size = 1;
@@ -40,6 +47,8 @@ class ThermalModel : public LeastSquaresModel {
   std::unique_ptr<ceres::CostFunction> cost_function(const std::vector<std::size_t>& rows,
                                                      const RowLoss& loss) const override;
   bool linear(const std::vector<bool>& held) const override;
+  // The most parameters one run's simulation depends on (the Jet size it needs; at most 8).
+  std::size_t max_local_parameters() const;
   void explain(IdentifiabilityIssue& issue) const override;
 
   // Simulated temperature at every (run, record, sensor) of the data for parameters θ.

@@ -24,16 +24,10 @@
 #include <string>
 #include <vector>
 
+#include "lmcal/diagnose/diagnosis.hpp"
 #include "lmcal/fit/friction_fit.hpp"
 
 namespace lmcal {
-
-struct CovariateTest {
-  std::string covariate;
-  double correlation = 0;  // Pearson, over condition means
-  double p_value = 1;
-  std::size_t n = 0;       // condition means (or runs, for run order)
-};
 
 struct ResidualDiagnostics {
   double rmse_N = 0;
@@ -42,22 +36,6 @@ struct ResidualDiagnostics {
   std::vector<std::pair<std::string, double>> run_bias_N;
   std::vector<CovariateTest> covariates;    // strongest first
   bool structured = false;                  // a covariate significant at p < 0.001
-};
-
-struct CandidateScore {
-  std::string effect;
-  double value = 0, se = 0, ci_low = 0, ci_high = 0;
-  double aicc = 0, bic = 0;
-  double lrt_statistic = 0, lrt_p = 1;
-  double cv_rmse_N = 0;       // leave-one-run-out
-  double cv_gain_percent = 0; // against the current model
-  bool accepted = false;
-  std::string reason;         // why it was or was not accepted
-};
-
-struct ParameterShift {
-  std::string name;
-  double baseline = 0, extended = 0;
 };
 
 struct FrictionDiagnosisOptions {

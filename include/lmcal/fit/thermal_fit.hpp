@@ -1,5 +1,5 @@
-// Fit the heat partition α (and optionally h, per-sensor offsets and the initial rail
-// temperature) to rail thermocouple traces, through the rail solver of rail_thermal.hpp:
+// Fit the heat partition α (and optionally h, named extensions, per-sensor offsets and the
+// initial rail temperature) to rail thermocouple traces, through the rail solver of rail_thermal.hpp:
 //
 //   r = (T_measured(t, x_s) - offset_s - T_model(t, x_s; α, h, T0)) / σ
 //
@@ -50,8 +50,20 @@ struct ThermalFitOptions {
   double alpha_start = 0.6, alpha_lower = 0.0, alpha_upper = 1.0;
   bool fit_h = false;                        // one h for all runs
   double h_W_m2K = 5.3, h_lower = 0.5, h_upper = 50.0;
-  bool fit_offsets = false;                  // one offset per thermocouple and run
+  // One offset per thermocouple and run; the rail then starts at the ambient (at rest, in
+  // equilibrium with the room), and the offsets take each thermocouple's bias against the
+  // ambient sensors.
+  bool fit_offsets = false;
   bool fit_initial_temperature = false;      // one T0 per run
+  // Named mechanisms of the extension library added to the model (`lmcal fit thermal
+  // --extension`, thermal_extension_names()), each with its own parameter(s); their starting
+  // values may be given in `extension_start` (name -> value).
+  std::vector<std::string> extensions;
+  std::vector<std::pair<std::string, double>> extension_start;
+  // Leave-one-run-out prediction error (cv_rmse_K): each run predicted by the global
+  // parameters (α, h, extensions) fitted to the others, one Gauss-Newton step from the
+  // joint fit; its own offsets and T0 stay at their joint-fit values.
+  bool cross_validate = false;
   bool per_run_fits = true;
   bool compare_sources = true;               // also fit with `paper` (or `averaged`) and report the α ratio
   // α error curve (the paper's Fig. 11): RMSE at spot 1 (first sensor) for α on a grid.
@@ -99,10 +111,14 @@ struct ThermalFitResult {
   double alpha_ratio_paper_over_averaged = std::numeric_limits<double>::quiet_NaN();
   double contact_over_stroke = std::numeric_limits<double>::quiet_NaN();  // Lb1 / L1 of the first run
   std::vector<Sample> samples;                         // joint fit, every fitted record
+  double cv_rmse_K = std::numeric_limits<double>::quiet_NaN();  // leave-one-run-out, when asked
   std::vector<std::vector<std::string>> sensor_names;  // [run][sensor]
 };
 
 ThermalFitResult fit_thermal(const ThermalDataSet& data, const ThermalFitOptions& options);
+
+// The thermal extension library (name, what it models), in a fixed order.
+std::vector<std::pair<std::string, std::string>> thermal_extension_names();
 
 // Reads constants and effects from a friction fit JSON (`lmcal fit friction` output).
 void read_friction_fit(const std::string& json_file, ThermalFitOptions& options);

@@ -1,0 +1,35 @@
+// What the friction and the thermal diagnosis share: the covariate tests of the residuals,
+// the score of a candidate cause, and the shift of the baseline's parameters.
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+namespace lmcal {
+
+struct CovariateTest {
+  std::string covariate;
+  double correlation = 0;  // η, the share of the residuals' variation the covariate's groups explain
+  double p_value = 1;
+  std::size_t n = 0;       // group means tested (condition or cell means, or runs for run order)
+};
+
+struct CandidateScore {
+  std::string effect;
+  double value = 0, se = 0, ci_low = 0, ci_high = 0;  // its (first) parameter; NaN for a switch
+  std::size_t added_parameters = 1;
+  double aicc = 0, bic = 0;
+  double lrt_statistic = 0, lrt_p = 1;  // NaN for a switch (not nested: BIC decides)
+  double cv_rmse = 0;                   // leave-one-run-out, in the data's unit
+  double cv_gain_percent = 0;           // against the current model
+  bool accepted = false;
+  std::string reason;                   // why it was or was not accepted
+};
+
+struct ParameterShift {
+  std::string name;
+  double baseline = 0, extended = 0;
+};
+
+}  // namespace lmcal

@@ -1,0 +1,120 @@
+#include "selection.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+
+#include "lmcal/fit/statistics.hpp"
+
+namespace lmcal::detail {
+
+CovariateTest anova(const std::string& name, const std::vector<double>& covariate, const std::vector<double>& residual) {
+  CovariateTest t{name, 0, 1, residual.size()};
+  std::vector<double> sorted = covariate;
+  std::sort(sorted.begin(), sorted.end());
+  sorted.erase(std::unique(sorted.begin(), sorted.end()), sorted.end());
+  auto group_of = [&](double v) -> std::size_t {
+    const auto pos = static_cast<std::size_t>(std::lower_bound(sorted.begin(), sorted.end(), v) - sorted.begin());
+    return sorted.size() <= 12 ? pos : pos * 10 / sorted.size();
+  };
+  const std::size_t groups = std::min<std::size_t>(sorted.size(), sorted.size() <= 12 ? sorted.size() : 10);
+  if (groups < 2 || residual.size() <= groups) return t;
+  std::vector<double> sum(groups, 0), count(groups, 0);
+  double total = 0;
+  for (std::size_t i = 0; i < residual.size(); ++i) {
+    sum[group_of(covariate[i])] += residual[i];
+    count[group_of(covariate[i])] += 1;
+    total += residual[i];
+  }
+  const double grand = total / static_cast<double>(residual.size());
+  double between = 0, within = 0;
+  for (std::size_t g = 0; g < groups; ++g)
+    if (count[g] > 0) between += count[g] * std::pow(sum[g] / count[g] - grand, 2);
+  for (std::size_t i = 0; i < residual.size(); ++i) {
+    const std::size_t g = group_of(covariate[i]);
+    within += std::pow(residual[i] - sum[g] / count[g], 2);
+  }
+  const double d1 = static_cast<double>(groups - 1), d2 = static_cast<double>(residual.size() - groups);
+  const double F = (between / d1) / std::max(within / d2, 1e-300);
+  t.p_value = fisher_f_upper_p(F, d1, d2);
+  t.correlation = std::sqrt(between / std::max(between + within, 1e-300));
+  return t;
+}
+
+std::pair<double, double> information_criteria(double ss, double n, double n_eff, std::size_t k) {
+  // The Gaussian log-likelihood of n residuals carries n_eff independent ones' evidence.
+  const double K = static_cast<double>(k), fit = n_eff * std::log(ss / n);
+  const double aic = fit + 2 * K;
+  return {aic + 2 * K * (K + 1) / std::max(n_eff - K - 1, 1.0), fit + K * std::log(n_eff)};
+}
+
+bool score_candidate(const ModelFit& current, const ModelFit& candidate, const SelectionRules& rules, CandidateScore& c) {
+  const double n_eff = std::min(current.n_eff, candidate.n_eff);
+  std::tie(c.aicc, c.bic) = information_criteria(candidate.ss, candidate.n, n_eff, candidate.k);
+  const double bic0 = information_criteria(current.ss, current.n, n_eff, current.k).second;
+  c.added_parameters = candidate.k >= current.k ? candidate.k - current.k : 0;
+  c.cv_rmse = candidate.cv_rmse;
+  c.cv_gain_percent = 100 * (1 - candidate.cv_rmse / current.cv_rmse);
+  bool significant;
+  std::string why_not;
+  if (c.added_parameters > 0) {
+    c.lrt_statistic = n_eff * std::log(current.ss / candidate.ss);
+    c.lrt_p = chi_squared_upper_p(std::max(c.lrt_statistic, 0.0), static_cast<double>(c.added_parameters));
+    significant = c.lrt_p < rules.lrt_p && c.bic < bic0;
+    why_not = fmt::format("not significant (LRT p = {:.2g}, BIC {:+.1f})", c.lrt_p, c.bic - bic0);
+  } else {
+    c.lrt_statistic = c.lrt_p = std::numeric_limits<double>::quiet_NaN();
+    significant = c.bic < bic0 - rules.switch_bic;
+    why_not = fmt::format("not significant (BIC {:+.1f}; a switch needs {:+.0f})", c.bic - bic0, -rules.switch_bic);
+  }
+  const bool better = c.cv_gain_percent >= rules.min_cv_gain_percent;
+  if (!candidate.problem.empty()) c.reason = candidate.problem;
+  else if (!significant) c.reason = why_not;
+  else if (!better) c.reason = fmt::format("held-out RMSE gain {:.2f} % < {:.2f} %", c.cv_gain_percent, rules.min_cv_gain_percent);
+  else c.reason = "significant and better on held-out runs";
+  c.accepted = candidate.problem.empty() && significant && better;  // passes; forward_select picks one
+  return c.accepted;
+}
+
+Verdict make_verdict(const VerdictInput& in) {
+  Verdict v;
+  v.cv_gain_percent = 100 * (1 - in.cv_after / in.cv_before);
+  const std::string remains = in.final_structured ? fmt::format("the residuals still follow {} (p = {:.2g})",
+                                                                in.final_top.covariate, in.final_top.p_value)
+                                                  : "no structure left beyond the noise";
+  if (!in.accepted.empty()) {
+    v.verdict = "explained";
+    std::string causes;
+    for (const auto& c : in.accepted) {
+      causes += causes.empty() ? "" : "; ";
+      causes += std::isfinite(c.value) ? fmt::format("{} = {:.4g} (95 % [{:.4g}, {:.4g}])", c.effect, c.value, c.ci_low, c.ci_high)
+                                       : c.effect;
+    }
+    std::string shift;
+    for (const auto& s : in.shifts)
+      if (std::abs(s.extended - s.baseline) > 0.02 * std::max(std::abs(s.baseline), 1e-12))
+        shift += fmt::format("{}{} {:.4g} -> {:.4g}", shift.empty() ? "" : ", ", s.name, s.baseline, s.extended);
+    v.summary = fmt::format(
+        "{} misses: {}. Modelled, the held-out (leave-one-run-out) RMSE goes from {:.4g} {} to {:.4g} {} ({:.1f} % better). "
+        "Parameters that move: {}. What remains: {}.",
+        in.model, causes, in.cv_before, in.unit, in.cv_after, in.unit, v.cv_gain_percent,
+        shift.empty() ? "none by more than 2 %" : shift, remains);
+    if (in.final_structured) v.unexplained_covariate = in.final_top.covariate;
+  } else if (in.baseline_structured) {
+    v.verdict = "unexplained";
+    v.unexplained_covariate = in.baseline_top.covariate;
+    v.summary = fmt::format(
+        "Unexplained: the residuals of {} follow {} (p = {:.2g}), but no mechanism of the library explains them on "
+        "held-out runs. Held-out RMSE {:.4g} {}.",
+        in.model, v.unexplained_covariate, in.baseline_top.p_value, in.cv_before, in.unit);
+  } else {
+    v.verdict = "no significant discrepancy";
+    v.summary = fmt::format(
+        "No significant discrepancy: {} fits to the noise (residual RMSE {:.4g} {}, held-out {:.4g} {}) and no mechanism "
+        "of the library improves it.",
+        in.model, in.baseline_rmse, in.unit, in.cv_before, in.unit);
+  }
+  return v;
+}
+
+}  // namespace lmcal::detail

@@ -1,0 +1,111 @@
+// The part of a diagnosis that does not depend on the physics (private): covariate ANOVA,
+// the score of a candidate against the current model, forward selection and the verdict.
+#pragma once
+
+#include <algorithm>
+#include <cstddef>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "lmcal/diagnose/diagnosis.hpp"
+
+namespace lmcal::detail {
+
+// One-way ANOVA of `residual` grouped by the covariate's value (binned into ten quantile
+// bins when it has more than twelve values): finds structure of any shape. η is stored in
+// `correlation`.
+CovariateTest anova(const std::string& name, const std::vector<double>& covariate, const std::vector<double>& residual);
+
+// What selection needs to know of one fitted model.
+struct ModelFit {
+  double ss = 0;          // residual sum of squares
+  double n = 0;           // residuals
+  double n_eff = 0;       // effective independent residuals (n when they are white)
+  std::size_t k = 0;      // free parameters
+  double cv_rmse = 0;     // leave-one-run-out
+  std::string problem;    // non-empty: the fit cannot be used (not identifiable, not converged)
+};
+
+struct SelectionRules {
+  double lrt_p = 1e-3;
+  double min_cv_gain_percent = 2.0;
+  double switch_bic = 10;  // a switch (no parameter) must lower the BIC by this much
+  std::size_t max_effects = 3;
+};
+
+// AICc and BIC of a Gaussian least-squares fit with k parameters over n (effective) residuals.
+std::pair<double, double> information_criteria(double ss, double n, double n_eff, std::size_t k);
+
+// Scores `candidate` against `current` (LRT and BIC on the effective sample, held-out gain)
+// and sets c.aicc … c.reason; true when it passes.
+bool score_candidate(const ModelFit& current, const ModelFit& candidate, const SelectionRules& rules, CandidateScore& c);
+
+template <class Fit>
+struct Selection {
+  std::vector<std::vector<CandidateScore>> rounds;  // the candidates of every forward step
+  std::vector<std::string> accepted;
+  Fit current;
+};
+
+// Forward selection: every effect of `library` not yet accepted is added to the current
+// model (fit_with(effects, current) -> Fit) and scored (summarise(fit, effect) -> the
+// ModelFit and the effect's estimate in a CandidateScore); the passing candidate with the
+// largest held-out gain is accepted, until none passes or max_effects are in.
+template <class Fit, class FitWith, class Summarise>
+Selection<Fit> forward_select(const std::vector<std::string>& library, Fit baseline, const FitWith& fit_with,
+                              const Summarise& summarise, const SelectionRules& rules) {
+  Selection<Fit> s{{}, {}, std::move(baseline)};
+  ModelFit current = summarise(s.current, std::string()).first;
+  while (s.accepted.size() < rules.max_effects) {
+    std::vector<CandidateScore> round;
+    std::vector<Fit> fits;
+    std::vector<ModelFit> models;
+    for (const auto& effect : library) {
+      if (std::find(s.accepted.begin(), s.accepted.end(), effect) != s.accepted.end()) continue;
+      std::vector<std::string> effects = s.accepted;
+      effects.push_back(effect);
+      Fit fit = fit_with(effects, s.current);
+      auto [model, score] = summarise(fit, effect);
+      score.effect = effect;
+      score_candidate(current, model, rules, score);
+      round.push_back(score);
+      fits.push_back(std::move(fit));
+      models.push_back(model);
+    }
+    std::size_t best = round.size();
+    for (std::size_t i = 0; i < round.size(); ++i)
+      if (round[i].accepted && (best == round.size() || round[i].cv_gain_percent > round[best].cv_gain_percent)) best = i;
+    for (auto& c : round) c.accepted = false;
+    if (best == round.size()) {
+      s.rounds.push_back(std::move(round));
+      break;
+    }
+    round[best].accepted = true;
+    s.accepted.push_back(round[best].effect);
+    s.current = std::move(fits[best]);
+    current = models[best];
+    s.rounds.push_back(std::move(round));
+  }
+  return s;
+}
+
+// The verdict of a diagnosis in plain words.
+struct VerdictInput {
+  std::string model;  // "the published law", "the published rail model"
+  std::string unit;   // of the residuals: "N", "K"
+  std::vector<CandidateScore> accepted;  // with the final fit's estimates
+  std::vector<ParameterShift> shifts;
+  double cv_before = 0, cv_after = 0, baseline_rmse = 0;
+  bool baseline_structured = false, final_structured = false;
+  CovariateTest baseline_top, final_top;  // strongest covariate of the residuals
+};
+struct Verdict {
+  std::string verdict;  // "explained", "unexplained", "no significant discrepancy"
+  std::string summary;
+  std::string unexplained_covariate;
+  double cv_gain_percent = 0;
+};
+Verdict make_verdict(const VerdictInput& in);
+
+}  // namespace lmcal::detail

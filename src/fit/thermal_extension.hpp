@@ -1,0 +1,98 @@
+// A thermal extension: one physical mechanism the published rail model leaves out, added to
+// the thermal fit with its own parameter(s) (shared/PHYSICS.md §7). The thermal fit
+// (`lmcal fit thermal --extension NAME`) and the thermal diagnosis use the same library.
+//
+// Adding a mechanism is one new header in thermal_extensions/ plus its line (and include)
+// in thermal_extensions.cc. The header defines a struct with
+//
+//   static constexpr const char* name, *description, *measure;   // measure: what to log to see it
+//   static constexpr bool linear;     // temperatures stay linear in α, offsets and its parameters
+//   static std::vector<ExtensionParameter> parameters();          // none for a switch
+//   static std::optional<SourceModel> source();                   // a source-model switch, or none
+//   template <typename T> static void apply(ThermalRunSetup<T>& run, const T* values);
+//
+// `apply` changes one run's simulation (its parameters, its heat-rate model, the sensor lag)
+// from the values of the extension's parameters; it is instantiated for double and for the
+// ceres::Jet types the thermal cost uses, so derivatives come for free.
+#pragma once
+
+#include <ceres/jet.h>
+
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "lmcal/models/friction_effects.hpp"
+#include "lmcal/models/rail_thermal.hpp"
+
+namespace lmcal::detail {
+
+// One run's simulation, as the extensions see and change it.
+template <typename T>
+struct ThermalRunSetup {
+  double velocity_m_s = 0;
+  const FrictionConstants<double>* friction = nullptr;      // the constants behind Q_f
+  const FrictionEffects<double>* friction_effects = nullptr;
+  FrictionConditions<double> conditions;                    // the run's, at the start temperature
+  RailParams<T> params;
+  HeatRateModel<T> heat_rate;  // empty: the constant params.heat_rate_W
+  T sensor_lag_s{0.0};         // thermocouple first-order time constant; 0: none
+  bool lagged = false;
+};
+
+struct ExtensionParameter {
+  std::string name, unit;
+  double start = 0, lower = 0, upper = 0;
+  double scale = 0;  // typical size (see ParameterSpec::scale)
+};
+
+class ThermalExtension {
+ public:
+  template <class Mechanism>
+  static ThermalExtension of() {
+    ThermalExtension e;
+    e.name = Mechanism::name;
+    e.description = Mechanism::description;
+    e.measure = Mechanism::measure;
+    e.linear = Mechanism::linear;
+    e.parameters = Mechanism::parameters();
+    e.source = Mechanism::source();
+    e.apply_d_ = &Mechanism::template apply<double>;
+    e.apply_1_ = &Mechanism::template apply<ceres::Jet<double, 1>>;
+    e.apply_2_ = &Mechanism::template apply<ceres::Jet<double, 2>>;
+    e.apply_4_ = &Mechanism::template apply<ceres::Jet<double, 4>>;
+    e.apply_8_ = &Mechanism::template apply<ceres::Jet<double, 8>>;
+    return e;
+  }
+
+  template <typename T>
+  void apply(ThermalRunSetup<T>& run, const T* values) const {
+    if constexpr (std::is_same_v<T, double>) apply_d_(run, values);
+    else if constexpr (std::is_same_v<T, ceres::Jet<double, 1>>) apply_1_(run, values);
+    else if constexpr (std::is_same_v<T, ceres::Jet<double, 2>>) apply_2_(run, values);
+    else if constexpr (std::is_same_v<T, ceres::Jet<double, 4>>) apply_4_(run, values);
+    else apply_8_(run, values);
+  }
+
+  std::string name, description, measure;
+  bool linear = false;
+  std::vector<ExtensionParameter> parameters;
+  std::optional<SourceModel> source;
+
+ private:
+  template <typename T>
+  using Apply = void (*)(ThermalRunSetup<T>&, const T*);
+  Apply<double> apply_d_ = nullptr;
+  Apply<ceres::Jet<double, 1>> apply_1_ = nullptr;
+  Apply<ceres::Jet<double, 2>> apply_2_ = nullptr;
+  Apply<ceres::Jet<double, 4>> apply_4_ = nullptr;
+  Apply<ceres::Jet<double, 8>> apply_8_ = nullptr;
+};
+
+// The library, in a fixed order.
+const std::vector<ThermalExtension>& thermal_extensions();
+// By name; InvalidParameter naming the known ones for an unknown name.
+const ThermalExtension& thermal_extension(std::string_view name);
+
+}  // namespace lmcal::detail

@@ -1,0 +1,37 @@
+// Two-way friction-temperature coupling: the grease under the block warms with the rail,
+// its viscosity falls (Eq. 7), and so does the heat rate. With share κ of the law's
+// temperature dependence,
+//
+//   Q(T_s) = Q_0 · (1 + κ (Q_law(T_s) / Q_law(T_start) - 1))
+//
+// at the rail temperature under the block T_s; κ = 1 is the friction law as fitted.
+// Shows as a warm-up that levels off sooner than a constant heat rate gives.
+#pragma once
+
+#include "../thermal_extension.hpp"
+
+namespace lmcal::detail {
+
+struct Coupling {
+  static constexpr const char* name = "coupling";
+  static constexpr const char* description =
+      "heat rate from the friction law at the rail temperature under the block (viscosity falls as the rail warms)";
+  static constexpr const char* measure = "the friction force logged during the thermal run";
+  static constexpr bool linear = false;
+  static std::vector<ExtensionParameter> parameters() { return {{"coupling", "1", 0.5, -1.0, 3.0, 1.0}}; }
+  static std::optional<SourceModel> source() { return std::nullopt; }
+  template <typename T>
+  static void apply(ThermalRunSetup<T>& run, const T* kappa) {
+    const double q_start = heat_rate_with_effects_W(*run.friction, *run.friction_effects, run.conditions);
+    const FrictionConstants<double>* k = run.friction;
+    const FrictionEffects<double>* e = run.friction_effects;
+    const FrictionConditions<double> c = run.conditions;
+    run.heat_rate = [q0 = run.params.heat_rate_W, q_start, k, e, c, kappa = kappa[0]](const T& source_C) {
+      FrictionConditions<T> at = c.template cast<T>();
+      at.temperature_C = source_C;
+      return q0 * (1.0 + kappa * (heat_rate_with_effects_W(*k, *e, at) / q_start - 1.0));
+    };
+  }
+};
+
+}  // namespace lmcal::detail
