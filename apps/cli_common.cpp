@@ -1,5 +1,7 @@
 #include "cli_common.hpp"
 
+#include "lmcal/io/hash.hpp"
+
 #include <fmt/format.h>
 
 #include <charconv>
@@ -152,6 +154,30 @@ std::vector<double> or_catalog(const std::vector<double>& given, const GuideSpec
                                std::optional<double> GuideSpec::*field, const char* name) {
   if (!given.empty()) return given;
   return {require(spec, field, name)};
+}
+
+void ThermalModelOptions::add_to(CLI::App& app, ThermalFitOptions& fit) {
+  app.add_option("--friction", friction_fit, "Friction fit JSON (lmcal fit friction) for the heat rate");
+  app.add_option("--heat", heat, "Heat rate: auto, friction (law) or measured (mean friction force)")->capture_default_str();
+  app.add_option("--source", source, "Heat source model: paper, averaged or moving")->capture_default_str();
+  app.add_option("--scheme", scheme, "Time scheme: backward-euler (be) or crank-nicolson (cn)")->capture_default_str();
+  app.add_option("--segments", fit.half_rail_segments, "Segments on the half rail")->capture_default_str();
+  app.add_option("--dt", fit.time_step_s, "Time step, s")->capture_default_str();
+  app.add_option("--every", fit.every, "Fit every n-th record (the paper kept every 120th)")->capture_default_str();
+  app.add_option("--ambient", fit.ambient, "Ambient: mean of the ambient sensors, or a column name")->capture_default_str();
+}
+
+void ThermalModelOptions::apply(ThermalFitOptions& fit, std::vector<std::pair<std::string, std::string>>& inputs) const {
+  fit.source = parse_source_model(source);
+  fit.scheme = parse_time_scheme(scheme);
+  if (heat == "auto") fit.heat = HeatInput::automatic;
+  else if (heat == "friction") fit.heat = HeatInput::friction_law;
+  else if (heat == "measured") fit.heat = HeatInput::measured_friction;
+  else throw InvalidParameter("--heat", "unknown heat input '" + heat + "'; expected auto, friction or measured");
+  if (!friction_fit.empty()) {
+    read_friction_fit(friction_fit, fit);
+    inputs.emplace_back(friction_fit, sha256_file(friction_fit));
+  }
 }
 
 }  // namespace lmcal::cli

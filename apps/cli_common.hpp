@@ -29,6 +29,7 @@ nlohmann::json run_record(const std::vector<std::string>& argv);
 #include <CLI/CLI.hpp>
 
 #include "lmcal/io/catalog.hpp"
+#include "lmcal/fit/thermal_fit.hpp"
 #include "lmcal/models/friction.hpp"
 
 namespace lmcal::cli {
@@ -49,6 +50,18 @@ struct FrictionOptions {
   FrictionConstants<double> constants = paper_friction_constants();
   void add_to(CLI::App& app);
   nlohmann::json record() const;
+};
+
+// How a thermal model is set up: heat input, source model, numerics, ambient (lmcal fit
+// thermal, diagnose thermal, calibrate).
+struct ThermalModelOptions {
+  std::string friction_fit;  // friction fit JSON for the heat rate
+  std::string heat = "auto";
+  std::string source = "averaged";
+  std::string scheme = "crank-nicolson";
+  void add_to(CLI::App& app, ThermalFitOptions& fit);
+  // Parses the names into `fit`, reads the friction fit; its file goes to `inputs` with its hash.
+  void apply(ThermalFitOptions& fit, std::vector<std::pair<std::string, std::string>>& inputs) const;
 };
 
 // A value the catalog may lack, or the user's list: the user's list wins.

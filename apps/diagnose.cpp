@@ -8,6 +8,7 @@
 
 #include "cli_common.hpp"
 #include "lmcal/diagnose/friction_diagnosis.hpp"
+#include "lmcal/diagnose/thermal_diagnosis.hpp"
 #include "lmcal/io/atomic_file.hpp"
 
 namespace lmcal::cli {
@@ -36,6 +37,43 @@ void print(const FrictionDiagnosis& d) {
   std::cout << "verdict: " << d.verdict << "\n  " << d.summary << "\n";
 }
 
+struct DiagnoseThermalOptions {
+  std::string manifest;
+  std::string name = "thermal_diagnosis";
+  std::string output_dir = "fits";
+  ThermalModelOptions model;
+  ThermalDiagnosisOptions diagnosis;
+};
+
+void print(const ThermalDiagnosis& d) {
+  std::cout << fmt::format("baseline: alpha {:.4f}, residual RMSE {:.4f} K, lag-1 autocorrelation {:.3f} (n_eff {:.0f}); "
+                           "residuals against covariates:\n",
+                           d.baseline_fit.joint.parameter("alpha").value, d.baseline.rmse_K, d.baseline.lag1_autocorrelation,
+                           d.baseline.n_eff);
+  for (const auto& c : d.baseline.covariates)
+    std::cout << fmt::format("  {:<24} strength {:.3f}  size {:.4f} K  p {:.2g}{}\n", c.covariate, c.correlation, c.size, c.p_value,
+                             c.p_value < 1e-3 ? "  <- structured" : "");
+  for (const auto& s : d.skipped) std::cout << "not tried: " << s << "\n";
+  for (std::size_t r = 0; r < d.rounds.size(); ++r) {
+    std::cout << fmt::format("candidates, step {} (held-out RMSE gain against the model so far):\n", r + 1);
+    for (const auto& c : d.rounds[r])
+      std::cout << fmt::format("  {:<20} {:>10.4g} ± {:<9.3g} LRT p {:<8.2g} held-out {:.4f} K ({:+.2f} %)  {}{}\n", c.effect,
+                               c.value, c.se, c.lrt_p, c.cv_rmse, c.cv_gain_percent, c.accepted ? "ACCEPTED: " : "", c.reason);
+  }
+  std::cout << "verdict: " << d.verdict << "\n  " << d.summary << "\n";
+}
+
+void run_diagnose_thermal(DiagnoseThermalOptions& o) {
+  std::vector<std::pair<std::string, std::string>> inputs;
+  o.model.apply(o.diagnosis.fit, inputs);
+  const ThermalDataSet data = load_thermal_dataset(o.manifest);
+  const ThermalDiagnosis d = diagnose_thermal(data, o.diagnosis);
+  const auto file = std::filesystem::path(o.output_dir) / (o.name + ".json");
+  write_file_atomically(file, thermal_diagnosis_json(d));
+  print(d);
+  std::cout << "wrote " << file.string() << "\n";
+}
+
 void run_diagnose_friction(const DiagnoseFrictionOptions& o) {
   std::vector<std::filesystem::path> paths(o.files.begin(), o.files.end());
   const FrictionLog log = load_friction_logs(paths);
@@ -60,6 +98,17 @@ void setup_diagnose(CLI::App& app) {
       ->capture_default_str();
   friction->add_option("--lrt-p", o->diagnosis.lrt_p, "Significance level of the likelihood-ratio test")->capture_default_str();
   friction->callback([o] { run_diagnose_friction(*o); });
+
+  auto t = std::make_shared<DiagnoseThermalOptions>();
+  CLI::App* thermal = diagnose->add_subcommand("thermal", "Rail model against thermocouple traces");
+  thermal->add_option("manifest", t->manifest, "Thermal data set manifest (TOML)")->required();
+  thermal->add_option("--name", t->name, "Name of the output")->capture_default_str();
+  thermal->add_option("-o,--output-dir", t->output_dir, "Output folder")->capture_default_str();
+  t->model.add_to(*thermal, t->diagnosis.fit);
+  thermal->add_option("--min-gain", t->diagnosis.min_cv_gain_percent, "Least held-out RMSE gain to accept a cause, %")
+      ->capture_default_str();
+  thermal->add_option("--lrt-p", t->diagnosis.lrt_p, "Significance level of the likelihood-ratio test")->capture_default_str();
+  thermal->callback([t] { run_diagnose_thermal(*t); });
 }
 
 }  // namespace lmcal::cli

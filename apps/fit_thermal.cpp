@@ -24,28 +24,16 @@ namespace fs = std::filesystem;
 
 struct FitThermalOptions {
   std::string manifest;
-  std::string friction_fit;
-  std::string heat = "auto";
   std::string name = "thermal";
   std::string output_dir = "fits";
-  std::string source = "averaged";
-  std::string scheme = "crank-nicolson";
+  ThermalModelOptions model;
   ThermalFitOptions fit;
 };
 
 void run_fit_thermal(FitThermalOptions& o, const std::vector<std::string>& argv) {
   ThermalFitOptions& f = o.fit;
-  f.source = parse_source_model(o.source);
-  f.scheme = parse_time_scheme(o.scheme);
-  if (o.heat == "auto") f.heat = HeatInput::automatic;
-  else if (o.heat == "friction") f.heat = HeatInput::friction_law;
-  else if (o.heat == "measured") f.heat = HeatInput::measured_friction;
-  else throw InvalidParameter("--heat", "unknown heat input '" + o.heat + "'; expected auto, friction or measured");
   std::vector<std::pair<std::string, std::string>> inputs;
-  if (!o.friction_fit.empty()) {
-    read_friction_fit(o.friction_fit, f);
-    inputs.emplace_back(o.friction_fit, sha256_file(o.friction_fit));
-  }
+  o.model.apply(f, inputs);
   const ThermalDataSet data = load_thermal_dataset(o.manifest);
   inputs.emplace_back(o.manifest, sha256_file(o.manifest));
   for (const auto& run : data.runs) inputs.emplace_back(run.file.string(), sha256_file(run.file));
@@ -67,24 +55,16 @@ void setup_fit_thermal(CLI::App& fit, const std::vector<std::string>& argv) {
   auto o = std::make_shared<FitThermalOptions>();
   CLI::App* app = fit.add_subcommand("thermal", "Heat partition alpha from rail thermocouple traces");
   app->add_option("manifest", o->manifest, "Thermal data set manifest (TOML)")->required();
-  app->add_option("--friction", o->friction_fit, "Friction fit JSON (lmcal fit friction) for the heat rate");
-  app->add_option("--heat", o->heat, "Heat rate: auto, friction (law) or measured (mean friction force)")->capture_default_str();
   app->add_option("--name", o->name, "Name of the fit (output file names)")->capture_default_str();
   app->add_option("-o,--output-dir", o->output_dir, "Output folder")->capture_default_str();
-  app->add_option("--source", o->source, "Heat source model: paper, averaged or moving")->capture_default_str();
-  app->add_option("--scheme", o->scheme, "Time scheme: backward-euler (be) or crank-nicolson (cn)")->capture_default_str();
-  app->add_option("--segments", o->fit.half_rail_segments, "Segments on the half rail")->capture_default_str();
-  app->add_option("--dt", o->fit.time_step_s, "Time step, s")->capture_default_str();
-  app->add_option("--every", o->fit.every, "Fit every n-th record (the paper kept every 120th)")->capture_default_str();
-  app->add_option("--ambient", o->fit.ambient, "Ambient: mean of the ambient sensors, or a column name")
-      ->capture_default_str();
+  o->model.add_to(*app, o->fit);
   app->add_option("--alpha-start", o->fit.alpha_start, "Start value of alpha")->capture_default_str();
   app->add_flag("--fit-h", o->fit.fit_h, "Also fit the convection coefficient h (one for all runs)");
   app->add_option("--h", o->fit.h_W_m2K, "Convection coefficient (start value with --fit-h), W/m2K")->capture_default_str();
   app->add_flag("--fit-offsets", o->fit.fit_offsets, "Also fit one offset per thermocouple and run");
   app->add_flag("--fit-initial", o->fit.fit_initial_temperature, "Also fit the initial rail temperature of each run");
   std::string known;
-  for (const auto& [name, what] : thermal_extension_names()) known += fmt::format("\n    {}: {}", name, what);
+  for (const auto& e : thermal_extension_library()) known += fmt::format("\n    {}: {}", e.name, e.description);
   app->add_option("--extension", o->fit.extensions, "Add a mechanism of the extension library (repeatable):" + known);
   app->add_flag("--cross-validate", o->fit.cross_validate, "Also report the leave-one-run-out prediction RMSE");
   app->add_flag("!--no-run-fits", o->fit.per_run_fits, "Skip the per-run fits");

@@ -98,7 +98,11 @@ ResidualDiagnostics diagnose_residuals(const FrictionLog& log, const FrictionFit
     const double rho = syy > 0 ? sxy / std::sqrt(sxx * syy) : 0.0;
     const double dof = static_cast<double>(run_bias.size() - 2);
     const double t = rho * std::sqrt(dof / std::max(1 - rho * rho, 1e-12));
-    d.covariates.push_back({"run order", rho, student_t_two_sided_p(t, dof), run_bias.size()});
+    d.covariates.push_back({.covariate = "run order",
+                            .correlation = rho,
+                            .p_value = student_t_two_sided_p(t, dof),
+                            .size = std::abs(rho) * std::sqrt(syy / static_cast<double>(run_bias.size())),
+                            .n = run_bias.size()});
   }
   std::sort(d.covariates.begin(), d.covariates.end(), [](auto& a, auto& b) { return a.p_value < b.p_value; });
   d.structured = !d.covariates.empty() && d.covariates.front().p_value < structure_p;
@@ -193,22 +197,13 @@ FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagno
 std::string friction_diagnosis_json(const FrictionDiagnosis& d) {
   auto number = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
   auto diagnostics = [&](const ResidualDiagnostics& r) {
-    nlohmann::json covariates = nlohmann::json::array();
-    for (const auto& c : r.covariates)
-      covariates.push_back({{"covariate", c.covariate}, {"strength", number(c.correlation)}, {"p", number(c.p_value)}, {"n", c.n}});
     nlohmann::json runs = nlohmann::json::object();
     for (const auto& [run, bias] : r.run_bias_N) runs[run] = number(bias);
     return nlohmann::json{{"rmse_N", number(r.rmse_N)},         {"sigma", number(r.sigma)},
                           {"durbin_watson", number(r.durbin_watson)}, {"run_bias_N", runs},
-                          {"covariates", covariates},            {"structured", r.structured}};
+                          {"covariates", detail::covariates_json(r.covariates)}, {"structured", r.structured}};
   };
-  auto candidate = [&](const CandidateScore& c) {
-    return nlohmann::json{{"effect", c.effect},         {"value", number(c.value)},       {"se", number(c.se)},
-                          {"ci95", {number(c.ci_low), number(c.ci_high)}},
-                          {"aicc", number(c.aicc)},     {"bic", number(c.bic)},           {"lrt", number(c.lrt_statistic)},
-                          {"lrt_p", number(c.lrt_p)},   {"cv_rmse_N", number(c.cv_rmse)},
-                          {"cv_gain_percent", number(c.cv_gain_percent)}, {"accepted", c.accepted}, {"reason", c.reason}};
-  };
+  auto candidate = [](const CandidateScore& c) { return detail::candidate_json(c, "N"); };
   nlohmann::json rounds = nlohmann::json::array();
   for (const auto& round : d.rounds) {
     nlohmann::json r = nlohmann::json::array();

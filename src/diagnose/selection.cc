@@ -3,42 +3,54 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <map>
 
 #include "lmcal/fit/statistics.hpp"
 
 namespace lmcal::detail {
 
-CovariateTest anova(const std::string& name, const std::vector<double>& covariate, const std::vector<double>& residual) {
-  CovariateTest t{name, 0, 1, residual.size()};
+CovariateTest nested_anova(const std::string& name, const std::vector<std::size_t>& coarse,
+                           const std::vector<std::size_t>& fine, const std::vector<double>& values) {
+  CovariateTest t{.covariate = name, .n = values.size()};
+  auto fit_means = [&](const std::vector<std::size_t>& group, std::size_t& groups) {
+    std::map<std::size_t, std::pair<double, double>> sums;  // group -> (sum, count)
+    for (std::size_t i = 0; i < values.size(); ++i) {
+      sums[group[i]].first += values[i];
+      sums[group[i]].second += 1;
+    }
+    groups = sums.size();
+    double ss = 0;
+    for (std::size_t i = 0; i < values.size(); ++i) {
+      const auto& [sum, count] = sums[group[i]];
+      ss += std::pow(values[i] - sum / count, 2);
+    }
+    return ss;
+  };
+  std::size_t g0 = 0, g1 = 0;
+  const double ss0 = fit_means(coarse, g0), ss1 = fit_means(fine, g1);
+  if (g1 <= g0 || values.size() <= g1) return t;
+  const double d1 = static_cast<double>(g1 - g0), d2 = static_cast<double>(values.size() - g1);
+  const double F = ((ss0 - ss1) / d1) / std::max(ss1 / d2, 1e-300);
+  t.p_value = fisher_f_upper_p(std::max(F, 0.0), d1, d2);
+  t.correlation = std::sqrt(std::max(ss0 - ss1, 0.0) / std::max(ss0, 1e-300));
+  t.size = std::sqrt(std::max(ss0 - ss1, 0.0) / static_cast<double>(values.size()));
+  return t;
+}
+
+std::vector<std::size_t> value_bins(const std::vector<double>& covariate) {
   std::vector<double> sorted = covariate;
   std::sort(sorted.begin(), sorted.end());
   sorted.erase(std::unique(sorted.begin(), sorted.end()), sorted.end());
-  auto group_of = [&](double v) -> std::size_t {
+  std::vector<std::size_t> bins;
+  for (double v : covariate) {
     const auto pos = static_cast<std::size_t>(std::lower_bound(sorted.begin(), sorted.end(), v) - sorted.begin());
-    return sorted.size() <= 12 ? pos : pos * 10 / sorted.size();
-  };
-  const std::size_t groups = std::min<std::size_t>(sorted.size(), sorted.size() <= 12 ? sorted.size() : 10);
-  if (groups < 2 || residual.size() <= groups) return t;
-  std::vector<double> sum(groups, 0), count(groups, 0);
-  double total = 0;
-  for (std::size_t i = 0; i < residual.size(); ++i) {
-    sum[group_of(covariate[i])] += residual[i];
-    count[group_of(covariate[i])] += 1;
-    total += residual[i];
+    bins.push_back(sorted.size() <= 12 ? pos : pos * 10 / sorted.size());
   }
-  const double grand = total / static_cast<double>(residual.size());
-  double between = 0, within = 0;
-  for (std::size_t g = 0; g < groups; ++g)
-    if (count[g] > 0) between += count[g] * std::pow(sum[g] / count[g] - grand, 2);
-  for (std::size_t i = 0; i < residual.size(); ++i) {
-    const std::size_t g = group_of(covariate[i]);
-    within += std::pow(residual[i] - sum[g] / count[g], 2);
-  }
-  const double d1 = static_cast<double>(groups - 1), d2 = static_cast<double>(residual.size() - groups);
-  const double F = (between / d1) / std::max(within / d2, 1e-300);
-  t.p_value = fisher_f_upper_p(F, d1, d2);
-  t.correlation = std::sqrt(between / std::max(between + within, 1e-300));
-  return t;
+  return bins;
+}
+
+CovariateTest anova(const std::string& name, const std::vector<double>& covariate, const std::vector<double>& residual) {
+  return nested_anova(name, std::vector<std::size_t>(residual.size(), 0), value_bins(covariate), residual);
 }
 
 std::pair<double, double> information_criteria(double ss, double n, double n_eff, std::size_t k) {
@@ -115,6 +127,33 @@ Verdict make_verdict(const VerdictInput& in) {
         in.model, in.baseline_rmse, in.unit, in.cv_before, in.unit);
   }
   return v;
+}
+
+namespace {
+nlohmann::json number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
+}  // namespace
+
+nlohmann::json candidate_json(const CandidateScore& c, const std::string& unit) {
+  return nlohmann::json{{"effect", c.effect},
+                        {"value", number(c.value)},
+                        {"se", number(c.se)},
+                        {"ci95", {number(c.ci_low), number(c.ci_high)}},
+                        {"added_parameters", c.added_parameters},
+                        {"aicc", number(c.aicc)},
+                        {"bic", number(c.bic)},
+                        {"lrt", number(c.lrt_statistic)},
+                        {"lrt_p", number(c.lrt_p)},
+                        {"cv_rmse_" + unit, number(c.cv_rmse)},
+                        {"cv_gain_percent", number(c.cv_gain_percent)},
+                        {"accepted", c.accepted},
+                        {"reason", c.reason}};
+}
+
+nlohmann::json covariates_json(const std::vector<CovariateTest>& tests) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const auto& c : tests)
+    out.push_back({{"covariate", c.covariate}, {"strength", number(c.correlation)}, {"p", number(c.p_value)}, {"size", number(c.size)}, {"n", c.n}});
+  return out;
 }
 
 }  // namespace lmcal::detail

@@ -8,6 +8,8 @@
 #include <utility>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "lmcal/diagnose/diagnosis.hpp"
 
 namespace lmcal::detail {
@@ -16,6 +18,17 @@ namespace lmcal::detail {
 // bins when it has more than twelve values): finds structure of any shape. η is stored in
 // `correlation`.
 CovariateTest anova(const std::string& name, const std::vector<double>& covariate, const std::vector<double>& residual);
+
+// F test of the finer grouping against the coarser one it refines (group labels per value):
+// does `fine` explain more of `values` than `coarse` already does? With all-equal `coarse`
+// this is the one-way ANOVA of `fine`; with coarse = time bin and fine = (speed, time bin)
+// it tests whether the residuals' course over time differs between speeds.
+CovariateTest nested_anova(const std::string& name, const std::vector<std::size_t>& coarse,
+                           const std::vector<std::size_t>& fine, const std::vector<double>& values);
+
+// A covariate's values as group labels: one per distinct value, or ten quantile bins when
+// there are more than twelve.
+std::vector<std::size_t> value_bins(const std::vector<double>& covariate);
 
 // What selection needs to know of one fitted model.
 struct ModelFit {
@@ -107,5 +120,9 @@ struct Verdict {
   double cv_gain_percent = 0;
 };
 Verdict make_verdict(const VerdictInput& in);
+
+// JSON of candidate scores (the held-out RMSE as "cv_rmse_<unit>") and covariate tests.
+nlohmann::json candidate_json(const CandidateScore& c, const std::string& unit);
+nlohmann::json covariates_json(const std::vector<CovariateTest>& tests);
 
 }  // namespace lmcal::detail

@@ -110,7 +110,15 @@ Prepared prepare_run(const ThermalRun& run, const ThermalFitOptions& o) {
   std::vector<double> first;
   for (const auto& channel : trace.rail) first.push_back(channel.values.front());
   double T0 = mean_of_finite(first, 0, first.size());
-  if (std::isnan(T0) || o.fit_offsets) T0 = pr.ambient.temperature_C.front();
+  if (std::isnan(T0) || o.fit_offsets) {
+    // The ambient at the start, averaged over the first minute: one noisy sample would start
+    // the rail off its equilibrium by the sensors' noise, a transient of the rail's time constant.
+    double sum = 0;
+    std::size_t n = 0;
+    for (std::size_t i = 0; i < pr.ambient.time_s.size() && (n == 0 || pr.ambient.time_s[i] <= 60.0); ++i, ++n)
+      sum += pr.ambient.temperature_C[i];
+    T0 = sum / static_cast<double>(n);
+  }
 
   // Heat: the friction law at the start (the rail and grease at the ambient, which the two
   // ambient sensors measure better than one biased thermocouple), or the measured mean friction.
@@ -147,6 +155,30 @@ Prepared prepare_run(const ThermalRun& run, const ThermalFitOptions& o) {
                .density_kg_m3 = require(spec, &GuideSpec::density_kg_m3, "density_kg_m3"),
                .specific_heat_J_kgK = require(spec, &GuideSpec::specific_heat_J_kgK, "specific_heat_J_kgK"),
                .initial_temperature_C = T0};
+  // The heat scale's prior: σ_Q from the temperature Q_f was evaluated at and the law's own
+  // uncertainty; σ_T from the thermocouples' second differences (insensitive to the warm-up).
+  if (o.fit_heat_scales) {
+    const double dT = 0.5;
+    FrictionConditions<double> lo = pr.conditions, hi = pr.conditions;
+    lo.temperature_C -= dT;
+    hi.temperature_C += dT;
+    const double dlnQ = std::log(heat_rate_with_effects_W(pr.friction, pr.friction_effects, hi) /
+                                 heat_rate_with_effects_W(pr.friction, pr.friction_effects, lo)) / (2 * dT);
+    const double sigma_Q = std::hypot(dlnQ * o.heat_temperature_uncertainty_K, o.heat_law_uncertainty);
+    double ss = 0;
+    std::size_t n = 0;
+    for (const auto& channel : trace.rail)
+      for (std::size_t i = 1; i + 1 < channel.values.size(); ++i) {
+        const double d2 = channel.values[i + 1] - 2 * channel.values[i] + channel.values[i - 1];
+        if (!std::isnan(d2)) {
+          ss += d2 * d2;
+          ++n;
+        }
+      }
+    const double sigma_T = n ? std::max(std::sqrt(ss / (6.0 * static_cast<double>(n))), 1e-3) : 0.05;
+    if (!(sigma_Q > 0)) throw InvalidParameter("heat_law_uncertainty", "the heat rate's uncertainty must be positive");
+    pr.heat_prior_weight = sigma_T / sigma_Q;
+  }
   out.info.id = run.id;
   out.info.velocity_m_s = run.velocity_m_s;
   out.info.load_N = run.load_N;
@@ -194,6 +226,12 @@ std::pair<ThermalLayout, std::vector<ParameterSpec>> layout_for(const std::vecto
       specs.push_back({fmt::format("T0 {}", run.id), "C", T0, T0 - 10, T0 + 10, true, 1.0});
     }
     layout.initial.push_back(initial);
+    int scale = -1;
+    if (o.fit_heat_scales) {
+      scale = static_cast<int>(specs.size());
+      specs.push_back({fmt::format("heat_scale {}", run.id), "1", 1.0, 0.5, 2.0, true});
+    }
+    layout.heat_scale.push_back(scale);
   }
   layout.size = static_cast<int>(specs.size());
   return {layout, specs};
@@ -225,35 +263,60 @@ FitResult fit_runs(const std::vector<PreparedRun>& runs, const ThermalFitOptions
   return detail::solve_least_squares(model, specs, o.fit);
 }
 
-// Each run predicted by the global parameters fitted to the others (one Gauss-Newton step
-// from the joint optimum); the run's own offsets and T0 cannot be learnt from the others and
-// stay at their joint values.
+// Each run predicted by the global parameters (α, h, extensions) fitted to the others (one
+// Gauss-Newton step from the joint optimum, with the run's own parameters held), its own
+// nuisance parameters (offsets, T0, heat scale within its prior) then re-estimated from its
+// records. What is scored is what the others teach about this run: its course over time,
+// and its level through the heat scale's prior row (a scale far from 1 counts as error);
+// not its thermocouples' biases.
 double leave_one_run_out_rmse(const ThermalModel& model, const FitResult& joint, const detail::FinalState& state) {
   const auto& rows = model.rows();
   const ThermalLayout& layout = model.layout();
-  std::vector<std::size_t> group(rows.size());
+  const std::size_t runs = model.runs().size();
+  std::vector<std::size_t> group(model.num_residuals(), runs);  // priors: never left out
   for (std::size_t k = 0; k < rows.size(); ++k) group[k] = rows[k].run;
   std::vector<bool> held;
   for (const auto& p : joint.parameters) held.push_back(!p.free || p.held_unidentifiable);
   double ss = 0;
-  for (std::size_t r = 0; r < model.runs().size(); ++r) {
+  for (std::size_t r = 0; r < runs; ++r) {
+    std::vector<int> own;
+    for (int o : layout.offsets[r]) own.push_back(o);
+    own.push_back(layout.initial[r]);
+    own.push_back(layout.heat_scale.empty() ? -1 : layout.heat_scale[r]);
+    std::erase_if(own, [&](int i) { return i < 0 || held[static_cast<std::size_t>(i)]; });
     std::vector<bool> held_r = held;
-    for (int o : layout.offsets[r])
-      if (o >= 0) held_r[static_cast<std::size_t>(o)] = true;
-    if (layout.initial[r] >= 0) held_r[static_cast<std::size_t>(layout.initial[r])] = true;
-    const Eigen::VectorXd held_out = detail::leave_group_out_residuals(state, group, held_r);
+    for (int i : own) held_r[static_cast<std::size_t>(i)] = true;
+    const Eigen::VectorXd predicted = detail::leave_group_out_residuals(state, group, held_r);
+    // The run's rows (and its heat-scale prior row), and its own parameters re-estimated.
+    std::vector<Eigen::Index> mine;
     for (std::size_t k = 0; k < rows.size(); ++k)
-      if (rows[k].run == r) ss += held_out[static_cast<Eigen::Index>(k)] * held_out[static_cast<Eigen::Index>(k)];
+      if (rows[k].run == r) mine.push_back(static_cast<Eigen::Index>(k));
+    const std::size_t data_rows = mine.size();
+    for (std::size_t k = 0; k < model.prior_runs().size(); ++k)
+      if (model.prior_runs()[k] == r) mine.push_back(static_cast<Eigen::Index>(rows.size() + k));
+    Eigen::VectorXd e(static_cast<Eigen::Index>(mine.size()));
+    Eigen::MatrixXd N(static_cast<Eigen::Index>(mine.size()), static_cast<Eigen::Index>(own.size()));
+    for (std::size_t i = 0; i < mine.size(); ++i) {
+      e[static_cast<Eigen::Index>(i)] = i < data_rows ? predicted[mine[i]] : state.residuals[mine[i]];
+      for (std::size_t j = 0; j < own.size(); ++j)
+        N(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = state.jacobian(mine[i], own[j]);
+    }
+    if (!own.empty()) e += N * N.colPivHouseholderQr().solve(-e);
+    ss += e.squaredNorm();  // with the prior row: a heat scale far from 1 counts against the model
   }
   return std::sqrt(ss / static_cast<double>(rows.size()));
 }
 
 }  // namespace
 
-std::vector<std::pair<std::string, std::string>> thermal_extension_names() {
-  std::vector<std::pair<std::string, std::string>> names;
-  for (const auto& e : detail::thermal_extensions()) names.emplace_back(e.name, e.description);
-  return names;
+std::vector<ThermalExtensionInfo> thermal_extension_library() {
+  std::vector<ThermalExtensionInfo> library;
+  for (const auto& e : detail::thermal_extensions()) {
+    ThermalExtensionInfo info{e.name, e.description, e.measure, {}, e.source};
+    for (const auto& p : e.parameters) info.parameters.push_back(p.name);
+    library.push_back(std::move(info));
+  }
+  return library;
 }
 
 ThermalFitResult fit_thermal(const ThermalDataSet& data, const ThermalFitOptions& o) {
@@ -275,6 +338,7 @@ ThermalFitResult fit_thermal(const ThermalDataSet& data, const ThermalFitOptions
   check_jet_size(model);
   detail::FinalState final_state;
   result.joint = detail::solve_least_squares(model, specs, o.fit, &final_state);
+  result.sum_of_squares_K2 = final_state.residuals.squaredNorm();
   if (o.cross_validate && runs.size() >= 2 && o.fit.loss == RobustLoss::none)
     result.cv_rmse_K = leave_one_run_out_rmse(model, result.joint, final_state);
   std::vector<double> alphas;

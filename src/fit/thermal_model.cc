@@ -14,16 +14,17 @@ namespace lmcal::detail {
 
 namespace {
 
-// The global parameters run r depends on: α, h, the extensions', its sensors' offsets, its T0.
+// The global parameters run r's simulation depends on: α, h, the extensions', its T0. Its
+// sensors' offsets enter the residuals only, with derivative -1 (through the robust loss):
+// they are not carried through the solver.
 std::vector<int> local_parameters(const ThermalLayout& layout, std::size_t r) {
   std::vector<int> local{layout.alpha};
   if (layout.h >= 0) local.push_back(layout.h);
   for (std::size_t e = 0; e < layout.extensions.size(); ++e)
     for (std::size_t j = 0; j < layout.extensions[e]->parameters.size(); ++j)
       local.push_back(layout.extension_first[e] + static_cast<int>(j));
-  for (int o : layout.offsets[r])
-    if (o >= 0) local.push_back(o);
   if (layout.initial[r] >= 0) local.push_back(layout.initial[r]);
+  if (!layout.heat_scale.empty() && layout.heat_scale[r] >= 0) local.push_back(layout.heat_scale[r]);
   return local;
 }
 
@@ -32,8 +33,9 @@ std::vector<int> local_parameters(const ThermalLayout& layout, std::size_t r) {
 template <typename T, typename Param>
 std::vector<std::vector<T>> simulate_run(const PreparedRun& run, const RailNumerics& numerics,
                                          const ThermalLayout& layout, std::size_t r, const Param& param) {
+  const bool scaled = !layout.heat_scale.empty() && layout.heat_scale[r] >= 0;
   RailParams<T> p{.heat_partition = param(layout.alpha),
-                  .heat_rate_W = T(run.params.heat_rate_W),
+                  .heat_rate_W = scaled ? run.params.heat_rate_W * param(layout.heat_scale[r]) : T(run.params.heat_rate_W),
                   .h_W_m2K = layout.h >= 0 ? param(layout.h) : T(run.params.h_W_m2K),
                   .conductivity_W_mK = T(run.params.conductivity_W_mK),
                   .density_kg_m3 = T(run.params.density_kg_m3),
@@ -91,23 +93,37 @@ class ThermalCost final : public ceres::CostFunction {
       }
     }
     if (J) std::fill(J, J + n * P, 0.0);
-    std::size_t row = 0;
-    for (std::size_t run = 0; run < model_.runs().size(); ++run) {
+    // Runs are independent simulations writing disjoint rows: one thread each (OpenMP).
+    const auto runs = static_cast<long>(model_.runs().size());
+    std::vector<char> ok(static_cast<std::size_t>(runs), 1);
+#pragma omp parallel for schedule(dynamic)
+    for (long i = 0; i < runs; ++i) {
+      const auto run = static_cast<std::size_t>(i);
       const std::vector<int> local = local_parameters(model_.layout(), run);
-      bool ok = true;
+      std::size_t first = model_.first_row(run);
       // A trial step outside the physical range (α(V) outside [0, 1], h <= 0) is rejected,
       // not thrown through Ceres.
       try {
-        if (!J) ok = evaluate_run<double>(run, theta, local, r, nullptr, row);
-        else if (local.size() <= 1) ok = evaluate_run<ceres::Jet<double, 1>>(run, theta, local, r, J, row);
-        else if (local.size() <= 2) ok = evaluate_run<ceres::Jet<double, 2>>(run, theta, local, r, J, row);
-        else if (local.size() <= 4) ok = evaluate_run<ceres::Jet<double, 4>>(run, theta, local, r, J, row);
-        else if (local.size() <= 8) ok = evaluate_run<ceres::Jet<double, 8>>(run, theta, local, r, J, row);
-        else LMCAL_ASSERT(false, "a thermal run depends on at most 8 fitted parameters (checked by the fit)");
+        bool good = true;
+        if (!J) good = evaluate_run<double>(run, theta, local, r, nullptr, first);
+        else if (local.size() <= 1) good = evaluate_run<ceres::Jet<double, 1>>(run, theta, local, r, J, first);
+        else if (local.size() <= 2) good = evaluate_run<ceres::Jet<double, 2>>(run, theta, local, r, J, first);
+        else if (local.size() <= 4) good = evaluate_run<ceres::Jet<double, 4>>(run, theta, local, r, J, first);
+        else good = evaluate_run<ceres::Jet<double, 8>>(run, theta, local, r, J, first);  // at most 8: checked by the fit
+        ok[run] = good;
       } catch (const InvalidParameter&) {
-        return false;
+        ok[run] = 0;
       }
-      if (!ok) return false;
+    }
+    if (std::find(ok.begin(), ok.end(), 0) != ok.end()) return false;
+    std::size_t row = model_.rows().size();
+    // Prior rows of the heat scales, after the data rows.
+    for (std::size_t k = 0; k < model_.prior_runs().size(); ++k, ++row) {
+      const std::size_t run = model_.prior_runs()[k];
+      const auto index = static_cast<std::size_t>(model_.layout().heat_scale[run]);
+      const double weight = model_.runs()[run].heat_prior_weight;
+      r[row] = weight * (theta[index] - 1.0);
+      if (J) J[row * P + index] = weight;
     }
     if (subset) {
       for (std::size_t k = 0; k < rows_.size(); ++k) {
@@ -139,9 +155,9 @@ class ThermalCost final : public ceres::CostFunction {
     for (; row < rows.size() && rows[row].run == run; ++row) {
       const auto& w = rows[row];
       const int offset_index = layout.offsets[run][w.sensor];
-      T residual = pr.measured[w.time][w.sensor] - simulated[w.time][w.sensor];
-      if (offset_index >= 0) residual -= param(offset_index);
-      residual = robust_residual(residual, loss_);
+      T raw = pr.measured[w.time][w.sensor] - simulated[w.time][w.sensor];
+      if (offset_index >= 0) raw -= theta[offset_index];
+      const T residual = robust_residual(raw, loss_);
       if constexpr (std::is_same_v<T, double>) {
         r[row] = residual;
         if (!std::isfinite(r[row])) return false;
@@ -149,6 +165,9 @@ class ThermalCost final : public ceres::CostFunction {
         r[row] = residual.a;
         if (!std::isfinite(r[row])) return false;
         for (std::size_t k = 0; k < local.size(); ++k) J[row * P + static_cast<std::size_t>(local[k])] = residual.v[k];
+        if (offset_index >= 0)
+          J[row * P + static_cast<std::size_t>(offset_index)] =
+              -robust_residual(ceres::Jet<double, 1>(raw.a, 0), loss_).v[0];
       }
     }
     return true;
@@ -169,6 +188,8 @@ ThermalModel::ThermalModel(const std::vector<PreparedRun>& runs, ThermalLayout l
       for (std::size_t s = 0; s < runs_[r].sensor_positions_m.size(); ++s)
         if (!std::isnan(runs_[r].measured[t][s])) rows_.push_back({r, t, s});
   }
+  for (std::size_t r = 0; r < runs_.size(); ++r)
+    if (!layout_.heat_scale.empty() && layout_.heat_scale[r] >= 0) priors_.push_back(r);
 }
 
 std::unique_ptr<ceres::CostFunction> ThermalModel::cost_function(const std::vector<std::size_t>& rows,
@@ -184,6 +205,8 @@ bool ThermalModel::linear(const std::vector<bool>& held) const {
     for (std::size_t j = 0; j < layout_.extensions[e]->parameters.size(); ++j)
       if (!held[static_cast<std::size_t>(layout_.extension_first[e]) + j]) return false;
   }
+  for (int scale : layout_.heat_scale)
+    if (scale >= 0 && !held[static_cast<std::size_t>(scale)]) return false;  // α · scale
   return layout_.h < 0 || held[static_cast<std::size_t>(layout_.h)];
 }
 

@@ -27,6 +27,9 @@ struct PreparedRun {
   FrictionConstants<double> friction = paper_friction_constants();
   FrictionEffects<double> friction_effects;
   FrictionConditions<double> conditions;  // at the temperature Q_f was evaluated at
+  // With a fitted heat scale: the weight σ_T/σ_Q of its prior row (σ_T the thermocouple
+  // noise, σ_Q the relative uncertainty of Q_f), r = weight · (scale - 1).
+  double heat_prior_weight = 0;
 };
 
 // Where each kind of parameter sits in the global parameter vector (-1: not fitted).
@@ -37,13 +40,15 @@ struct ThermalLayout {
   std::vector<int> extension_first;       // [extension]: index of its first parameter
   std::vector<std::vector<int>> offsets;  // [run][sensor]
   std::vector<int> initial;               // [run]
+  std::vector<int> heat_scale;            // [run], -1: Q_f as prepared
   int size = 1;
 };
 
 class ThermalModel : public LeastSquaresModel {
  public:
   ThermalModel(const std::vector<PreparedRun>& runs, ThermalLayout layout, RailNumerics numerics);
-  std::size_t num_residuals() const override { return rows_.size(); }
+  // The data rows, then one prior row per fitted heat scale.
+  std::size_t num_residuals() const override { return rows_.size() + priors_.size(); }
   std::unique_ptr<ceres::CostFunction> cost_function(const std::vector<std::size_t>& rows,
                                                      const RowLoss& loss) const override;
   bool linear(const std::vector<bool>& held) const override;
@@ -57,7 +62,9 @@ class ThermalModel : public LeastSquaresModel {
   struct Row {
     std::size_t run, time, sensor;
   };
-  const std::vector<Row>& rows() const { return rows_; }
+  const std::vector<Row>& rows() const { return rows_; }  // the data rows
+  std::size_t first_row(std::size_t run) const { return first_row_[run]; }
+  const std::vector<std::size_t>& prior_runs() const { return priors_; }  // the run of each prior row
   const std::vector<PreparedRun>& runs() const { return runs_; }
   const ThermalLayout& layout() const { return layout_; }
   const RailNumerics& numerics() const { return numerics_; }
@@ -68,6 +75,7 @@ class ThermalModel : public LeastSquaresModel {
   RailNumerics numerics_;
   std::vector<Row> rows_;                     // measured (not NaN) samples, run by run
   std::vector<std::size_t> first_row_;        // per run, into rows_
+  std::vector<std::size_t> priors_;
 };
 
 }  // namespace lmcal::detail

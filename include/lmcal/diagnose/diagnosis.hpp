@@ -12,6 +12,7 @@ struct CovariateTest {
   std::string covariate;
   double correlation = 0;  // η, the share of the residuals' variation the covariate's groups explain
   double p_value = 1;
+  double size = 0;         // RMS of the structure it explains, in the residuals' unit
   std::size_t n = 0;       // group means tested (condition or cell means, or runs for run order)
 };
 

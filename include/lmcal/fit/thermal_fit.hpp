@@ -55,6 +55,14 @@ struct ThermalFitOptions {
   // ambient sensors.
   bool fit_offsets = false;
   bool fit_initial_temperature = false;      // one T0 per run
+  // One heat-rate scale per run ("heat_scale <run>"), tied to 1 by a Gaussian prior of the
+  // heat rate's relative uncertainty σ_Q: the temperature the friction law is evaluated at is
+  // known to ±heat_temperature_uncertainty_K (|d ln Q/dT| is about 5 %/K at 24 °C), the law
+  // itself to ±heat_law_uncertainty. Without it, a 0.3 K error of the ambient sensors puts a
+  // 1.5 % error into one run's heat, which no global parameter can absorb.
+  bool fit_heat_scales = false;
+  double heat_temperature_uncertainty_K = 0.3;
+  double heat_law_uncertainty = 0.01;
   // Named mechanisms of the extension library added to the model (`lmcal fit thermal
   // --extension`, thermal_extension_names()), each with its own parameter(s); their starting
   // values may be given in `extension_start` (name -> value).
@@ -62,7 +70,8 @@ struct ThermalFitOptions {
   std::vector<std::pair<std::string, double>> extension_start;
   // Leave-one-run-out prediction error (cv_rmse_K): each run predicted by the global
   // parameters (α, h, extensions) fitted to the others, one Gauss-Newton step from the
-  // joint fit; its own offsets and T0 stay at their joint-fit values.
+  // joint fit; its own offsets, T0 and heat scale (within its prior) re-estimated from its
+  // own records.
   bool cross_validate = false;
   bool per_run_fits = true;
   bool compare_sources = true;               // also fit with `paper` (or `averaged`) and report the α ratio
@@ -112,13 +121,20 @@ struct ThermalFitResult {
   double contact_over_stroke = std::numeric_limits<double>::quiet_NaN();  // Lb1 / L1 of the first run
   std::vector<Sample> samples;                         // joint fit, every fitted record
   double cv_rmse_K = std::numeric_limits<double>::quiet_NaN();  // leave-one-run-out, when asked
+  double sum_of_squares_K2 = 0;  // the fit's objective: data rows and the heat-scale priors
   std::vector<std::vector<std::string>> sensor_names;  // [run][sensor]
 };
 
 ThermalFitResult fit_thermal(const ThermalDataSet& data, const ThermalFitOptions& options);
 
-// The thermal extension library (name, what it models), in a fixed order.
-std::vector<std::pair<std::string, std::string>> thermal_extension_names();
+// The thermal extension library, in a fixed order (src/fit/thermal_extensions/).
+struct ThermalExtensionInfo {
+  std::string name, description;
+  std::string measure;                       // what to log to see it
+  std::vector<std::string> parameters;       // their names in FitResult; none for a switch
+  std::optional<SourceModel> source;         // the source model a switch selects
+};
+std::vector<ThermalExtensionInfo> thermal_extension_library();
 
 // Reads constants and effects from a friction fit JSON (`lmcal fit friction` output).
 void read_friction_fit(const std::string& json_file, ThermalFitOptions& options);

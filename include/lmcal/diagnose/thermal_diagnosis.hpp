@@ -1,0 +1,85 @@
+// What the published rail model gets wrong on thermocouple traces, the named physical
+// cause, and what modelling it gains on runs it was not fitted to.
+//
+//   Every thermocouple of every run gets an offset (its bias against the ambient sensors),
+//   and every run a heat scale tied to 1 by the heat rate's uncertainty (a prior; the
+//   friction law is evaluated at a temperature known to a few tenths of a kelvin, and Q_f
+//   changes by about 5 %/K), fitted with α in every model. So the diagnosis looks at the
+//   course of the traces over time and at levels beyond what the heat rate's uncertainty
+//   allows, not at thermocouple biases.
+//
+//   1. baseline: α (and what the fit options free) with the published model; the residuals
+//      per run and sensor (bias, RMSE, Durbin-Watson), their lag-1 autocorrelation and the
+//      effective sample size n_eff = n (1 - ρ)/(1 + ρ) it leaves, and ANOVA F tests on cell
+//      means (run × sensor × time bin; one value per cell, so serially correlated samples do
+//      not count as independent evidence): time, heating vs steady phase, temperature rise,
+//      and how the course over time differs with speed, load, sensor position and run;
+//   2. candidates: each mechanism of the thermal extension library added on its own and
+//      fitted; scored by leave-one-run-out prediction RMSE (the run's global parameters from
+//      the others, one Gauss-Newton step), AICc, BIC and a likelihood-ratio test, both on
+//      n_eff; a switch without parameters (the source model) needs a BIC 10 lower;
+//   3. forward selection: the passing candidate with the largest held-out gain is
+//      accepted, the rest are tried on top of it, until nothing more passes;
+//   4. verdict: causes with magnitude and interval, held-out RMSE before and after, how α
+//      moves, what remains; "unexplained" with the covariate the residuals follow when no
+//      candidate passes, or "no significant discrepancy".
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "lmcal/diagnose/diagnosis.hpp"
+#include "lmcal/fit/thermal_fit.hpp"
+
+namespace lmcal {
+
+struct SensorResiduals {
+  std::string run, sensor;
+  double position_m = 0;
+  double bias_K = 0, rmse_K = 0;
+  double durbin_watson = 2;
+};
+
+struct ThermalResidualDiagnostics {
+  double rmse_K = 0;
+  double lag1_autocorrelation = 0;  // pooled over the sensor series
+  double n_eff = 0;                 // effective independent residuals
+  std::vector<SensorResiduals> sensors;
+  std::vector<CovariateTest> covariates;  // strongest first
+  bool structured = false;                // a covariate significant at structure_p, and large enough
+};
+
+struct ThermalDiagnosisOptions {
+  // The baseline: source, heat input, numerics (offsets and heat scales are always fitted).
+  // Dozens of fits: 60 s steps (Crank-Nicolson; the rail's time constant is over an hour).
+  ThermalFitOptions fit{.time_step_s = 60};
+  // Records closer than this are thinned (every n-th) unless fit.every asks for more.
+  double min_record_spacing_s = 15;
+  double lrt_p = 1e-3;
+  double min_cv_gain_percent = 0.1;  // the held-out RMSE is mostly noise: gains are small in %
+  double structure_p = 1e-3;
+  // Structure smaller than this share of the residual RMSE is reported but not called a
+  // discrepancy: with thousands of records, millikelvin (the start temperature read from a
+  // noisy ambient, a logger's rounding) is significant without mattering.
+  double min_structure_fraction = 0.2;
+  std::size_t max_effects = 3;
+  int time_bins = 12;     // cells per sensor series for the covariate tests
+};
+
+struct ThermalDiagnosis {
+  std::string verdict;  // "no significant discrepancy", "explained", "unexplained"
+  std::string summary;
+  ThermalResidualDiagnostics baseline, final;
+  std::vector<std::vector<CandidateScore>> rounds;
+  std::vector<CandidateScore> accepted;
+  std::vector<std::string> skipped;  // mechanisms not tried, and why
+  double cv_rmse_before_K = 0, cv_rmse_after_K = 0, cv_gain_percent = 0;
+  std::vector<ParameterShift> shifts;
+  std::string unexplained_covariate;
+  ThermalFitResult baseline_fit, final_fit;  // for before/after plots
+};
+
+ThermalDiagnosis diagnose_thermal(const ThermalDataSet& data, const ThermalDiagnosisOptions& options);
+std::string thermal_diagnosis_json(const ThermalDiagnosis& d);
+
+}  // namespace lmcal

@@ -1,0 +1,315 @@
+#include "lmcal/diagnose/thermal_diagnosis.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <set>
+
+#include "lmcal/error.hpp"
+#include "selection.hpp"
+
+namespace lmcal {
+
+namespace {
+
+// Every model of the diagnosis is fitted like this: offsets per thermocouple, one start
+// (warm-started from the model before), no profiles, leave-one-run-out scores.
+ThermalFitOptions model_options(const ThermalDiagnosisOptions& o) {
+  ThermalFitOptions f = o.fit;
+  f.fit_offsets = true;
+  f.fit_heat_scales = true;
+  f.per_run_fits = false;
+  f.compare_sources = false;
+  f.curve_points = 0;
+  f.cross_validate = true;
+  f.fit.starts = 0;
+  f.fit.profile = ProfileMode::none;
+  return f;
+}
+
+// Residual series: the samples of the fit are stored run by run, sensor by sensor, in time order.
+struct Series {
+  std::size_t run, sensor, first, count;
+};
+
+std::vector<Series> series_of(const ThermalFitResult& fit) {
+  std::vector<Series> out;
+  const auto& s = fit.samples;
+  for (std::size_t i = 0; i < s.size(); ++i)
+    if (i == 0 || s[i].run != s[i - 1].run || s[i].sensor != s[i - 1].sensor) out.push_back({s[i].run, s[i].sensor, i, 0});
+    else ++out.back().count;
+  for (auto& se : out) ++se.count;
+  return out;
+}
+
+// Lag-1 autocorrelation of the residuals within the series, pooled.
+double lag1_autocorrelation(const ThermalFitResult& fit) {
+  double num = 0, den = 0;
+  for (const auto& se : series_of(fit))
+    for (std::size_t i = se.first; i < se.first + se.count; ++i) {
+      const double e = fit.samples[i].measured_C - fit.samples[i].simulated_C;
+      den += e * e;
+      if (i > se.first) num += e * (fit.samples[i - 1].measured_C - fit.samples[i - 1].simulated_C);
+    }
+  return den > 0 ? num / den : 0.0;
+}
+
+double effective_sample_size(double n, double rho) {
+  rho = std::clamp(rho, 0.0, 0.999);
+  return std::max(n * (1 - rho) / (1 + rho), 2.0);
+}
+
+ThermalResidualDiagnostics diagnose_residuals(const ThermalFitResult& fit, const ThermalDiagnosisOptions& o) {
+  ThermalResidualDiagnostics d;
+  const auto& samples = fit.samples;
+  double ss = 0;
+  for (const auto& s : samples) ss += std::pow(s.measured_C - s.simulated_C, 2);
+  d.rmse_K = std::sqrt(ss / static_cast<double>(std::max<std::size_t>(samples.size(), 1)));
+  d.lag1_autocorrelation = lag1_autocorrelation(fit);
+  d.n_eff = effective_sample_size(static_cast<double>(samples.size()), d.lag1_autocorrelation);
+
+  // Per sensor series, and cell means (time bins of the run's duration).
+  const int bins = std::max(o.time_bins, 2);
+  std::vector<double> cell_e, cell_rise, cell_velocity, cell_load, cell_position, cell_run;
+  std::vector<std::size_t> cell_bin;
+  for (const auto& se : series_of(fit)) {
+    SensorResiduals r{fit.runs[se.run].id, fit.sensor_names[se.run][se.sensor], 0, 0, 0, 2};
+    for (const auto& g : fit.goodness)
+      if (g.run == r.run && g.sensor == r.sensor) r.position_m = g.position_m;
+    double sum = 0, sq = 0, dw = 0;
+    const double duration = samples[se.first + se.count - 1].time_s;
+    std::vector<double> e_sum(static_cast<std::size_t>(bins), 0), rise_sum(static_cast<std::size_t>(bins), 0),
+        count(static_cast<std::size_t>(bins), 0);
+    for (std::size_t i = se.first; i < se.first + se.count; ++i) {
+      const double e = samples[i].measured_C - samples[i].simulated_C;
+      sum += e;
+      sq += e * e;
+      if (i > se.first) dw += std::pow(e - (samples[i - 1].measured_C - samples[i - 1].simulated_C), 2);
+      const auto b = static_cast<std::size_t>(
+          std::clamp(static_cast<int>(samples[i].time_s / std::max(duration, 1e-9) * bins), 0, bins - 1));
+      e_sum[b] += e;
+      rise_sum[b] += samples[i].simulated_C - fit.runs[se.run].initial_temperature_C;
+      count[b] += 1;
+    }
+    const double n = static_cast<double>(se.count);
+    r.bias_K = sum / n;
+    r.rmse_K = std::sqrt(sq / n);
+    r.durbin_watson = sq > 0 ? dw / sq : 2.0;
+    d.sensors.push_back(r);
+    for (std::size_t b = 0; b < static_cast<std::size_t>(bins); ++b) {
+      if (count[b] == 0) continue;
+      cell_e.push_back(e_sum[b] / count[b]);
+      cell_rise.push_back(rise_sum[b] / count[b]);
+      cell_bin.push_back(b);
+      cell_velocity.push_back(fit.runs[se.run].velocity_m_s);
+      cell_load.push_back(fit.runs[se.run].load_N);
+      cell_position.push_back(r.position_m);
+      cell_run.push_back(static_cast<double>(se.run));
+    }
+  }
+  const std::size_t cells = cell_e.size();
+  const std::vector<std::size_t> all(cells, 0);
+  std::vector<std::size_t> phase(cells);
+  for (std::size_t c = 0; c < cells; ++c) phase[c] = cell_bin[c] < static_cast<std::size_t>(bins) / 2 ? 0 : 1;
+  // The course over time, refined by a covariate: label = bin + bins · covariate group.
+  auto by_time_and = [&](const std::vector<double>& covariate) {
+    const std::vector<std::size_t> groups = detail::value_bins(covariate);
+    std::vector<std::size_t> labels(cells);
+    for (std::size_t c = 0; c < cells; ++c) labels[c] = cell_bin[c] + static_cast<std::size_t>(bins) * groups[c];
+    return labels;
+  };
+  d.covariates.push_back(detail::nested_anova("time_s", all, cell_bin, cell_e));
+  d.covariates.push_back(detail::nested_anova("heating vs steady phase", all, phase, cell_e));
+  d.covariates.push_back(detail::nested_anova("temperature rise", all, detail::value_bins(cell_rise), cell_e));
+  d.covariates.push_back(detail::nested_anova("velocity_m_s", cell_bin, by_time_and(cell_velocity), cell_e));
+  d.covariates.push_back(detail::nested_anova("load_N", cell_bin, by_time_and(cell_load), cell_e));
+  d.covariates.push_back(detail::nested_anova("position_m", cell_bin, by_time_and(cell_position), cell_e));
+  // Runs at the same conditions that still differ in their course: run order (or the rig).
+  std::vector<double> condition(cells);
+  for (std::size_t c = 0; c < cells; ++c) condition[c] = cell_velocity[c] * 1e6 + cell_load[c];
+  const std::vector<std::size_t> coarse = by_time_and(condition), fine = by_time_and(cell_run);
+  d.covariates.push_back(detail::nested_anova("run order", coarse, fine, cell_e));
+  std::erase_if(d.covariates, [](const CovariateTest& t) { return t.n == 0; });
+  std::sort(d.covariates.begin(), d.covariates.end(), [](auto& a, auto& b) { return a.p_value < b.p_value; });
+  // Strongest first: the significant ones by size, then the rest by p.
+  auto counts = [&](const CovariateTest& t) { return t.p_value < o.structure_p && t.size >= o.min_structure_fraction * d.rmse_K; };
+  std::stable_sort(d.covariates.begin(), d.covariates.end(), [&](auto& a, auto& b) {
+    if (counts(a) != counts(b)) return counts(a);
+    return counts(a) ? a.size > b.size : a.p_value < b.p_value;
+  });
+  d.structured = !d.covariates.empty() && counts(d.covariates.front());
+  return d;
+}
+
+ThermalFitResult fit_model(const ThermalDataSet& data, const ThermalDiagnosisOptions& o, const std::vector<std::string>& extensions,
+                           const ThermalFitResult* from) {
+  ThermalFitOptions f = model_options(o);
+  f.extensions = extensions;
+  if (from) {
+    f.alpha_start = std::clamp(from->joint.parameter("alpha").value, f.alpha_lower, f.alpha_upper);
+    for (const auto& p : from->joint.parameters) f.extension_start.emplace_back(p.name, p.value);
+  }
+  try {
+    return fit_thermal(data, f);
+  } catch (const InvalidParameter& e) {
+    ThermalFitResult failed;
+    failed.joint.warnings.push_back(e.what());
+    return failed;
+  }
+}
+
+}  // namespace
+
+ThermalDiagnosis diagnose_thermal(const ThermalDataSet& data, const ThermalDiagnosisOptions& options) {
+  if (data.runs.size() < 3) throw InvalidParameter("runs", "a diagnosis needs at least three runs (it holds one out at a time)");
+  ThermalDiagnosisOptions o = options;
+  const auto& times = data.runs.front().trace.time_s;
+  if (o.min_record_spacing_s > 0 && o.fit.every == 1 && times.size() >= 2) {
+    const double spacing = (times.back() - times.front()) / static_cast<double>(times.size() - 1);
+    o.fit.every = static_cast<std::size_t>(std::max(1.0, std::ceil(o.min_record_spacing_s / spacing - 1e-9)));
+  }
+  ThermalDiagnosis d;
+
+  // 1. The baseline.
+  d.baseline_fit = fit_thermal(data, model_options(o));
+  d.baseline = diagnose_residuals(d.baseline_fit, o);
+
+  // 2-3. The library, less what these data cannot show.
+  std::set<double> speeds;
+  for (const auto& run : data.runs) speeds.insert(run.velocity_m_s);
+  const std::vector<ThermalExtensionInfo> known = thermal_extension_library();
+  auto info = [&](const std::string& name) -> const ThermalExtensionInfo& {
+    return *std::find_if(known.begin(), known.end(), [&](auto& e) { return e.name == name; });
+  };
+  std::vector<std::string> library;
+  for (const auto& e : known) {
+    if (e.source && (*e.source == o.fit.source || *e.source == SourceModel::paper)) continue;  // no step back to the paper's
+    if ((e.name == "convection_velocity" || e.name == "alpha_velocity") && speeds.size() < 2) {
+      d.skipped.push_back(e.name + ": all runs at one speed");
+      continue;
+    }
+    library.push_back(e.name);
+  }
+  auto fit_candidate = [&](const std::vector<std::string>& extensions, const ThermalFitResult& current) {
+    return fit_model(data, o, extensions, &current);
+  };
+  auto summarise = [&](const ThermalFitResult& fit, const std::string& effect) {
+    detail::ModelFit m;
+    CandidateScore c;
+    c.value = c.se = c.ci_low = c.ci_high = std::numeric_limits<double>::quiet_NaN();
+    if (fit.samples.empty()) {
+      m.problem = "the fit failed: " + (fit.joint.warnings.empty() ? std::string("no result") : fit.joint.warnings.front());
+      m.ss = m.n = m.n_eff = m.cv_rmse = std::numeric_limits<double>::infinity();
+      return std::make_pair(m, c);
+    }
+    m.ss = fit.sum_of_squares_K2;
+    m.n = static_cast<double>(fit.samples.size());
+    m.n_eff = effective_sample_size(m.n, lag1_autocorrelation(fit));
+    m.k = fit.joint.free_parameters;
+    m.cv_rmse = fit.cv_rmse_K;
+    if (!fit.joint.solver.usable) m.problem = "the fit did not converge: " + fit.joint.solver.termination;
+    for (const auto& issue : fit.joint.identifiability.issues) m.problem = "not identifiable: " + issue.why;
+    if (!effect.empty()) {
+      const auto& e = info(effect);
+      if (!e.parameters.empty()) {
+        const auto& p = fit.joint.parameter(e.parameters.front());
+        c.value = p.value;
+        c.se = p.se;
+        c.ci_low = p.ci_low;
+        c.ci_high = p.ci_high;
+      }
+    }
+    return std::make_pair(m, c);
+  };
+  const detail::SelectionRules rules{.lrt_p = o.lrt_p, .min_cv_gain_percent = o.min_cv_gain_percent, .max_effects = o.max_effects};
+  auto selection = detail::forward_select(library, d.baseline_fit, fit_candidate, summarise, rules);
+  d.final_fit = std::move(selection.current);
+  d.rounds = std::move(selection.rounds);
+
+  // 4. Verdict.
+  d.final = diagnose_residuals(d.final_fit, o);
+  d.cv_rmse_before_K = d.baseline_fit.cv_rmse_K;
+  d.cv_rmse_after_K = d.final_fit.cv_rmse_K;
+  for (const auto& name : selection.accepted) {
+    CandidateScore c;
+    for (const auto& round : d.rounds)
+      for (const auto& cand : round)
+        if (cand.effect == name && cand.accepted) c = cand;
+    const auto& e = info(name);
+    if (!e.parameters.empty()) {
+      const auto& p = d.final_fit.joint.parameter(e.parameters.front());
+      c.value = p.value;
+      c.se = p.se;
+      c.ci_low = p.ci_low;
+      c.ci_high = p.ci_high;
+    }
+    d.accepted.push_back(c);
+  }
+  for (const auto& p : d.baseline_fit.joint.parameters)
+    if (p.name == "alpha" || p.name == "h_W_m2K") d.shifts.push_back({p.name, p.value, d.final_fit.joint.parameter(p.name).value});
+
+  const detail::Verdict v = detail::make_verdict(
+      {.model = "The published rail model",
+       .unit = "K",
+       .accepted = d.accepted,
+       .shifts = d.shifts,
+       .cv_before = d.cv_rmse_before_K,
+       .cv_after = d.cv_rmse_after_K,
+       .baseline_rmse = d.baseline.rmse_K,
+       .baseline_structured = d.baseline.structured,
+       .final_structured = d.final.structured,
+       .baseline_top = d.baseline.covariates.empty() ? CovariateTest{} : d.baseline.covariates.front(),
+       .final_top = d.final.covariates.empty() ? CovariateTest{} : d.final.covariates.front()});
+  d.verdict = v.verdict;
+  d.summary = v.summary;
+  d.unexplained_covariate = v.unexplained_covariate;
+  d.cv_gain_percent = v.cv_gain_percent;
+  return d;
+}
+
+std::string thermal_diagnosis_json(const ThermalDiagnosis& d) {
+  auto number = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
+  auto diagnostics = [&](const ThermalResidualDiagnostics& r) {
+    nlohmann::json sensors = nlohmann::json::array();
+    for (const auto& s : r.sensors)
+      sensors.push_back({{"run", s.run}, {"sensor", s.sensor}, {"position_m", s.position_m}, {"bias_K", number(s.bias_K)},
+                         {"rmse_K", number(s.rmse_K)}, {"durbin_watson", number(s.durbin_watson)}});
+    return nlohmann::json{{"rmse_K", number(r.rmse_K)},
+                          {"lag1_autocorrelation", number(r.lag1_autocorrelation)},
+                          {"n_eff", number(r.n_eff)},
+                          {"sensors", sensors},
+                          {"covariates", detail::covariates_json(r.covariates)},
+                          {"structured", r.structured}};
+  };
+  nlohmann::json rounds = nlohmann::json::array();
+  for (const auto& round : d.rounds) {
+    nlohmann::json r = nlohmann::json::array();
+    for (const auto& c : round) r.push_back(detail::candidate_json(c, "K"));
+    rounds.push_back(r);
+  }
+  nlohmann::json accepted = nlohmann::json::array();
+  for (const auto& c : d.accepted) accepted.push_back(detail::candidate_json(c, "K"));
+  nlohmann::json shifts = nlohmann::json::array();
+  for (const auto& s : d.shifts) shifts.push_back({{"parameter", s.name}, {"baseline", s.baseline}, {"extended", s.extended}});
+  return nlohmann::json{{"kind", "thermal diagnosis"},
+                        {"lmcal_version", LMCAL_VERSION},
+                        {"verdict", d.verdict},
+                        {"summary", d.summary},
+                        {"causes", accepted},
+                        {"cv_rmse_before_K", number(d.cv_rmse_before_K)},
+                        {"cv_rmse_after_K", number(d.cv_rmse_after_K)},
+                        {"cv_gain_percent", number(d.cv_gain_percent)},
+                        {"parameter_shifts", shifts},
+                        {"unexplained_covariate", d.unexplained_covariate},
+                        {"not_tried", d.skipped},
+                        {"baseline_residuals", diagnostics(d.baseline)},
+                        {"final_residuals", diagnostics(d.final)},
+                        {"rounds", rounds}}
+             .dump(2) +
+         "\n";
+}
+
+}  // namespace lmcal
