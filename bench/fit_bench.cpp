@@ -4,6 +4,7 @@
 
 #include "lmcal/fit/friction_fit.hpp"
 #include "lmcal/diagnose/friction_diagnosis.hpp"
+#include "lmcal/diagnose/thermal_diagnosis.hpp"
 #include "lmcal/fit/thermal_fit.hpp"
 #include "lmcal/rig/virtual_rig.hpp"
 
@@ -83,5 +84,36 @@ void BM_FrictionDiagnosis100k(benchmark::State& state) {
 }
 
 BENCHMARK(BM_FrictionDiagnosis100k)->Unit(benchmark::kMillisecond)->Iterations(2);
+
+}  // namespace
+
+namespace {
+
+// Thermal diagnosis speed target (issue 6): 4 runs of 6 h at a record every 5 s, with the
+// bundled set's effects (coupling, forced convection, thermocouple lag, moving block), every
+// candidate of the library, leave-one-run-out scoring, forward selection: under 10 s on 2 cores.
+void BM_ThermalDiagnosis4Runs(benchmark::State& state) {
+  static const lmcal::ThermalDataSet data = [] {
+    lmcal::ThermalRigConfig rig;
+    rig.velocity_m_s = {0.066, 0.083, 0.11, 0.15};
+    lmcal::RigEffects effects;
+    for (const auto& [name, value] :
+         {std::pair{"coupling", 1.0}, {"convection_velocity", 6.0}, {"tc_lag", 30.0}, {"moving_source", 1.0}})
+      lmcal::set_rig_effect(effects, name, value);
+    return lmcal::generate_thermal_dataset(rig, effects, "bench").set;
+  }();
+  lmcal::ThermalDiagnosisOptions options;
+  options.fit.heat = lmcal::HeatInput::friction_law;
+  std::size_t causes = 0;
+  for (auto _ : state) {
+    const auto d = lmcal::diagnose_thermal(data, options);
+    causes = d.accepted.size();
+    benchmark::DoNotOptimize(d.accepted.data());
+  }
+  state.counters["runs"] = static_cast<double>(data.runs.size());
+  state.counters["causes"] = static_cast<double>(causes);
+}
+
+BENCHMARK(BM_ThermalDiagnosis4Runs)->Unit(benchmark::kMillisecond)->Iterations(1);
 
 }  // namespace

@@ -28,6 +28,11 @@ echo "== Heat partition alpha fitted to the bundled thermal runs, heat from the 
   -o fits/cheng2017 --name thermal
 
 echo
+echo "== What the published rail model gets wrong on the bundled thermal runs, and why =="
+"$lmcal" diagnose thermal measurements/cheng2017/thermal.toml --friction fits/cheng2017/friction.json \
+  -o fits/cheng2017 --name thermal_diagnosis
+
+echo
 echo "== Friction law (Eqs. 3-7) over speed, load, preload and temperature (Figs. 4-7) =="
 "$lmcal" simulate friction -o "$out/friction.csv" \
   --velocity 0.005:0.2:0.005 --load 1000,2000,3000 --preload 1.5,2.5,4 --temperature 26,40

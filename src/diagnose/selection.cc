@@ -79,10 +79,20 @@ bool score_candidate(const ModelFit& current, const ModelFit& candidate, const S
     significant = c.bic < bic0 - rules.switch_bic;
     why_not = fmt::format("not significant (BIC {:+.1f}; a switch needs {:+.0f})", c.bic - bic0, -rules.switch_bic);
   }
-  const bool better = c.cv_gain_percent >= rules.min_cv_gain_percent;
+  // The excess over the noise in variance; a current model within 2 % of the noise has none
+  // left to speak of, and the plain gain decides.
+  const double excess = current.cv_rmse * current.cv_rmse - rules.noise_floor * rules.noise_floor;
+  const bool at_noise = rules.noise_floor <= 0 || current.cv_rmse <= 1.02 * rules.noise_floor;
+  const double removed = at_noise ? 1.0 : (current.cv_rmse * current.cv_rmse - candidate.cv_rmse * candidate.cv_rmse) / excess;
+  const bool enough = removed >= rules.min_excess_removed;
+  const bool better = c.cv_gain_percent >= rules.min_cv_gain_percent && enough;
   if (!candidate.problem.empty()) c.reason = candidate.problem;
   else if (!significant) c.reason = why_not;
-  else if (!better) c.reason = fmt::format("held-out RMSE gain {:.2f} % < {:.2f} %", c.cv_gain_percent, rules.min_cv_gain_percent);
+  else if (c.cv_gain_percent < rules.min_cv_gain_percent)
+    c.reason = fmt::format("held-out RMSE gain {:.2f} % < {:.2f} %", c.cv_gain_percent, rules.min_cv_gain_percent);
+  else if (!better)
+    c.reason = fmt::format("removes {:.0f} % of the held-out RMSE above the noise ({:.4g}), less than {:.0f} %", 100 * removed,
+                           rules.noise_floor, 100 * rules.min_excess_removed);
   else c.reason = "significant and better on held-out runs";
   c.accepted = candidate.problem.empty() && significant && better;  // passes; forward_select picks one
   return c.accepted;

@@ -44,6 +44,11 @@ struct SelectionRules {
   double lrt_p = 1e-3;
   double min_cv_gain_percent = 2.0;
   double switch_bic = 10;  // a switch (no parameter) must lower the BIC by this much
+  // When the measurement noise is known (> 0, in the held-out RMSE's unit) and the current
+  // held-out RMSE is above it: a candidate must also remove this share of the excess
+  // (RMSE² - noise²); a tiny gain on residuals far above the noise is not an explanation.
+  double noise_floor = 0;
+  double min_excess_removed = 0.1;
   std::size_t max_effects = 3;
 };
 

@@ -224,7 +224,15 @@ ThermalDiagnosis diagnose_thermal(const ThermalDataSet& data, const ThermalDiagn
     }
     return std::make_pair(m, c);
   };
-  const detail::SelectionRules rules{.lrt_p = o.lrt_p, .min_cv_gain_percent = o.min_cv_gain_percent, .max_effects = o.max_effects};
+  // The noise floor of the held-out RMSE: the thermocouples' own noise, over all runs.
+  double noise_ss = 0;
+  for (const auto& run : data.runs) noise_ss += std::pow(thermocouple_noise_K(run.trace), 2);
+  d.noise_K = std::sqrt(noise_ss / static_cast<double>(data.runs.size()));
+  const detail::SelectionRules rules{.lrt_p = o.lrt_p,
+                                     .min_cv_gain_percent = o.min_cv_gain_percent,
+                                     .noise_floor = std::isfinite(d.noise_K) ? d.noise_K : 0.0,
+                                     .min_excess_removed = o.min_excess_removed,
+                                     .max_effects = o.max_effects};
   auto selection = detail::forward_select(library, d.baseline_fit, fit_candidate, summarise, rules);
   d.final_fit = std::move(selection.current);
   d.rounds = std::move(selection.rounds);
@@ -302,6 +310,7 @@ std::string thermal_diagnosis_json(const ThermalDiagnosis& d) {
                         {"cv_rmse_before_K", number(d.cv_rmse_before_K)},
                         {"cv_rmse_after_K", number(d.cv_rmse_after_K)},
                         {"cv_gain_percent", number(d.cv_gain_percent)},
+                        {"thermocouple_noise_K", number(d.noise_K)},
                         {"parameter_shifts", shifts},
                         {"unexplained_covariate", d.unexplained_covariate},
                         {"not_tried", d.skipped},

@@ -165,17 +165,7 @@ Prepared prepare_run(const ThermalRun& run, const ThermalFitOptions& o) {
     const double dlnQ = std::log(heat_rate_with_effects_W(pr.friction, pr.friction_effects, hi) /
                                  heat_rate_with_effects_W(pr.friction, pr.friction_effects, lo)) / (2 * dT);
     const double sigma_Q = std::hypot(dlnQ * o.heat_temperature_uncertainty_K, o.heat_law_uncertainty);
-    double ss = 0;
-    std::size_t n = 0;
-    for (const auto& channel : trace.rail)
-      for (std::size_t i = 1; i + 1 < channel.values.size(); ++i) {
-        const double d2 = channel.values[i + 1] - 2 * channel.values[i] + channel.values[i - 1];
-        if (!std::isnan(d2)) {
-          ss += d2 * d2;
-          ++n;
-        }
-      }
-    const double sigma_T = n ? std::max(std::sqrt(ss / (6.0 * static_cast<double>(n))), 1e-3) : 0.05;
+    const double sigma_T = std::max(thermocouple_noise_K(trace), 1e-3);
     if (!(sigma_Q > 0)) throw InvalidParameter("heat_law_uncertainty", "the heat rate's uncertainty must be positive");
     pr.heat_prior_weight = sigma_T / sigma_Q;
   }
@@ -308,6 +298,20 @@ double leave_one_run_out_rmse(const ThermalModel& model, const FitResult& joint,
 }
 
 }  // namespace
+
+double thermocouple_noise_K(const ThermalTrace& trace) {
+  double ss = 0;
+  std::size_t n = 0;
+  for (const auto& channel : trace.rail)
+    for (std::size_t i = 1; i + 1 < channel.values.size(); ++i) {
+      const double d2 = channel.values[i + 1] - 2 * channel.values[i] + channel.values[i - 1];
+      if (!std::isnan(d2)) {
+        ss += d2 * d2;
+        ++n;
+      }
+    }
+  return n ? std::sqrt(ss / (6.0 * static_cast<double>(n))) : std::numeric_limits<double>::quiet_NaN();
+}
 
 std::vector<ThermalExtensionInfo> thermal_extension_library() {
   std::vector<ThermalExtensionInfo> library;

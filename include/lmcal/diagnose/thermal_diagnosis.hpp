@@ -18,7 +18,9 @@
 //      fitted; scored by leave-one-run-out prediction RMSE (the run's global parameters from
 //      the others, one Gauss-Newton step), AICc, BIC and a likelihood-ratio test, both on
 //      n_eff; a switch without parameters (the source model) needs a BIC 10 lower;
-//   3. forward selection: the passing candidate with the largest held-out gain is
+//   3. forward selection: a candidate passes when significant, when it lowers the held-out
+//      RMSE by 0.1 % and removes a tenth of its excess over the thermocouple noise; the
+//      passing candidate with the largest held-out gain is
 //      accepted, the rest are tried on top of it, until nothing more passes;
 //   4. verdict: causes with magnitude and interval, held-out RMSE before and after, how α
 //      moves, what remains; "unexplained" with the covariate the residuals follow when no
@@ -56,7 +58,8 @@ struct ThermalDiagnosisOptions {
   // Records closer than this are thinned (every n-th) unless fit.every asks for more.
   double min_record_spacing_s = 15;
   double lrt_p = 1e-3;
-  double min_cv_gain_percent = 0.1;  // the held-out RMSE is mostly noise: gains are small in %
+  double min_cv_gain_percent = 0.1;
+  double min_excess_removed = 0.1;  // and this share of the held-out RMSE above the thermocouple noise  // the held-out RMSE is mostly noise: gains are small in %
   double structure_p = 1e-3;
   // Structure smaller than this share of the residual RMSE is reported but not called a
   // discrepancy: with thousands of records, millikelvin (the start temperature read from a
@@ -74,6 +77,7 @@ struct ThermalDiagnosis {
   std::vector<CandidateScore> accepted;
   std::vector<std::string> skipped;  // mechanisms not tried, and why
   double cv_rmse_before_K = 0, cv_rmse_after_K = 0, cv_gain_percent = 0;
+  double noise_K = 0;  // the thermocouples' noise (second differences): the floor of the held-out RMSE
   std::vector<ParameterShift> shifts;
   std::string unexplained_covariate;
   ThermalFitResult baseline_fit, final_fit;  // for before/after plots

@@ -136,6 +136,10 @@ struct ThermalExtensionInfo {
 };
 std::vector<ThermalExtensionInfo> thermal_extension_library();
 
+// The thermocouples' noise σ (K), from the second differences of the rail channels:
+// insensitive to the slow warm-up, exact for white noise.
+double thermocouple_noise_K(const ThermalTrace& trace);
+
 // Reads constants and effects from a friction fit JSON (`lmcal fit friction` output).
 void read_friction_fit(const std::string& json_file, ThermalFitOptions& options);
 
