@@ -22,18 +22,28 @@ struct DiagnoseFrictionOptions {
   FrictionDiagnosisOptions diagnosis;
 };
 
+// The residuals against the covariates, and every forward step's candidates.
+void print_covariates(const std::vector<CovariateTest>& covariates, const char* unit) {
+  for (const auto& c : covariates)
+    std::cout << fmt::format("  {:<24} strength {:.3f}  size {:.4g} {}  p {:.2g}{}\n", c.covariate, c.correlation, c.size, unit,
+                             c.p_value, c.structured ? "  <- structured" : "");
+}
+
+void print_rounds(const std::vector<std::vector<CandidateScore>>& rounds, const char* unit) {
+  for (std::size_t r = 0; r < rounds.size(); ++r) {
+    std::cout << fmt::format("candidates, step {} (held-out RMSE gain against the model so far):\n", r + 1);
+    for (const auto& c : rounds[r])
+      std::cout << fmt::format("  {:<20} {:>10.4g} ± {:<9.3g} LRT p {:<8.2g} held-out {:.4f} {} ({:+.2f} %)  {}{}\n", c.effect,
+                               c.value, c.se, c.lrt_p, c.cv_rmse, unit, c.cv_gain_percent, c.accepted ? "ACCEPTED: " : "",
+                               c.reason);
+  }
+}
+
 void print(const FrictionDiagnosis& d) {
   std::cout << fmt::format("baseline: residual RMSE {:.3f} N, Durbin-Watson {:.2f}; residuals against covariates:\n",
                            d.baseline.rmse_N, d.baseline.durbin_watson);
-  for (const auto& c : d.baseline.covariates)
-    std::cout << fmt::format("  {:<16} strength {:.3f}  p {:.2g}{}\n", c.covariate, c.correlation, c.p_value,
-                             c.p_value < 1e-3 ? "  <- structured" : "");
-  for (std::size_t r = 0; r < d.rounds.size(); ++r) {
-    std::cout << fmt::format("candidates, step {} (held-out RMSE gain against the model so far):\n", r + 1);
-    for (const auto& c : d.rounds[r])
-      std::cout << fmt::format("  {:<20} {:>10.4g} ± {:<9.3g} LRT p {:<8.2g} held-out {:.4f} N ({:+.1f} %)  {}{}\n", c.effect,
-                               c.value, c.se, c.lrt_p, c.cv_rmse, c.cv_gain_percent, c.accepted ? "ACCEPTED: " : "", c.reason);
-  }
+  print_covariates(d.baseline.covariates, "N");
+  print_rounds(d.rounds, "N");
   std::cout << "verdict: " << d.verdict << "\n  " << d.summary << "\n";
 }
 
@@ -50,16 +60,9 @@ void print(const ThermalDiagnosis& d) {
                            "residuals against covariates:\n",
                            d.baseline_fit.joint.parameter("alpha").value, d.baseline.rmse_K, d.baseline.lag1_autocorrelation,
                            d.baseline.n_eff);
-  for (const auto& c : d.baseline.covariates)
-    std::cout << fmt::format("  {:<24} strength {:.3f}  size {:.4f} K  p {:.2g}{}\n", c.covariate, c.correlation, c.size, c.p_value,
-                             c.p_value < 1e-3 ? "  <- structured" : "");
+  print_covariates(d.baseline.covariates, "K");
   for (const auto& s : d.skipped) std::cout << "not tried: " << s << "\n";
-  for (std::size_t r = 0; r < d.rounds.size(); ++r) {
-    std::cout << fmt::format("candidates, step {} (held-out RMSE gain against the model so far):\n", r + 1);
-    for (const auto& c : d.rounds[r])
-      std::cout << fmt::format("  {:<20} {:>10.4g} ± {:<9.3g} LRT p {:<8.2g} held-out {:.4f} K ({:+.2f} %)  {}{}\n", c.effect,
-                               c.value, c.se, c.lrt_p, c.cv_rmse, c.cv_gain_percent, c.accepted ? "ACCEPTED: " : "", c.reason);
-  }
+  print_rounds(d.rounds, "K");
   std::cout << "verdict: " << d.verdict << "\n  " << d.summary << "\n";
 }
 

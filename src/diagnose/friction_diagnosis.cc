@@ -11,6 +11,7 @@
 
 #include "lmcal/error.hpp"
 #include "lmcal/fit/statistics.hpp"
+#include "fit/fit_json.hpp"
 #include "selection.hpp"
 
 namespace lmcal {
@@ -105,7 +106,8 @@ ResidualDiagnostics diagnose_residuals(const FrictionLog& log, const FrictionFit
                             .n = run_bias.size()});
   }
   std::sort(d.covariates.begin(), d.covariates.end(), [](auto& a, auto& b) { return a.p_value < b.p_value; });
-  d.structured = !d.covariates.empty() && d.covariates.front().p_value < structure_p;
+  for (auto& c : d.covariates) c.structured = c.p_value < structure_p;
+  d.structured = !d.covariates.empty() && d.covariates.front().structured;
   return d;
 }
 
@@ -147,7 +149,7 @@ FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagno
     CandidateScore c;
     if (!effect.empty()) {
       const auto& p = fit.fit.parameter(effect);
-      c = {.value = p.value, .se = p.se, .ci_low = p.ci_low, .ci_high = p.ci_high};
+      detail::set_estimate(c, p);
       if (p.held_unidentifiable) m.problem = "not identifiable from these data";
     }
     return std::make_pair(m, c);
@@ -161,18 +163,8 @@ FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagno
   d.final = diagnose_residuals(log, current, o.structure_p);
   d.cv_rmse_before_N = baseline.cv_rmse_N;
   d.cv_rmse_after_N = current.cv_rmse_N;
-  for (const auto& name : selection.accepted) {
-    CandidateScore c;
-    for (const auto& round : d.rounds)
-      for (const auto& cand : round)
-        if (cand.effect == name && cand.accepted) c = cand;
-    const auto& p = current.fit.parameter(name);  // the final fit's estimate and interval
-    c.value = p.value;
-    c.se = p.se;
-    c.ci_low = p.ci_low;
-    c.ci_high = p.ci_high;
-    d.accepted.push_back(c);
-  }
+  d.accepted = detail::accepted_scores(d.rounds, selection.accepted,
+                                       [&](const std::string& name) { return &current.fit.parameter(name); });
   for (std::size_t j = 0; j < 7; ++j)
     d.shifts.push_back({kFrictionConstantNames[j], baseline.fit.parameters[j].value, current.fit.parameters[j].value});
 
@@ -185,8 +177,8 @@ FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagno
                                                   .baseline_rmse = d.baseline.rmse_N,
                                                   .baseline_structured = d.baseline.structured,
                                                   .final_structured = d.final.structured,
-                                                  .baseline_top = d.baseline.covariates.empty() ? CovariateTest{} : d.baseline.covariates.front(),
-                                                  .final_top = d.final.covariates.empty() ? CovariateTest{} : d.final.covariates.front()});
+                                                  .baseline_covariates = d.baseline.covariates,
+                                                  .final_covariates = d.final.covariates});
   d.verdict = v.verdict;
   d.summary = v.summary;
   d.unexplained_covariate = v.unexplained_covariate;
@@ -195,7 +187,7 @@ FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagno
 }
 
 std::string friction_diagnosis_json(const FrictionDiagnosis& d) {
-  auto number = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
+  using detail::number;
   auto diagnostics = [&](const ResidualDiagnostics& r) {
     nlohmann::json runs = nlohmann::json::object();
     for (const auto& [run, bias] : r.run_bias_N) runs[run] = number(bias);

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <map>
 
+#include "fit/fit_json.hpp"
 #include "lmcal/fit/statistics.hpp"
 
 namespace lmcal::detail {
@@ -98,11 +99,21 @@ bool score_candidate(const ModelFit& current, const ModelFit& candidate, const S
   return c.accepted;
 }
 
+void set_estimate(CandidateScore& c, const ParameterEstimate& p) {
+  c.value = p.value;
+  c.se = p.se;
+  c.ci_low = p.ci_low;
+  c.ci_high = p.ci_high;
+}
+
 Verdict make_verdict(const VerdictInput& in) {
   Verdict v;
+  const CovariateTest none;
+  const CovariateTest& baseline_top = in.baseline_covariates.empty() ? none : in.baseline_covariates.front();
+  const CovariateTest& final_top = in.final_covariates.empty() ? none : in.final_covariates.front();
   v.cv_gain_percent = 100 * (1 - in.cv_after / in.cv_before);
   const std::string remains = in.final_structured ? fmt::format("the residuals still follow {} (p = {:.2g})",
-                                                                in.final_top.covariate, in.final_top.p_value)
+                                                                final_top.covariate, final_top.p_value)
                                                   : "no structure left beyond the noise";
   if (!in.accepted.empty()) {
     v.verdict = "explained";
@@ -121,14 +132,14 @@ Verdict make_verdict(const VerdictInput& in) {
         "Parameters that move: {}. What remains: {}.",
         in.model, causes, in.cv_before, in.unit, in.cv_after, in.unit, v.cv_gain_percent,
         shift.empty() ? "none by more than 2 %" : shift, remains);
-    if (in.final_structured) v.unexplained_covariate = in.final_top.covariate;
+    if (in.final_structured) v.unexplained_covariate = final_top.covariate;
   } else if (in.baseline_structured) {
     v.verdict = "unexplained";
-    v.unexplained_covariate = in.baseline_top.covariate;
+    v.unexplained_covariate = baseline_top.covariate;
     v.summary = fmt::format(
         "Unexplained: the residuals of {} follow {} (p = {:.2g}), but no mechanism of the library explains them on "
         "held-out runs. Held-out RMSE {:.4g} {}.",
-        in.model, v.unexplained_covariate, in.baseline_top.p_value, in.cv_before, in.unit);
+        in.model, v.unexplained_covariate, baseline_top.p_value, in.cv_before, in.unit);
   } else {
     v.verdict = "no significant discrepancy";
     v.summary = fmt::format(
@@ -138,10 +149,6 @@ Verdict make_verdict(const VerdictInput& in) {
   }
   return v;
 }
-
-namespace {
-nlohmann::json number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
-}  // namespace
 
 nlohmann::json candidate_json(const CandidateScore& c, const std::string& unit) {
   return nlohmann::json{{"effect", c.effect},
@@ -162,7 +169,8 @@ nlohmann::json candidate_json(const CandidateScore& c, const std::string& unit) 
 nlohmann::json covariates_json(const std::vector<CovariateTest>& tests) {
   nlohmann::json out = nlohmann::json::array();
   for (const auto& c : tests)
-    out.push_back({{"covariate", c.covariate}, {"strength", number(c.correlation)}, {"p", number(c.p_value)}, {"size", number(c.size)}, {"n", c.n}});
+    out.push_back({{"covariate", c.covariate}, {"strength", number(c.correlation)}, {"p", number(c.p_value)}, {"size", number(c.size)}, {"n", c.n},
+                   {"structured", c.structured}});
   return out;
 }
 

@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "lmcal/diagnose/diagnosis.hpp"
+#include "lmcal/fit/fit_result.hpp"
 
 namespace lmcal::detail {
 
@@ -108,6 +109,26 @@ Selection<Fit> forward_select(const std::vector<std::string>& library, Fit basel
   return s;
 }
 
+// The estimate and interval of `p` into the candidate's score.
+void set_estimate(CandidateScore& c, const ParameterEstimate& p);
+
+// The accepted candidates, each as scored in the round it was accepted in, with the final
+// fit's estimate of its (first) parameter (`estimate(name)`; nullptr for a switch).
+template <class Estimate>
+std::vector<CandidateScore> accepted_scores(const std::vector<std::vector<CandidateScore>>& rounds,
+                                            const std::vector<std::string>& accepted, const Estimate& estimate) {
+  std::vector<CandidateScore> out;
+  for (const auto& name : accepted) {
+    CandidateScore c;
+    for (const auto& round : rounds)
+      for (const auto& candidate : round)
+        if (candidate.effect == name && candidate.accepted) c = candidate;
+    if (const ParameterEstimate* p = estimate(name)) set_estimate(c, *p);
+    out.push_back(c);
+  }
+  return out;
+}
+
 // The verdict of a diagnosis in plain words.
 struct VerdictInput {
   std::string model;  // "the published law", "the published rail model"
@@ -116,7 +137,7 @@ struct VerdictInput {
   std::vector<ParameterShift> shifts;
   double cv_before = 0, cv_after = 0, baseline_rmse = 0;
   bool baseline_structured = false, final_structured = false;
-  CovariateTest baseline_top, final_top;  // strongest covariate of the residuals
+  std::vector<CovariateTest> baseline_covariates, final_covariates;  // strongest first
 };
 struct Verdict {
   std::string verdict;  // "explained", "unexplained", "no significant discrepancy"

@@ -9,6 +9,7 @@
 #include <set>
 
 #include "lmcal/error.hpp"
+#include "fit/fit_json.hpp"
 #include "selection.hpp"
 
 namespace lmcal {
@@ -140,7 +141,8 @@ ThermalResidualDiagnostics diagnose_residuals(const ThermalFitResult& fit, const
     if (counts(a) != counts(b)) return counts(a);
     return counts(a) ? a.size > b.size : a.p_value < b.p_value;
   });
-  d.structured = !d.covariates.empty() && counts(d.covariates.front());
+  for (auto& c : d.covariates) c.structured = counts(c);
+  d.structured = !d.covariates.empty() && d.covariates.front().structured;
   return d;
 }
 
@@ -214,13 +216,7 @@ ThermalDiagnosis diagnose_thermal(const ThermalDataSet& data, const ThermalDiagn
     for (const auto& issue : fit.joint.identifiability.issues) m.problem = "not identifiable: " + issue.why;
     if (!effect.empty()) {
       const auto& e = info(effect);
-      if (!e.parameters.empty()) {
-        const auto& p = fit.joint.parameter(e.parameters.front());
-        c.value = p.value;
-        c.se = p.se;
-        c.ci_low = p.ci_low;
-        c.ci_high = p.ci_high;
-      }
+      if (!e.parameters.empty()) detail::set_estimate(c, fit.joint.parameter(e.parameters.front()));
     }
     return std::make_pair(m, c);
   };
@@ -241,21 +237,10 @@ ThermalDiagnosis diagnose_thermal(const ThermalDataSet& data, const ThermalDiagn
   d.final = diagnose_residuals(d.final_fit, o);
   d.cv_rmse_before_K = d.baseline_fit.cv_rmse_K;
   d.cv_rmse_after_K = d.final_fit.cv_rmse_K;
-  for (const auto& name : selection.accepted) {
-    CandidateScore c;
-    for (const auto& round : d.rounds)
-      for (const auto& cand : round)
-        if (cand.effect == name && cand.accepted) c = cand;
+  d.accepted = detail::accepted_scores(d.rounds, selection.accepted, [&](const std::string& name) {
     const auto& e = info(name);
-    if (!e.parameters.empty()) {
-      const auto& p = d.final_fit.joint.parameter(e.parameters.front());
-      c.value = p.value;
-      c.se = p.se;
-      c.ci_low = p.ci_low;
-      c.ci_high = p.ci_high;
-    }
-    d.accepted.push_back(c);
-  }
+    return e.parameters.empty() ? nullptr : &d.final_fit.joint.parameter(e.parameters.front());
+  });
   for (const auto& p : d.baseline_fit.joint.parameters)
     if (p.name == "alpha" || p.name == "h_W_m2K") d.shifts.push_back({p.name, p.value, d.final_fit.joint.parameter(p.name).value});
 
@@ -269,8 +254,8 @@ ThermalDiagnosis diagnose_thermal(const ThermalDataSet& data, const ThermalDiagn
        .baseline_rmse = d.baseline.rmse_K,
        .baseline_structured = d.baseline.structured,
        .final_structured = d.final.structured,
-       .baseline_top = d.baseline.covariates.empty() ? CovariateTest{} : d.baseline.covariates.front(),
-       .final_top = d.final.covariates.empty() ? CovariateTest{} : d.final.covariates.front()});
+       .baseline_covariates = d.baseline.covariates,
+       .final_covariates = d.final.covariates});
   d.verdict = v.verdict;
   d.summary = v.summary;
   d.unexplained_covariate = v.unexplained_covariate;
@@ -279,7 +264,7 @@ ThermalDiagnosis diagnose_thermal(const ThermalDataSet& data, const ThermalDiagn
 }
 
 std::string thermal_diagnosis_json(const ThermalDiagnosis& d) {
-  auto number = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
+  using detail::number;
   auto diagnostics = [&](const ThermalResidualDiagnostics& r) {
     nlohmann::json sensors = nlohmann::json::array();
     for (const auto& s : r.sensors)

@@ -14,6 +14,7 @@ struct CovariateTest {
   double p_value = 1;
   double size = 0;         // RMS of the structure it explains, in the residuals' unit
   std::size_t n = 0;       // group means tested (condition or cell means, or runs for run order)
+  bool structured = false; // counts as structure under the diagnosis's rule
 };
 
 struct CandidateScore {
