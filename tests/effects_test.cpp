@@ -3,6 +3,7 @@
 
 #include <cmath>
 
+#include "lmcal/error.hpp"
 #include "lmcal/models/friction_effects.hpp"
 #include "lmcal/models/thermal_effects.hpp"
 #include "support/srn35c.hpp"
@@ -24,23 +25,23 @@ TEST(FrictionEffects, EachEffectAddsWhatItsEquationSays) {
   const double base = friction_force_N(k, c);
   const auto b = friction_breakdown(k, c);
   FrictionEffects<double> e;
-  e.seal_drag_N_s2_m2 = 100;
+  e.of<SealDrag>() = 100;
   EXPECT_NEAR(friction_force_with_effects_N(k, e, c) - base, 100 * 0.11 * 0.11, 1e-12);
   e = {};
-  e.viscous_load_per_kN = 0.1;  // μv up 30 % at 3 kN
+  e.of<ViscousLoad>() = 0.1;  // μv up 30 % at 3 kN
   EXPECT_NEAR(friction_force_with_effects_N(k, e, c) - base, 0.3 * (b.viscous_N - 120.2 * 0.029), 1e-9);
   e = {};
-  e.direction_asymmetry = 0.05;
+  e.of<DirectionAsymmetry>() = 0.05;
   c.direction = -1;
   EXPECT_NEAR(friction_force_with_effects_N(k, e, c), 0.95 * base, 1e-9);
   c.direction = 1;
   EXPECT_NEAR(friction_force_with_effects_N(k, e, c), 1.05 * base, 1e-9);
   e = {};
-  e.coulomb_temperature_per_K = 0.01;  // 26 °C is 14 K below T_i
+  e.of<CoulombTemperature>() = 0.01;  // 26 °C is 14 K below T_i
   EXPECT_NEAR(friction_force_with_effects_N(k, e, c) - base, b.coulomb_N * 0.01 * -14.0, 1e-12);
   // Stribeck exponent: at V = V_St the correction vanishes (r = r^δ = 1); below it δ > 1 raises F.
   e = {};
-  e.stribeck_exponent = 2;
+  e.of<StribeckExponent>() = 2;
   auto slow = test::srn35c_conditions(0.015);
   EXPECT_NEAR(friction_force_with_effects_N(k, e, slow), friction_force_N(k, slow), 1e-12);
   slow.velocity_m_s = 0.0075;
@@ -49,26 +50,75 @@ TEST(FrictionEffects, EachEffectAddsWhatItsEquationSays) {
               bs.stribeck_N * (std::exp(0.5 - 0.25) - 1), 1e-12);
 }
 
+// Every registered effect, all switched on at once, against central differences.
 TEST(FrictionEffects, JetDerivativesOfTheEffectParametersEqualFiniteDifferences) {
-  using Jet = ceres::Jet<double, 5>;
+  using Jet = ceres::Jet<double, kFrictionEffectCount>;
   const auto k = paper_friction_constants();
-  const FrictionEffects<double> e{1.3, 0.05, 0.03, 40.0, 0.004};
+  FrictionEffects<double> e;
+  for (std::size_t i = 0; i < kFrictionEffectCount; ++i) {
+    const auto& info = FrictionEffectLibrary::infos[i];
+    e[i] = info.neutral + 0.3 * info.scale;  // away from neutral, inside the fit bounds
+    ASSERT_LT(e[i], info.upper) << info.name;
+  }
   for (double v : {0.0, 0.01, 0.11}) {
     auto c = test::srn35c_conditions(v);
     c.direction = -1;
-    FrictionEffects<Jet> ej{Jet(e.stribeck_exponent, 0), Jet(e.viscous_load_per_kN, 1), Jet(e.direction_asymmetry, 2),
-                            Jet(e.seal_drag_N_s2_m2, 3), Jet(e.coulomb_temperature_per_K, 4)};
+    FrictionEffects<Jet> ej;
+    for (std::size_t i = 0; i < kFrictionEffectCount; ++i) ej[i] = Jet(e[i], static_cast<int>(i));
     const Jet F = friction_force_with_effects_N(k, ej, c);
-    EXPECT_TRUE(std::isfinite(F.v[0])) << "V = " << v;
-    for (int i = 0; i < 5; ++i) {
+    EXPECT_TRUE(std::isfinite(F.a)) << "V = " << v;
+    for (std::size_t i = 0; i < kFrictionEffectCount; ++i) {
       auto plus = e, minus = e;
-      const double step = 1e-6 * std::max(1.0, std::abs(*(&e.stribeck_exponent + i)));
-      *(&plus.stribeck_exponent + i) += step;
-      *(&minus.stribeck_exponent + i) -= step;
+      const double step = 1e-6 * std::max(1.0, std::abs(e[i]));
+      plus[i] += step;
+      minus[i] -= step;
       const double fd = (friction_force_with_effects_N(k, plus, c) - friction_force_with_effects_N(k, minus, c)) / (2 * step);
-      EXPECT_NEAR(F.v[i], fd, 1e-6 * std::max(1.0, std::abs(fd))) << "effect " << i << " V = " << v;
+      EXPECT_NEAR(F.v[i], fd, 1e-6 * std::max(1.0, std::abs(fd)))
+          << FrictionEffectLibrary::infos[i].name << " V = " << v;
     }
   }
+}
+
+// The registry's contract: names are unique and findable, the bounds hold the neutral value,
+// and every correction vanishes at its neutral value, at every condition.
+TEST(FrictionEffects, EveryRegisteredEffectVanishesAtItsNeutralValueAndIsFindableByName) {
+  const auto k = paper_friction_constants();
+  std::size_t checked = 0;
+  FrictionEffectLibrary::for_each([&]<class Effect, std::size_t slot>() {
+    const FrictionEffectInfo& info = Effect::info;
+    EXPECT_EQ(friction_effect_slot(info.name), slot);
+    EXPECT_LT(info.lower, info.neutral) << info.name;
+    EXPECT_GT(info.upper, info.neutral) << info.name;
+    EXPECT_GT(info.scale, 0) << info.name;
+    bool acts = false;
+    for (double v : {0.0, 0.004, 0.05, 0.11})
+      for (double temperature_C : {22.0, 40.0})
+        for (int direction : {-1, 1}) {
+          auto c = test::srn35c_conditions(v);
+          c.temperature_C = temperature_C;
+          c.direction = direction;
+          const auto b = friction_breakdown(k, c);
+          EXPECT_NEAR(Effect::correction_N(k, c, b, b.total_N(), info.neutral), 0.0, 1e-12 * b.total_N())
+              << info.name << " V = " << v;
+          acts = acts || Effect::correction_N(k, c, b, b.total_N(), info.neutral + info.scale) != 0.0;
+        }
+    EXPECT_TRUE(acts) << info.name << " changes nothing at any test condition";
+    ++checked;
+  });
+  EXPECT_EQ(checked, kFrictionEffectCount);
+  EXPECT_THROW(friction_effect_slot("no_such_effect"), InvalidParameter);
+}
+
+// The direction factor acts on the force with the other effects already applied.
+TEST(FrictionEffects, DirectionAsymmetryScalesTheTotalWithTheOtherEffects) {
+  const auto k = paper_friction_constants();
+  auto c = test::srn35c_conditions(0.11);
+  c.direction = -1;
+  FrictionEffects<double> drag;
+  drag.of<SealDrag>() = 100;
+  FrictionEffects<double> both = drag;
+  both.of<DirectionAsymmetry>() = 0.05;
+  EXPECT_NEAR(friction_force_with_effects_N(k, both, c), 0.95 * friction_force_with_effects_N(k, drag, c), 1e-12);
 }
 
 TEST(ThermalEffects, LagOfARampIsTheExactFirstOrderResponse) {

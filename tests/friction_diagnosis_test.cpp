@@ -36,6 +36,10 @@ TEST(FrictionDiagnosis, NamesEveryLibraryEffectHiddenInTheData) {
                            {"viscous_load", 0.01},        {"viscous_load", 0.04},
                            {"stribeck_exponent", 1.3},    {"stribeck_exponent", 1.6},
                            {"coulomb_temperature", 0.03}, {"coulomb_temperature", 0.08}};
+  // A newly registered effect must come with its own cases here.
+  for (const auto& info : FrictionEffectLibrary::infos)
+    EXPECT_TRUE(std::any_of(std::begin(hidden), std::end(hidden), [&](const Hidden& h) { return h.effect == std::string(info.name); }))
+        << info.name << " is registered but never hidden in the test data";
   for (const auto& h : hidden) {
     for (std::uint64_t seed : {21, 22}) {
       RigEffects effects;
@@ -47,7 +51,7 @@ TEST(FrictionDiagnosis, NamesEveryLibraryEffectHiddenInTheData) {
       const auto& c = d.accepted.front();
       // The magnitude is recovered. (Its interval assumes equal noise on every sample; the
       // rig's logged-temperature noise is not, so the interval is not asserted here.)
-      const double neutral = std::string(h.effect) == "stribeck_exponent" ? 1.0 : 0.0;
+      const double neutral = FrictionEffectLibrary::infos[friction_effect_slot(h.effect)].neutral;
       EXPECT_NEAR(c.value - neutral, h.magnitude - neutral, 0.1 * std::abs(h.magnitude - neutral))
           << h.effect << " seed " << seed << ": " << c.value << " [" << c.ci_low << ", " << c.ci_high << "]";
     }
@@ -90,7 +94,7 @@ TEST(FrictionDiagnosis, ReportedGainIsCloseToTheTruthsGain) {
   // cell, and the logged temperature's).
   double ss = 0;
   FrictionEffects<double> truth_effects;
-  truth_effects.seal_drag_N_s2_m2 = 80;
+  truth_effects.of<SealDrag>() = 80;
   for (std::size_t i = 0; i < made.log.size(); ++i)
     ss += std::pow(made.log.friction_N[i] -
                        friction_force_with_effects_N(paper_friction_constants(), truth_effects, made.log.conditions(i)),

@@ -142,7 +142,7 @@ TEST(FrictionFit, ResidualDerivativesEqualFiniteDifferences) {
     data.inv_sigma.push_back(1 / 0.15);
   }
   for (const auto& loss : {detail::RowLoss{}, detail::RowLoss{RobustLoss::huber, 1.345}, detail::RowLoss{RobustLoss::cauchy, 2.0}}) {
-    const detail::FrictionModel model(data, {detail::effect_slot("seal_drag"), detail::effect_slot("stribeck_exponent")});
+    const detail::FrictionModel model(data, {friction_effect_slot("seal_drag"), friction_effect_slot("stribeck_exponent")});
     const auto cost = model.cost_function({}, loss);
     // Relative step 1e-6 of |θ| (the constants are small numbers).
     test::expect_jacobian_matches_central_differences(*cost, {0.3, 0.02, 1.4, 0.017, 0.0032, 0.065, 0.03, 80.0, 1.1},
@@ -177,7 +177,7 @@ TEST(FrictionFit, FitsANamedEffectOnTopOfTheLaw) {
   const auto result = fit_friction(log, options);
   const auto& drag = result.fit.parameter("seal_drag");
   EXPECT_TRUE(covers(drag, 150.0)) << drag.value << " ± " << drag.se;
-  EXPECT_NEAR(result.effects().seal_drag_N_s2_m2, drag.value, 0);
+  EXPECT_NEAR(result.effects().of<SealDrag>(), drag.value, 0);
   EXPECT_THROW(
       [&] {
         FrictionFitOptions bad;

@@ -52,7 +52,9 @@ TEST_P(ThermalDiagnosisNames, TheHiddenMechanismAndItsMagnitude) {
   // α moves back to the truth (0.6) once the cause is modelled.
   const auto& alpha = d.shifts.front();
   ASSERT_EQ(alpha.name, "alpha");
-  if (std::string(effect) != "alpha_velocity") EXPECT_NEAR(alpha.extended, 0.6, 0.02);
+  if (std::string(effect) != "alpha_velocity") {
+    EXPECT_NEAR(alpha.extended, 0.6, 0.02);
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(

@@ -22,13 +22,9 @@ namespace lmcal {
 using detail::fit_json;
 using detail::number;
 
-using detail::EffectSpec;
-using detail::effect_member;
-using detail::effect_slot;
 using detail::FrictionData;
 using detail::FrictionModel;
 using detail::kConstantUnits;
-using detail::kEffects;
 
 namespace {
 
@@ -145,7 +141,7 @@ std::vector<detail::ParameterSpec> parameter_specs(const FrictionFitOptions& o, 
   for (std::size_t j = 0; j < 7; ++j)
     specs.push_back({kFrictionConstantNames[j], kConstantUnits[j], fittable_constant(o.start, j), o.bounds[j].first, o.bounds[j].second, o.free[j]});
   for (std::size_t m = 0; m < slots.size(); ++m) {
-    const EffectSpec& e = kEffects[slots[m]];
+    const FrictionEffectInfo& e = FrictionEffectLibrary::infos[slots[m]];
     const double start = m < o.effect_start.size() ? std::clamp(o.effect_start[m], e.lower, e.upper) : e.neutral;
     specs.push_back({e.name, e.unit, start, e.lower, e.upper, true, e.scale});
   }
@@ -155,7 +151,7 @@ std::vector<detail::ParameterSpec> parameter_specs(const FrictionFitOptions& o, 
 std::vector<std::size_t> effect_slots(const FrictionFitOptions& o) {
   std::vector<std::size_t> slots;
   for (const auto& name : o.effects) {
-    const std::size_t slot = effect_slot(name);
+    const std::size_t slot = friction_effect_slot(name);
     if (std::find(slots.begin(), slots.end(), slot) != slots.end())
       throw InvalidParameter("effect", "effect '" + name + "' given twice");
     slots.push_back(slot);
@@ -168,7 +164,7 @@ std::vector<std::size_t> effect_slots(const FrictionFitOptions& o) {
 const std::vector<std::string>& friction_effect_names() {
   static const std::vector<std::string> names = [] {
     std::vector<std::string> v;
-    for (const auto& e : kEffects) v.emplace_back(e.name);
+    for (const auto& e : FrictionEffectLibrary::infos) v.emplace_back(e.name);
     return v;
   }();
   return names;
@@ -185,7 +181,7 @@ FrictionConstants<double> FrictionFitResult::constants() const {
 FrictionEffects<double> FrictionFitResult::effects() const {
   FrictionEffects<double> e;
   for (std::size_t j = 7; j < fit.parameters.size(); ++j)
-    effect_member(e, effect_slot(fit.parameters[j].name)) = fit.parameters[j].value;
+    e[friction_effect_slot(fit.parameters[j].name)] = fit.parameters[j].value;
   return e;
 }
 

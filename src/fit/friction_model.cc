@@ -11,14 +11,6 @@
 
 namespace lmcal::detail {
 
-std::size_t effect_slot(const std::string& name) {
-  for (std::size_t k = 0; k < std::size(kEffects); ++k)
-    if (name == kEffects[k].name) return k;
-  std::string known;
-  for (const auto& e : kEffects) known += (known.empty() ? "" : ", ") + std::string(e.name);
-  throw InvalidParameter("effect", fmt::format("unknown friction effect '{}'; known: {}", name, known));
-}
-
 namespace {
 
 // r_j = (F_measured - F_model(θ)) / σ for entry `rows[j]` of `data` (entry j when `rows` is
@@ -37,7 +29,7 @@ struct FrictionResidual {
   template <typename T>
   Prepared<T> prepare(const T* th) const {
     Prepared<T> p{{th[0], th[1], th[2], th[3], th[4], th[5], th[6], T(99.0), T(data->T_ref_C)}, {}};
-    for (std::size_t m = 0; m < effect_slots.size(); ++m) effect_member(p.e, effect_slots[m]) = th[7 + m];
+    for (std::size_t m = 0; m < effect_slots.size(); ++m) p.e[effect_slots[m]] = th[7 + m];
     return p;
   }
 

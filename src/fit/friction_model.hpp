@@ -13,33 +13,7 @@
 
 namespace lmcal::detail {
 
-struct EffectSpec {
-  const char* name;
-  const char* unit;
-  double neutral, lower, upper;
-  double scale;  // a typical size (the neutral value is often zero)
-};
-
-// The fittable friction effects, in FrictionEffects member order.
-inline constexpr EffectSpec kEffects[] = {
-    {"stribeck_exponent", "1", 1.0, 0.2, 5.0, 1.0},
-    {"viscous_load", "1/kN", 0.0, -1.0, 1.0, 0.1},
-    {"direction_asymmetry", "1", 0.0, -0.5, 0.5, 0.05},
-    {"seal_drag", "N s2/m2", 0.0, -5000.0, 5000.0, 100.0},
-    {"coulomb_temperature", "1/K", 0.0, -0.1, 0.1, 0.01},
-};
-
 inline constexpr const char* kConstantUnits[] = {"1", "1/um", "N mm2/s / (um mm)", "m/s", "N/(mm um m/s mm2/s)", "1/K", "N/mm"};
-
-template <typename T>
-T& effect_member(FrictionEffects<T>& e, std::size_t slot) {
-  T* members[] = {&e.stribeck_exponent, &e.viscous_load_per_kN, &e.direction_asymmetry, &e.seal_drag_N_s2_m2,
-                  &e.coulomb_temperature_per_K};
-  return *members[slot];
-}
-
-// The slot of a named effect in FrictionEffects; InvalidParameter for an unknown name.
-std::size_t effect_slot(const std::string& name);
 
 // What the residuals need, one entry per sample.
 struct FrictionData {

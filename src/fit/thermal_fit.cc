@@ -455,7 +455,6 @@ void read_friction_fit(const std::string& json_file, ThermalFitOptions& options)
   FrictionEffects<double> e;
   if (!j.contains("parameters") || !j["parameters"].is_array())
     throw InputError(json_file, 0, 0, "expected a \"parameters\" array");
-  const auto& effects = friction_effect_names();
   for (const auto& p : j["parameters"]) {
     const std::string name = p.value("name", "");
     if (!p.contains("value") || !p["value"].is_number()) continue;  // null: not estimated
@@ -463,8 +462,8 @@ void read_friction_fit(const std::string& json_file, ThermalFitOptions& options)
     const auto c = std::find(kFrictionConstantNames.begin(), kFrictionConstantNames.end(), name);
     if (c != kFrictionConstantNames.end())
       fittable_constant(k, static_cast<std::size_t>(c - kFrictionConstantNames.begin())) = value;
-    else if (std::find(effects.begin(), effects.end(), name) != effects.end())
-      detail::effect_member(e, detail::effect_slot(name)) = value;
+    else if (const auto slot = find_friction_effect(name))
+      e[*slot] = value;
   }
   options.friction = k;
   options.friction_effects = e;

@@ -1,6 +1,9 @@
 #include "lmcal/models/friction.hpp"
 
+#include <string>
+
 #include "lmcal/error.hpp"
+#include "lmcal/models/friction_effects.hpp"
 
 namespace lmcal {
 
@@ -22,6 +25,17 @@ void validate(const FrictionConditions<double>& c) {
   require_positive("block_length_mm", c.block_length_mm);
   require_non_negative("velocity_m_s", c.velocity_m_s);
   require_in_range("temperature_C", c.temperature_C, -273.15, 1000.0);
+}
+
+}  // namespace lmcal
+
+namespace lmcal {
+
+std::size_t friction_effect_slot(std::string_view name) {
+  if (const auto slot = find_friction_effect(name)) return *slot;
+  std::string known;
+  for (const auto& info : FrictionEffectLibrary::infos) known += (known.empty() ? "" : ", ") + std::string(info.name);
+  throw InvalidParameter("effect", "unknown friction effect '" + std::string(name) + "'; known: " + known);
 }
 
 }  // namespace lmcal

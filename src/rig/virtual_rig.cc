@@ -5,6 +5,7 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 #include <numbers>
+#include <optional>
 #include <random>
 
 #include "lmcal/error.hpp"
@@ -47,36 +48,38 @@ double round_to(double value, int decimals) {
   return std::round(value * scale) / scale;
 }
 
+// A named effect of the rig: a friction effect (a slot of FrictionEffects, from the
+// library in friction_effects.hpp) or a thermal one (a member of ThermalRigEffects).
 struct EffectEntry {
   RigEffectInfo info;
-  double& (*ref)(RigEffects&);
+  std::optional<std::size_t> friction_slot;
+  double ThermalRigEffects::*thermal = nullptr;
+
+  double& ref(RigEffects& e) const { return friction_slot ? e.friction[*friction_slot] : e.thermal.*thermal; }
+  double value(const RigEffects& e) const { return friction_slot ? e.friction[*friction_slot] : e.thermal.*thermal; }
 };
 
 const std::vector<EffectEntry>& effect_table() {
-  static const std::vector<EffectEntry> table = {
-      {{"stribeck_exponent", "1", 1.0, "exponent δ of the Stribeck decay exp(-(V/V_St)^δ)"},
-       [](RigEffects& e) -> double& { return e.friction.stribeck_exponent; }},
-      {{"viscous_load", "1/kN", 0.0, "viscous coefficient grows with load: μv (1 + c P/kN)"},
-       [](RigEffects& e) -> double& { return e.friction.viscous_load_per_kN; }},
-      {{"direction_asymmetry", "1", 0.0, "friction (1 + a) forward, (1 - a) backward"},
-       [](RigEffects& e) -> double& { return e.friction.direction_asymmetry; }},
-      {{"seal_drag", "N s2/m2", 0.0, "quadratic seal drag c V²"},
-       [](RigEffects& e) -> double& { return e.friction.seal_drag_N_s2_m2; }},
-      {{"coulomb_temperature", "1/K", 0.0, "Coulomb term (1 + c (T - T_i))"},
-       [](RigEffects& e) -> double& { return e.friction.coulomb_temperature_per_K; }},
-      {{"convection_velocity", "W/m2K/sqrt(m/s)", 0.0, "forced convection h = h0 + c sqrt(V)"},
-       [](RigEffects& e) -> double& { return e.thermal.convection_velocity; }},
-      {{"base_loss", "W/mK", 0.0, "heat loss through the rail base to the bed (at ambient)"},
-       [](RigEffects& e) -> double& { return e.thermal.base_loss; }},
-      {{"coupling", "0/1", 0.0, "Q from the friction law at the rail temperature (two-way coupling)"},
-       [](RigEffects& e) -> double& { return e.thermal.coupling; }},
-      {{"tc_lag", "s", 0.0, "thermocouple first-order time constant"},
-       [](RigEffects& e) -> double& { return e.thermal.tc_lag; }},
-      {{"alpha_velocity", "1/(m/s)", 0.0, "α = α0 + s (V - 0.1 m/s)"},
-       [](RigEffects& e) -> double& { return e.thermal.alpha_velocity; }},
-      {{"moving_source", "0/1", 0.0, "the block moves (truth simulated with the moving source)"},
-       [](RigEffects& e) -> double& { return e.thermal.moving_source; }},
-  };
+  static const std::vector<EffectEntry> table = [] {
+    std::vector<EffectEntry> t;
+    for (std::size_t slot = 0; slot < kFrictionEffectCount; ++slot) {
+      const FrictionEffectInfo& f = FrictionEffectLibrary::infos[slot];
+      t.push_back({{f.name, f.unit, f.neutral, f.description}, slot});
+    }
+    auto thermal = [&](const char* name, const char* unit, const char* description, double ThermalRigEffects::*member) {
+      t.push_back({{name, unit, 0.0, description}, std::nullopt, member});
+    };
+    thermal("convection_velocity", "W/m2K/sqrt(m/s)", "forced convection h = h0 + c sqrt(V)",
+            &ThermalRigEffects::convection_velocity);
+    thermal("base_loss", "W/mK", "heat loss through the rail base to the bed (at ambient)", &ThermalRigEffects::base_loss);
+    thermal("coupling", "0/1", "Q from the friction law at the rail temperature (two-way coupling)",
+            &ThermalRigEffects::coupling);
+    thermal("tc_lag", "s", "thermocouple first-order time constant", &ThermalRigEffects::tc_lag);
+    thermal("alpha_velocity", "1/(m/s)", "α = α0 + s (V - 0.1 m/s)", &ThermalRigEffects::alpha_velocity);
+    thermal("moving_source", "0/1", "the block moves (truth simulated with the moving source)",
+            &ThermalRigEffects::moving_source);
+    return t;
+  }();
   return table;
 }
 
@@ -91,7 +94,7 @@ const EffectEntry& find_effect(std::string_view name) {
 nlohmann::json effects_json(const RigEffects& effects) {
   nlohmann::json j = nlohmann::json::object();
   for (const auto& e : effect_table()) {
-    const double value = e.ref(const_cast<RigEffects&>(effects));
+    const double value = e.value(effects);
     j[e.info.name] = {{"value", value}, {"unit", e.info.unit}, {"active", value != e.info.neutral}};
   }
   return j;
@@ -127,7 +130,7 @@ void set_rig_effect(RigEffects& effects, std::string_view name, double value) {
 }
 
 double rig_effect(const RigEffects& effects, std::string_view name) {
-  return find_effect(name).ref(const_cast<RigEffects&>(effects));
+  return find_effect(name).value(effects);
 }
 
 FrictionRigOutput generate_friction_log(const FrictionRigConfig& config, const RigEffects& effects) {

@@ -1,78 +1,107 @@
-// Friction mechanisms the published law (friction.hpp) leaves out, each a correction to
-// the terms of Eq. 7 with its own parameter, neutral at zero (or one). The virtual rig
-// switches them on to make data with a known truth; the discrepancy analysis fits them.
-// See shared/PHYSICS.md §1a and §7.
+// The library of friction effects (see friction_effect.hpp for what one is) and the
+// published law with them applied. Register a new effect here: its include and one line
+// in FrictionEffectLibrary.
 //
-//   Stribeck shape     f_St · exp(r - r^δ),  r = V / V_St      (δ = 1: Eq. 5)
-//   load-dependent μv  + c_P · (P / 1 kN) · Lb μv pc V ν       (μv grows with load)
-//   direction          F · (1 + a · direction)                  (a = asymmetry, ±)
-//   seal drag          + c_s · V²                               (N per (m/s)²)
-//   Coulomb(T)         + f_C · c_T · (T - T_i)                  (1/K)
+//   F = F_law + Σ on_law corrections       (each from the law's own terms)
+//   F ← F + Σ on_total corrections          (each from that F)
 //
-// All templated like the law itself, so the same code serves data generation and fits.
-// Trap: the Stribeck exponent is evaluated as exp(δ ln r); at V = 0 the correction is
-// exactly 1 and its derivative with respect to δ is taken as 0.
+// FrictionEffects<T> holds one value per registered effect, neutral by default, so the
+// published law is FrictionEffects<double>{}. Values are addressed by slot (the effect's
+// place in the library), by type (`e.of<SealDrag>()`) or by name (friction_effect_slot).
 #pragma once
 
-#include <cmath>
+#include <array>
+#include <cstddef>
+#include <optional>
+#include <string_view>
+#include <utility>
 
 #include "lmcal/models/friction.hpp"
+#include "lmcal/models/friction_effect.hpp"
+#include "lmcal/models/friction_effects/coulomb_temperature.hpp"
+#include "lmcal/models/friction_effects/direction_asymmetry.hpp"
+#include "lmcal/models/friction_effects/seal_drag.hpp"
+#include "lmcal/models/friction_effects/stribeck_exponent.hpp"
+#include "lmcal/models/friction_effects/viscous_load.hpp"
 
 namespace lmcal {
 
-template <typename T>
-struct FrictionEffects {
-  T stribeck_exponent{1.0};           // δ
-  T viscous_load_per_kN{0.0};         // c_P
-  T direction_asymmetry{0.0};         // a
-  T seal_drag_N_s2_m2{0.0};           // c_s
-  T coulomb_temperature_per_K{0.0};   // c_T
+template <class... Effects>
+struct FrictionEffectList {
+  static constexpr std::size_t size = sizeof...(Effects);
+  static constexpr std::array<FrictionEffectInfo, size> infos{Effects::info...};
+
+  template <class Effect>
+  static constexpr std::size_t slot_of() {
+    constexpr bool match[] = {std::is_same_v<Effect, Effects>...};
+    for (std::size_t i = 0; i < size; ++i)
+      if (match[i]) return i;
+    return size;
+  }
+
+  // f.template operator()<Effect, slot>() for each effect, in library order.
+  template <class F>
+  static constexpr void for_each(F&& f) {
+    [&]<std::size_t... slot>(std::index_sequence<slot...>) {
+      (f.template operator()<Effects, slot>(), ...);
+    }(std::index_sequence_for<Effects...>{});
+  }
 };
 
-// Each correction returns the force it adds (N) to the published law's breakdown `b`.
-template <typename P, typename C, typename B, typename E>
-auto stribeck_shape_correction_N(const FrictionConstants<P>& k, const FrictionConditions<C>& c, const B& b,
-                                 const E& exponent) {
-  using std::exp;
-  using std::log;
-  const auto r = c.velocity_m_s / k.v_st_m_s;
-  if (!(r > 0.0)) return b.stribeck_N * 0.0 * exponent;
-  return b.stribeck_N * (exp(r - exp(exponent * log(r))) - 1.0);
-}
+using FrictionEffectLibrary = FrictionEffectList<
+    StribeckExponent,
+    ViscousLoad,
+    DirectionAsymmetry,
+    SealDrag,
+    CoulombTemperature>;
 
-template <typename P, typename C, typename B, typename E>
-auto viscous_load_correction_N(const FrictionConstants<P>& k, const FrictionConditions<C>& c, const B& b,
-                               const E& per_kN) {
-  const auto velocity_part = b.viscous_N - c.block_length_mm * k.f0;  // Lb μv pc V ν
-  return per_kN * (c.load_N * 1e-3) * velocity_part;
-}
+inline constexpr std::size_t kFrictionEffectCount = FrictionEffectLibrary::size;
 
-template <typename C, typename Total, typename E>
-auto direction_correction_N(const FrictionConditions<C>& c, const Total& total_N, const E& asymmetry) {
-  return total_N * asymmetry * c.direction;
+// The slot of a named effect, or none.
+constexpr std::optional<std::size_t> find_friction_effect(std::string_view name) {
+  for (std::size_t i = 0; i < kFrictionEffectCount; ++i)
+    if (name == FrictionEffectLibrary::infos[i].name) return i;
+  return std::nullopt;
 }
+// The slot of a named effect; InvalidParameter naming the known ones for an unknown name.
+std::size_t friction_effect_slot(std::string_view name);
 
-template <typename C, typename E>
-auto seal_drag_correction_N(const FrictionConditions<C>& c, const E& coefficient) {
-  return coefficient * c.velocity_m_s * c.velocity_m_s;
-}
+template <typename T>
+struct FrictionEffects {
+  std::array<T, kFrictionEffectCount> values;
 
-template <typename P, typename C, typename B, typename E>
-auto coulomb_temperature_correction_N(const FrictionConstants<P>& k, const FrictionConditions<C>& c, const B& b,
-                                      const E& per_K) {
-  return b.coulomb_N * per_K * (c.temperature_C - k.T_ref_C);
-}
+  FrictionEffects() {
+    for (std::size_t i = 0; i < kFrictionEffectCount; ++i) values[i] = T(FrictionEffectLibrary::infos[i].neutral);
+  }
+  T& operator[](std::size_t slot) { return values[slot]; }
+  const T& operator[](std::size_t slot) const { return values[slot]; }
+  template <class Effect>
+  T& of() {
+    return values[FrictionEffectLibrary::slot_of<Effect>()];
+  }
+  template <class Effect>
+  const T& of() const {
+    return values[FrictionEffectLibrary::slot_of<Effect>()];
+  }
+};
 
-// The published law with every effect of `e` applied (the direction factor last, on the total).
+// The published law with every effect of `e` applied, N.
 template <typename P, typename C, typename E>
 auto friction_force_with_effects_N(const FrictionConstants<P>& k, const FrictionEffects<E>& e,
                                    const FrictionConditions<C>& c) {
   const auto b = friction_breakdown(k, c);
-  const auto without_direction = b.total_N() + stribeck_shape_correction_N(k, c, b, e.stribeck_exponent) +
-                                 viscous_load_correction_N(k, c, b, e.viscous_load_per_kN) +
-                                 seal_drag_correction_N(c, e.seal_drag_N_s2_m2) +
-                                 coulomb_temperature_correction_N(k, c, b, e.coulomb_temperature_per_K);
-  return without_direction + direction_correction_N(c, without_direction, e.direction_asymmetry);
+  const auto law_N = b.total_N();
+  using R = decltype(law_N * e[0]);
+  R total(law_N);
+  auto add_stage = [&](FrictionEffectStage stage, const auto& reference_N) {
+    FrictionEffectLibrary::for_each([&]<class Effect, std::size_t slot>() {
+      if (Effect::stage == stage) total = total + Effect::correction_N(k, c, b, reference_N, e[slot]);
+    });
+  };
+  add_stage(FrictionEffectStage::on_law, law_N);
+  const R with_law_effects = total;
+  add_stage(FrictionEffectStage::on_total, with_law_effects);
+  return total;
 }
 
 // Eqs. 9-10 with the effects: Q_f = F · V, W.

@@ -11,8 +11,9 @@
 //             slow wave, logger resolution 0.01 K.
 //
 // Effects (rig_effects() lists them with units and neutral values):
-//   friction: stribeck_exponent, viscous_load, direction_asymmetry, seal_drag,
-//             coulomb_temperature                           (friction_effects.hpp)
+//   friction: the library in friction_effects.hpp (stribeck_exponent, viscous_load,
+//             direction_asymmetry, seal_drag, coulomb_temperature); a newly registered
+//             effect is a rig effect too
 //   thermal:  convection_velocity, base_loss, coupling, tc_lag, alpha_velocity,
 //             moving_source                                  (thermal_effects.hpp, solver)
 //

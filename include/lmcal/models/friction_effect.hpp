@@ -1,0 +1,38 @@
+// A friction effect: one mechanism the published law (friction.hpp, Eq. 7) leaves out, with
+// one parameter that is neutral at `info.neutral` (shared/PHYSICS.md §1a and §7).
+//
+// Adding one is a new header in friction_effects/ plus its line (and include) in
+// friction_effects.hpp. The virtual rig (`lmcal generate --effect NAME=VALUE`), the friction
+// fit (`lmcal fit friction --effect NAME`), the heat rate of the thermal fit and
+// `lmcal diagnose friction` all take the library from there. The header defines
+//
+//   struct Name {
+//     static constexpr FrictionEffectInfo info{name, unit, description, neutral, lower, upper, scale};
+//     static constexpr FrictionEffectStage stage = FrictionEffectStage::on_law;   // or on_total
+//     template <typename P, typename C, typename B, typename Total, typename E>
+//     static auto correction_N(const FrictionConstants<P>& k, const FrictionConditions<C>& c,
+//                              const B& breakdown, const Total& total_N, const E& value);
+//   };
+//
+// `correction_N` returns the force the effect adds, N. It is templated like the law itself, so
+// the same code makes data in the rig and gives derivatives (ceres::Jet) in the fits.
+//   on_law:   corrects the law's terms; `total_N` is the published law's total.
+//   on_total: scales the result; `total_N` is the law with every on_law effect applied.
+// Trap: at `value == neutral` the correction must be zero for every condition (the effects
+// test checks it for the whole library), or a fit of another effect would carry it along.
+#pragma once
+
+namespace lmcal {
+
+struct FrictionEffectInfo {
+  const char* name;         // the parameter's name in fits, truth files and on the command line
+  const char* unit;
+  const char* description;  // the equation in words, for `lmcal generate effects` and reports
+  double neutral;           // the published law
+  double lower, upper;      // bounds of a fit
+  double scale;             // a typical size (the neutral value is often zero), for fit scaling
+};
+
+enum class FrictionEffectStage { on_law, on_total };
+
+}  // namespace lmcal

@@ -1,0 +1,23 @@
+// Direction asymmetry: the whole friction force × (1 + a · direction), direction = ±1
+// (a tilted rail, an off-centre load, a seal that wipes one way). Acts on the total with
+// every other effect applied; shows as forward and backward strokes that differ in proportion.
+#pragma once
+
+#include "lmcal/models/friction.hpp"
+#include "lmcal/models/friction_effect.hpp"
+
+namespace lmcal {
+
+struct DirectionAsymmetry {
+  static constexpr FrictionEffectInfo info{"direction_asymmetry", "1", "friction (1 + a) forward, (1 - a) backward",
+                                           0.0, -0.5, 0.5, 0.05};
+  static constexpr FrictionEffectStage stage = FrictionEffectStage::on_total;
+
+  template <typename P, typename C, typename B, typename Total, typename E>
+  static auto correction_N(const FrictionConstants<P>&, const FrictionConditions<C>& c, const B&, const Total& total_N,
+                           const E& asymmetry) {
+    return total_N * asymmetry * c.direction;
+  }
+};
+
+}  // namespace lmcal
