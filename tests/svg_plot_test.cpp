@@ -1,0 +1,351 @@
+// Tests for the SVG plots of the reports: 1-2-5 ticks, where a value lands in pixels (read back
+// from the output against the drawn frame), skipped non-finite and non-positive-on-log values,
+// escaping, well-formed and deterministic output.
+#include "lmcal/report/svg_plot.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <limits>
+#include <regex>
+#include <string>
+#include <vector>
+
+namespace lmcal::report {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+std::size_t count_of(const std::string& text, const std::string& what) {
+  std::size_t n = 0;
+  for (std::size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + what.size())) ++n;
+  return n;
+}
+
+// Empty when every tag is closed in order; else what went wrong, and where.
+std::string tag_balance_error(const std::string& svg) {
+  std::vector<std::string> open;
+  for (std::size_t at = svg.find('<'); at != std::string::npos; at = svg.find('<', at + 1)) {
+    const std::size_t end = svg.find('>', at);
+    if (end == std::string::npos) return "unterminated tag at " + std::to_string(at);
+    const bool closing = svg[at + 1] == '/';
+    const std::size_t name_at = at + (closing ? 2 : 1);
+    const std::string name = svg.substr(name_at, svg.find_first_of(" />", name_at) - name_at);
+    if (name.empty() || !std::isalpha(static_cast<unsigned char>(name[0]))) return "bad tag at " + std::to_string(at);
+    if (closing) {
+      if (open.empty() || open.back() != name) return "</" + name + "> closes " + (open.empty() ? "nothing" : open.back());
+      open.pop_back();
+    } else if (svg[end - 1] != '/') {
+      open.push_back(name);
+    }
+  }
+  return open.empty() ? "" : "<" + open.back() + "> never closed";
+}
+
+// Every '&' starts one of the entities escape_xml writes.
+bool ampersands_are_entities(const std::string& svg) {
+  static const std::regex entity("^&(amp|lt|gt|quot|#39);");
+  for (std::size_t at = svg.find('&'); at != std::string::npos; at = svg.find('&', at + 1))
+    if (!std::regex_search(svg.substr(at, 8), entity)) return false;
+  return true;
+}
+
+bool has_non_finite_text(std::string svg) {
+  std::transform(svg.begin(), svg.end(), svg.begin(), [](unsigned char c) { return std::tolower(c); });
+  return svg.find("nan") != std::string::npos || svg.find("inf") != std::string::npos;
+}
+
+struct Point {
+  double x, y;
+};
+
+// The circles of the k-th series group.
+std::vector<Point> circles_of_series(const std::string& svg, std::size_t k) {
+  std::size_t at = svg.find("<g class=\"series\"");
+  for (std::size_t i = 0; i < k && at != std::string::npos; ++i) at = svg.find("<g class=\"series\"", at + 1);
+  if (at == std::string::npos) return {};
+  const std::string group = svg.substr(at, svg.find("</g>", at) - at);
+  static const std::regex circle(R"re(<circle cx="([-0-9.]+)" cy="([-0-9.]+)")re");
+  std::vector<Point> points;
+  for (std::sregex_iterator it(group.begin(), group.end(), circle), end; it != end; ++it)
+    points.push_back({std::stod((*it)[1]), std::stod((*it)[2])});
+  return points;
+}
+
+struct Rect {
+  double x, y, width, height;
+};
+
+Rect frame_of(const std::string& svg) {
+  static const std::regex frame(R"re(<rect class="frame" x="([-0-9.]+)" y="([-0-9.]+)" width="([0-9.]+)" height="([0-9.]+)")re");
+  std::smatch m;
+  if (!std::regex_search(svg, m, frame)) return {kNaN, kNaN, kNaN, kNaN};
+  return {std::stod(m[1]), std::stod(m[2]), std::stod(m[3]), std::stod(m[4])};
+}
+
+// Tick labels of the x axis (centred under the frame) or the y axis (right-aligned beside it).
+std::vector<std::string> tick_labels(const std::string& svg, bool x_axis) {
+  const std::size_t at = svg.find("<g class=\"tick-labels\"");
+  if (at == std::string::npos) return {};
+  const std::string group = svg.substr(at, svg.find("</g>", at) - at);
+  const std::regex label(std::string("text-anchor=\"") + (x_axis ? "middle" : "end") + "\">([^<]*)</text>");
+  std::vector<std::string> labels;
+  for (std::sregex_iterator it(group.begin(), group.end(), label), end; it != end; ++it) labels.push_back((*it)[1]);
+  return labels;
+}
+
+Plot points_on_fixed_limits(std::vector<double> x, std::vector<double> y) {
+  Plot plot{.id = "fixed", .x_min = 0, .x_max = 10, .y_min = -1, .y_max = 1};
+  plot.series.push_back({.x = std::move(x), .y = std::move(y), .mark = Mark::points});
+  return plot;
+}
+
+// Steps 1, 2 or 5 × 10^k, evenly spaced, the first at or below lo, the last at or above hi,
+// neither a whole step further out than needed.
+void expect_nice(double lo, double hi, int target) {
+  SCOPED_TRACE(testing::Message() << "nice_ticks(" << lo << ", " << hi << ", " << target << ")");
+  const std::vector<double> ticks = nice_ticks(lo, hi, target);
+  ASSERT_GE(ticks.size(), 2u);
+  const double step = ticks[1] - ticks[0];
+  const double mantissa = step / std::pow(10.0, std::floor(std::log10(step)));
+  EXPECT_TRUE(std::abs(mantissa - 1) < 1e-6 || std::abs(mantissa - 2) < 1e-6 || std::abs(mantissa - 5) < 1e-6 ||
+              std::abs(mantissa - 10) < 1e-6)
+      << "step " << step;
+  for (std::size_t i = 1; i < ticks.size(); ++i) EXPECT_NEAR(ticks[i] - ticks[i - 1], step, 1e-9 * step);
+  const double slack = 1e-9 * step;
+  EXPECT_LE(ticks.front(), lo + slack);
+  EXPECT_GE(ticks.back(), hi - slack);
+  EXPECT_GT(ticks.front(), lo - step);
+  EXPECT_LT(ticks.back(), hi + step);
+  EXPECT_GE(static_cast<int>(ticks.size()), target / 2 + 1);
+  EXPECT_LE(static_cast<int>(ticks.size()), 2 * target + 2);
+}
+
+TEST(SvgPlot, NiceTicksOfTheExample) {
+  EXPECT_EQ(nice_ticks(0, 0.97, 5), (std::vector<double>{0, 0.2, 0.4, 0.6, 0.8, 1.0}));  // exact decimals
+  EXPECT_EQ(nice_ticks(-3.7, -0.2, 5), (std::vector<double>{-4, -3, -2, -1, 0}));
+  EXPECT_EQ(nice_ticks(0.97, 0, 5), nice_ticks(0, 0.97, 5));
+}
+
+TEST(SvgPlot, NiceTicksAreOneTwoFiveStepsCoveringTheRange) {
+  const double ranges[][2] = {{0, 0.97},   {-3.7, -0.2},   {-12, 17},         {1e-9, 3.3e-9},  {1, 1 + 1e-10},
+                              {2e5, 9e6},  {-1e-6, 2e-7},  {0.013, 0.0171},   {99.5, 100.5},   {-1e300, 1e300},
+                              {3, 1000.5}, {12345, 12346}, {-273.15, -200.0}, {1e-300, 2e-300}};
+  for (const auto& [lo, hi] : ranges)
+    for (const int target : {2, 3, 5, 8, 12}) expect_nice(lo, hi, target);
+}
+
+TEST(SvgPlot, NiceTicksOfDegenerateInput) {
+  EXPECT_EQ(nice_ticks(2, 2, 5), (std::vector<double>{2}));
+  EXPECT_TRUE(nice_ticks(kNaN, 1, 5).empty());
+  EXPECT_TRUE(nice_ticks(0, kInf, 5).empty());
+  EXPECT_TRUE(nice_ticks(-1.7e308, 1.7e308, 5).empty());  // the span itself overflows
+  EXPECT_EQ(nice_ticks(0, 1, -3), nice_ticks(0, 1, 2));  // target clamped
+}
+
+TEST(SvgPlot, PointsLandOnTheFrameAtTheLimitsAndInBetweenLinearly) {
+  const std::string svg = render_svg(points_on_fixed_limits({0, 10, 5, 2.5}, {-1, 1, 0, 0.5}));
+  const Rect frame = frame_of(svg);
+  ASSERT_GT(frame.width, 100);
+  ASSERT_GT(frame.height, 100);
+  const std::vector<Point> p = circles_of_series(svg, 0);
+  ASSERT_EQ(p.size(), 4u);
+  const double tol = 0.011;  // coordinates carry 2 decimals
+  EXPECT_NEAR(p[0].x, frame.x, tol);  // (x_min, y_min): bottom left, y grows downwards
+  EXPECT_NEAR(p[0].y, frame.y + frame.height, tol);
+  EXPECT_NEAR(p[1].x, frame.x + frame.width, tol);  // (x_max, y_max): top right
+  EXPECT_NEAR(p[1].y, frame.y, tol);
+  EXPECT_NEAR(p[2].x, frame.x + frame.width / 2, tol);
+  EXPECT_NEAR(p[2].y, frame.y + frame.height / 2, tol);
+  EXPECT_NEAR(p[3].x, frame.x + frame.width / 4, tol);
+  EXPECT_NEAR(p[3].y, frame.y + frame.height / 4, tol);
+}
+
+TEST(SvgPlot, ErrorBarsSpanYPlusMinusError) {
+  Plot plot = points_on_fixed_limits({5}, {0});
+  plot.series[0].y_error = {0.5};
+  const std::string svg = render_svg(plot);
+  const Rect frame = frame_of(svg);
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(svg, m, std::regex(R"re(class="error-bars"[^>]* d="M([-0-9.]+) ([-0-9.]+)V([-0-9.]+))re")));
+  EXPECT_NEAR(std::stod(m[1]), frame.x + frame.width / 2, 0.011);
+  EXPECT_NEAR(std::stod(m[2]), frame.y + 0.75 * frame.height, 0.011);  // y - 0.5
+  EXPECT_NEAR(std::stod(m[3]), frame.y + 0.25 * frame.height, 0.011);  // y + 0.5
+}
+
+TEST(SvgPlot, NonFiniteValuesAreSkippedAndBreakTheLine) {
+  Plot plot{.id = "gaps"};
+  plot.series.push_back({.x = {0, 1, 2, kNaN, 4, 5, 6}, .y = {0, 1, kInf, 3, 4, -kInf, 6}, .mark = Mark::line_points});
+  const std::string svg = render_svg(plot);
+  EXPECT_EQ(circles_of_series(svg, 0).size(), 4u);  // (0,0) (1,1) (4,4) (6,6)
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(svg, m, std::regex(R"re(<path fill="none" d="([^"]*)")re")));
+  EXPECT_EQ(count_of(m[1], "M"), 3u) << m[1];  // runs {0,1}, {4}, {6}
+  EXPECT_FALSE(has_non_finite_text(svg));
+}
+
+TEST(SvgPlot, WithoutDrawableDataSaysNoData) {
+  Plot all_bad{.id = "bad", .log_y = true};
+  all_bad.series.push_back({.label = "bad", .x = {1, 2, kNaN}, .y = {-1, 0, 3}});  // y ≤ 0 on a log axis
+  all_bad.references.push_back({.at = 1});
+  for (const Plot& plot : {Plot{.id = "empty"}, all_bad}) {
+    const std::string svg = render_svg(plot);
+    EXPECT_NE(svg.find("no data"), std::string::npos);
+    EXPECT_NE(svg.find("data-plot=\"" + plot.id + "\""), std::string::npos);
+    EXPECT_EQ(count_of(svg, "<svg"), 1u);
+    EXPECT_EQ(count_of(svg, "class=\"series\""), 0u);
+    EXPECT_EQ(count_of(svg, "class=\"legend\""), 0u);
+    EXPECT_EQ(tag_balance_error(svg), "");
+    EXPECT_EQ(svg.find("nan"), std::string::npos);
+  }
+}
+
+TEST(SvgPlot, SinglePointOrZeroRangeGetsAnOpenAxis) {
+  Plot plot{.id = "one"};
+  plot.series.push_back({.x = {3}, .y = {7}});  // a line of one point still shows it
+  const std::string svg = render_svg(plot);
+  const Rect frame = frame_of(svg);
+  const std::vector<Point> p = circles_of_series(svg, 0);
+  ASSERT_EQ(p.size(), 1u);
+  EXPECT_NEAR(p[0].x, frame.x + frame.width / 2, 0.011);
+  EXPECT_NEAR(p[0].y, frame.y + frame.height / 2, 0.011);
+  const std::vector<std::string> y = tick_labels(svg, false);  // 7 ± 10 %
+  ASSERT_GE(y.size(), 2u);
+  EXPECT_GE(std::stod(y.front()), 6.3);
+  EXPECT_LE(std::stod(y.back()), 7.7);
+
+  Plot zeros{.id = "zeros"};
+  zeros.series.push_back({.x = {0, 0}, .y = {0, 0}, .mark = Mark::points});
+  const std::vector<std::string> z = tick_labels(render_svg(zeros), true);  // 0 ± 1
+  ASSERT_GE(z.size(), 2u);
+  EXPECT_EQ(z.front(), "-1");
+  EXPECT_EQ(z.back(), "1");
+}
+
+TEST(SvgPlot, LogAxisSkipsNonPositiveAndTicksAtDecades) {
+  Plot plot{.id = "log", .log_x = true};
+  plot.series.push_back({.x = {-5, 0, 1, 10, 100, 1000}, .y = {1, 2, 3, 4, 5, 6}, .mark = Mark::points});
+  const std::string svg = render_svg(plot);
+  const std::vector<Point> p = circles_of_series(svg, 0);
+  ASSERT_EQ(p.size(), 4u);
+  EXPECT_NEAR(p[1].x - p[0].x, p[2].x - p[1].x, 0.02);  // decades evenly spaced
+  EXPECT_NEAR(p[2].x - p[1].x, p[3].x - p[2].x, 0.02);
+  EXPECT_EQ(tick_labels(svg, true), (std::vector<std::string>{"1", "10", "100", "1000"}));
+
+  Plot wide{.id = "wide", .log_y = true};
+  wide.series.push_back({.x = {0, 1, 2}, .y = {1e-9, 1, 1e9}});
+  const std::vector<std::string> labels = tick_labels(render_svg(wide), false);
+  ASSERT_GE(labels.size(), 3u);
+  for (const std::string& label : labels) {
+    const double decade = std::log10(std::stod(label));
+    EXPECT_NEAR(decade, std::round(decade), 1e-12) << label;
+    EXPECT_LE(label.size(), 6u) << label;  // "1e-09", not "0.000000001"
+  }
+
+  Plot narrow{.id = "narrow", .log_y = true};  // within a decade: 1-2-5
+  narrow.series.push_back({.x = {0, 1}, .y = {12, 80}});
+  EXPECT_EQ(tick_labels(render_svg(narrow), false), (std::vector<std::string>{"20", "50"}));
+}
+
+TEST(SvgPlot, TickLabelsAreCompact) {
+  Plot plot{.id = "compact"};
+  plot.series.push_back({.x = {0.1, 0.3}, .y = {1e-5, 5e-5}});
+  const std::string svg = render_svg(plot);
+  const std::vector<std::string> x = tick_labels(svg, true), y = tick_labels(svg, false);
+  EXPECT_NE(std::find(x.begin(), x.end(), "0.3"), x.end());
+  EXPECT_NE(std::find(y.begin(), y.end(), "2e-05"), y.end());
+  for (const auto* labels : {&x, &y})
+    for (const std::string& label : *labels) EXPECT_LE(label.size(), 6u) << label;
+
+  Plot big{.id = "big", .x_min = 0, .x_max = 3000};
+  big.series.push_back({.x = {0, 3000}, .y = {0, 1}});
+  const std::vector<std::string> b = tick_labels(render_svg(big), true);
+  EXPECT_NE(std::find(b.begin(), b.end(), "2000"), b.end());
+}
+
+TEST(SvgPlot, EscapesEveryUserString) {
+  Plot plot{.id = "p\"><script>", .title = "Force <F> & \"v\" 'x'", .x_label = "a<b", .y_label = "c&d"};
+  plot.series.push_back({.label = "fit </g>", .x = {0, 1}, .y = {0, 1}, .color = "red\"/><x"});
+  plot.references.push_back({.at = 0.5, .label = "<ref>"});
+  const std::string svg = render_svg(plot);
+  EXPECT_NE(svg.find("<title>Force &lt;F&gt; &amp; &quot;v&quot; &#39;x&#39;</title>"), std::string::npos);
+  EXPECT_NE(svg.find("data-plot=\"p&quot;&gt;&lt;script&gt;\""), std::string::npos);
+  EXPECT_EQ(svg.find("<script"), std::string::npos);
+  EXPECT_EQ(svg.find("<F>"), std::string::npos);
+  EXPECT_EQ(svg.find("<ref>"), std::string::npos);
+  EXPECT_EQ(svg.find("<x"), std::string::npos);
+  EXPECT_TRUE(ampersands_are_entities(svg));
+  EXPECT_EQ(tag_balance_error(svg), "");
+  EXPECT_EQ(escape_xml("a\x01\tb"), "a\tb");  // XML forbids most control characters
+}
+
+TEST(SvgPlot, OneWellFormedSvgWithAGroupPerSeriesWithData) {
+  Plot plot{.id = "four", .title = "t", .x_label = "velocity (m/s)", .y_label = "force (N)"};
+  plot.series.push_back({.label = "measured", .x = {0, 1, 2}, .y = {1, 2, 3}, .y_error = {0.1, 0.1, 0.1},
+                         .mark = Mark::points});
+  plot.series.push_back({.label = "empty"});
+  plot.series.push_back({.label = "all NaN", .x = {kNaN, 1}, .y = {1, kNaN}});
+  plot.series.push_back({.label = "", .x = {0, 2}, .y = {1, 3}, .dashed = true});
+  plot.references.push_back({.horizontal = false, .at = 1, .label = "x = 1"});
+  const std::string svg = render_svg(plot);
+  EXPECT_EQ(svg.rfind("<svg xmlns=\"http://www.w3.org/2000/svg\" class=\"plot\" data-plot=\"four\"", 0), 0u);
+  EXPECT_EQ(count_of(svg, "<svg"), 1u);
+  EXPECT_EQ(count_of(svg, "</svg>"), 1u);
+  EXPECT_EQ(tag_balance_error(svg), "");
+  EXPECT_EQ(count_of(svg, "class=\"series\""), 2u);
+  EXPECT_NE(svg.find("data-label=\"measured\""), std::string::npos);
+  EXPECT_EQ(count_of(svg, ">measured</text>"), 1u);  // in the legend; series without data are not
+  EXPECT_EQ(svg.find(">empty</text>"), std::string::npos);
+  EXPECT_EQ(svg.find(">all NaN</text>"), std::string::npos);
+  EXPECT_EQ(count_of(svg, "class=\"reference\""), 1u);
+}
+
+TEST(SvgPlot, OddInputStaysWellFormed) {
+  const double denormal = std::numeric_limits<double>::denorm_min();
+  std::vector<Plot> plots;
+  plots.push_back({.id = "extremes"});
+  plots.back().series.push_back({.x = {-1e300, 0, 1e300}, .y = {1e-300, denormal, -1e300}, .mark = Mark::line_points});
+  plots.back().series.push_back({.x = {1e308, 2}, .y = {1, 1e308}});  // beyond 1e300: skipped
+  plots.push_back({.id = "reversed", .x_min = 5, .x_max = -5, .y_min = 3});  // y_min above all data
+  plots.back().series.push_back({.x = {0, 1, 2, 3}, .y = {0, 1}, .y_error = {kNaN, -1}});  // lengths differ
+  plots.push_back({.id = "log", .log_x = true, .log_y = true, .x_min = -1, .y_max = 0, .width_px = 0, .height_px = -4});
+  plots.back().series.push_back({.x = {1e-300, 1e300}, .y = {2, 3}, .y_error = {5, 1}});  // bar below 0 on log y
+  plots.back().references.push_back({.horizontal = false, .at = -1, .label = "off the log axis"});
+  plots.push_back({.id = "flat", .x_min = 1, .x_max = 1});
+  plots.back().series.push_back({.x = {1, 1}, .y = {-2, -2}, .mark = Mark::points});
+  for (const Plot& plot : plots) {
+    SCOPED_TRACE(plot.id);
+    const std::string svg = render_svg(plot);
+    EXPECT_EQ(tag_balance_error(svg), "");
+    EXPECT_EQ(count_of(svg, "<svg"), 1u);
+    EXPECT_FALSE(has_non_finite_text(svg));
+    EXPECT_EQ(svg.find("no data"), std::string::npos);
+    EXPECT_LT(svg.size(), 20000u);  // clamped coordinates stay short
+  }
+}
+
+TEST(SvgPlot, PaletteColoursFollowSeriesOrder) {
+  Plot plot{.id = "colours"};
+  for (int i = 0; i < 3; ++i) plot.series.push_back({.x = {0, 1}, .y = {0, 1.0 * i}});
+  plot.series[1].color = "purple";
+  const std::string svg = render_svg(plot);
+  EXPECT_NE(svg.find("stroke=\"#0072B2\""), std::string::npos);
+  EXPECT_NE(svg.find("stroke=\"purple\""), std::string::npos);
+  EXPECT_NE(svg.find("stroke=\"#009E73\""), std::string::npos);  // third colour for the third series
+  EXPECT_EQ(svg.find("stroke=\"#D55E00\""), std::string::npos);
+  EXPECT_EQ(svg.find("class=\"legend\""), std::string::npos);  // no labels, no legend
+}
+
+TEST(SvgPlot, SameInputSameBytes) {
+  Plot plot{.id = "det", .title = "determinism", .log_y = true};
+  plot.series.push_back({.label = "a", .x = {0.1, 0.2, 0.7}, .y = {3, 30, 300}, .y_error = {1, 2, 3}});
+  const std::string first = render_svg(plot);
+  render_svg(points_on_fixed_limits({1, 2}, {0.5, 0.25}));
+  EXPECT_EQ(render_svg(plot), first);
+}
+
+}  // namespace
+}  // namespace lmcal::report
