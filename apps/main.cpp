@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
   lmcal::cli::setup_check(app);
   lmcal::cli::setup_fit(app, args);
   lmcal::cli::setup_diagnose(app);
+  lmcal::cli::setup_calibrate(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -154,7 +154,10 @@ FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagno
     }
     return std::make_pair(m, c);
   };
-  const detail::SelectionRules rules{.lrt_p = o.lrt_p, .min_cv_gain_percent = o.min_cv_gain_percent, .max_effects = o.max_effects};
+  const detail::SelectionRules rules{.lrt_p = o.lrt_p,
+                                     .min_cv_gain_percent = o.min_cv_gain_percent,
+                                     .max_effects = o.max_effects,
+                                     .progress = o.progress};
   auto selection = detail::forward_select(friction_effect_names(), baseline, fit_candidate, summarise, rules);
   const FrictionFitResult& current = selection.current;
   d.rounds = std::move(selection.rounds);
@@ -183,6 +186,8 @@ FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagno
   d.summary = v.summary;
   d.unexplained_covariate = v.unexplained_covariate;
   d.cv_gain_percent = v.cv_gain_percent;
+  d.final_fit = current;
+  d.baseline_fit = baseline;
   return d;
 }
 

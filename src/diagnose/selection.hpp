@@ -51,6 +51,7 @@ struct SelectionRules {
   double noise_floor = 0;
   double min_excess_removed = 0.1;
   std::size_t max_effects = 3;
+  Progress progress;  // told of every candidate fit
 };
 
 // AICc and BIC of a Gaussian least-squares fit with k parameters over n (effective) residuals.
@@ -80,8 +81,11 @@ Selection<Fit> forward_select(const std::vector<std::string>& library, Fit basel
     std::vector<CandidateScore> round;
     std::vector<Fit> fits;
     std::vector<ModelFit> models;
+    const std::size_t candidates = library.size() - s.accepted.size();
     for (const auto& effect : library) {
       if (std::find(s.accepted.begin(), s.accepted.end(), effect) != s.accepted.end()) continue;
+      if (rules.progress)
+        rules.progress("round " + std::to_string(s.rounds.size() + 1) + ", " + effect, round.size(), candidates);
       std::vector<std::string> effects = s.accepted;
       effects.push_back(effect);
       Fit fit = fit_with(effects, s.current);

@@ -228,7 +228,8 @@ ThermalDiagnosis diagnose_thermal(const ThermalDataSet& data, const ThermalDiagn
                                      .min_cv_gain_percent = o.min_cv_gain_percent,
                                      .noise_floor = std::isfinite(d.noise_K) ? d.noise_K : 0.0,
                                      .min_excess_removed = o.min_excess_removed,
-                                     .max_effects = o.max_effects};
+                                     .max_effects = o.max_effects,
+                                     .progress = o.progress};
   auto selection = detail::forward_select(library, d.baseline_fit, fit_candidate, summarise, rules);
   d.final_fit = std::move(selection.current);
   d.rounds = std::move(selection.rounds);

@@ -420,6 +420,16 @@ ThermalFitResult fit_thermal(const ThermalDataSet& data, const ThermalFitOptions
       result.goodness.push_back(g);
     }
   }
+  const auto profiles = model.end_profiles(theta);
+  for (std::size_t r = 0; r < runs.size(); ++r) {
+    const auto& pr = runs[r];
+    ThermalFitResult::EndState end{profiles[r], pr.sensor_positions_m, {}};
+    for (std::size_t s = 0; s < pr.sensor_names.size(); ++s) {
+      const int offset = layout.offsets[r][s];
+      end.measured_C.push_back(pr.measured.back()[s] - (offset >= 0 ? theta[static_cast<std::size_t>(offset)] : 0.0));
+    }
+    result.end_states.push_back(std::move(end));
+  }
   const double alpha_hat = theta[static_cast<std::size_t>(layout.alpha)];
   for (std::size_t r = 0; r < runs.size(); ++r) {
     for (int c = 0; c < o.curve_points; ++c) {

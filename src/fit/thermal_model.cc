@@ -29,10 +29,12 @@ std::vector<int> local_parameters(const ThermalLayout& layout, std::size_t r) {
 }
 
 // Simulated temperatures of run r, [time][sensor], with the parameters given by `param`
-// (global index -> scalar) and the run's fixed values elsewhere.
+// (global index -> scalar) and the run's fixed values elsewhere; with `end_profile`, also the
+// rail's temperature profile at the last record.
 template <typename T, typename Param>
 std::vector<std::vector<T>> simulate_run(const PreparedRun& run, const RailNumerics& numerics,
-                                         const ThermalLayout& layout, std::size_t r, const Param& param) {
+                                         const ThermalLayout& layout, std::size_t r, const Param& param,
+                                         RailProfile* end_profile = nullptr) {
   const bool scaled = !layout.heat_scale.empty() && layout.heat_scale[r] >= 0;
   RailParams<T> p{.heat_partition = param(layout.alpha),
                   .heat_rate_W = scaled ? run.params.heat_rate_W * param(layout.heat_scale[r]) : T(run.params.heat_rate_W),
@@ -56,8 +58,12 @@ std::vector<std::vector<T>> simulate_run(const PreparedRun& run, const RailNumer
   }
   const RailOutputs outputs{.duration_s = run.times_s.back(),
                             .sensor_positions_m = run.sensor_positions_m,
-                            .output_times_s = run.times_s};
+                            .output_times_s = run.times_s,
+                            .profile_times_s = end_profile ? std::vector<double>{run.times_s.back()} : std::vector<double>{}};
   const RailSolution<T> sol = simulate_rail(run.geometry, numerics, outputs, setup.params, run.ambient, setup.heat_rate);
+  if constexpr (std::is_same_v<T, double>) {
+    if (end_profile) *end_profile = {run.times_s.back(), sol.node_positions_m, sol.profiles_C.front()};
+  }
   std::vector<std::vector<T>> out(run.times_s.size(), std::vector<T>(run.sensor_positions_m.size()));
   for (std::size_t s = 0; s < run.sensor_positions_m.size(); ++s) {
     std::vector<T> series(run.times_s.size());
@@ -257,6 +263,13 @@ std::vector<std::vector<std::vector<double>>> ThermalModel::simulate(const std::
   std::vector<std::vector<std::vector<double>>> out;
   for (std::size_t r = 0; r < runs_.size(); ++r)
     out.push_back(simulate_run<double>(runs_[r], numerics_, layout_, r, [&](int g) { return theta[g]; }));
+  return out;
+}
+
+std::vector<RailProfile> ThermalModel::end_profiles(const std::vector<double>& theta) const {
+  std::vector<RailProfile> out(runs_.size());
+  for (std::size_t r = 0; r < runs_.size(); ++r)
+    simulate_run<double>(runs_[r], numerics_, layout_, r, [&](int g) { return theta[g]; }, &out[r]);
   return out;
 }
 

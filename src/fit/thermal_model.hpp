@@ -8,6 +8,7 @@
 
 #include "least_squares.hpp"
 #include "thermal_extension.hpp"
+#include "lmcal/fit/thermal_fit.hpp"
 #include "lmcal/models/rail_thermal.hpp"
 
 namespace lmcal::detail {
@@ -58,6 +59,8 @@ class ThermalModel : public LeastSquaresModel {
 
   // Simulated temperature at every (run, record, sensor) of the data for parameters θ.
   std::vector<std::vector<std::vector<double>>> simulate(const std::vector<double>& theta) const;
+  // Each run's temperature along the rail at its last record, for parameters θ.
+  std::vector<RailProfile> end_profiles(const std::vector<double>& theta) const;
 
   struct Row {
     std::size_t run, time, sensor;

@@ -3,10 +3,15 @@
 #pragma once
 
 #include <cstddef>
+#include <functional>
 #include <string>
 #include <vector>
 
 namespace lmcal {
+
+// Told what a long computation is doing and how far it has got: step `done` of `total`
+// (0-based) of `what`. Called from the calling thread; may be empty.
+using Progress = std::function<void(const std::string& what, std::size_t done, std::size_t total)>;
 
 struct CovariateTest {
   std::string covariate;

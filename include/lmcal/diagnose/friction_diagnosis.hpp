@@ -44,6 +44,7 @@ struct FrictionDiagnosisOptions {
   double min_cv_gain_percent = 2.0;
   double structure_p = 1e-3;
   std::size_t max_effects = 3;
+  Progress progress;  // the candidate fits, round by round
 };
 
 struct FrictionDiagnosis {
@@ -56,6 +57,7 @@ struct FrictionDiagnosis {
   double cv_rmse_before_N = 0, cv_rmse_after_N = 0, cv_gain_percent = 0;
   std::vector<ParameterShift> shifts;
   std::string unexplained_covariate;  // when the verdict is "unexplained"
+  FrictionFitResult baseline_fit, final_fit;  // the law, and the law with the accepted causes
 };
 
 FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagnosisOptions& options);

@@ -67,6 +67,7 @@ struct ThermalDiagnosisOptions {
   double min_structure_fraction = 0.2;
   std::size_t max_effects = 3;
   int time_bins = 12;     // cells per sensor series for the covariate tests
+  Progress progress;      // the candidate fits, round by round
 };
 
 struct ThermalDiagnosis {

@@ -16,6 +16,7 @@
 
 #include <cstddef>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace lmcal {
@@ -93,5 +94,8 @@ struct FitResult {
   const ParameterEstimate& parameter(const std::string& name) const;
   std::vector<double> values() const;
 };
+
+// Name -> version of the numerical libraries the fits were built with (Ceres, Eigen, NLopt).
+std::vector<std::pair<std::string, std::string>> numerical_library_versions();
 
 }  // namespace lmcal

@@ -80,6 +80,12 @@ struct ThermalFitOptions {
   int curve_points = 46;
 };
 
+// Temperature along the rail at one time (the model's nodes, from the rail centre).
+struct RailProfile {
+  double time_s = 0;
+  std::vector<double> position_m, temperature_C;
+};
+
 struct SensorGoodness {
   std::string run, sensor;
   double position_m = 0;
@@ -120,6 +126,13 @@ struct ThermalFitResult {
   double alpha_ratio_paper_over_averaged = std::numeric_limits<double>::quiet_NaN();
   double contact_over_stroke = std::numeric_limits<double>::quiet_NaN();  // Lb1 / L1 of the first run
   std::vector<Sample> samples;                         // joint fit, every fitted record
+  // Each run at its last fitted record: the model along the rail, and each sensor's reading
+  // less its fitted offset (the rail temperature it measured).
+  struct EndState {
+    RailProfile model;
+    std::vector<double> sensor_position_m, measured_C;
+  };
+  std::vector<EndState> end_states;
   double cv_rmse_K = std::numeric_limits<double>::quiet_NaN();  // leave-one-run-out, when asked
   double sum_of_squares_K2 = 0;  // the fit's objective: data rows and the heat-scale priors
   std::vector<std::vector<std::string>> sensor_names;  // [run][sensor]

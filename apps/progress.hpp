@@ -1,0 +1,38 @@
+// Progress on the terminal: one line on stderr, rewritten in place ("[2/5] thermal
+// diagnosis: round 1, coupling (3/8)  14 s"), and nothing at all when stderr is not a
+// terminal (a log file or a pipe gets only the results).
+#pragma once
+
+#include <chrono>
+#include <cstddef>
+#include <cstdio>
+#include <string>
+
+namespace lmcal::cli {
+
+class TerminalProgress {
+ public:
+  explicit TerminalProgress(std::FILE* out = stderr);
+  ~TerminalProgress();
+  TerminalProgress(const TerminalProgress&) = delete;
+  TerminalProgress& operator=(const TerminalProgress&) = delete;
+
+  // Step `index` (0-based) of `count` starts.
+  void step(std::size_t index, std::size_t count, const std::string& name);
+  // Inside the current step: item `done` (0-based) of `total`.
+  void detail(const std::string& what, std::size_t done, std::size_t total);
+  // Clears the line (before the results are printed).
+  void clear();
+
+ private:
+  using Clock = std::chrono::steady_clock;
+  void draw(bool force);
+
+  std::FILE* out_;
+  bool enabled_;
+  bool shown_ = false;
+  std::string step_, detail_;
+  Clock::time_point step_start_ = Clock::now(), last_draw_{};
+};
+
+}  // namespace lmcal::cli

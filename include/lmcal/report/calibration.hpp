@@ -1,0 +1,97 @@
+// lmcal calibrate: the whole story of one measurement set, in one call.
+//
+//   load → friction fit → friction diagnosis → thermal fit (heat from that friction fit)
+//        → thermal diagnosis,   with the spread across runs inside each fit
+//
+// A measurement set is a folder: its friction logs are the `friction*.csv` files in it, its
+// thermal data the `thermal*.toml` manifest (at most one). Either half may be missing; the
+// thermal half then takes its heat from the manifest's measured mean friction (or is skipped).
+// The outputs are the files `lmcal fit …` and `lmcal diagnose …` write, a summary
+// (calibration.json) and the report (report.html, see html_report.hpp).
+//
+// Example:
+//   auto set = lmcal::find_calibration_set("measurements/cheng2017");
+//   auto c = lmcal::calibrate(set, {});
+//   lmcal::OutputSet out;
+//   for (auto& [name, text] : lmcal::calibration_outputs(c)) out.add("fits/cheng2017" / name, text);
+//   out.commit();
+//
+// Trap: the outputs record the command as `lmcal calibrate SET` (not where they were written),
+// so the same set gives the same files wherever they go; timings ("seconds") are the only
+// fields that differ between runs.
+#pragma once
+
+#include <cstddef>
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "lmcal/diagnose/friction_diagnosis.hpp"
+#include "lmcal/diagnose/thermal_diagnosis.hpp"
+#include "lmcal/fit/friction_fit.hpp"
+#include "lmcal/fit/thermal_fit.hpp"
+#include "lmcal/io/friction_log.hpp"
+#include "lmcal/io/thermal_run.hpp"
+
+namespace lmcal {
+
+struct CalibrationSet {
+  std::filesystem::path dir;
+  std::string name;                                   // the folder's name
+  std::vector<std::filesystem::path> friction_logs;   // friction*.csv, sorted
+  std::optional<std::filesystem::path> thermal_manifest;
+};
+
+// What `dir` holds; InputError when it is not a folder or holds neither half.
+CalibrationSet find_calibration_set(const std::filesystem::path& dir);
+
+struct CalibrationOptions {
+  FrictionFitOptions friction;
+  FrictionDiagnosisOptions friction_diagnosis;
+  ThermalFitOptions thermal;  // the friction constants are set from the friction fit
+  ThermalDiagnosisOptions thermal_diagnosis;
+  bool diagnose = true;
+};
+
+// How far the calibration is: `step` (0-based) of `steps` named `name` starts; `detail`
+// reports inside the long steps (the diagnoses' candidate fits).
+struct CalibrationProgress {
+  std::function<void(std::size_t step, std::size_t steps, const std::string& name)> step;
+  Progress detail;
+};
+
+struct Calibration {
+  CalibrationSet set;
+  std::vector<std::pair<std::string, std::string>> inputs;  // file -> sha256
+  std::vector<std::string> command;                         // as recorded in the outputs
+  std::vector<std::string> notes;                           // steps skipped, and why
+  std::optional<FrictionLog> friction_log;
+  FrictionFitOptions friction_options;
+  std::optional<FrictionFitResult> friction;
+  std::optional<FrictionDiagnosis> friction_diagnosis;
+  std::optional<ThermalDataSet> thermal_data;
+  ThermalFitOptions thermal_options;
+  std::optional<ThermalFitResult> thermal;
+  std::optional<ThermalDiagnosis> thermal_diagnosis;
+};
+
+Calibration calibrate(const CalibrationSet& set, const CalibrationOptions& options,
+                      const CalibrationProgress& progress = {});
+
+// Every output file, name -> contents, in a fixed order: friction.json, friction_samples.csv,
+// friction_conditions.csv, friction_diagnosis.json, thermal.json, thermal_samples.csv,
+// thermal_alpha_curve.csv, thermal_diagnosis.json (those of the steps that ran),
+// calibration.json and report.html.
+std::vector<std::pair<std::string, std::string>> calibration_outputs(const Calibration& c);
+
+// calibration.json: the set, its inputs and their hashes, the steps, the headline numbers and
+// the verdicts.
+std::string calibration_json(const Calibration& c);
+
+// The headline numbers and verdicts in a few lines, for the terminal.
+std::string calibration_summary(const Calibration& c);
+
+}  // namespace lmcal

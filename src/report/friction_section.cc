@@ -1,0 +1,257 @@
+// The friction half of the report: Fig. 6-style force over velocity, the constants, the
+// residuals against every covariate, the spread across runs and the diagnosis.
+#include <map>
+#include <set>
+
+#include "lmcal/models/friction_effects.hpp"
+#include "sections.hpp"
+
+namespace lmcal::report {
+
+namespace {
+
+// The four things a Fig. 6 panel varies or holds; temperature rounded to 1 K.
+struct Key {
+  std::uint32_t guide;
+  double preload_um, load_N, temperature_C;
+  auto operator<=>(const Key&) const = default;
+};
+
+Key key_of(const FrictionLog& log, std::size_t i) {
+  return {log.guide[i], log.preload_um[i], log.load_N[i], std::round(log.temperature_C[i])};
+}
+
+// The most frequent value of each of the four (the conditions a panel holds fixed).
+Key reference_key(const FrictionLog& log) {
+  std::map<std::uint32_t, std::size_t> guides;
+  std::map<double, std::size_t> preloads, loads, temperatures;
+  for (std::size_t i = 0; i < log.size(); ++i) {
+    const Key k = key_of(log, i);
+    ++guides[k.guide], ++preloads[k.preload_um], ++loads[k.load_N], ++temperatures[k.temperature_C];
+  }
+  auto mode = [](const auto& counts) {
+    return std::max_element(counts.begin(), counts.end(), [](auto& a, auto& b) { return a.second < b.second; })->first;
+  };
+  return {mode(guides), mode(preloads), mode(loads), mode(temperatures)};
+}
+
+// The law (with effects), averaged over both directions, along a velocity grid at the
+// conditions of sample `i` (its temperature replaced by the group's mean).
+std::vector<double> law_over_velocity(const FrictionLog& log, std::size_t i, double temperature_C,
+                                      FrictionConstants<double> k, const FrictionEffects<double>& e,
+                                      const std::vector<double>& grid) {
+  k.nu_ref_mm2_s = log.viscosity40_mm2_s[i];
+  FrictionConditions<double> c = log.conditions(i);
+  c.temperature_C = temperature_C;
+  std::vector<double> force;
+  for (double v : grid) {
+    c.velocity_m_s = v;
+    c.direction = 1;
+    const double forward = friction_force_with_effects_N(k, e, c);
+    c.direction = -1;
+    force.push_back(0.5 * (forward + friction_force_with_effects_N(k, e, c)));
+  }
+  return force;
+}
+
+// Fig. 6: measured force (means over runs and directions) and the fitted law over velocity,
+// one series per value of the varied quantity, the other three held at their most frequent value.
+Plot velocity_panel(const Calibration& c, const char* varied, const char* label, const char* unit) {
+  const FrictionLog& log = *c.friction_log;
+  const Key ref = reference_key(log);
+  auto varied_value = [&](const Key& k) {
+    const std::string v = varied;
+    return v == "load" ? k.load_N : v == "preload" ? k.preload_um : k.temperature_C;
+  };
+  auto matches = [&](const Key& k) {
+    Key fixed = ref;
+    const std::string v = varied;
+    (v == "load" ? fixed.load_N : v == "preload" ? fixed.preload_um : fixed.temperature_C) = varied_value(k);
+    return k == fixed;
+  };
+  // value -> velocity -> (sum, n); value -> (a sample, temperature sum, n)
+  std::map<double, std::map<double, std::pair<double, std::size_t>>> measured;
+  std::map<double, std::tuple<std::size_t, double, std::size_t>> groups;
+  double v_max = 0;
+  for (std::size_t i = 0; i < log.size(); ++i) {
+    const Key k = key_of(log, i);
+    if (!matches(k)) continue;
+    auto& m = measured[varied_value(k)][log.velocity_m_s[i]];
+    m.first += log.friction_N[i], ++m.second;
+    auto& g = groups.try_emplace(varied_value(k), i, 0.0, 0).first->second;
+    std::get<1>(g) += log.temperature_C[i], ++std::get<2>(g);
+    v_max = std::max(v_max, log.velocity_m_s[i]);
+  }
+  std::vector<double> grid;
+  for (int j = 0; j <= 60; ++j) grid.push_back(v_max * j / 60.0);
+  const std::string guide = log.guide_names.empty() ? "" : log.guide_names[ref.guide];
+  Plot plot{.id = std::string("friction-by-") + varied,
+            .title = fmt::format("Friction vs velocity by {} ({}{})", label, guide.empty() ? "" : guide + ", ",
+                                 std::string(varied) == "load"      ? fmt::format("{} um, {} °C", ref.preload_um, ref.temperature_C)
+                                 : std::string(varied) == "preload" ? fmt::format("{} N, {} °C", ref.load_N, ref.temperature_C)
+                                                                    : fmt::format("{} um, {} N", ref.preload_um, ref.load_N)),
+            .x_label = "velocity (m/s)",
+            .y_label = "friction force (N)"};
+  const bool extended = c.friction_diagnosis && !c.friction_diagnosis->accepted.empty();
+  std::size_t index = 0;
+  for (const auto& [value, by_velocity] : measured) {
+    Series points{.label = fmt::format("{} {}", num(value), unit), .mark = Mark::points, .color = colour(index)};
+    for (const auto& [v, sum] : by_velocity) {
+      points.x.push_back(v);
+      points.y.push_back(sum.first / static_cast<double>(sum.second));
+    }
+    const auto& [sample, temperature_sum, n] = groups.at(value);
+    const double temperature_C = temperature_sum / static_cast<double>(n);
+    FrictionConstants<double> k = c.friction->constants();
+    k.T_ref_C = c.friction_options.start.T_ref_C;
+    plot.series.push_back(std::move(points));
+    plot.series.push_back({.label = index == 0 ? "fitted law" : "",
+                           .x = grid,
+                           .y = law_over_velocity(log, sample, temperature_C, k, c.friction->effects(), grid),
+                           .color = colour(index)});
+    if (extended) {
+      const auto& fit = c.friction_diagnosis->final_fit;
+      FrictionConstants<double> ke = fit.constants();
+      ke.T_ref_C = k.T_ref_C;
+      plot.series.push_back({.label = index == 0 ? "law + causes" : "",
+                             .x = grid,
+                             .y = law_over_velocity(log, sample, temperature_C, ke, fit.effects(), grid),
+                             .color = colour(index),
+                             .dashed = true});
+    }
+    ++index;
+  }
+  return plot;
+}
+
+// Mean residual of each condition against one covariate.
+Plot condition_residuals(const std::string& id, const std::string& title, const std::string& x_label,
+                         const std::vector<std::pair<std::string, const std::vector<ConditionResidual>*>>& fits,
+                         double ConditionResidual::*x) {
+  Plot plot{.id = id, .title = title, .x_label = x_label, .y_label = "mean residual (N)"};
+  plot.references.push_back({});
+  for (std::size_t f = 0; f < fits.size(); ++f) {
+    Series s{.label = fits[f].first, .mark = Mark::points, .color = colour(f)};
+    for (const auto& r : *fits[f].second) {
+      s.x.push_back(r.*x);
+      s.y.push_back(r.bias_N);
+    }
+    plot.series.push_back(std::move(s));
+  }
+  return plot;
+}
+
+struct Covariate {
+  const char* name;  // as the diagnosis names it
+  const char* label;
+  double ConditionResidual::*member;
+};
+constexpr Covariate kCovariates[] = {{"velocity_m_s", "velocity (m/s)", &ConditionResidual::velocity_m_s},
+                                     {"load_N", "load (N)", &ConditionResidual::load_N},
+                                     {"preload_um", "preload (um)", &ConditionResidual::preload_um},
+                                     {"temperature_C", "temperature (°C)", &ConditionResidual::temperature_C},
+                                     {"direction", "direction (+1 forward, -1 backward)", &ConditionResidual::direction}};
+
+void spread_section(Page& page, const FrictionFitResult& f) {
+  if (f.spread.empty()) return;
+  page.heading(3, "Spread across runs");
+  page.paragraph(
+      "Each run fitted alone. Eq. 1 σ is the runs' standard deviation; the interval is the Student-t 95 % interval "
+      "of their mean. The ratio σ_runs / (SE_pooled √runs) is about 1 when the runs differ by noise only.");
+  std::vector<std::vector<std::string>> rows;
+  std::vector<Plot> plots;
+  for (const auto& sp : f.spread) {
+    const auto& pooled = f.fit.parameter(sp.parameter);
+    rows.push_back({sp.parameter, num(pooled.value), num(pooled.se, 3), num(sp.spread.mean), num(sp.spread.sd, 3),
+                    fmt::format("[{}, {}]", num(sp.spread.low), num(sp.spread.high)), num(sp.spread.min), num(sp.spread.max),
+                    num(sp.ratio, 3)});
+    Plot plot{.id = plot_id("friction-spread-" + sp.parameter), .title = sp.parameter + " per run",
+              .x_label = "run", .y_label = sp.parameter + " (" + pooled.unit + ")", .width_px = 300, .height_px = 220};
+    Series s{.mark = Mark::points};
+    for (std::size_t r = 0; r < sp.per_run.size(); ++r) {
+      s.x.push_back(static_cast<double>(r + 1));
+      s.y.push_back(sp.per_run[r]);
+    }
+    plot.series.push_back(std::move(s));
+    plot.references.push_back({.at = pooled.value, .label = "pooled"});
+    plots.push_back(std::move(plot));
+  }
+  page.table({"parameter", "pooled", "SE", "run mean", "Eq. 1 σ", "95 % interval of the mean", "min", "max", "ratio"}, rows);
+  page.figures(plots);
+}
+
+void diagnosis_section(Page& page, const Calibration& c) {
+  const FrictionDiagnosis& d = *c.friction_diagnosis;
+  page.heading(3, "What the published law gets wrong");
+  page << fmt::format("<p class=\"verdict {}\"><b>{}</b>: {}</p>\n", plot_id(d.verdict), escape_xml(d.verdict),
+                      escape_xml(d.summary));
+  page.paragraph(fmt::format("Held-out (leave-one-run-out) RMSE: {} N before, {} N after: a gain of {:.1f} %.",
+                             num(d.cv_rmse_before_N), num(d.cv_rmse_after_N), d.cv_gain_percent));
+  candidate_tables(page, d.rounds, "N");
+  std::vector<std::vector<std::string>> shifts;
+  for (const auto& s : d.shifts) shifts.push_back({s.name, num(s.baseline), num(s.extended)});
+  if (!d.accepted.empty()) page.table({"constant", "the law alone", "with the causes"}, shifts);
+  // Before/after against velocity and against the covariate the baseline residuals follow most.
+  std::vector<std::string> shown{"velocity_m_s"};
+  if (!d.baseline.covariates.empty() && d.baseline.covariates.front().covariate != shown.front())
+    shown.push_back(d.baseline.covariates.front().covariate);
+  std::vector<Plot> plots;
+  for (const auto& name : shown)
+    for (const auto& cov : kCovariates)
+      if (name == cov.name)
+        plots.push_back(condition_residuals(plot_id(std::string("friction-diagnosis-") + cov.name),
+                                            std::string("Residuals before and after, against ") + cov.label, cov.label,
+                                            {{"the law", &d.baseline_fit.conditions}, {"law + causes", &d.final_fit.conditions}},
+                                            cov.member));
+  page.figures(plots);
+}
+
+}  // namespace
+
+void friction_section(Page& page, const Calibration& c) {
+  const FrictionFitResult& f = *c.friction;
+  const FrictionLog& log = *c.friction_log;
+  page.heading(2, "Friction", "friction");
+  page.paragraph(fmt::format("{} samples in {} runs from {} file(s). The published law (Eqs. 3-7) fitted by weighted least "
+                             "squares; residual RMSE {} N, largest relative error {} %.",
+                             log.size(), f.runs.size(), c.set.friction_logs.size(), num(f.rmse_N), num(100 * f.max_relative_error, 3)));
+  page.figures({velocity_panel(c, "load", "load", "N"), velocity_panel(c, "preload", "preload", "um"),
+                velocity_panel(c, "temperature", "temperature", "°C")});
+
+  page.heading(3, "Constants");
+  parameter_tables(page, f.fit, [](const ParameterEstimate&) { return true; });
+
+  page.heading(3, "Residuals against the covariates");
+  page.paragraph("Mean residual (measured - fitted) of each condition; structure here is what the law misses.");
+  std::vector<Plot> plots;
+  for (const auto& cov : kCovariates)
+    plots.push_back(condition_residuals(plot_id(std::string("friction-residual-") + cov.name), std::string("Residuals vs ") + cov.label,
+                                        cov.label, {{"", &f.conditions}}, cov.member));
+  Plot runs{.id = "friction-residual-run", .title = "Mean residual of each run", .x_label = "run", .y_label = "mean residual (N)"};
+  runs.references.push_back({});
+  Series s{.mark = Mark::points};
+  for (std::size_t r = 0; r < f.run_offset_N.size(); ++r) {
+    s.x.push_back(static_cast<double>(r + 1));
+    s.y.push_back(f.run_offset_N[r]);
+  }
+  runs.series.push_back(std::move(s));
+  plots.push_back(std::move(runs));
+  page.figures(plots);
+
+  spread_section(page, f);
+  if (c.friction_diagnosis) diagnosis_section(page, c);
+}
+
+void candidate_tables(Page& page, const std::vector<std::vector<CandidateScore>>& rounds, const char* unit) {
+  for (std::size_t r = 0; r < rounds.size(); ++r) {
+    std::vector<std::vector<std::string>> rows;
+    for (const auto& cand : rounds[r])
+      rows.push_back({cand.effect, num(cand.value), fmt::format("[{}, {}]", num(cand.ci_low), num(cand.ci_high)),
+                      num(cand.lrt_p, 2), num(cand.cv_rmse), fmt::format("{:+.2f} %", cand.cv_gain_percent),
+                      (cand.accepted ? "accepted: " : "") + cand.reason});
+    page.paragraph(fmt::format("Candidates, step {} (held-out RMSE in {}, gain against the model so far):", r + 1, unit));
+    page.table({"cause", "estimate", "95 % interval", "LRT p", "held-out RMSE", "gain", "decision"}, rows);
+  }
+}
+
+}  // namespace lmcal::report

@@ -1,0 +1,115 @@
+#include "lmcal/report/html_report.hpp"
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "sections.hpp"
+
+namespace lmcal {
+
+namespace {
+
+using report::escape_xml;
+using report::num;
+using report::Page;
+
+constexpr const char* kStyle = R"(
+body{font:14px/1.45 system-ui,-apple-system,"Segoe UI",Roboto,sans-serif;margin:0 auto;max-width:1280px;padding:0 24px 48px;color:#222}
+h1{font-size:24px;margin:24px 0 4px}h2{font-size:20px;border-bottom:2px solid #0072B2;margin-top:40px}h3{font-size:16px;margin-top:28px}
+nav a{margin-right:16px}.brief{background:#f4f7fb;border:1px solid #d0dbe8;border-radius:6px;padding:8px 16px}
+.figures{display:flex;flex-wrap:wrap;gap:12px}figure{margin:0}
+table{border-collapse:collapse;margin:8px 0;font-size:13px}th,td{border:1px solid #ddd;padding:3px 8px;text-align:left}
+th{background:#f2f2f2}td.num{text-align:right;font-variant-numeric:tabular-nums}
+.verdict{padding:6px 10px;border-left:4px solid #999}.verdict.explained{border-color:#D55E00}
+.verdict.unexplained{border-color:#CC79A7}.verdict.no-significant-discrepancy{border-color:#009E73}
+.warning{color:#9a3b00}code{background:#f4f4f4;padding:1px 4px}
+)";
+
+// Marks <body data-rendered> with "all N" when every listed plot drew, or with those that
+// did not; <body data-errors> collects script errors. For the browser test; the page itself
+// needs no script.
+constexpr const char* kCheck = R"(
+window.addEventListener('error',function(e){document.body.dataset.errors=(document.body.dataset.errors||'')+e.message+';'});
+window.addEventListener('load',function(){var ids=document.body.dataset.plots.split(' ').filter(Boolean),missing=[];
+ids.forEach(function(id){var s=document.querySelector('svg[data-plot="'+id+'"]');var b=s&&s.getBoundingClientRect();
+if(!b||!(b.width>0&&b.height>0)||!s.querySelector('.series,text'))missing.push(id)});
+document.body.dataset.rendered=missing.length?'missing '+missing.join(' '):'all '+ids.length});
+)";
+
+void brief(Page& page, const Calibration& c) {
+  page << "<div class=\"brief\">\n";
+  if (c.friction) {
+    page << fmt::format("<p><b>Friction</b>: the published law fitted to {} samples of {} runs, residual RMSE {} N.",
+                        c.friction_log->size(), c.friction->runs.size(), num(c.friction->rmse_N));
+    if (c.friction_diagnosis)
+      page << fmt::format(" Diagnosis: <b>{}</b>. {}", escape_xml(c.friction_diagnosis->verdict),
+                          escape_xml(c.friction_diagnosis->summary));
+    page << "</p>\n";
+  }
+  if (c.thermal) {
+    const auto& a = c.thermal->joint.parameter("alpha");
+    page << fmt::format("<p><b>Thermal</b>: heat partition α = {} {} from {} runs; across runs {} ± {}.", num(a.value),
+                        escape_xml(report::interval(a)), c.thermal_data->runs.size(), num(c.thermal->alpha_spread.mean),
+                        num(c.thermal->alpha_spread.half_width, 3));
+    if (c.thermal_diagnosis)
+      page << fmt::format(" Diagnosis: <b>{}</b>. {}", escape_xml(c.thermal_diagnosis->verdict),
+                          escape_xml(c.thermal_diagnosis->summary));
+    page << "</p>\n";
+  }
+  for (const auto& note : c.notes) page.paragraph("Note: " + note, "warning");
+  page << "</div>\n";
+}
+
+void provenance(Page& page, const Calibration& c) {
+  page.heading(2, "Inputs and versions", "inputs");
+  std::string command;
+  for (const auto& part : c.command) command += (command.empty() ? "" : " ") + part;
+  page << "<p>Command: <code>" << escape_xml(command) << "</code></p>\n";
+  std::vector<std::vector<std::string>> rows;
+  for (const auto& [file, hash] : c.inputs) rows.push_back({file, hash});
+  page.table({"input file", "SHA-256"}, rows);
+  rows = {{"lmcal", LMCAL_VERSION}};
+  for (const auto& [name, version] : numerical_library_versions()) rows.push_back({name, version});
+  rows.push_back({"fmt", std::to_string(FMT_VERSION)});
+  rows.push_back({"nlohmann-json", fmt::format("{}.{}.{}", NLOHMANN_JSON_VERSION_MAJOR, NLOHMANN_JSON_VERSION_MINOR,
+                                               NLOHMANN_JSON_VERSION_PATCH)});
+  rows.push_back({"compiler", __VERSION__});
+  page.table({"software", "version"}, rows);
+  if (c.thermal)
+    page.paragraph(fmt::format("Thermal model: {} source, {} scheme, {} segments per half rail, time step {} s, ambient: {}.",
+                               to_string(c.thermal_options.source), to_string(c.thermal_options.scheme),
+                               c.thermal_options.half_rail_segments, num(c.thermal_options.time_step_s),
+                               c.thermal_options.ambient));
+}
+
+Page build(const Calibration& c) {
+  Page body;
+  body.heading(1, "lmcal calibration: " + c.set.name);
+  body << "<nav>";
+  if (c.friction) body << "<a href=\"#friction\">Friction</a>";
+  if (c.thermal) body << "<a href=\"#thermal\">Thermal</a>";
+  body << "<a href=\"#inputs\">Inputs and versions</a></nav>\n";
+  brief(body, c);
+  if (c.friction) report::friction_section(body, c);
+  if (c.thermal) report::thermal_section(body, c);
+  provenance(body, c);
+  return body;
+}
+
+}  // namespace
+
+std::string calibration_report_html(const Calibration& c) {
+  const Page body = build(c);
+  std::string ids;
+  for (const auto& id : body.plot_ids()) ids += (ids.empty() ? "" : " ") + id;
+  return fmt::format(
+      "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
+      "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n"
+      "<title>lmcal calibration: {}</title>\n<style>{}</style>\n</head>\n<body data-plots=\"{}\">\n{}<script>{}</script>\n"
+      "</body>\n</html>\n",
+      escape_xml(c.set.name), kStyle, ids, body.html(), kCheck);
+}
+
+std::vector<std::string> calibration_report_plots(const Calibration& c) { return build(c).plot_ids(); }
+
+}  // namespace lmcal

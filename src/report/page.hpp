@@ -1,0 +1,105 @@
+// Building blocks of the HTML report (private to the report layer): a page that collects
+// its plots' IDs, tables, numbers and the colours series share across plots.
+#pragma once
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "lmcal/fit/fit_result.hpp"
+#include "lmcal/report/svg_plot.hpp"
+
+namespace lmcal::report {
+
+class Page {
+ public:
+  Page& operator<<(std::string_view html) {
+    html_ += html;
+    return *this;
+  }
+  // A row of figures (they wrap on a narrow window).
+  void figures(const std::vector<Plot>& plots) {
+    html_ += "<div class=\"figures\">";
+    for (const auto& p : plots) {
+      ids_.push_back(p.id);
+      html_ += "<figure>" + render_svg(p) + "</figure>";
+    }
+    html_ += "</div>\n";
+  }
+  void heading(int level, std::string_view text, std::string_view id = {}) {
+    html_ += fmt::format("<h{0}{1}>{2}</h{0}>\n", level, id.empty() ? "" : fmt::format(" id=\"{}\"", id),
+                         escape_xml(text));
+  }
+  void paragraph(std::string_view text, std::string_view css_class = {}) {
+    html_ += fmt::format("<p{}>{}</p>\n", css_class.empty() ? "" : fmt::format(" class=\"{}\"", css_class),
+                         escape_xml(text));
+  }
+  // A table of escaped text; a cell starting with '\x01' is raw HTML (a coloured cell).
+  void table(const std::vector<std::string>& header, const std::vector<std::vector<std::string>>& rows) {
+    html_ += "<table><thead><tr>";
+    for (const auto& h : header) html_ += "<th>" + escape_xml(h) + "</th>";
+    html_ += "</tr></thead><tbody>\n";
+    for (const auto& row : rows) {
+      html_ += "<tr>";
+      for (const auto& cell : row)
+        html_ += !cell.empty() && cell[0] == '\x01' ? cell.substr(1) : "<td>" + escape_xml(cell) + "</td>";
+      html_ += "</tr>\n";
+    }
+    html_ += "</tbody></table>\n";
+  }
+  const std::string& html() const { return html_; }
+  const std::vector<std::string>& plot_ids() const { return ids_; }
+
+ private:
+  std::string html_;
+  std::vector<std::string> ids_;
+};
+
+// A number to 4 significant digits, "–" when it is not finite.
+inline std::string num(double v, int digits = 4) {
+  return std::isfinite(v) ? fmt::format("{:.{}g}", v, digits) : "–";
+}
+
+// The interval a fit says to quote.
+inline std::string interval(const ParameterEstimate& p) {
+  if (p.interval == "profile") return fmt::format("[{}, {}] (profile)", num(p.profile_low), num(p.profile_high));
+  if (p.interval == "none" || !std::isfinite(p.se)) return "–";
+  return fmt::format("[{}, {}]", num(p.ci_low), num(p.ci_high));
+}
+
+inline std::string flags(const ParameterEstimate& p) {
+  if (!p.free) return "held (given)";
+  if (p.held_unidentifiable) return "held: not identifiable";
+  return p.at_bound ? "at a bound" : "";
+}
+
+// A correlation coefficient as a cell shaded by its size (orange positive, blue negative).
+inline std::string correlation_cell(double r) {
+  if (!std::isfinite(r)) return "\x01<td class=\"num\">–</td>";
+  const double a = std::min(1.0, std::abs(r));
+  return fmt::format("\x01<td class=\"num\" style=\"background:rgba({},{:.2f})\">{:+.2f}</td>",
+                     r >= 0 ? "230,159,0" : "0,114,178", 0.8 * a, r);
+}
+
+// Colours shared by the series of one quantity across plots (Okabe-Ito).
+inline const std::string& colour(std::size_t i) {
+  static const std::vector<std::string> palette = {"#0072B2", "#D55E00", "#009E73", "#CC79A7",
+                                                   "#E69F00", "#56B4E9", "#000000", "#F0E442"};
+  return palette[i % palette.size()];
+}
+
+// A plot ID from free text: letters, digits and '-' only.
+inline std::string plot_id(std::string_view text) {
+  std::string id;
+  for (char ch : text) id += std::isalnum(static_cast<unsigned char>(ch)) ? static_cast<char>(std::tolower(ch)) : '-';
+  return id;
+}
+
+// Every n-th index so that at most `most` of `count` remain.
+inline std::size_t stride(std::size_t count, std::size_t most) { return std::max<std::size_t>(1, (count + most - 1) / most); }
+
+}  // namespace lmcal::report

@@ -1,0 +1,246 @@
+// The thermal half of the report: α, the error against α (Fig. 11), temperature over time
+// and along the rail (Figs. 14-16), residuals, the spread across runs and the diagnosis.
+#include "sections.hpp"
+
+namespace lmcal::report {
+
+namespace {
+
+constexpr std::size_t kPointsPerSeries = 120;
+constexpr double kHour_s = 3600.0;
+
+bool nuisance(const ParameterEstimate& p) {
+  return p.name.starts_with("offset ") || p.name.starts_with("T0 ") || p.name.starts_with("heat_scale ");
+}
+
+// Measured points (thinned) and the simulated line of every sensor of run r, with the
+// measured ambient (the paper's Figs. 14-15).
+Plot time_plot(const Calibration& c, std::size_t r) {
+  const ThermalFitResult& f = *c.thermal;
+  const ThermalRun& run = c.thermal_data->runs[r];
+  Plot plot{.id = plot_id("thermal-time-" + run.id),
+            .title = fmt::format("Run {}: {} m/s, {} N", run.id, num(run.velocity_m_s), num(run.load_N)),
+            .x_label = "time (h)",
+            .y_label = "temperature (°C)"};
+  const auto& sensors = f.sensor_names[r];
+  for (std::size_t s = 0; s < sensors.size(); ++s) {
+    Series measured{.label = sensors[s], .mark = Mark::points, .color = colour(s)};
+    Series simulated{.label = s == 0 ? "model" : "", .color = colour(s)};
+    std::vector<const ThermalFitResult::Sample*> mine;
+    for (const auto& sample : f.samples)
+      if (sample.run == r && sample.sensor == s) mine.push_back(&sample);
+    const std::size_t every = stride(mine.size(), kPointsPerSeries);
+    const std::size_t line_every = stride(mine.size(), 3 * kPointsPerSeries);
+    for (std::size_t k = 0; k < mine.size(); ++k) {
+      if (k % line_every == 0 || k + 1 == mine.size()) {
+        simulated.x.push_back(mine[k]->time_s / kHour_s);
+        simulated.y.push_back(mine[k]->simulated_C);
+      }
+      if (k % every != 0) continue;
+      measured.x.push_back(mine[k]->time_s / kHour_s);
+      measured.y.push_back(mine[k]->measured_C);
+    }
+    plot.series.push_back(std::move(measured));
+    plot.series.push_back(std::move(simulated));
+  }
+  const auto& trace = run.trace;
+  if (!trace.ambient.empty()) {
+    Series ambient{.label = "ambient (mean)", .color = "#999999", .dashed = true};
+    const std::size_t every = stride(trace.size(), 4 * kPointsPerSeries);
+    for (std::size_t t = 0; t < trace.size(); t += every) {
+      double sum = 0;
+      std::size_t n = 0;
+      for (const auto& channel : trace.ambient)
+        if (std::isfinite(channel.values[t])) sum += channel.values[t], ++n;
+      ambient.x.push_back(trace.time_s[t] / kHour_s);
+      ambient.y.push_back(n ? sum / static_cast<double>(n) : std::nan(""));
+    }
+    plot.series.push_back(std::move(ambient));
+  }
+  return plot;
+}
+
+// The model along the rail at the end of run r and what the sensors read there (Fig. 16).
+Plot position_plot(const Calibration& c, std::size_t r) {
+  const auto& end = c.thermal->end_states[r];
+  const ThermalRun& run = c.thermal_data->runs[r];
+  Plot plot{.id = plot_id("thermal-position-" + run.id),
+            .title = fmt::format("Run {} along the rail at {} h", run.id, num(end.model.time_s / kHour_s, 3)),
+            .x_label = "position from the rail centre (mm)",
+            .y_label = "temperature (°C)"};
+  Series model{.label = "model", .color = colour(0)};
+  for (std::size_t i = 0; i < end.model.position_m.size(); ++i) {
+    model.x.push_back(1e3 * end.model.position_m[i]);
+    model.y.push_back(end.model.temperature_C[i]);
+  }
+  const bool offsets = std::any_of(c.thermal->joint.parameters.begin(), c.thermal->joint.parameters.end(),
+                                   [](const ParameterEstimate& p) { return p.name.starts_with("offset "); });
+  Series measured{.label = offsets ? "measured less its offset" : "measured", .mark = Mark::points, .color = colour(1)};
+  for (std::size_t s = 0; s < end.sensor_position_m.size(); ++s) {
+    measured.x.push_back(1e3 * end.sensor_position_m[s]);
+    measured.y.push_back(end.measured_C[s]);
+  }
+  plot.series = {std::move(model), std::move(measured)};
+  return plot;
+}
+
+// Residuals over time, one line per run and sensor (thinned), from one fit.
+Plot residual_time_plot(const std::string& id, const std::string& title, const ThermalFitResult& f,
+                        const std::vector<ThermalRun>& runs, std::optional<std::pair<double, double>> y_limits = {}) {
+  Plot plot{.id = id, .title = title, .x_label = "time (h)", .y_label = "measured - model (K)"};
+  plot.references.push_back({});
+  for (std::size_t r = 0; r < runs.size(); ++r)
+    for (std::size_t s = 0; s < f.sensor_names[r].size(); ++s) {
+      Series line{.label = s == 0 ? runs[r].id : "", .color = colour(r)};
+      std::vector<const ThermalFitResult::Sample*> mine;
+      for (const auto& sample : f.samples)
+        if (sample.run == r && sample.sensor == s) mine.push_back(&sample);
+      for (std::size_t k = 0; k < mine.size(); k += stride(mine.size(), 2 * kPointsPerSeries)) {
+        line.x.push_back(mine[k]->time_s / kHour_s);
+        line.y.push_back(mine[k]->measured_C - mine[k]->simulated_C);
+      }
+      plot.series.push_back(std::move(line));
+    }
+  if (y_limits) plot.y_min = y_limits->first, plot.y_max = y_limits->second;
+  return plot;
+}
+
+// Mean residual and RMSE of each sensor against position, and of each run against velocity.
+std::vector<Plot> covariate_plots(const Calibration& c) {
+  const ThermalFitResult& f = *c.thermal;
+  Plot position{.id = "thermal-residual-position", .title = "Residuals by sensor position",
+                .x_label = "position from the rail centre (mm)", .y_label = "residual (K)"};
+  Plot velocity{.id = "thermal-residual-velocity", .title = "Residuals by run velocity", .x_label = "velocity (m/s)",
+                .y_label = "residual (K)"};
+  for (Plot* p : {&position, &velocity}) p->references.push_back({});
+  Series bias{.label = "mean", .mark = Mark::points, .color = colour(0)}, rmse{.label = "RMSE", .mark = Mark::points, .color = colour(1)};
+  Series run_bias = bias, run_rmse = rmse;
+  for (std::size_t r = 0; r < c.thermal_data->runs.size(); ++r) {
+    double run_sum = 0, run_ss = 0;
+    std::size_t run_n = 0;
+    for (const auto& g : f.goodness) {
+      if (g.run != c.thermal_data->runs[r].id) continue;
+      double sum = 0;
+      std::size_t n = 0;
+      for (const auto& sample : f.samples)
+        if (sample.run == r && f.sensor_names[r][sample.sensor] == g.sensor) sum += sample.measured_C - sample.simulated_C, ++n;
+      bias.x.push_back(1e3 * g.position_m), bias.y.push_back(n ? sum / static_cast<double>(n) : std::nan(""));
+      rmse.x.push_back(1e3 * g.position_m), rmse.y.push_back(g.rmse_K);
+      run_sum += sum, run_ss += g.rmse_K * g.rmse_K * static_cast<double>(g.n), run_n += g.n;
+    }
+    const double v = c.thermal_data->runs[r].velocity_m_s, n = static_cast<double>(std::max<std::size_t>(run_n, 1));
+    run_bias.x.push_back(v), run_bias.y.push_back(run_sum / n);
+    run_rmse.x.push_back(v), run_rmse.y.push_back(std::sqrt(run_ss / n));
+  }
+  position.series = {std::move(bias), std::move(rmse)};
+  velocity.series = {std::move(run_bias), std::move(run_rmse)};
+  return {std::move(position), std::move(velocity)};
+}
+
+void spread_section(Page& page, const Calibration& c) {
+  const ThermalFitResult& f = *c.thermal;
+  page.heading(3, "Spread across runs");
+  const Spread& s = f.alpha_spread;
+  page.paragraph(fmt::format("α of each run fitted alone: mean {}, Eq. 1 σ {}, 95 % interval of the mean [{}, {}] "
+                             "({} runs; the joint fit gives {}).",
+                             num(s.mean), num(s.sd, 3), num(s.low), num(s.high), s.n,
+                             num(f.joint.parameter("alpha").value)));
+  std::vector<std::vector<std::string>> rows;
+  Plot plot{.id = "thermal-spread-alpha", .title = "α of each run (95 % interval)", .x_label = "run", .y_label = "α"};
+  Series points{.mark = Mark::points};
+  for (std::size_t r = 0; r < f.runs.size(); ++r) {
+    const RunInfo& info = f.runs[r];
+    const ParameterEstimate* a = r < f.per_run.size() ? &f.per_run[r].parameter("alpha") : nullptr;
+    rows.push_back({info.id, num(info.velocity_m_s), num(info.load_N), num(info.heat_rate_W), info.heat_source,
+                    a ? num(a->value) : "–", a ? interval(*a) : "–", num(info.ambient_difference_percent, 3)});
+    if (!a) continue;
+    points.x.push_back(static_cast<double>(r + 1));
+    points.y.push_back(a->value);
+    points.y_error.push_back(0.5 * (a->ci_high - a->ci_low));
+  }
+  page.table({"run", "velocity (m/s)", "load (N)", "Q_f (W)", "heat from", "α", "95 % interval", "ambient sensors' Eq. 2 difference (%)"},
+             rows);
+  rows.clear();
+  for (const auto& [pair, difference] : f.repeat_differences) rows.push_back({pair, num(difference, 3)});
+  if (!rows.empty()) page.table({"repeated runs", "Eq. 2 difference of α (%)"}, rows);
+  plot.series.push_back(std::move(points));
+  plot.references.push_back({.at = f.joint.parameter("alpha").value, .label = "joint"});
+  page.figures({plot});
+}
+
+void diagnosis_section(Page& page, const Calibration& c) {
+  const ThermalDiagnosis& d = *c.thermal_diagnosis;
+  page.heading(3, "What the published rail model gets wrong");
+  page << fmt::format("<p class=\"verdict {}\"><b>{}</b>: {}</p>\n", plot_id(d.verdict), escape_xml(d.verdict),
+                      escape_xml(d.summary));
+  page.paragraph(fmt::format("Held-out (leave-one-run-out) RMSE: {} K before, {} K after: a gain of {:.1f} %; the "
+                             "thermocouples' noise is {} K.",
+                             num(d.cv_rmse_before_K), num(d.cv_rmse_after_K), d.cv_gain_percent, num(d.noise_K, 3)));
+  candidate_tables(page, d.rounds, "K");
+  for (const auto& skipped : d.skipped) page.paragraph("Not tried: " + skipped);
+  std::vector<std::vector<std::string>> rows;
+  for (const auto& s : d.shifts) rows.push_back({s.name, num(s.baseline), num(s.extended)});
+  if (!d.accepted.empty()) page.table({"parameter", "published model", "with the causes"}, rows);
+  // Before and after on one scale.
+  double lo = 0, hi = 0;
+  for (const auto* fit : {&d.baseline_fit, &d.final_fit})
+    for (const auto& s : fit->samples) lo = std::min(lo, s.measured_C - s.simulated_C), hi = std::max(hi, s.measured_C - s.simulated_C);
+  const auto& runs = c.thermal_data->runs;
+  page.figures({residual_time_plot("thermal-diagnosis-before", "Residuals, published model", d.baseline_fit, runs, {{lo, hi}}),
+                residual_time_plot("thermal-diagnosis-after", "Residuals, with the causes", d.final_fit, runs, {{lo, hi}})});
+}
+
+}  // namespace
+
+void thermal_section(Page& page, const Calibration& c) {
+  const ThermalFitResult& f = *c.thermal;
+  const auto& runs = c.thermal_data->runs;
+  page.heading(2, "Thermal", "thermal");
+  const ParameterEstimate& alpha = f.joint.parameter("alpha");
+  page.paragraph(fmt::format("{} runs; the rail model (Eq. 11, {} source) driven by each run's measured ambient, heat Q_f "
+                             "from {}. Heat partition α = {} {} (joint fit); largest error {} % of the rise.",
+                             runs.size(), to_string(c.thermal_options.source),
+                             c.thermal_options.friction ? "the fitted friction law" : "the measured mean friction",
+                             num(alpha.value), interval(alpha), num(f.max_error_percent, 3)));
+  if (std::isfinite(f.alpha_ratio_paper_over_averaged))
+    page.paragraph(fmt::format("With the {} source α is {}; α_paper / α_averaged = {} (the contact over the stroke, "
+                               "Lb1/L1, is {}).",
+                               f.other_source, num(f.other_source_alpha), num(f.alpha_ratio_paper_over_averaged),
+                               num(f.contact_over_stroke)));
+
+  page.heading(3, "Parameters");
+  parameter_tables(page, f.joint, [](const ParameterEstimate& p) { return !nuisance(p); });
+  std::vector<std::vector<std::string>> rows;
+  for (const auto& p : f.joint.parameters)
+    if (nuisance(p)) rows.push_back({p.name, p.unit, num(p.value, 5), num(p.se, 3), interval(p), flags(p)});
+  if (!rows.empty()) {
+    page << "<details><summary>Per-run nuisance parameters (thermocouple offsets, start temperatures, heat scales)</summary>\n";
+    page.table({"parameter", "unit", "estimate", "standard error", "95 % interval", ""}, rows);
+    page << "</details>\n";
+  }
+
+  page.heading(3, "Error against α (Fig. 11)");
+  Plot curve{.id = "thermal-alpha-curve", .title = "RMSE at the first sensor against α", .x_label = "α",
+             .y_label = "RMSE (K)"};
+  for (std::size_t r = 0; r < runs.size(); ++r) {
+    Series s{.label = runs[r].id, .color = colour(r)};
+    for (const auto& p : f.alpha_curve)
+      if (p.run == runs[r].id) s.x.push_back(p.alpha), s.y.push_back(p.rmse_K);
+    curve.series.push_back(std::move(s));
+  }
+  curve.references.push_back({.horizontal = false, .at = alpha.value, .label = "fitted"});
+  page.figures({curve});
+
+  page.heading(3, "Temperature over time (Figs. 14-15) and along the rail (Fig. 16)");
+  for (std::size_t r = 0; r < runs.size(); ++r) page.figures({time_plot(c, r), position_plot(c, r)});
+
+  page.heading(3, "Residuals");
+  std::vector<Plot> plots{residual_time_plot("thermal-residual-time", "Residuals over time", f, runs)};
+  for (auto& p : covariate_plots(c)) plots.push_back(std::move(p));
+  page.figures(plots);
+
+  spread_section(page, c);
+  if (c.thermal_diagnosis) diagnosis_section(page, c);
+}
+
+}  // namespace lmcal::report
