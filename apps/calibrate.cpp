@@ -29,10 +29,7 @@ void run_calibrate(const CalibrateOptions& o) {
   TerminalProgress progress;
   const Calibration c = calibrate(set, options,
                                   {.step = [&](std::size_t i, std::size_t n, const std::string& name) { progress.step(i, n, name); },
-                                   .detail = [&](const std::string& what, std::size_t done, std::size_t total) {
-                                     progress.detail(what, done, total);
-                                   }});
-  progress.step(0, 1, "writing the report");
+                                   .detail = progress.detail_callback()});
   const std::filesystem::path dir = o.output_dir.empty() ? std::filesystem::path("fits") / set.name : std::filesystem::path(o.output_dir);
   OutputSet out;
   std::string names;

@@ -11,30 +11,44 @@ TerminalProgress::TerminalProgress(std::FILE* out) : out_(out), enabled_(isatty(
 TerminalProgress::~TerminalProgress() { clear(); }
 
 void TerminalProgress::step(std::size_t index, std::size_t count, const std::string& name) {
+  if (!enabled_) return;
+  std::lock_guard lock(mutex_);
   step_ = fmt::format("[{}/{}] {}", index + 1, count, name);
   detail_.clear();
   step_start_ = Clock::now();
-  draw(true);
+  draw();
+  if (!ticker_.joinable())
+    ticker_ = std::jthread([this](std::stop_token stop) {
+      while (!stop.stop_requested()) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(250));
+        std::lock_guard tick(mutex_);
+        if (!stop.stop_requested()) draw();
+      }
+    });
 }
 
 void TerminalProgress::detail(const std::string& what, std::size_t done, std::size_t total) {
+  if (!enabled_) return;
+  std::lock_guard lock(mutex_);
   detail_ = fmt::format(": {} ({}/{})", what, done + 1, total);
-  draw(false);
+  draw();
 }
 
 void TerminalProgress::clear() {
-  if (!enabled_ || !shown_) return;
+  if (!enabled_) return;
+  if (ticker_.joinable()) {
+    ticker_.request_stop();
+    ticker_.join();
+  }
+  std::lock_guard lock(mutex_);
+  if (!shown_) return;
   std::fputs("\r\x1b[K", out_);
   std::fflush(out_);
   shown_ = false;
 }
 
-void TerminalProgress::draw(bool force) {
-  if (!enabled_) return;
-  const auto now = Clock::now();
-  if (!force && now - last_draw_ < std::chrono::milliseconds(100)) return;
-  last_draw_ = now;
-  const double seconds = std::chrono::duration<double>(now - step_start_).count();
+void TerminalProgress::draw() {
+  const double seconds = std::chrono::duration<double>(Clock::now() - step_start_).count();
   std::string line = step_ + detail_ + fmt::format("  {:.0f} s", seconds);
   winsize size{};
   const std::size_t width = ioctl(fileno(out_), TIOCGWINSZ, &size) == 0 && size.ws_col > 0 ? size.ws_col : 80;

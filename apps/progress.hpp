@@ -1,12 +1,16 @@
 // Progress on the terminal: one line on stderr, rewritten in place ("[2/5] thermal
-// diagnosis: round 1, coupling (3/8)  14 s"), and nothing at all when stderr is not a
-// terminal (a log file or a pipe gets only the results).
+// diagnosis: round 1, coupling (3/8)  14 s", the seconds ticking while a step runs), and
+// nothing at all when stderr is not a terminal (a log file or a pipe gets only the results).
 #pragma once
 
 #include <chrono>
 #include <cstddef>
 #include <cstdio>
+#include <mutex>
 #include <string>
+#include <thread>
+
+#include "lmcal/diagnose/diagnosis.hpp"
 
 namespace lmcal::cli {
 
@@ -21,18 +25,24 @@ class TerminalProgress {
   void step(std::size_t index, std::size_t count, const std::string& name);
   // Inside the current step: item `done` (0-based) of `total`.
   void detail(const std::string& what, std::size_t done, std::size_t total);
-  // Clears the line (before the results are printed).
+  // detail() as a callback for the library's long computations.
+  Progress detail_callback() {
+    return [this](const std::string& what, std::size_t done, std::size_t total) { detail(what, done, total); };
+  }
+  // Clears the line and stops (before the results are printed).
   void clear();
 
  private:
   using Clock = std::chrono::steady_clock;
-  void draw(bool force);
+  void draw();  // with mutex_ held
 
   std::FILE* out_;
   bool enabled_;
+  std::mutex mutex_;
   bool shown_ = false;
   std::string step_, detail_;
-  Clock::time_point step_start_ = Clock::now(), last_draw_{};
+  Clock::time_point step_start_ = Clock::now();
+  std::jthread ticker_;  // redraws while a step runs, so the seconds move
 };
 
 }  // namespace lmcal::cli

@@ -10,6 +10,7 @@ packages=(
   libcli11-dev libfmt-dev nlohmann-json3-dev libtomlplusplus-dev libfast-float-dev
   libboost-dev libssl-dev        # Student-t and F quantiles (Boost.Math); SHA-256 of inputs (OpenSSL)
   libgtest-dev libbenchmark-dev  # tests and benchmarks
+  chromium chromium-driver       # the report's test in a headless browser
 )
 
 missing=()

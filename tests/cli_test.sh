@@ -105,6 +105,19 @@ check "alpha curve has the runs' rows" test "$(grep -c '^v110,' fitout/t_alpha_c
 check "not a friction fit refused" refused "expected a friction fit" fit thermal thermaldata/thermal.toml --friction thermaldata/thermal_truth.json -o out
 check "unknown ambient column refused" refused "no ambient column 'ambient9_C'" fit thermal thermaldata/thermal.toml --ambient ambient9_C -o out
 
+# --- calibrate: a measurement folder end to end -------------------------------------------------
+mkdir -p calset
+"$LMCAL" generate friction -o calset --runs 2 --guides "SRN 35C" >/dev/null
+"$LMCAL" calibrate calset -o calout --no-diagnosis >calibrate.txt 2>calibrate.err
+check "calibrate writes the fits, the summary and the report" test -s calout/friction.json -a -s calout/calibration.json -a -s calout/report.html
+check "calibrate says the thermal half was skipped" grep -q 'note: no thermal manifest' calibrate.txt
+check "calibrate is quiet on stderr when it is not a terminal" test ! -s calibrate.err
+script -qec "'$LMCAL' calibrate calset -o ttyout --no-diagnosis" /dev/null >tty.txt 2>&1
+check "calibrate shows its steps on a terminal" grep -q '\[2/2\] friction fit' tty.txt
+check "calibrate defaults to fits/<folder name>" bash -c "cd calset && '$LMCAL' calibrate . >/dev/null && test -s fits/calset/report.html"
+check "a folder without measurements refused" refused "expected friction logs (friction*.csv) or a thermal manifest" calibrate out
+check "a missing folder refused" refused "expected a measurement folder" calibrate no_such_folder -o out
+
 # The bundled set is exactly what the recorded commands make (the command lines aside).
 LMCAL="$LMCAL" bash "$SOURCE/scripts/make-bundled-data.sh" "$work/bundled" >/dev/null
 same_as_bundled() {

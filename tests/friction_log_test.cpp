@@ -16,6 +16,8 @@
 #include <string>
 #include <unistd.h>
 
+#include "support/temp_folder.hpp"
+
 namespace lmcal {
 namespace {
 
@@ -23,25 +25,7 @@ namespace fs = std::filesystem;
 
 const fs::path kGood = fs::path(LMCAL_TEST_DATA_DIR) / "good";
 
-// A fresh folder per test, removed afterwards; files written into it.
-class FrictionLogTest : public ::testing::Test {
- protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / fmt::format("lmcal_friction_log_test_{}_{}", ::getpid(),
-                                                   ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
-  fs::path write(const std::string& name, const std::string& text) const {
-    const fs::path path = dir_ / name;
-    std::ofstream(path, std::ios::binary) << text;
-    return path;
-  }
-
-  fs::path dir_;
-};
+class FrictionLogTest : public test::TempFolderTest {};
 
 // Same bits (so 0.1 + 0.2 must not come back as 0.3, and -0.0 stays -0.0).
 bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }

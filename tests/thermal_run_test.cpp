@@ -16,6 +16,8 @@
 #include <string>
 #include <unistd.h>
 
+#include "support/temp_folder.hpp"
+
 namespace lmcal {
 namespace {
 
@@ -24,26 +26,7 @@ namespace fs = std::filesystem;
 const fs::path kGood = fs::path(LMCAL_TEST_DATA_DIR) / "good";
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-// A fresh folder per test, removed afterwards; files written into it.
-class ThermalRunTest : public ::testing::Test {
- protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / fmt::format("lmcal_thermal_run_test_{}_{}", ::getpid(),
-                                                   ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
-  fs::path write(const fs::path& name, const std::string& text) const {
-    const fs::path path = dir_ / name;
-    fs::create_directories(path.parent_path());
-    std::ofstream(path, std::ios::binary) << text;
-    return path;
-  }
-
-  fs::path dir_;
-};
+class ThermalRunTest : public test::TempFolderTest {};
 
 bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
 

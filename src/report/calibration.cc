@@ -95,11 +95,13 @@ Calibration calibrate(const CalibrationSet& set, const CalibrationOptions& optio
     c.thermal = fit_thermal(*c.thermal_data, c.thermal_options);
     if (options.diagnose) {
       start("thermal diagnosis");
-      if (c.thermal_data->runs.size() >= 2) {
+      if (c.thermal_data->runs.size() >= 3) {
         diagnosis.progress = progress.detail;
         c.thermal_diagnosis = diagnose_thermal(*c.thermal_data, diagnosis);
       } else {
-        c.notes.push_back("thermal diagnosis skipped: it holds one run out at a time and needs at least two runs");
+        c.notes.push_back(fmt::format("thermal diagnosis skipped: it holds one run out at a time and needs at least three runs; the "
+                                      "manifest has {}",
+                                      c.thermal_data->runs.size()));
       }
     }
   } else {

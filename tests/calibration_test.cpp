@@ -1,0 +1,222 @@
+// lmcal calibrate end to end: a measurement folder made by the virtual rig goes through
+// every step; the report holds every plot of the story; the bundled set's committed results
+// (fits/cheng2017/) are what a fresh run gives.
+#include "lmcal/report/calibration.hpp"
+
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <regex>
+#include <sstream>
+
+#include "lmcal/error.hpp"
+#include "lmcal/io/atomic_file.hpp"
+#include "lmcal/report/html_report.hpp"
+#include "lmcal/rig/virtual_rig.hpp"
+#include "support/temp_folder.hpp"
+
+namespace lmcal {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string read(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// A measurement folder as a rig would leave it: a friction log of three runs (seal drag
+// hidden in it) and three thermal runs.
+class CalibrationTest : public test::TempFolderTest {
+ protected:
+  void write_friction(const std::string& file = "friction.csv") {
+    FrictionRigConfig config;
+    config.guides = {"SRN 35C"};
+    config.runs = 3;
+    RigEffects effects;
+    set_rig_effect(effects, "seal_drag", 100);
+    write(file, friction_log_csv(generate_friction_log(config, effects).log));
+  }
+  void write_thermal(const std::string& manifest = "thermal.toml") {
+    ThermalRigConfig config;
+    config.velocity_m_s = {0.066, 0.083, 0.11};
+    config.duration_s = 3 * 3600;
+    config.record_every_s = 30;
+    ThermalDataSet set = generate_thermal_dataset(config, {}, "test").set;
+    OutputSet out;
+    for (ThermalRun& run : set.runs) {
+      run.file = dir_ / run.file;
+      out.add(run.file, thermal_trace_csv(run.trace));
+    }
+    out.add(dir_ / manifest, thermal_manifest_toml(set, dir_));
+    out.commit();
+  }
+};
+
+// The plots each part of the story needs, by the IDs the report gives them.
+std::vector<std::string> expected_plots(const Calibration& c) {
+  std::vector<std::string> ids;
+  if (c.friction) {
+    for (const char* varied : {"load", "preload", "temperature"}) ids.push_back(std::string("friction-by-") + varied);
+    for (const char* cov : {"velocity-m-s", "load-n", "preload-um", "temperature-c", "direction"})
+      ids.push_back(std::string("friction-residual-") + cov);
+    ids.push_back("friction-residual-run");
+    for (const char* p : {"k1", "k2", "mu-st", "v-st-m-s", "mu-v", "beta-per-k", "f0"}) ids.push_back(std::string("friction-spread-") + p);
+  }
+  if (c.friction_diagnosis) ids.push_back("friction-diagnosis-velocity-m-s");
+  if (c.thermal) {
+    ids.push_back("thermal-alpha-curve");
+    for (const auto& run : c.thermal_data->runs) {
+      ids.push_back("thermal-time-" + run.id);
+      ids.push_back("thermal-position-" + run.id);
+    }
+    for (const char* p : {"thermal-residual-time", "thermal-residual-position", "thermal-residual-velocity", "thermal-spread-alpha"})
+      ids.push_back(p);
+  }
+  if (c.thermal_diagnosis) ids.insert(ids.end(), {"thermal-diagnosis-before", "thermal-diagnosis-after"});
+  return ids;
+}
+
+// Every expected plot is in the page once, with data drawn; the page loads nothing from outside.
+void expect_complete_report(const Calibration& c, const std::string& html) {
+  const auto listed = calibration_report_plots(c);
+  for (const auto& id : expected_plots(c)) {
+    EXPECT_NE(std::find(listed.begin(), listed.end(), id), listed.end()) << id << " is not listed";
+    const std::string tag = "data-plot=\"" + id + "\"";
+    const auto at = html.find(tag);
+    ASSERT_NE(at, std::string::npos) << id << " is not in the page";
+    EXPECT_EQ(html.find(tag, at + 1), std::string::npos) << id << " is in the page twice";
+    const auto end = html.find("</svg>", at);
+    EXPECT_NE(html.substr(at, end - at).find("class=\"series\""), std::string::npos) << id << " draws no data";
+  }
+  std::string ids;
+  for (const auto& id : listed) ids += (ids.empty() ? "" : " ") + id;
+  EXPECT_NE(html.find("<body data-plots=\"" + ids + "\">"), std::string::npos);
+  EXPECT_FALSE(std::regex_search(html, std::regex(R"((src|href)\s*=\s*"(?!#))"))) << "the page refers to an outside resource";
+  for (const auto& [file, hash] : c.inputs) EXPECT_NE(html.find(hash), std::string::npos) << file;
+}
+
+TEST_F(CalibrationTest, AFullFolderGoesThroughEveryStepIntoACompleteReport) {
+  write_friction();
+  write_thermal();
+  const CalibrationSet set = find_calibration_set(dir_);
+  ASSERT_EQ(set.friction_logs.size(), 1u);
+  ASSERT_TRUE(set.thermal_manifest);
+  std::vector<std::string> steps;
+  const Calibration c = calibrate(set, {}, {.step = [&](std::size_t, std::size_t, const std::string& s) { steps.push_back(s); }});
+  EXPECT_EQ(steps, (std::vector<std::string>{"loading the measurements", "friction fit", "friction diagnosis", "thermal fit",
+                                             "thermal diagnosis"}));
+  ASSERT_TRUE(c.friction && c.friction_diagnosis && c.thermal && c.thermal_diagnosis);
+  EXPECT_TRUE(c.notes.empty());
+  // The hidden seal drag is found, and the thermal heat came from the fitted law.
+  ASSERT_FALSE(c.friction_diagnosis->accepted.empty()) << c.friction_diagnosis->summary;
+  EXPECT_EQ(c.friction_diagnosis->accepted.front().effect, "seal_drag");
+  ASSERT_TRUE(c.thermal_options.friction);
+  EXPECT_EQ(c.thermal_options.friction->k1, c.friction->constants().k1);
+
+  const auto outputs = calibration_outputs(c);
+  std::vector<std::string> names;
+  for (const auto& [name, text] : outputs) names.push_back(name);
+  EXPECT_EQ(names, (std::vector<std::string>{"friction.json", "friction_samples.csv", "friction_conditions.csv",
+                                             "friction_diagnosis.json", "thermal.json", "thermal_samples.csv",
+                                             "thermal_alpha_curve.csv", "thermal_diagnosis.json", "calibration.json",
+                                             "report.html"}));
+  const auto summary = nlohmann::json::parse(outputs[8].second);
+  EXPECT_EQ(summary["friction_diagnosis"]["verdict"], c.friction_diagnosis->verdict);
+  EXPECT_EQ(summary["thermal"]["alpha"]["value"].get<double>(), c.thermal->joint.parameter("alpha").value);
+  EXPECT_EQ(summary["inputs"].size(), 2u + c.thermal_data->runs.size());
+  const std::string& html = outputs.back().second;
+  expect_complete_report(c, html);
+  EXPECT_NE(html.find(c.friction_diagnosis->verdict), std::string::npos);
+  EXPECT_NE(html.find(c.thermal_diagnosis->verdict), std::string::npos);
+}
+
+TEST_F(CalibrationTest, AFolderWithOneHalfCalibratesThatHalfAndSaysWhatWasSkipped) {
+  write_friction("friction_run_a.csv");
+  CalibrationOptions options;
+  options.diagnose = false;
+  const Calibration c = calibrate(find_calibration_set(dir_), options);
+  EXPECT_TRUE(c.friction);
+  EXPECT_FALSE(c.thermal);
+  ASSERT_EQ(c.notes.size(), 1u);
+  EXPECT_NE(c.notes[0].find("thermal"), std::string::npos);
+  const std::string html = calibration_report_html(c);
+  expect_complete_report(c, html);
+  EXPECT_EQ(html.find("data-plot=\"thermal"), std::string::npos);
+  EXPECT_NE(html.find(c.notes[0]), std::string::npos) << "the report says what was skipped";
+}
+
+TEST_F(CalibrationTest, RefusesAFolderWithoutMeasurementsOrWithTwoManifests) {
+  EXPECT_THROW(find_calibration_set(dir_ / "missing"), InputError);
+  EXPECT_THROW(find_calibration_set(dir_), InputError);  // empty
+  write_thermal("thermal_a.toml");
+  write_thermal("thermal_b.toml");
+  try {
+    find_calibration_set(dir_);
+    FAIL() << "two manifests accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("thermal_b.toml"), std::string::npos) << e.what();
+  }
+}
+
+// ---- the committed results of the bundled set -------------------------------------------
+
+// Numbers equal to a relative 1e-6 (or `absolute`), everything else exactly. JSON fields named
+// "seconds" (timings) are not compared.
+void expect_same_json(const nlohmann::json& a, const nlohmann::json& b, const std::string& where) {
+  if (a.is_number() && b.is_number()) {
+    const double x = a.get<double>(), y = b.get<double>();
+    EXPECT_NEAR(x, y, 1e-6 * std::max(std::abs(x), std::abs(y)) + 1e-12) << where;
+  } else if (a.is_object() && b.is_object()) {
+    ASSERT_EQ(a.size(), b.size()) << where;
+    for (auto it = a.begin(); it != a.end(); ++it) {
+      ASSERT_TRUE(b.contains(it.key())) << where << "." << it.key();
+      if (it.key() != "seconds") expect_same_json(it.value(), b[it.key()], where + "." + it.key());
+    }
+  } else if (a.is_array() && b.is_array()) {
+    ASSERT_EQ(a.size(), b.size()) << where;
+    for (std::size_t i = 0; i < a.size(); ++i) expect_same_json(a[i], b[i], fmt::format("{}[{}]", where, i));
+  } else {
+    EXPECT_EQ(a, b) << where;
+  }
+}
+
+void expect_same_text(const std::string& a, const std::string& b, double absolute, const std::string& file) {
+  const std::regex number(R"([-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?)");
+  std::sregex_token_iterator ia(a.begin(), a.end(), number, {-1, 0}), ib(b.begin(), b.end(), number, {-1, 0}), end;
+  std::size_t differences = 0, token = 0;
+  for (; ia != end && ib != end; ++ia, ++ib, ++token) {
+    const std::string x = *ia, y = *ib;
+    if (x == y) continue;
+    const bool numeric = std::regex_match(x, number) && std::regex_match(y, number);
+    if (numeric && std::abs(std::stod(x) - std::stod(y)) <= absolute + 1e-6 * std::abs(std::stod(x))) continue;
+    if (++differences <= 5) ADD_FAILURE() << file << " token " << token << ": '" << x << "' vs '" << y << "'";
+  }
+  EXPECT_TRUE(ia == end && ib == end) << file << " has a different length";
+  EXPECT_EQ(differences, 0u) << file;
+}
+
+TEST(BundledCalibration, AFreshRunReproducesTheCommittedResults) {
+  const fs::path root = LMCAL_SOURCE_DIR;
+  const fs::path previous = fs::current_path();
+  fs::current_path(root);  // the outputs record the set as given: measurements/cheng2017
+  const Calibration c = calibrate(find_calibration_set("measurements/cheng2017"), {});
+  fs::current_path(previous);
+  for (const auto& [name, text] : calibration_outputs(c)) {
+    const fs::path committed = root / "fits" / "cheng2017" / name;
+    ASSERT_TRUE(fs::exists(committed)) << committed << ": run scripts/run.sh and commit fits/cheng2017";
+    const std::string stored = read(committed);
+    if (committed.extension() == ".json")
+      expect_same_json(nlohmann::json::parse(text), nlohmann::json::parse(stored), name);
+    else
+      expect_same_text(text, stored, committed.extension() == ".html" ? 0.011 : 0.0, name);
+  }
+}
+
+}  // namespace
+}  // namespace lmcal

@@ -1,0 +1,29 @@
+#!/usr/bin/env bash
+# The bundled set's report (fits/cheng2017/report.html; calibration_test checks a fresh run
+# reproduces it) in a real browser, headless Chromium: it loads without script errors and
+# every plot the page lists draws with a size (the page's own check, read from the DOM).
+set -euo pipefail
+root="$(cd "$(dirname "$0")/.." && pwd)"
+report="${1:-$root/fits/cheng2017/report.html}"  # or the report given
+browser=$(command -v chromium || command -v chromium-browser || true)
+fail() { echo "FAIL: $*"; exit 1; }
+[[ -n "$browser" ]] || fail "chromium is not installed (scripts/install-deps.sh installs it)"
+[[ -f "$report" ]] || fail "$report is missing (scripts/run.sh writes it)"
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+
+"$browser" --headless --no-sandbox --disable-gpu --disable-dev-shm-usage --no-first-run --user-data-dir="$tmp/profile" \
+  --enable-logging=stderr --v=0 --virtual-time-budget=10000 --dump-dom "file://$report" >"$tmp/dom.html" 2>"$tmp/browser.log" ||
+  fail "chromium could not load the report: $(tail -3 "$tmp/browser.log")"
+
+listed=$(grep -o 'data-plots="[^"]*"' "$tmp/dom.html" | head -1 | sed 's/data-plots="//; s/"$//')
+count=$(wc -w <<<"$listed")
+[[ "$count" -ge 30 ]] || fail "the page lists $count plots; expected the whole story (30 or more)"
+rendered=$(grep -o 'data-rendered="[^"]*"' "$tmp/dom.html" | head -1 || true)
+[[ "$rendered" == "data-rendered=\"all $count\"" ]] || fail "not every plot drew: ${rendered:-the check in the page did not run}"
+for id in $listed; do
+  grep -q "data-plot=\"$id\"" "$tmp/dom.html" || fail "plot $id is not in the rendered page"
+done
+if grep -q 'data-errors=' "$tmp/dom.html"; then fail "script errors: $(grep -o 'data-errors="[^"]*"' "$tmp/dom.html")"; fi
+if grep -E 'CONSOLE|Uncaught|Failed to load resource' "$tmp/browser.log"; then fail "the browser reported errors (above)"; fi
+echo "ok: the report loads and all $count plots draw"
