@@ -11,6 +11,7 @@
 #include <iostream>
 
 #include "cli_common.hpp"
+#include "progress.hpp"
 #include "lmcal/error.hpp"
 #include "lmcal/fit/friction_fit.hpp"
 #include "lmcal/io/atomic_file.hpp"
@@ -95,7 +96,10 @@ void run_fit_friction(const FitFrictionOptions& o, const std::vector<std::string
   const FrictionLog log = load_friction_logs(paths);
   FitProvenance provenance{o.name, {}, argv};
   for (const auto& file : o.files) provenance.inputs.emplace_back(file, sha256_file(file));
+  TerminalProgress progress;
+  progress.step(0, 1, "friction fit");
   const FrictionFitResult result = fit_friction(log, options);
+  progress.clear();
 
   const fs::path dir = o.output_dir;
   OutputSet out;

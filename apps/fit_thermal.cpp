@@ -11,6 +11,7 @@
 #include <iostream>
 
 #include "cli_common.hpp"
+#include "progress.hpp"
 #include "lmcal/error.hpp"
 #include "lmcal/fit/thermal_fit.hpp"
 #include "lmcal/io/atomic_file.hpp"
@@ -38,7 +39,10 @@ void run_fit_thermal(FitThermalOptions& o, const std::vector<std::string>& argv)
   inputs.emplace_back(o.manifest, sha256_file(o.manifest));
   for (const auto& run : data.runs) inputs.emplace_back(run.file.string(), sha256_file(run.file));
 
+  TerminalProgress progress;
+  progress.step(0, 1, "thermal fit");
   const ThermalFitResult result = fit_thermal(data, f);
+  progress.clear();
   const fs::path dir = o.output_dir;
   OutputSet out;
   out.add(dir / (o.name + ".json"), thermal_fit_json(result, f, inputs, argv, o.name));

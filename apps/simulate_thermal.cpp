@@ -12,6 +12,7 @@
 #include <iostream>
 
 #include "cli_common.hpp"
+#include "progress.hpp"
 #include "lmcal/error.hpp"
 #include "lmcal/io/atomic_file.hpp"
 #include "lmcal/models/rail_thermal.hpp"
@@ -153,8 +154,10 @@ void run_simulate_thermal(const ThermalSweepOptions& o, const std::vector<std::s
                            "Lb_mm", "L1_m", "Q_W", "peak_dT", "T at end per sensor (C)");
   const std::vector<Case> cases = enumerate_cases(o, initial_C);
   nlohmann::json errors = nlohmann::json::array();
+  TerminalProgress progress;
   for (std::size_t k = 0; k < cases.size(); ++k) {
     const Case& c = cases[k];
+    progress.step(k, cases.size(), "simulating case " + std::to_string(k));
     const auto sol = simulate_rail(c.geometry, numerics, outputs, c.params, ambient);
     const auto steady = steady_rail(c.geometry, numerics, {}, c.params, ambient.at(o.duration_s));
     RailSolution<double> ref;
@@ -189,6 +192,7 @@ void run_simulate_thermal(const ThermalSweepOptions& o, const std::vector<std::s
     std::string at_end;
     for (std::size_t s = 0; s < o.sensors_m.size(); ++s)
       at_end += fmt::format("{}{:.2f}", s ? " " : "", sol.temperature_C(outputs.output_times_s.size() - 1, s));
+    progress.clear();
     std::cout << fmt::format("{:>4}  {:<8} {:>7.3f} {:>6.0f} {:>7.1f} {:>6.3f} {:>7.3f}  {:>8.2f}  {}\n", k, c.guide,
                              c.velocity_m_s, c.load_N, c.block_length_mm, c.stroke_m, c.heat_rate_W,
                              peak - ambient.at(o.duration_s), at_end);
