@@ -1,7 +1,7 @@
 // The friction half of the report: Fig. 6-style force over velocity, the constants, the
 // residuals against every covariate, the spread across runs and the diagnosis.
 #include <map>
-#include <set>
+#include <tuple>
 
 #include "lmcal/models/friction_effects.hpp"
 #include "sections.hpp"
@@ -14,7 +14,7 @@ namespace {
 struct Key {
   std::uint32_t guide;
   double preload_um, load_N, temperature_C;
-  auto operator<=>(const Key&) const = default;
+  bool operator==(const Key&) const = default;
 };
 
 Key key_of(const FrictionLog& log, std::size_t i) {
@@ -54,48 +54,56 @@ std::vector<double> law_over_velocity(const FrictionLog& log, std::size_t i, dou
   return force;
 }
 
+// What a Fig. 6 panel varies; the other conditions are held at their most frequent value.
+struct Varied {
+  const char* name;
+  const char* unit;
+  double Key::*member;
+};
+constexpr Varied kVaried[] = {{"load", "N", &Key::load_N},
+                              {"preload", "um", &Key::preload_um},
+                              {"temperature", "°C", &Key::temperature_C}};
+
+// The held conditions in words: "1.5 um, 26 °C".
+std::string held_conditions(const Key& ref, const Varied& varied) {
+  std::string text;
+  for (const Varied& v : kVaried)
+    if (v.member != varied.member) text += fmt::format("{}{} {}", text.empty() ? "" : ", ", num(ref.*v.member), v.unit);
+  return text;
+}
+
 // Fig. 6: measured force (means over runs and directions) and the fitted law over velocity,
-// one series per value of the varied quantity, the other three held at their most frequent value.
-Plot velocity_panel(const Calibration& c, const char* varied, const char* label, const char* unit) {
+// one series per value of the varied quantity.
+Plot velocity_panel(const Calibration& c, const Varied& varied) {
   const FrictionLog& log = *c.friction_log;
   const Key ref = reference_key(log);
-  auto varied_value = [&](const Key& k) {
-    const std::string v = varied;
-    return v == "load" ? k.load_N : v == "preload" ? k.preload_um : k.temperature_C;
-  };
-  auto matches = [&](const Key& k) {
-    Key fixed = ref;
-    const std::string v = varied;
-    (v == "load" ? fixed.load_N : v == "preload" ? fixed.preload_um : fixed.temperature_C) = varied_value(k);
-    return k == fixed;
-  };
   // value -> velocity -> (sum, n); value -> (a sample, temperature sum, n)
   std::map<double, std::map<double, std::pair<double, std::size_t>>> measured;
   std::map<double, std::tuple<std::size_t, double, std::size_t>> groups;
   double v_max = 0;
   for (std::size_t i = 0; i < log.size(); ++i) {
     const Key k = key_of(log, i);
-    if (!matches(k)) continue;
-    auto& m = measured[varied_value(k)][log.velocity_m_s[i]];
+    Key held = ref;
+    held.*varied.member = k.*varied.member;
+    if (!(k == held)) continue;
+    const double value = k.*varied.member;
+    auto& m = measured[value][log.velocity_m_s[i]];
     m.first += log.friction_N[i], ++m.second;
-    auto& g = groups.try_emplace(varied_value(k), i, 0.0, 0).first->second;
+    auto& g = groups.try_emplace(value, i, 0.0, 0).first->second;
     std::get<1>(g) += log.temperature_C[i], ++std::get<2>(g);
     v_max = std::max(v_max, log.velocity_m_s[i]);
   }
   std::vector<double> grid;
   for (int j = 0; j <= 60; ++j) grid.push_back(v_max * j / 60.0);
-  const std::string guide = log.guide_names.empty() ? "" : log.guide_names[ref.guide];
-  Plot plot{.id = std::string("friction-by-") + varied,
-            .title = fmt::format("Friction vs velocity by {} ({}{})", label, guide.empty() ? "" : guide + ", ",
-                                 std::string(varied) == "load"      ? fmt::format("{} um, {} °C", ref.preload_um, ref.temperature_C)
-                                 : std::string(varied) == "preload" ? fmt::format("{} N, {} °C", ref.load_N, ref.temperature_C)
-                                                                    : fmt::format("{} um, {} N", ref.preload_um, ref.load_N)),
+  const std::string guide = log.guide_names.empty() || log.guide_names[ref.guide].empty() ? "" : log.guide_names[ref.guide] + ", ";
+  Plot plot{.id = std::string("friction-by-") + varied.name,
+            .title = fmt::format("Friction vs velocity by {} ({}{})", varied.name, guide, held_conditions(ref, varied)),
             .x_label = "velocity (m/s)",
             .y_label = "friction force (N)"};
   const bool extended = c.friction_diagnosis && !c.friction_diagnosis->accepted.empty();
   std::size_t index = 0;
   for (const auto& [value, by_velocity] : measured) {
-    Series points{.label = fmt::format("{} {}", num(value), unit), .mark = Mark::points, .color = colour(index)};
+    Series points{.label = fmt::format("{} {}", num(value), varied.unit), .mark = Mark::points, .color = colour(index)};
     for (const auto& [v, sum] : by_velocity) {
       points.x.push_back(v);
       points.y.push_back(sum.first / static_cast<double>(sum.second));
@@ -215,8 +223,9 @@ void friction_section(Page& page, const Calibration& c) {
   page.paragraph(fmt::format("{} samples in {} runs from {} file(s). The published law (Eqs. 3-7) fitted by weighted least "
                              "squares; residual RMSE {} N, largest relative error {} %.",
                              log.size(), f.runs.size(), c.set.friction_logs.size(), num(f.rmse_N), num(100 * f.max_relative_error, 3)));
-  page.figures({velocity_panel(c, "load", "load", "N"), velocity_panel(c, "preload", "preload", "um"),
-                velocity_panel(c, "temperature", "temperature", "°C")});
+  std::vector<Plot> panels;
+  for (const Varied& varied : kVaried) panels.push_back(velocity_panel(c, varied));
+  page.figures(panels);
 
   page.heading(3, "Constants");
   parameter_tables(page, f.fit, [](const ParameterEstimate&) { return true; });

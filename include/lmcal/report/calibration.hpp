@@ -13,7 +13,7 @@
 //   auto set = lmcal::find_calibration_set("measurements/cheng2017");
 //   auto c = lmcal::calibrate(set, {});
 //   lmcal::OutputSet out;
-//   for (auto& [name, text] : lmcal::calibration_outputs(c)) out.add("fits/cheng2017" / name, text);
+//   for (auto& [name, text] : lmcal::calibration_outputs(c)) out.add(std::filesystem::path("fits/cheng2017") / name, text);
 //   out.commit();
 //
 // Trap: the outputs record the command as `lmcal calibrate SET` (not where they were written),
