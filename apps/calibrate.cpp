@@ -8,7 +8,6 @@
 #include <iostream>
 
 #include "cli_common.hpp"
-#include "lmcal/io/atomic_file.hpp"
 #include "lmcal/report/calibration.hpp"
 #include "progress.hpp"
 
@@ -31,16 +30,10 @@ void run_calibrate(const CalibrateOptions& o) {
                                   {.step = [&](std::size_t i, std::size_t n, const std::string& name) { progress.step(i, n, name); },
                                    .detail = progress.detail_callback()});
   const std::filesystem::path dir = o.output_dir.empty() ? std::filesystem::path("fits") / set.name : std::filesystem::path(o.output_dir);
-  OutputSet out;
-  std::string names;
-  for (auto& [name, text] : calibration_outputs(c)) {
-    names += (names.empty() ? "" : ", ") + name;
-    out.add(dir / name, std::move(text));
-  }
-  out.commit();
+  const std::string written = write_outputs(dir, calibration_outputs(c));
   progress.clear();
   std::cout << "calibration of " << set.dir.string() << "\n" << calibration_summary(c);
-  std::cout << fmt::format("wrote {}/: {}\nreport: {}\n", dir.string(), names, (dir / "report.html").string());
+  std::cout << "wrote " << written << "\nreport: " << (dir / "report.html").string() << "\n";
 }
 
 }  // namespace

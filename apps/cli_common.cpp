@@ -8,6 +8,7 @@
 #include <cmath>
 
 #include "lmcal/error.hpp"
+#include "lmcal/io/atomic_file.hpp"
 
 namespace lmcal::cli {
 
@@ -35,6 +36,18 @@ std::vector<std::string_view> split(std::string_view text, char separator) {
 }
 
 }  // namespace
+
+std::string write_outputs(const std::filesystem::path& dir, std::vector<std::pair<std::string, std::string>> files) {
+  OutputSet out;
+  std::string written;
+  for (std::size_t i = 0; i < files.size(); ++i) {
+    const std::filesystem::path path = dir / files[i].first;
+    written += (i == 0 ? "" : i + 1 == files.size() ? " and " : ", ") + path.string();
+    out.add(path, std::move(files[i].second));
+  }
+  out.commit();
+  return written;
+}
 
 std::vector<double> parse_list(std::string_view option, std::string_view text) {
   constexpr std::string_view kExpected = "a list like 0.066,0.083,0.11 or a range start:stop:step";

@@ -6,6 +6,7 @@
 
 #include "lmcal/io/csv_writer.hpp"
 
+#include <filesystem>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -18,6 +19,10 @@ std::vector<double> parse_list(std::string_view option, std::string_view text);
 
 // "t:T,t:T,..." pairs of time (s) and temperature (°C), for an ambient trace.
 std::vector<std::pair<double, double>> parse_pairs(std::string_view option, std::string_view text);
+
+// Writes `files` (name -> contents) into `dir`, all or none (OutputSet); returns the paths
+// written, for the message: "fits/a.json, fits/a_samples.csv and fits/a_conditions.csv".
+std::string write_outputs(const std::filesystem::path& dir, std::vector<std::pair<std::string, std::string>> files);
 
 // Version, command line and time-independent facts every output carries alongside.
 nlohmann::json run_record(const std::vector<std::string>& argv);

@@ -71,11 +71,10 @@ void run_diagnose_thermal(DiagnoseThermalOptions& o) {
   std::vector<std::pair<std::string, std::string>> inputs;
   o.model.apply(o.diagnosis.fit, inputs);
   const ThermalDataSet data = load_thermal_dataset(o.manifest);
-  TerminalProgress progress;
-  progress.step(0, 1, "thermal diagnosis");
-  o.diagnosis.progress = progress.detail_callback();
-  const ThermalDiagnosis d = diagnose_thermal(data, o.diagnosis);
-  progress.clear();
+  const ThermalDiagnosis d = with_progress("thermal diagnosis", [&](const Progress& progress) {
+    o.diagnosis.progress = progress;
+    return diagnose_thermal(data, o.diagnosis);
+  });
   const auto file = std::filesystem::path(o.output_dir) / (o.name + ".json");
   write_file_atomically(file, thermal_diagnosis_json(d));
   print(d);
@@ -85,11 +84,10 @@ void run_diagnose_thermal(DiagnoseThermalOptions& o) {
 void run_diagnose_friction(DiagnoseFrictionOptions& o) {
   std::vector<std::filesystem::path> paths(o.files.begin(), o.files.end());
   const FrictionLog log = load_friction_logs(paths);
-  TerminalProgress progress;
-  progress.step(0, 1, "friction diagnosis");
-  o.diagnosis.progress = progress.detail_callback();
-  const FrictionDiagnosis d = diagnose_friction(log, o.diagnosis);
-  progress.clear();
+  const FrictionDiagnosis d = with_progress("friction diagnosis", [&](const Progress& progress) {
+    o.diagnosis.progress = progress;
+    return diagnose_friction(log, o.diagnosis);
+  });
   const auto file = std::filesystem::path(o.output_dir) / (o.name + ".json");
   write_file_atomically(file, friction_diagnosis_json(d));
   print(d);

@@ -14,7 +14,6 @@
 #include "progress.hpp"
 #include "lmcal/error.hpp"
 #include "lmcal/fit/friction_fit.hpp"
-#include "lmcal/io/atomic_file.hpp"
 #include "lmcal/io/hash.hpp"
 
 namespace lmcal::cli {
@@ -96,19 +95,10 @@ void run_fit_friction(const FitFrictionOptions& o, const std::vector<std::string
   const FrictionLog log = load_friction_logs(paths);
   FitProvenance provenance{o.name, {}, argv};
   for (const auto& file : o.files) provenance.inputs.emplace_back(file, sha256_file(file));
-  TerminalProgress progress;
-  progress.step(0, 1, "friction fit");
-  const FrictionFitResult result = fit_friction(log, options);
-  progress.clear();
-
-  const fs::path dir = o.output_dir;
-  OutputSet out;
-  out.add(dir / (o.name + ".json"), friction_fit_json(result, options, provenance));
-  out.add(dir / (o.name + "_samples.csv"), friction_fit_samples_csv(result, log));
-  out.add(dir / (o.name + "_conditions.csv"), friction_fit_conditions_csv(result));
-  out.commit();
+  const FrictionFitResult result = with_progress("friction fit", [&](const Progress&) { return fit_friction(log, options); });
+  const std::string written = write_outputs(o.output_dir, friction_fit_files(result, log, options, provenance));
   std::cout << "friction fit '" << o.name << "': " << friction_fit_summary(result);
-  std::cout << fmt::format("wrote {0}.json, {0}_samples.csv and {0}_conditions.csv\n", (dir / o.name).string());
+  std::cout << "wrote " << written << "\n";
 }
 
 }  // namespace

@@ -14,7 +14,6 @@
 #include "progress.hpp"
 #include "lmcal/error.hpp"
 #include "lmcal/fit/thermal_fit.hpp"
-#include "lmcal/io/atomic_file.hpp"
 #include "lmcal/io/hash.hpp"
 
 namespace lmcal::cli {
@@ -39,18 +38,10 @@ void run_fit_thermal(FitThermalOptions& o, const std::vector<std::string>& argv)
   inputs.emplace_back(o.manifest, sha256_file(o.manifest));
   for (const auto& run : data.runs) inputs.emplace_back(run.file.string(), sha256_file(run.file));
 
-  TerminalProgress progress;
-  progress.step(0, 1, "thermal fit");
-  const ThermalFitResult result = fit_thermal(data, f);
-  progress.clear();
-  const fs::path dir = o.output_dir;
-  OutputSet out;
-  out.add(dir / (o.name + ".json"), thermal_fit_json(result, f, inputs, argv, o.name));
-  out.add(dir / (o.name + "_samples.csv"), thermal_fit_samples_csv(result));
-  out.add(dir / (o.name + "_alpha_curve.csv"), thermal_fit_curve_csv(result));
-  out.commit();
+  const ThermalFitResult result = with_progress("thermal fit", [&](const Progress&) { return fit_thermal(data, f); });
+  const std::string written = write_outputs(o.output_dir, thermal_fit_files(result, f, inputs, argv, o.name));
   std::cout << "thermal fit '" << o.name << "' (" << to_string(f.source) << " source): " << thermal_fit_summary(result);
-  std::cout << fmt::format("wrote {0}.json, {0}_samples.csv and {0}_alpha_curve.csv\n", (dir / o.name).string());
+  std::cout << "wrote " << written << "\n";
 }
 
 }  // namespace

@@ -73,10 +73,9 @@ void run_generate_friction(GenerateOptions& o, const std::vector<std::string>& a
 void run_generate_thermal(GenerateOptions& o, const std::vector<std::string>& argv) {
   o.thermal.seed = o.seed;
   const RigEffects effects = resolve_effects(o.effects);
-  TerminalProgress progress;
-  progress.step(0, 1, "simulating the thermal runs");
-  const ThermalRigOutput made = generate_thermal_dataset(o.thermal, effects, o.name);
-  progress.clear();
+  const ThermalRigOutput made = with_progress("simulating the thermal runs", [&](const Progress&) {
+    return generate_thermal_dataset(o.thermal, effects, o.name);
+  });
   const fs::path dir = o.output;
   const std::vector<std::string> comments = {"SYNTHETIC thermal run made by the lmcal virtual rig, not measured.",
                                              "Command: " + command_line(argv),

@@ -9,6 +9,7 @@
 #include <mutex>
 #include <string>
 #include <thread>
+#include <utility>
 
 #include "lmcal/diagnose/diagnosis.hpp"
 
@@ -44,5 +45,16 @@ class TerminalProgress {
   Clock::time_point step_start_ = Clock::now();
   std::jthread ticker_;  // redraws while a step runs, so the seconds move
 };
+
+// Runs `work(detail callback)` with `name` shown as the one step on the terminal; the line is
+// cleared before the result comes back, so what follows prints on a clean line.
+template <class Work>
+auto with_progress(const std::string& name, Work&& work) {
+  TerminalProgress progress;
+  progress.step(0, 1, name);
+  auto result = std::forward<Work>(work)(progress.detail_callback());
+  progress.clear();
+  return result;
+}
 
 }  // namespace lmcal::cli

@@ -93,7 +93,7 @@ check "bad loss refused" refused "unknown loss 'l1'" fit friction fitdata/fricti
 "$LMCAL" diagnose friction drag/friction.csv -o fitout --name d > diag.txt
 check "diagnosis names the hidden seal drag" grep -q 'The published law misses: seal_drag' diag.txt
 check "diagnosis writes its json" grep -q '"verdict": "explained"' fitout/d.json
-check "diagnosis needs three runs" refused "at least three runs" diagnose friction onepc/friction.csv --name x -o out
+check "diagnosis needs three runs" refused "at least 3 runs" diagnose friction onepc/friction.csv --name x -o out
 
 # --- thermal fit -------------------------------------------------------------------------------
 "$LMCAL" generate thermal -o thermaldata --velocity 0.083,0.11 --duration 7200 --record-every 30 >/dev/null

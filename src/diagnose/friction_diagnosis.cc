@@ -120,7 +120,9 @@ double sum_of_squares(const FrictionLog& log, const std::vector<double>& predict
 }  // namespace
 
 FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagnosisOptions& o) {
-  if (log.run_names.size() < 3) throw InvalidParameter("runs", "a diagnosis needs at least three runs (it holds one out at a time)");
+  if (log.run_names.size() < kMinDiagnosisRuns)
+    throw InvalidParameter("runs", fmt::format("a diagnosis needs at least {} runs (it holds one out at a time)",
+                                               kMinDiagnosisRuns));
   FrictionDiagnosis d;
   const std::size_t n = log.size();
 
@@ -182,10 +184,7 @@ FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagno
                                                   .final_structured = d.final.structured,
                                                   .baseline_covariates = d.baseline.covariates,
                                                   .final_covariates = d.final.covariates});
-  d.verdict = v.verdict;
-  d.summary = v.summary;
-  d.unexplained_covariate = v.unexplained_covariate;
-  d.cv_gain_percent = v.cv_gain_percent;
+  detail::set_verdict(d, v);
   d.final_fit = current;
   d.baseline_fit = baseline;
   return d;

@@ -150,6 +150,14 @@ struct Verdict {
   double cv_gain_percent = 0;
 };
 Verdict make_verdict(const VerdictInput& in);
+// The verdict into a diagnosis (FrictionDiagnosis, ThermalDiagnosis).
+template <class Diagnosis>
+void set_verdict(Diagnosis& d, const Verdict& v) {
+  d.verdict = v.verdict;
+  d.summary = v.summary;
+  d.unexplained_covariate = v.unexplained_covariate;
+  d.cv_gain_percent = v.cv_gain_percent;
+}
 
 // JSON of candidate scores (the held-out RMSE as "cv_rmse_<unit>") and covariate tests.
 nlohmann::json candidate_json(const CandidateScore& c, const std::string& unit);

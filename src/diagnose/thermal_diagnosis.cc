@@ -166,7 +166,9 @@ ThermalFitResult fit_model(const ThermalDataSet& data, const ThermalDiagnosisOpt
 }  // namespace
 
 ThermalDiagnosis diagnose_thermal(const ThermalDataSet& data, const ThermalDiagnosisOptions& options) {
-  if (data.runs.size() < 3) throw InvalidParameter("runs", "a diagnosis needs at least three runs (it holds one out at a time)");
+  if (data.runs.size() < kMinDiagnosisRuns)
+    throw InvalidParameter("runs", fmt::format("a diagnosis needs at least {} runs (it holds one out at a time)",
+                                               kMinDiagnosisRuns));
   ThermalDiagnosisOptions o = options;
   const auto& times = data.runs.front().trace.time_s;
   if (o.min_record_spacing_s > 0 && o.fit.every == 1 && times.size() >= 2) {
@@ -257,10 +259,7 @@ ThermalDiagnosis diagnose_thermal(const ThermalDataSet& data, const ThermalDiagn
        .final_structured = d.final.structured,
        .baseline_covariates = d.baseline.covariates,
        .final_covariates = d.final.covariates});
-  d.verdict = v.verdict;
-  d.summary = v.summary;
-  d.unexplained_covariate = v.unexplained_covariate;
-  d.cv_gain_percent = v.cv_gain_percent;
+  detail::set_verdict(d, v);
   return d;
 }
 

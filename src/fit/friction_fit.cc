@@ -400,6 +400,14 @@ std::string friction_fit_samples_csv(const FrictionFitResult& r, const FrictionL
   return csv.str();
 }
 
+std::vector<std::pair<std::string, std::string>> friction_fit_files(const FrictionFitResult& result, const FrictionLog& log,
+                                                                    const FrictionFitOptions& options,
+                                                                    const FitProvenance& provenance) {
+  return {{provenance.name + ".json", friction_fit_json(result, options, provenance)},
+          {provenance.name + "_samples.csv", friction_fit_samples_csv(result, log)},
+          {provenance.name + "_conditions.csv", friction_fit_conditions_csv(result)}};
+}
+
 std::string friction_fit_conditions_csv(const FrictionFitResult& r) {
   CsvText csv({"guide", "preload_um", "load_N", "temperature_C", "velocity_m_s", "direction", "n", "measured_N",
                "predicted_N", "bias_N", "rmse_N", "relative_error"});

@@ -559,6 +559,16 @@ std::string thermal_fit_samples_csv(const ThermalFitResult& r) {
   return csv.str();
 }
 
+std::vector<std::pair<std::string, std::string>> thermal_fit_files(const ThermalFitResult& result,
+                                                                   const ThermalFitOptions& options,
+                                                                   const std::vector<std::pair<std::string, std::string>>& inputs,
+                                                                   const std::vector<std::string>& command,
+                                                                   const std::string& name) {
+  return {{name + ".json", thermal_fit_json(result, options, inputs, command, name)},
+          {name + "_samples.csv", thermal_fit_samples_csv(result)},
+          {name + "_alpha_curve.csv", thermal_fit_curve_csv(result)}};
+}
+
 std::string thermal_fit_curve_csv(const ThermalFitResult& r) {
   CsvText csv({"run", "alpha", "rmse_K", "max_error_K"});
   for (const auto& p : r.alpha_curve) csv.cell(p.run).cell(p.alpha).cell(p.rmse_K).cell(p.max_error_K).end_row();

@@ -68,14 +68,14 @@ Calibration calibrate(const CalibrationSet& set, const CalibrationOptions& optio
     c.friction = fit_friction(*c.friction_log, c.friction_options);
     if (options.diagnose) {
       start("friction diagnosis");
-      if (c.friction_log->run_names.size() >= 3) {
+      if (c.friction_log->run_names.size() >= kMinDiagnosisRuns) {
         FrictionDiagnosisOptions o = options.friction_diagnosis;
         o.progress = progress.detail;
         c.friction_diagnosis = diagnose_friction(*c.friction_log, o);
       } else {
         c.notes.push_back(fmt::format("friction diagnosis skipped: it holds one run out at a time and needs at least "
-                                      "three runs; the logs have {}",
-                                      c.friction_log->run_names.size()));
+                                      "{} runs; the logs have {}",
+                                      kMinDiagnosisRuns, c.friction_log->run_names.size()));
       }
     }
   } else {
@@ -95,13 +95,13 @@ Calibration calibrate(const CalibrationSet& set, const CalibrationOptions& optio
     c.thermal = fit_thermal(*c.thermal_data, c.thermal_options);
     if (options.diagnose) {
       start("thermal diagnosis");
-      if (c.thermal_data->runs.size() >= 3) {
+      if (c.thermal_data->runs.size() >= kMinDiagnosisRuns) {
         diagnosis.progress = progress.detail;
         c.thermal_diagnosis = diagnose_thermal(*c.thermal_data, diagnosis);
       } else {
-        c.notes.push_back(fmt::format("thermal diagnosis skipped: it holds one run out at a time and needs at least three runs; the "
-                                      "manifest has {}",
-                                      c.thermal_data->runs.size()));
+        c.notes.push_back(fmt::format("thermal diagnosis skipped: it holds one run out at a time and needs at least {} "
+                                      "runs; the manifest has {}",
+                                      kMinDiagnosisRuns, c.thermal_data->runs.size()));
       }
     }
   } else {
@@ -112,25 +112,16 @@ Calibration calibrate(const CalibrationSet& set, const CalibrationOptions& optio
 
 std::vector<std::pair<std::string, std::string>> calibration_outputs(const Calibration& c) {
   std::vector<std::pair<std::string, std::string>> out;
-  if (c.friction) {
-    std::vector<std::pair<std::string, std::string>> inputs;
-    for (const auto& [file, hash] : c.inputs)
-      if (std::find(c.set.friction_logs.begin(), c.set.friction_logs.end(), fs::path(file)) != c.set.friction_logs.end())
-        inputs.emplace_back(file, hash);
-    out.emplace_back("friction.json", friction_fit_json(*c.friction, c.friction_options, {"friction", inputs, c.command}));
-    out.emplace_back("friction_samples.csv", friction_fit_samples_csv(*c.friction, *c.friction_log));
-    out.emplace_back("friction_conditions.csv", friction_fit_conditions_csv(*c.friction));
-  }
+  auto append = [&](std::vector<std::pair<std::string, std::string>> files) {
+    for (auto& file : files) out.push_back(std::move(file));
+  };
+  // c.inputs: the friction logs first, then the thermal files.
+  const auto thermal_inputs = c.inputs.begin() + static_cast<std::ptrdiff_t>(c.set.friction_logs.size());
+  if (c.friction)
+    append(friction_fit_files(*c.friction, *c.friction_log, c.friction_options,
+                              {"friction", {c.inputs.begin(), thermal_inputs}, c.command}));
   if (c.friction_diagnosis) out.emplace_back("friction_diagnosis.json", friction_diagnosis_json(*c.friction_diagnosis));
-  if (c.thermal) {
-    std::vector<std::pair<std::string, std::string>> inputs;
-    for (const auto& [file, hash] : c.inputs)
-      if (std::find(c.set.friction_logs.begin(), c.set.friction_logs.end(), fs::path(file)) == c.set.friction_logs.end())
-        inputs.emplace_back(file, hash);
-    out.emplace_back("thermal.json", thermal_fit_json(*c.thermal, c.thermal_options, inputs, c.command, "thermal"));
-    out.emplace_back("thermal_samples.csv", thermal_fit_samples_csv(*c.thermal));
-    out.emplace_back("thermal_alpha_curve.csv", thermal_fit_curve_csv(*c.thermal));
-  }
+  if (c.thermal) append(thermal_fit_files(*c.thermal, c.thermal_options, {thermal_inputs, c.inputs.end()}, c.command, "thermal"));
   if (c.thermal_diagnosis) out.emplace_back("thermal_diagnosis.json", thermal_diagnosis_json(*c.thermal_diagnosis));
   out.emplace_back("calibration.json", calibration_json(c));
   out.emplace_back("report.html", calibration_report_html(c));

@@ -9,6 +9,9 @@
 
 namespace lmcal {
 
+// A diagnosis holds one run out at a time and scores it from the others.
+inline constexpr std::size_t kMinDiagnosisRuns = 3;
+
 // Told what a long computation is doing and how far it has got: step `done` of `total`
 // (0-based) of `what`. Called from the calling thread; may be empty.
 using Progress = std::function<void(const std::string& what, std::size_t done, std::size_t total)>;

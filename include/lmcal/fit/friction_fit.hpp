@@ -108,6 +108,11 @@ std::string friction_fit_json(const FrictionFitResult& result, const FrictionFit
                               const FitProvenance& provenance);
 std::string friction_fit_samples_csv(const FrictionFitResult& result, const FrictionLog& log);
 std::string friction_fit_conditions_csv(const FrictionFitResult& result);
+// Every file a friction fit writes, file name -> contents: NAME.json, NAME_samples.csv and
+// NAME_conditions.csv, with NAME = provenance.name.
+std::vector<std::pair<std::string, std::string>> friction_fit_files(const FrictionFitResult& result, const FrictionLog& log,
+                                                                    const FrictionFitOptions& options,
+                                                                    const FitProvenance& provenance);
 std::string friction_fit_summary(const FrictionFitResult& result);
 
 }  // namespace lmcal

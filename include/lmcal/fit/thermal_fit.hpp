@@ -20,6 +20,7 @@
 #include <limits>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "lmcal/fit/fit_result.hpp"
@@ -161,6 +162,13 @@ std::string thermal_fit_json(const ThermalFitResult& result, const ThermalFitOpt
                              const std::vector<std::string>& command, const std::string& name);
 std::string thermal_fit_samples_csv(const ThermalFitResult& result);
 std::string thermal_fit_curve_csv(const ThermalFitResult& result);
+// Every file a thermal fit writes, file name -> contents: NAME.json, NAME_samples.csv and
+// NAME_alpha_curve.csv.
+std::vector<std::pair<std::string, std::string>> thermal_fit_files(const ThermalFitResult& result,
+                                                                   const ThermalFitOptions& options,
+                                                                   const std::vector<std::pair<std::string, std::string>>& inputs,
+                                                                   const std::vector<std::string>& command,
+                                                                   const std::string& name);
 std::string thermal_fit_summary(const ThermalFitResult& result);
 
 }  // namespace lmcal
