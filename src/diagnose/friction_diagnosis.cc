@@ -173,18 +173,7 @@ FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagno
   for (std::size_t j = 0; j < 7; ++j)
     d.shifts.push_back({kFrictionConstantNames[j], baseline.fit.parameters[j].value, current.fit.parameters[j].value});
 
-  const detail::Verdict v = detail::make_verdict({.model = "The published law",
-                                                  .unit = "N",
-                                                  .accepted = d.accepted,
-                                                  .shifts = d.shifts,
-                                                  .cv_before = d.cv_rmse_before_N,
-                                                  .cv_after = d.cv_rmse_after_N,
-                                                  .baseline_rmse = d.baseline.rmse_N,
-                                                  .baseline_structured = d.baseline.structured,
-                                                  .final_structured = d.final.structured,
-                                                  .baseline_covariates = d.baseline.covariates,
-                                                  .final_covariates = d.final.covariates});
-  detail::set_verdict(d, v);
+  detail::conclude(d, "The published law", "N", d.cv_rmse_before_N, d.cv_rmse_after_N, d.baseline.rmse_N);
   d.final_fit = current;
   d.baseline_fit = baseline;
   return d;
@@ -199,31 +188,12 @@ std::string friction_diagnosis_json(const FrictionDiagnosis& d) {
                           {"durbin_watson", number(r.durbin_watson)}, {"run_bias_N", runs},
                           {"covariates", detail::covariates_json(r.covariates)}, {"structured", r.structured}};
   };
-  auto candidate = [](const CandidateScore& c) { return detail::candidate_json(c, "N"); };
-  nlohmann::json rounds = nlohmann::json::array();
-  for (const auto& round : d.rounds) {
-    nlohmann::json r = nlohmann::json::array();
-    for (const auto& c : round) r.push_back(candidate(c));
-    rounds.push_back(r);
-  }
-  nlohmann::json accepted = nlohmann::json::array();
-  for (const auto& c : d.accepted) accepted.push_back(candidate(c));
-  nlohmann::json shifts = nlohmann::json::array();
-  for (const auto& s : d.shifts) shifts.push_back({{"parameter", s.name}, {"baseline", s.baseline}, {"extended", s.extended}});
-  return nlohmann::json{{"kind", "friction diagnosis"},
-                        {"lmcal_version", LMCAL_VERSION},
-                        {"verdict", d.verdict},
-                        {"summary", d.summary},
-                        {"causes", accepted},
-                        {"cv_rmse_before_N", number(d.cv_rmse_before_N)},
-                        {"cv_rmse_after_N", number(d.cv_rmse_after_N)},
-                        {"cv_gain_percent", number(d.cv_gain_percent)},
-                        {"parameter_shifts", shifts},
-                        {"unexplained_covariate", d.unexplained_covariate},
-                        {"baseline_residuals", diagnostics(d.baseline)},
-                        {"final_residuals", diagnostics(d.final)},
-                        {"rounds", rounds}}
-             .dump(2) +
+  nlohmann::json j = detail::verdict_json(d, d.cv_rmse_before_N, d.cv_rmse_after_N, "N");
+  j["kind"] = "friction diagnosis";
+  j["lmcal_version"] = LMCAL_VERSION;
+  j["baseline_residuals"] = diagnostics(d.baseline);
+  j["final_residuals"] = diagnostics(d.final);
+  return j.dump(2) +
          "\n";
 }
 

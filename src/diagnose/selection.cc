@@ -166,6 +166,31 @@ nlohmann::json candidate_json(const CandidateScore& c, const std::string& unit) 
                         {"reason", c.reason}};
 }
 
+nlohmann::json verdict_json(const std::string& verdict, const std::string& summary,
+                            const std::vector<CandidateScore>& accepted, const std::vector<ParameterShift>& shifts,
+                            const std::vector<std::vector<CandidateScore>>& rounds, double cv_before, double cv_after,
+                            double cv_gain_percent, const std::string& unexplained_covariate, const std::string& unit) {
+  nlohmann::json steps = nlohmann::json::array();
+  for (const auto& round : rounds) {
+    nlohmann::json r = nlohmann::json::array();
+    for (const auto& c : round) r.push_back(candidate_json(c, unit));
+    steps.push_back(r);
+  }
+  nlohmann::json causes = nlohmann::json::array();
+  for (const auto& c : accepted) causes.push_back(candidate_json(c, unit));
+  nlohmann::json moves = nlohmann::json::array();
+  for (const auto& s : shifts) moves.push_back({{"parameter", s.name}, {"baseline", s.baseline}, {"extended", s.extended}});
+  return {{"verdict", verdict},
+          {"summary", summary},
+          {"causes", causes},
+          {"cv_rmse_before_" + unit, number(cv_before)},
+          {"cv_rmse_after_" + unit, number(cv_after)},
+          {"cv_gain_percent", number(cv_gain_percent)},
+          {"parameter_shifts", moves},
+          {"unexplained_covariate", unexplained_covariate},
+          {"rounds", steps}};
+}
+
 nlohmann::json covariates_json(const std::vector<CovariateTest>& tests) {
   nlohmann::json out = nlohmann::json::array();
   for (const auto& c : tests)

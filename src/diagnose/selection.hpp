@@ -150,9 +150,22 @@ struct Verdict {
   double cv_gain_percent = 0;
 };
 Verdict make_verdict(const VerdictInput& in);
-// The verdict into a diagnosis (FrictionDiagnosis, ThermalDiagnosis).
+// The verdict of a diagnosis (FrictionDiagnosis, ThermalDiagnosis: accepted, shifts, baseline
+// and final residuals set) into it; `model` and `unit` name the baseline and the residuals,
+// the held-out RMSEs and the baseline RMSE are in that unit.
 template <class Diagnosis>
-void set_verdict(Diagnosis& d, const Verdict& v) {
+void conclude(Diagnosis& d, std::string model, std::string unit, double cv_before, double cv_after, double baseline_rmse) {
+  const Verdict v = make_verdict({.model = std::move(model),
+                                  .unit = std::move(unit),
+                                  .accepted = d.accepted,
+                                  .shifts = d.shifts,
+                                  .cv_before = cv_before,
+                                  .cv_after = cv_after,
+                                  .baseline_rmse = baseline_rmse,
+                                  .baseline_structured = d.baseline.structured,
+                                  .final_structured = d.final.structured,
+                                  .baseline_covariates = d.baseline.covariates,
+                                  .final_covariates = d.final.covariates});
   d.verdict = v.verdict;
   d.summary = v.summary;
   d.unexplained_covariate = v.unexplained_covariate;
@@ -162,5 +175,18 @@ void set_verdict(Diagnosis& d, const Verdict& v) {
 // JSON of candidate scores (the held-out RMSE as "cv_rmse_<unit>") and covariate tests.
 nlohmann::json candidate_json(const CandidateScore& c, const std::string& unit);
 nlohmann::json covariates_json(const std::vector<CovariateTest>& tests);
+
+// What both diagnoses write of their verdict: verdict, summary, causes, the held-out RMSE
+// before and after ("cv_rmse_before_<unit>"), the gain, parameter shifts, the unexplained
+// covariate and every forward step's candidates ("rounds").
+nlohmann::json verdict_json(const std::string& verdict, const std::string& summary,
+                            const std::vector<CandidateScore>& accepted, const std::vector<ParameterShift>& shifts,
+                            const std::vector<std::vector<CandidateScore>>& rounds, double cv_before, double cv_after,
+                            double cv_gain_percent, const std::string& unexplained_covariate, const std::string& unit);
+template <class Diagnosis>
+nlohmann::json verdict_json(const Diagnosis& d, double cv_before, double cv_after, const std::string& unit) {
+  return verdict_json(d.verdict, d.summary, d.accepted, d.shifts, d.rounds, cv_before, cv_after, d.cv_gain_percent,
+                      d.unexplained_covariate, unit);
+}
 
 }  // namespace lmcal::detail

@@ -247,19 +247,7 @@ ThermalDiagnosis diagnose_thermal(const ThermalDataSet& data, const ThermalDiagn
   for (const auto& p : d.baseline_fit.joint.parameters)
     if (p.name == "alpha" || p.name == "h_W_m2K") d.shifts.push_back({p.name, p.value, d.final_fit.joint.parameter(p.name).value});
 
-  const detail::Verdict v = detail::make_verdict(
-      {.model = "The published rail model",
-       .unit = "K",
-       .accepted = d.accepted,
-       .shifts = d.shifts,
-       .cv_before = d.cv_rmse_before_K,
-       .cv_after = d.cv_rmse_after_K,
-       .baseline_rmse = d.baseline.rmse_K,
-       .baseline_structured = d.baseline.structured,
-       .final_structured = d.final.structured,
-       .baseline_covariates = d.baseline.covariates,
-       .final_covariates = d.final.covariates});
-  detail::set_verdict(d, v);
+  detail::conclude(d, "The published rail model", "K", d.cv_rmse_before_K, d.cv_rmse_after_K, d.baseline.rmse_K);
   return d;
 }
 
@@ -277,32 +265,14 @@ std::string thermal_diagnosis_json(const ThermalDiagnosis& d) {
                           {"covariates", detail::covariates_json(r.covariates)},
                           {"structured", r.structured}};
   };
-  nlohmann::json rounds = nlohmann::json::array();
-  for (const auto& round : d.rounds) {
-    nlohmann::json r = nlohmann::json::array();
-    for (const auto& c : round) r.push_back(detail::candidate_json(c, "K"));
-    rounds.push_back(r);
-  }
-  nlohmann::json accepted = nlohmann::json::array();
-  for (const auto& c : d.accepted) accepted.push_back(detail::candidate_json(c, "K"));
-  nlohmann::json shifts = nlohmann::json::array();
-  for (const auto& s : d.shifts) shifts.push_back({{"parameter", s.name}, {"baseline", s.baseline}, {"extended", s.extended}});
-  return nlohmann::json{{"kind", "thermal diagnosis"},
-                        {"lmcal_version", LMCAL_VERSION},
-                        {"verdict", d.verdict},
-                        {"summary", d.summary},
-                        {"causes", accepted},
-                        {"cv_rmse_before_K", number(d.cv_rmse_before_K)},
-                        {"cv_rmse_after_K", number(d.cv_rmse_after_K)},
-                        {"cv_gain_percent", number(d.cv_gain_percent)},
-                        {"thermocouple_noise_K", number(d.noise_K)},
-                        {"parameter_shifts", shifts},
-                        {"unexplained_covariate", d.unexplained_covariate},
-                        {"not_tried", d.skipped},
-                        {"baseline_residuals", diagnostics(d.baseline)},
-                        {"final_residuals", diagnostics(d.final)},
-                        {"rounds", rounds}}
-             .dump(2) +
+  nlohmann::json j = detail::verdict_json(d, d.cv_rmse_before_K, d.cv_rmse_after_K, "K");
+  j["kind"] = "thermal diagnosis";
+  j["lmcal_version"] = LMCAL_VERSION;
+  j["thermocouple_noise_K"] = number(d.noise_K);
+  j["not_tried"] = d.skipped;
+  j["baseline_residuals"] = diagnostics(d.baseline);
+  j["final_residuals"] = diagnostics(d.final);
+  return j.dump(2) +
          "\n";
 }
 

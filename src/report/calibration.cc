@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <nlohmann/json.hpp>
 
+#include "diagnose/selection.hpp"
 #include "fit/fit_json.hpp"
 #include "lmcal/error.hpp"
 #include "lmcal/io/hash.hpp"
@@ -139,18 +140,10 @@ nlohmann::json estimate_json(const ParameterEstimate& p) {
           {"at_bound", p.at_bound}, {"held", !p.free || p.held_unidentifiable}};
 }
 
-template <class Diagnosis>
-nlohmann::json verdict_json(const Diagnosis& d, double before, double after, const char* unit) {
-  nlohmann::json causes = nlohmann::json::array();
-  for (const auto& a : d.accepted)
-    causes.push_back({{"cause", a.effect}, {"value", number(a.value)}, {"ci_low", number(a.ci_low)}, {"ci_high", number(a.ci_high)}});
-  return {{"verdict", d.verdict},
-          {"summary", d.summary},
-          {"causes", causes},
-          {fmt::format("cv_rmse_before_{}", unit), number(before)},
-          {fmt::format("cv_rmse_after_{}", unit), number(after)},
-          {"cv_gain_percent", number(d.cv_gain_percent)},
-          {"unexplained_covariate", d.unexplained_covariate}};
+// A diagnosis's verdict without its candidate tables (those are in its own file).
+nlohmann::json brief_verdict(nlohmann::json verdict) {
+  verdict.erase("rounds");
+  return verdict;
 }
 
 }  // namespace
@@ -171,8 +164,8 @@ std::string calibration_json(const Calibration& c) {
                      {"identifiable", c.friction->fit.identifiability.identifiable}};
   }
   if (c.friction_diagnosis)
-    j["friction_diagnosis"] = verdict_json(*c.friction_diagnosis, c.friction_diagnosis->cv_rmse_before_N,
-                                           c.friction_diagnosis->cv_rmse_after_N, "N");
+    j["friction_diagnosis"] = brief_verdict(detail::verdict_json(*c.friction_diagnosis, c.friction_diagnosis->cv_rmse_before_N,
+                                                                 c.friction_diagnosis->cv_rmse_after_N, "N"));
   if (c.thermal) {
     const Spread& s = c.thermal->alpha_spread;
     j["thermal"] = {{"alpha", estimate_json(c.thermal->joint.parameter("alpha"))},
@@ -183,8 +176,8 @@ std::string calibration_json(const Calibration& c) {
                     {"converged", c.thermal->joint.solver.converged}};
   }
   if (c.thermal_diagnosis)
-    j["thermal_diagnosis"] = verdict_json(*c.thermal_diagnosis, c.thermal_diagnosis->cv_rmse_before_K,
-                                          c.thermal_diagnosis->cv_rmse_after_K, "K");
+    j["thermal_diagnosis"] = brief_verdict(detail::verdict_json(*c.thermal_diagnosis, c.thermal_diagnosis->cv_rmse_before_K,
+                                                                c.thermal_diagnosis->cv_rmse_after_K, "K"));
   return j.dump(2) + "\n";
 }
 
