@@ -196,11 +196,25 @@ TEST(FrictionFit, SpreadAcrossRunsUsesEquationOneAndFlagsRunToRunDifferences) {
     EXPECT_FALSE(s.wider_than_pooled) << s.parameter << " ratio " << s.ratio;
     EXPECT_LT(s.ratio, 2.5) << s.parameter;
   }
-  rig.run_offset_N = 1.0;  // a load-cell zero that moves by run: the model has no term for it
+  EXPECT_EQ(clean.fit.uncertainty.method, "hac") << clean.fit.uncertainty.reason;
+}
+
+// Runs that disagree beyond their noise widen the quoted intervals: a load-cell zero that
+// moves by run (the model has no term for it) is found by the between-run test, the cluster
+// covariance is quoted, and the spread of the runs' own fits is then inside the pooled SE.
+TEST(FrictionFit, RunsThatDisagreeWidenTheIntervals) {
+  auto rig = compact_rig(12, 6);
+  rig.run_offset_N = 1.0;
   const auto offset = fit_friction(generate_friction_log(rig, {}).log, {});
-  bool flagged = false;
-  for (const auto& s : offset.spread) flagged |= s.wider_than_pooled;
-  EXPECT_TRUE(flagged);
+  const Uncertainty& u = offset.fit.uncertainty;
+  EXPECT_EQ(u.method, "cluster") << u.reason;
+  EXPECT_EQ(u.dof, 5.0);
+  bool disagree = false;
+  for (const auto& h : u.heterogeneity) disagree |= h.significant;
+  EXPECT_TRUE(disagree);
+  const auto& f0 = offset.fit.parameter("f0");
+  EXPECT_GT(f0.se, 3 * u.find("iid")->se[6]) << "the zero offsets move f0 by run";
+  for (const auto& s : offset.spread) EXPECT_LT(s.ratio, 2.5) << s.parameter << ": the quoted SE holds the runs' spread";
 }
 
 TEST(FrictionFit, WeightsFromTheSpreadOfRepeats) {

@@ -6,6 +6,39 @@ namespace lmcal::detail {
 
 nlohmann::json number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
 
+nlohmann::json uncertainty_json(const FitResult& fit) {
+  const Uncertainty& u = fit.uncertainty;
+  nlohmann::json methods = nlohmann::json::array();
+  for (const auto& m : u.methods) {
+    nlohmann::json se = nlohmann::json::object();
+    for (std::size_t j = 0; j < m.se.size() && j < fit.parameters.size(); ++j)
+      if (std::isfinite(m.se[j])) se[fit.parameters[j].name] = m.se[j];
+    methods.push_back({{"method", m.method}, {"description", m.description}, {"ok", m.ok}, {"dof", number(m.dof)},
+                       {"note", m.note}, {"se", se}});
+  }
+  nlohmann::json heterogeneity = nlohmann::json::array();
+  for (const auto& h : u.heterogeneity)
+    heterogeneity.push_back({{"parameter", h.parameter}, {"runs", h.runs}, {"q", number(h.q)}, {"p", number(h.p_value)},
+                             {"p_holm", number(h.p_holm)}, {"i_squared", number(h.i_squared)}, {"significant", h.significant}});
+  nlohmann::json j = {{"method", u.method},
+                      {"reason", u.reason},
+                      {"dof", number(u.dof)},
+                      {"runs", u.runs},
+                      {"lag1_autocorrelation", number(u.lag1_autocorrelation)},
+                      {"effective_sample_size", number(u.effective_sample_size)},
+                      {"hac_lags", number(u.hac_lags)},
+                      {"methods", methods},
+                      {"between_run_heterogeneity", heterogeneity},
+                      {"notes", u.notes}};
+  if (!u.input.empty()) {
+    nlohmann::json share = nlohmann::json::object();
+    for (std::size_t k = 0; k < u.input_variance_share.size() && k < fit.parameters.size(); ++k)
+      if (std::isfinite(u.input_variance_share[k])) share[fit.parameters[k].name] = u.input_variance_share[k];
+    j["input"] = {{"name", u.input}, {"variance_share", share}};
+  }
+  return j;
+}
+
 nlohmann::json fit_json(const FitResult& fit) {
   nlohmann::json parameters = nlohmann::json::array();
   std::vector<std::string> names;
@@ -20,7 +53,9 @@ nlohmann::json fit_json(const FitResult& fit) {
                           {"held_unidentifiable", p.held_unidentifiable},
                           {"at_bound", p.at_bound},
                           {"se", number(p.se)},
+                          {"dof", number(p.dof)},
                           {"ci95", {number(p.ci_low), number(p.ci_high)}},
+                          {"bootstrap_ci95", {number(p.boot_low), number(p.boot_high)}},
                           {"profile_ci95", {number(p.profile_low), number(p.profile_high)}},
                           {"interval", p.interval}});
   }
@@ -42,6 +77,7 @@ nlohmann::json fit_json(const FitResult& fit) {
   }
   const auto& s = fit.solver;
   return {{"parameters", parameters},
+          {"uncertainty", uncertainty_json(fit)},
           {"correlation", {{"names", names}, {"matrix", correlation}}},
           {"residuals", fit.residuals},
           {"free_parameters", fit.free_parameters},

@@ -9,7 +9,9 @@ namespace lmcal::detail {
 
 // A number, or null when it is not finite (NaN SE of a held parameter, say).
 nlohmann::json number(double v);
-// Parameters, correlation, identifiability, solver and warnings.
+// The covariance methods side by side, the one quoted and why, the between-run tests.
+nlohmann::json uncertainty_json(const FitResult& fit);
+// Parameters, uncertainty, correlation, identifiability, solver and warnings.
 nlohmann::json fit_json(const FitResult& fit);
 
 }  // namespace lmcal::detail

@@ -80,6 +80,26 @@ std::unique_ptr<ceres::CostFunction> FrictionModel::cost_function(const std::vec
       std::move(groups));
 }
 
+// A run is a cluster; its samples, in the log's order (time order within a run), are its
+// time steps.
+RowStructure FrictionModel::row_structure() const {
+  RowStructure rows;
+  std::vector<std::size_t> cluster_of_run(data_.log->run_names.size(), 0), steps;
+  std::vector<bool> seen(data_.log->run_names.size(), false);
+  for (std::size_t sample : data_.samples) {
+    const std::uint32_t run = data_.log->run[sample];
+    if (!seen[run]) {
+      seen[run] = true;
+      cluster_of_run[run] = rows.clusters++;
+      steps.push_back(0);
+    }
+    const std::size_t c = cluster_of_run[run];
+    rows.cluster.push_back(c);
+    rows.time.push_back(steps[c]++);
+  }
+  return rows;
+}
+
 void FrictionModel::explain(IdentifiabilityIssue& issue) const {
   std::set<std::string> dominant;
   for (const auto& [name, weight] : issue.combination)

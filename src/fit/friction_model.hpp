@@ -40,6 +40,7 @@ class FrictionModel : public LeastSquaresModel {
                                                      const RowLoss& loss) const override;
   void explain(IdentifiabilityIssue& issue) const override;
   std::vector<IdentifiabilityIssue> design_issues(const std::vector<std::string>& free) const override;
+  RowStructure row_structure() const override;
 
  private:
   const FrictionData& data_;

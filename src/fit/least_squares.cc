@@ -11,6 +11,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <optional>
 
 #include "lmcal/error.hpp"
 #include "lmcal/fit/statistics.hpp"
@@ -327,11 +328,11 @@ Eigen::VectorXd evaluate_residuals(const LeastSquaresModel& model, const std::ve
   return r;
 }
 
-FitResult solve_least_squares(const LeastSquaresModel& model, const std::vector<ParameterSpec>& specs,
-                              const FitOptions& options, FinalState* final_state) {
-  const auto clock_start = std::chrono::steady_clock::now();
-  const std::size_t p = specs.size();
-  const std::size_t n = model.num_residuals();
+namespace {
+
+// ---- the steps of a fit ------------------------------------------------------------------
+
+void check_specs(const std::vector<ParameterSpec>& specs) {
   for (const auto& s : specs) {
     require_finite(s.name.c_str(), s.start);
     if (s.free && !(s.lower < s.upper && std::isfinite(s.lower) && std::isfinite(s.upper)))
@@ -339,38 +340,102 @@ FitResult solve_least_squares(const LeastSquaresModel& model, const std::vector<
     if (s.free && (s.start < s.lower || s.start > s.upper))
       throw InvalidParameter(s.name, s.start, fmt::format("a start inside the bounds [{}, {}]", s.lower, s.upper));
   }
+}
+
+// Step 0: what the design of the data rules out, held from the start.
+std::vector<bool> held_by_design(const LeastSquaresModel& model, const std::vector<ParameterSpec>& specs,
+                                 Identifiability& identifiability) {
+  const std::size_t p = specs.size();
   std::vector<bool> held(p);
-  std::vector<double> start(p);
+  std::vector<std::string> free_names;
   for (std::size_t j = 0; j < p; ++j) {
     held[j] = !specs[j].free;
-    start[j] = specs[j].start;
+    if (!held[j]) free_names.push_back(specs[j].name);
   }
+  for (IdentifiabilityIssue& issue : model.design_issues(free_names)) {
+    for (const auto& name : issue.held)
+      for (std::size_t j = 0; j < p; ++j)
+        if (specs[j].name == name) held[j] = true;
+    identifiability.identifiable = false;
+    identifiability.issues.push_back(std::move(issue));
+  }
+  return held;
+}
 
-  FitResult result;
-  result.residuals = n;
+std::vector<std::size_t> free_indices(const std::vector<bool>& held) {
+  std::vector<std::size_t> free;
+  for (std::size_t j = 0; j < held.size(); ++j)
+    if (!held[j]) free.push_back(j);
+  return free;
+}
+
+// The weakest direction of the fit, if the data cannot determine it: the top eigenvector of
+// the relatively scaled covariance, or (J rank deficient) the null vector of JᵀJ. Returns the
+// issue with the parameter that dominates it in `held`, or nothing when every direction is
+// determined to `identifiability_threshold`. Records the condition number on the first call.
+std::optional<IdentifiabilityIssue> weakest_direction(const LeastSquaresModel& model, const std::vector<ParameterSpec>& specs,
+                                                      const FinalState& state, double s2, const FitOptions& options,
+                                                      std::optional<double>& condition_number) {
+  const std::vector<std::size_t> free = free_indices(state.held);
+  if (free.empty()) return std::nullopt;
+  const auto m = static_cast<Eigen::Index>(free.size());
+  Eigen::VectorXd scale(m);
+  for (Eigen::Index k = 0; k < m; ++k) scale[k] = relative_scale(specs[free[k]], state.theta[free[k]]);
+  Eigen::VectorXd variance;  // relative, along each eigen-direction, largest first
+  Eigen::MatrixXd directions;
+  if (state.covariance_ok) {
+    Eigen::MatrixXd c(m, m);
+    for (Eigen::Index a = 0; a < m; ++a)
+      for (Eigen::Index b = 0; b < m; ++b)
+        c(a, b) = state.bread(static_cast<Eigen::Index>(free[a]), static_cast<Eigen::Index>(free[b])) / (scale[a] * scale[b]);
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(c);
+    variance = eig.eigenvalues().reverse().cwiseMax(0.0);
+    directions = eig.eigenvectors().rowwise().reverse();
+  } else {
+    Eigen::MatrixXd Js(state.jacobian.rows(), m);
+    for (Eigen::Index k = 0; k < m; ++k) Js.col(k) = state.jacobian.col(static_cast<Eigen::Index>(free[k])) * scale[k];
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(Js.transpose() * Js);
+    variance = eig.eigenvalues().cwiseMax(0.0).cwiseInverse();  // 1/0 = inf: undetermined
+    directions = eig.eigenvectors();
+  }
+  if (!condition_number) condition_number = std::sqrt(variance[0] / variance[m - 1]);
+  const double worst_se = std::sqrt(s2 * variance[0]);
+  if (!(worst_se > options.identifiability_threshold) || std::isnan(s2)) return std::nullopt;
+
+  IdentifiabilityIssue issue;
+  issue.relative_se = worst_se;
+  Eigen::VectorXd v = directions.col(0);
+  Eigen::Index dominant = 0;
+  v.cwiseAbs().maxCoeff(&dominant);
+  if (v[dominant] < 0) v = -v;
+  for (Eigen::Index k = 0; k < m; ++k)
+    if (std::abs(v[k]) >= 0.05) issue.combination.emplace_back(specs[free[k]].name, v[k]);
+  model.explain(issue);
+  issue.held.push_back(specs[free[static_cast<std::size_t>(dominant)]].name);
+  return issue;
+}
+
+struct Estimate {
+  FinalState state;
+  Polish fit;
+  MultiStart starts;
+};
+
+// Steps 1-3: multi-start, polish, and the covariance at the solution; a direction the data
+// cannot determine is held and the rest refitted, until every direction is determined.
+Estimate estimate(const LeastSquaresModel& model, const std::vector<ParameterSpec>& specs, const FitOptions& options,
+                  std::vector<bool> held, Identifiability& identifiability) {
+  const std::size_t p = specs.size(), n = model.num_residuals();
+  std::vector<double> start(p);
+  for (std::size_t j = 0; j < p; ++j) start[j] = specs[j].start;
   const RowLoss loss{options.loss, options.loss_scale};
   const auto cost = model.cost_function({}, loss);
 
-  // 0. What the design of the data rules out: held from the start.
-  {
-    std::vector<std::string> free_names;
-    for (std::size_t j = 0; j < p; ++j)
-      if (!held[j]) free_names.push_back(specs[j].name);
-    for (IdentifiabilityIssue& issue : model.design_issues(free_names)) {
-      for (const auto& name : issue.held)
-        for (std::size_t j = 0; j < p; ++j)
-          if (specs[j].name == name) held[j] = true;
-      result.identifiability.identifiable = false;
-      result.identifiability.issues.push_back(std::move(issue));
-    }
-  }
-
-  // 1-2. Multi-start, then polish (a linear model has one minimum: neither is needed).
+  // A linear model has one minimum: neither multi-start nor iterations are needed.
   const bool linear = model.linear(held) && options.loss == RobustLoss::none;
-  const MultiStart ms = linear ? MultiStart{start, 1, 1} : multi_start(model, specs, held, start, options);
-  result.solver.starts = ms.starts;
-  result.solver.starts_agreed = ms.agreed;
-  std::vector<double> theta = ms.best;
+  Estimate e;
+  e.starts = linear ? MultiStart{start, 1, 1} : multi_start(model, specs, held, start, options);
+  std::vector<double> theta = e.starts.best;
   // Large problems: converge on a tenth of the residuals first, so that the polish over all
   // of them starts next to the minimum and needs only a step or two.
   if (n > 20000 && !linear) {
@@ -378,185 +443,154 @@ FitResult solve_least_squares(const LeastSquaresModel& model, const std::vector<
     for (std::size_t k = 0; k < n / 10; ++k) rows.push_back(k * 10);
     theta = polish(*model.cost_function(rows, loss), specs, held, theta).theta;
   }
-
-  // 3-4. Covariance at the solution; a direction the data cannot determine is held and the
-  // rest refitted. The weakest direction is the top eigenvector of the relatively scaled
-  // covariance, or (when the Jacobian is rank deficient) the null vector of JᵀJ.
-  Polish fit;
-  Eigen::MatrixXd last_jacobian;
-  Eigen::VectorXd last_residuals;
-  Eigen::MatrixXd unscaled_covariance;
-  std::string covariance_message;
-  bool covariance_ok = false;
-  bool first_analysis = true;
+  std::optional<double> condition_number;
+  FinalState& state = e.state;
   for (std::size_t round = 0; round <= p; ++round) {
-    Eigen::MatrixXd& J = last_jacobian;
     if (linear && model.linear(held)) {
-      fit = linear_solve(model, *cost, specs, held, theta, loss, J);
-      last_residuals = fit.residuals;
+      e.fit = linear_solve(model, *cost, specs, held, theta, loss, state.jacobian);
+      state.residuals = e.fit.residuals;
     } else {
-      fit = polish(*cost, specs, held, theta);
-      last_residuals = evaluate_residuals(model, fit.theta, loss, &J);
+      e.fit = polish(*cost, specs, held, theta);
+      state.residuals = evaluate_residuals(model, e.fit.theta, loss, &state.jacobian);
     }
-    theta = fit.theta;
-    covariance_message.clear();
-    covariance_ok = covariance_from_jacobian(J, held, unscaled_covariance, covariance_message);
-    std::vector<std::size_t> free;
+    theta = state.theta = e.fit.theta;
+    state.held = held;
+    state.covariance_message.clear();
+    state.covariance_ok = covariance_from_jacobian(state.jacobian, held, state.bread, state.covariance_message);
+    const double dof = static_cast<double>(n) - static_cast<double>(free_indices(held).size());
+    const double s2 = dof > 0 ? 2.0 * e.fit.summary.final_cost / dof : kNaN;
+    auto issue = weakest_direction(model, specs, state, s2, options, condition_number);
+    if (!issue) break;
     for (std::size_t j = 0; j < p; ++j)
-      if (!held[j]) free.push_back(j);
-    if (free.empty()) break;
-    const double dof = static_cast<double>(n) - static_cast<double>(free.size());
-    const double s2 = dof > 0 ? 2.0 * fit.summary.final_cost / dof : kNaN;
-    const auto m = static_cast<Eigen::Index>(free.size());
-    Eigen::VectorXd scale(m);
-    for (Eigen::Index k = 0; k < m; ++k) scale[k] = relative_scale(specs[free[k]], theta[free[k]]);
-    // variance (relative) along each eigen-direction, largest first
-    Eigen::VectorXd variance;
-    Eigen::MatrixXd directions;
-    if (covariance_ok) {
-      Eigen::MatrixXd c(m, m);
-      for (Eigen::Index a = 0; a < m; ++a)
-        for (Eigen::Index b = 0; b < m; ++b)
-          c(a, b) = unscaled_covariance(static_cast<Eigen::Index>(free[a]), static_cast<Eigen::Index>(free[b])) /
-                    (scale[a] * scale[b]);
-      const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(c);
-      variance = eig.eigenvalues().reverse().cwiseMax(0.0);
-      directions = eig.eigenvectors().rowwise().reverse();
-    } else {
-      Eigen::MatrixXd Js(J.rows(), m);
-      for (Eigen::Index k = 0; k < m; ++k) Js.col(k) = J.col(static_cast<Eigen::Index>(free[k])) * scale[k];
-      const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(Js.transpose() * Js);
-      variance = eig.eigenvalues().cwiseMax(0.0).cwiseInverse();  // 1/0 = inf: undetermined
-      directions = eig.eigenvectors();
-    }
-    if (first_analysis) {
-      result.identifiability.condition_number = std::sqrt(variance[0] / variance[m - 1]);
-      first_analysis = false;
-    }
-    const double worst_se = std::sqrt(s2 * variance[0]);
-    if (!(worst_se > options.identifiability_threshold) || std::isnan(s2)) break;
-
-    IdentifiabilityIssue issue;
-    issue.relative_se = worst_se;
-    Eigen::VectorXd v = directions.col(0);
-    Eigen::Index dominant = 0;
-    v.cwiseAbs().maxCoeff(&dominant);
-    if (v[dominant] < 0) v = -v;
-    for (Eigen::Index k = 0; k < m; ++k)
-      if (std::abs(v[k]) >= 0.05) issue.combination.emplace_back(specs[free[k]].name, v[k]);
-    model.explain(issue);
-    const std::size_t hold = free[static_cast<std::size_t>(dominant)];
-    issue.held.push_back(specs[hold].name);
-    held[hold] = true;
-    theta[hold] = specs[hold].start;
-    result.identifiability.identifiable = false;
-    result.identifiability.issues.push_back(std::move(issue));
+      if (specs[j].name == issue->held.front()) {
+        held[j] = true;
+        theta[j] = specs[j].start;
+      }
+    identifiability.identifiable = false;
+    identifiability.issues.push_back(std::move(*issue));
   }
+  identifiability.condition_number = condition_number.value_or(0.0);
+  return e;
+}
 
-  const auto& summary = fit.summary;
-  result.solver.converged = summary.termination_type == ceres::CONVERGENCE;
-  result.solver.usable = summary.IsSolutionUsable();
-  result.solver.iterations = static_cast<int>(summary.iterations.size()) - 1;
-  result.solver.termination = ceres::TerminationTypeToString(summary.termination_type);
-  result.solver.brief = summary.BriefReport();
-  result.solver.initial_cost = summary.initial_cost;
-  result.solver.final_cost = summary.final_cost;
-  result.solver.covariance_ok = covariance_ok;
-  result.solver.covariance_message = covariance_message;
+void report_solver(const Estimate& e, const FitOptions& options, FitResult& result) {
+  const auto& summary = e.fit.summary;
+  SolverReport& s = result.solver;
+  s.converged = summary.termination_type == ceres::CONVERGENCE;
+  s.usable = summary.IsSolutionUsable();
+  s.iterations = static_cast<int>(summary.iterations.size()) - 1;
+  s.termination = ceres::TerminationTypeToString(summary.termination_type);
+  s.brief = summary.BriefReport();
+  s.initial_cost = summary.initial_cost;
+  s.final_cost = summary.final_cost;
+  s.covariance_ok = e.state.covariance_ok;
+  s.covariance_message = e.state.covariance_message;
+  s.starts = e.starts.starts;
+  s.starts_agreed = e.starts.agreed;
+  if (!s.converged) result.warnings.push_back("the solver stopped without converging: " + summary.message);
+  if (!s.covariance_ok && result.free_parameters > 0) result.warnings.push_back(s.covariance_message);
+  if (e.starts.starts > 1 && e.starts.agreed * 2 < e.starts.starts)
+    result.warnings.push_back(fmt::format("only {} of {} starts reached the best minimum", e.starts.agreed, e.starts.starts));
+  (void)options;
+}
 
-  std::size_t free_count = 0;
-  for (std::size_t j = 0; j < p; ++j) free_count += held[j] ? 0 : 1;
-  result.free_parameters = free_count;
-  result.dof = static_cast<double>(n) - static_cast<double>(free_count);
-  result.residual_variance = result.dof > 0 ? 2.0 * summary.final_cost / result.dof : kNaN;
-  const double s2 = result.residual_variance;
-  result.covariance = covariance_ok ? Eigen::MatrixXd(unscaled_covariance * s2) : Eigen::MatrixXd::Constant(p, p, kNaN);
-  result.correlation = Eigen::MatrixXd::Constant(p, p, kNaN);
-  for (std::size_t i = 0; i < p; ++i)
-    for (std::size_t j = 0; j < p; ++j) {
-      const double d = result.covariance(i, i) * result.covariance(j, j);
-      if (d > 0) result.correlation(i, j) = result.covariance(i, j) / std::sqrt(d);
-    }
-
-  const double t = result.dof > 0 ? student_t_quantile(1 - (1 - options.confidence) / 2, result.dof) : kNaN;
-  const double profile_threshold =
-      result.dof > 0 ? 0.5 * s2 * fisher_f_quantile(options.confidence, 1, result.dof) : kNaN;
-  for (std::size_t j = 0; j < p; ++j) {
+std::vector<ParameterEstimate> estimates(const std::vector<ParameterSpec>& specs, const FinalState& state) {
+  std::vector<ParameterEstimate> out;
+  for (std::size_t j = 0; j < specs.size(); ++j) {
     ParameterEstimate e;
     e.name = specs[j].name;
     e.unit = specs[j].unit;
-    e.value = theta[j];
+    e.value = state.theta[j];
     e.start = specs[j].start;
     e.lower = specs[j].lower;
     e.upper = specs[j].upper;
     e.free = specs[j].free;
-    e.held_unidentifiable = specs[j].free && held[j];
-    e.profile_low = e.profile_high = kNaN;
-    if (held[j]) {
-      e.se = e.ci_low = e.ci_high = kNaN;
-      e.interval = "none";
-    } else {
-      e.at_bound = at_bound(specs[j], theta[j]);
-      e.se = std::sqrt(result.covariance(j, j));
-      e.ci_low = e.value - t * e.se;
-      e.ci_high = e.value + t * e.se;
-      if (e.at_bound) result.warnings.push_back(fmt::format("{} = {} sits on a bound [{}, {}]", e.name, e.value, e.lower, e.upper));
-    }
-    result.parameters.push_back(e);
+    e.held_unidentifiable = specs[j].free && state.held[j];
+    e.at_bound = !state.held[j] && at_bound(specs[j], state.theta[j]);
+    e.se = e.ci_low = e.ci_high = e.profile_low = e.profile_high = e.boot_low = e.boot_high = kNaN;
+    e.interval = state.held[j] ? "none" : "linear";
+    out.push_back(e);
   }
+  return out;
+}
 
-  // Profile likelihood where the linear interval is unreliable (or everywhere, if asked).
-  if (options.profile != ProfileMode::none && result.dof > 0 && free_count > 1) {
-    for (std::size_t j = 0; j < p; ++j) {
-      ParameterEstimate& e = result.parameters[j];
-      if (held[j]) continue;
-      const bool unreliable = e.at_bound || !std::isfinite(e.se) || e.ci_low < e.lower || e.ci_high > e.upper ||
-                              e.se > 0.3 * relative_scale(specs[j], e.value);
-      if (options.profile == ProfileMode::automatic && !unreliable) continue;
-      std::vector<bool> held_j = held;
-      held_j[j] = true;
-      auto excess = [&](double value) {
-        std::vector<double> th = theta;
-        th[j] = value;
-        return polish(*cost, specs, held_j, th).summary.final_cost - summary.final_cost;
-      };
-      auto bound_side = [&](double direction) {
-        const double limit = direction > 0 ? specs[j].upper : specs[j].lower;
-        double step = std::isfinite(e.se) && e.se > 0 ? t * e.se : 0.1 * (specs[j].upper - specs[j].lower);
-        double inside = e.value;
-        for (int k = 0; k < 40; ++k) {
-          const double trial = std::clamp(e.value + direction * step, specs[j].lower, specs[j].upper);
-          if (excess(trial) > profile_threshold) {
-            double a = inside, b = trial;  // a inside, b outside: bisect
-            for (int m = 0; m < 30 && std::abs(b - a) > 1e-6 * std::abs(step); ++m) {
-              const double mid = 0.5 * (a + b);
-              (excess(mid) > profile_threshold ? b : a) = mid;
-            }
-            return 0.5 * (a + b);
+// Step 5: profile-likelihood intervals where the linear interval is unreliable (or everywhere,
+// if asked): {θ_j : S(θ_j) − S_min <= k_j · ½ s² F(conf; 1, dof)}, k_j = max(1, chosen / iid
+// variance of θ_j), so that the profile widens as the chosen covariance does.
+void profile_intervals(const LeastSquaresModel& model, const std::vector<ParameterSpec>& specs, const FitOptions& options,
+                       const FinalState& state, double final_cost, FitResult& result) {
+  if (options.profile == ProfileMode::none || !(result.dof > 0) || result.free_parameters <= 1) return;
+  const auto cost = model.cost_function({}, RowLoss{options.loss, options.loss_scale});
+  const double s2 = result.residual_variance;
+  const double base_threshold = 0.5 * s2 * fisher_f_quantile(options.confidence, 1, result.dof);
+  const double t = student_t_quantile(1 - (1 - options.confidence) / 2, std::min(result.dof, 1e7));
+  const CovarianceSummary* iid = result.uncertainty.find("iid");
+  for (std::size_t j = 0; j < specs.size(); ++j) {
+    ParameterEstimate& e = result.parameters[j];
+    if (state.held[j]) continue;
+    const bool unreliable = e.at_bound || !std::isfinite(e.se) || e.ci_low < e.lower || e.ci_high > e.upper ||
+                            e.se > 0.3 * relative_scale(specs[j], e.value);
+    if (options.profile == ProfileMode::automatic && !unreliable) continue;
+    const double iid_se = iid ? iid->se[j] : kNaN;
+    const double inflation = std::isfinite(e.se) && iid_se > 0 ? std::max(1.0, std::pow(e.se / iid_se, 2)) : 1.0;
+    const double threshold = base_threshold * inflation;
+    std::vector<bool> held_j = state.held;
+    held_j[j] = true;
+    auto excess = [&](double value) {
+      std::vector<double> th = state.theta;
+      th[j] = value;
+      return polish(*cost, specs, held_j, th).summary.final_cost - final_cost;
+    };
+    auto bound_side = [&](double direction) {
+      const double limit = direction > 0 ? specs[j].upper : specs[j].lower;
+      double step = std::isfinite(e.se) && e.se > 0 ? t * e.se : 0.1 * (specs[j].upper - specs[j].lower);
+      double inside = e.value;
+      for (int k = 0; k < 40; ++k) {
+        const double trial = std::clamp(e.value + direction * step, specs[j].lower, specs[j].upper);
+        if (excess(trial) > threshold) {
+          double a = inside, b = trial;  // a inside, b outside: bisect
+          for (int m = 0; m < 30 && std::abs(b - a) > 1e-6 * std::abs(step); ++m) {
+            const double mid = 0.5 * (a + b);
+            (excess(mid) > threshold ? b : a) = mid;
           }
-          if (trial == limit) return limit;
-          inside = trial;
-          step *= 2;
+          return 0.5 * (a + b);
         }
-        return limit;
-      };
-      e.profile_low = bound_side(-1);
-      e.profile_high = bound_side(+1);
-      e.interval = "profile";
-    }
+        if (trial == limit) return limit;
+        inside = trial;
+        step *= 2;
+      }
+      return limit;
+    };
+    e.profile_low = bound_side(-1);
+    e.profile_high = bound_side(+1);
+    e.interval = "profile";
   }
+}
 
-  if (!result.solver.converged)
-    result.warnings.push_back("the solver stopped without converging: " + summary.message);
-  if (!covariance_ok && free_count > 0) result.warnings.push_back(covariance_message);
-  if (ms.starts > 1 && ms.agreed * 2 < ms.starts)
-    result.warnings.push_back(fmt::format("only {} of {} starts reached the best minimum", ms.agreed, ms.starts));
-  if (final_state) {
-    if (last_residuals.size() == 0 || last_jacobian.rows() == 0 || theta != fit.theta)
-      last_residuals = evaluate_residuals(model, theta, loss, &last_jacobian);
-    final_state->residuals = std::move(last_residuals);
-    final_state->jacobian = std::move(last_jacobian);
-  }
+}  // namespace
+
+// The fit as a sequence of named steps; each is a function above (uncertainty.cc for step 4).
+FitResult solve_least_squares(const LeastSquaresModel& model, const std::vector<ParameterSpec>& specs,
+                              const FitOptions& options, FinalState* final_state) {
+  const auto clock_start = std::chrono::steady_clock::now();
+  check_specs(specs);
+  FitResult result;
+  result.residuals = model.num_residuals();
+
+  const std::vector<bool> held = held_by_design(model, specs, result.identifiability);       // 0
+  Estimate e = estimate(model, specs, options, held, result.identifiability);                 // 1-3
+  result.free_parameters = free_indices(e.state.held).size();
+  result.dof = static_cast<double>(result.residuals) - static_cast<double>(result.free_parameters);
+  result.residual_variance = result.dof > 0 ? 2.0 * e.fit.summary.final_cost / result.dof : kNaN;
+  result.parameters = estimates(specs, e.state);
+  report_solver(e, options, result);
+  for (const auto& p : result.parameters)
+    if (p.at_bound) result.warnings.push_back(fmt::format("{} = {} sits on a bound [{}, {}]", p.name, p.value, p.lower, p.upper));
+
+  assess_uncertainty(model.row_structure(), options, e.state, result);                         // 4
+  profile_intervals(model, specs, options, e.state, e.fit.summary.final_cost, result);         // 5
+
+  if (final_state) *final_state = std::move(e.state);
   result.solver.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - clock_start).count();
   return result;
 }

@@ -5,12 +5,14 @@
 //      given start and from a Halton sequence over the bounds;
 //   2. polish: Ceres Levenberg-Marquardt on all residuals from the best start, with
 //      bounds, held parameters (SubsetManifold) and an optional robust loss (row by row);
-//   3. uncertainty: (JᵀJ)⁻¹ from a rank-revealing QR of the autodiff Jacobian (what
-//      ceres::Covariance computes; tested against it), scaled by s², t intervals, correlation;
-//   4. identifiability: the eigen-directions of the relatively scaled covariance (or the
-//      null space of JᵀJ when Ceres finds the Jacobian rank deficient); a direction the
-//      data cannot determine is named (via the model's explain()) and the parameter that
-//      dominates it is held at its start, then 2-4 repeat;
+//   3. identifiability: (JᵀJ)⁻¹ from a rank-revealing QR of the autodiff Jacobian (what
+//      ceres::Covariance computes; tested against it); the eigen-directions of the relatively
+//      scaled covariance (or the null space of JᵀJ when the Jacobian is rank deficient); a
+//      direction the data cannot determine is named (via the model's explain()) and the
+//      parameter that dominates it is held at its start, then 2-3 repeat;
+//   4. uncertainty (uncertainty.cc): the covariance by every method the rows' structure
+//      allows (covariance/: iid, hac, cluster, bootstrap), the one that fits the data chosen,
+//      t intervals and the correlation from it;
 //   5. profile-likelihood intervals where the linear interval is unreliable.
 #pragma once
 
@@ -22,6 +24,7 @@
 #include <vector>
 
 #include "batched_autodiff.hpp"
+#include "covariance/covariance.hpp"
 #include "lmcal/fit/fit_result.hpp"
 
 namespace lmcal::detail {
@@ -60,13 +63,35 @@ class LeastSquaresModel {
     (void)free;
     return {};
   }
+  // The run and time step of every residual row, for covariances that do not assume
+  // independent rows; empty (the default) when the model knows none.
+  virtual RowStructure row_structure() const { return {}; }
 };
 
-// The residuals and Jacobian at the final estimate, for callers that derive more from them.
+// The state at the final estimate, for callers that derive more from it.
 struct FinalState {
+  std::vector<double> theta;
+  std::vector<bool> held;      // held parameters (given, or not identifiable)
   Eigen::VectorXd residuals;
-  Eigen::MatrixXd jacobian;
+  Eigen::MatrixXd jacobian;    // all parameters
+  Eigen::MatrixXd bread;       // (JᵀJ)⁻¹ over the free parameters, rows/columns of held ones zero
+  bool covariance_ok = false;
+  std::string covariance_message;
 };
+
+// Step 4: fills result.uncertainty, result.covariance, result.correlation and every free
+// parameter's se, ci and bootstrap interval, from the covariance chosen for the rows'
+// structure (see fit_result.hpp).
+void assess_uncertainty(const RowStructure& rows, const FitOptions& options, const FinalState& state, FitResult& result);
+
+// Adds the uncertainty of an input the fit took as given (two-stage, Murphy-Topel in its
+// delta-method form): with E = ∂r/∂u (rows × q) at θ̂ and u's covariance Σ_u, the estimate
+// moves by D = ∂θ̂/∂u = −(JᵀJ)⁻¹JᵀE, and D Σ_u Dᵀ joins the chosen covariance (t dof by
+// Welch-Satterthwaite). With `draws` (u* − û per bootstrap replicate) the bootstrap is rerun
+// over both stages. `label` names the input ("heat").
+void add_input_uncertainty(const RowStructure& rows, const FitOptions& options, const FinalState& state,
+                           const Eigen::MatrixXd& input_jacobian, const Eigen::MatrixXd& input_covariance,
+                           const std::vector<Eigen::VectorXd>* draws, const std::string& label, FitResult& result);
 
 FitResult solve_least_squares(const LeastSquaresModel& model, const std::vector<ParameterSpec>& parameters,
                               const FitOptions& options, FinalState* final_state = nullptr);

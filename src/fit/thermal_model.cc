@@ -198,6 +198,27 @@ ThermalModel::ThermalModel(const std::vector<PreparedRun>& runs, ThermalLayout l
     if (!layout_.heat_scale.empty() && layout_.heat_scale[r] >= 0) priors_.push_back(r);
 }
 
+// A run is a cluster and its records are the time steps (its sensors read at once share one);
+// every sensor of every run is its own series. A heat scale's prior row joins its run, one
+// step after its last record.
+RowStructure ThermalModel::row_structure() const {
+  RowStructure rows;
+  rows.clusters = runs_.size();
+  std::vector<std::size_t> first_series(runs_.size() + 1, 0);
+  for (std::size_t r = 0; r < runs_.size(); ++r) first_series[r + 1] = first_series[r] + runs_[r].sensor_names.size();
+  for (const Row& row : rows_) {
+    rows.cluster.push_back(row.run);
+    rows.time.push_back(row.time);
+    rows.series.push_back(first_series[row.run] + row.sensor);
+  }
+  for (std::size_t k = 0; k < priors_.size(); ++k) {
+    rows.cluster.push_back(priors_[k]);
+    rows.time.push_back(runs_[priors_[k]].times_s.size());
+    rows.series.push_back(first_series.back() + k);
+  }
+  return rows;
+}
+
 std::unique_ptr<ceres::CostFunction> ThermalModel::cost_function(const std::vector<std::size_t>& rows,
                                                                  const RowLoss& loss) const {
   return std::make_unique<ThermalCost>(*this, rows, loss);

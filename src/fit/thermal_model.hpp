@@ -24,6 +24,7 @@ struct PreparedRun {
   std::vector<std::string> sensor_names;
   std::vector<double> sensor_positions_m;
   std::vector<std::vector<double>> measured;  // [time][sensor], NaN = missing
+  bool fit_offsets = false;                   // one offset per sensor (ThermalOffsets)
   // Behind the heat rate (the coupling extension evaluates the law at the rail temperature).
   FrictionConstants<double> friction = paper_friction_constants();
   FrictionEffects<double> friction_effects;
@@ -56,6 +57,7 @@ class ThermalModel : public LeastSquaresModel {
   // The most parameters one run's simulation depends on (the Jet size it needs; at most 8).
   std::size_t max_local_parameters() const;
   void explain(IdentifiabilityIssue& issue) const override;
+  RowStructure row_structure() const override;
 
   // Simulated temperature at every (run, record, sensor) of the data for parameters θ.
   std::vector<std::vector<std::vector<double>>> simulate(const std::vector<double>& theta) const;

@@ -4,17 +4,28 @@
 // a bound, a singular covariance, a solver that stopped early, starts that disagree) is
 // reported here as data, never thrown.
 //
-// Intervals: `ci_low/ci_high` are linear, value ± t(0.975, n - p) · SE with
-// SE² = s² · [(JᵀJ)⁻¹]_jj and s² = Σr² / (n - p) (the covariance ceres::Covariance would
-// give, from the autodiff Jacobian at the solution, scaled by the residual variance). Where the linear interval is unreliable (a bound inside it, or a
-// weakly determined, strongly nonlinear parameter), `profile_low/high` hold the
-// profile-likelihood interval {θ_j : S(θ_j) - S_min <= s² · F(0.95; 1, n - p)}, and
-// `interval` says which one to quote.
+// Uncertainty: the covariance comes from the method that fits the data's structure
+// (`uncertainty.method`, chosen automatically unless asked; every method computed is reported
+// beside it so the ratio shows):
+//   iid        s²(JᵀJ)⁻¹, s² = Σr²/(n − p): independent residuals of equal variance;
+//   hac        Newey-West sandwich within each run: autocorrelated residuals (thermocouple
+//              traces sampled every few seconds), runs alike;
+//   cluster    cluster-robust sandwich by run, t with runs − 1 dof: runs that disagree beyond
+//              their own noise (chosen when a test says they do; floored at the hac SE);
+//   bootstrap  runs resampled with replacement (the reference; percentile interval in
+//              boot_low/boot_high).
+// Intervals: `ci_low/ci_high` are value ± t(0.975, dof) · SE with the chosen covariance.
+// Where the linear interval is unreliable (a bound inside it, or a weakly determined,
+// strongly nonlinear parameter), `profile_low/high` hold the profile-likelihood interval
+// {θ_j : S(θ_j) - S_min <= k_j s² F(0.95; 1, n - p)}, k_j >= 1 the chosen variance over the iid
+// one (a profile of a sum of squares knows nothing of correlated residuals), and `interval`
+// says which one to quote.
 #pragma once
 
 #include <Eigen/Core>
 
 #include <cstddef>
+#include <cstdint>
 #include <string>
 #include <utility>
 #include <vector>
@@ -23,6 +34,7 @@ namespace lmcal {
 
 enum class RobustLoss { none, huber, cauchy };
 enum class ProfileMode { none, automatic, all };
+enum class CovarianceMethod { automatic, iid, hac, cluster, bootstrap };
 
 struct FitOptions {
   RobustLoss loss = RobustLoss::none;
@@ -35,6 +47,12 @@ struct FitOptions {
   // fraction of the parameters' size is called not identifiable.
   double identifiability_threshold = 0.5;
   std::uint64_t seed = 1;
+  // Which covariance the SEs and intervals quote (see Uncertainty); automatic: hac where
+  // rows form time series in runs, cluster where the runs also disagree beyond their noise
+  // (a Holm-adjusted test below `heterogeneity_p`), iid where the model knows no structure.
+  CovarianceMethod covariance = CovarianceMethod::automatic;
+  double heterogeneity_p = 0.05;
+  std::size_t bootstrap = 999;  // cluster-bootstrap replicates (0: none)
 };
 
 struct ParameterEstimate {
@@ -47,9 +65,52 @@ struct ParameterEstimate {
   bool held_unidentifiable = false;  // asked to be fitted, but held at `start`: see identifiability
   bool at_bound = false;       // the estimate sits on a bound
   double se = 0;               // NaN when not fitted or the covariance failed
+  double dof = 0;              // of the t quantile of ci_low/ci_high
   double ci_low = 0, ci_high = 0;            // linear t interval
   double profile_low = 0, profile_high = 0;  // NaN unless computed
+  double boot_low = 0, boot_high = 0;        // cluster-bootstrap percentile interval; NaN unless computed
   std::string interval = "linear";           // "linear", "profile" or "none"
+};
+
+// One covariance method's standard errors, beside the others.
+struct CovarianceSummary {
+  std::string method;       // "iid", "hac", "cluster", "bootstrap", or with a suffix for a
+                            // two-stage total ("hac + heat")
+  std::string description;  // the method and what it assumes
+  std::string note;
+  bool ok = false;
+  double dof = 0;           // of its t quantile
+  std::vector<double> se;   // per parameter; NaN where held or not estimated
+};
+
+// Do the runs disagree about a parameter beyond their own errors? Q = G·V_cluster/V_hac,
+// Cochran's Q for one parameter, against χ²(G − 1); Holm-adjusted over the parameters.
+struct RunHeterogeneity {
+  std::string parameter;
+  std::size_t runs = 0;
+  double q = 0, p_value = 1, p_holm = 1;
+  double i_squared = 0;  // the share of the between-run spread that is real, not noise
+  bool significant = false;
+};
+
+struct Uncertainty {
+  std::string method;  // the covariance the reported SEs and intervals come from
+  std::string reason;  // why that one, in words
+  double dof = 0;      // of the intervals' t quantile
+  std::vector<CovarianceSummary> methods;
+  std::vector<RunHeterogeneity> heterogeneity;
+  std::size_t runs = 0;                 // clusters (0: the model knows no run structure)
+  double lag1_autocorrelation = 0;      // of the residuals within their series; NaN if unknown
+  double effective_sample_size = 0;     // n (1 − ρ)/(1 + ρ)
+  double hac_lags = 0;                  // NaN without hac
+  std::vector<std::string> notes;       // fallbacks and caveats, in words
+  // Two-stage: the input the fit took as given ("heat") and, per parameter, the share of its
+  // variance that comes from that input's uncertainty (NaN where none was added).
+  std::string input;
+  std::vector<double> input_variance_share;
+  Eigen::MatrixXd bootstrap_draws;      // replicates × parameters: θ* − θ̂ (NaN: held/undetermined)
+
+  const CovarianceSummary* find(const std::string& method) const;
 };
 
 struct IdentifiabilityIssue {
@@ -81,13 +142,14 @@ struct SolverReport {
 
 struct FitResult {
   std::vector<ParameterEstimate> parameters;
-  Eigen::MatrixXd covariance;   // all parameters, rows/columns of held ones zero
+  Eigen::MatrixXd covariance;   // all parameters (the chosen method's), rows/columns of held ones zero
   Eigen::MatrixXd correlation;  // NaN where undefined
   std::size_t residuals = 0;
   std::size_t free_parameters = 0;
   double dof = 0;                // residuals - free parameters
   double residual_variance = 0;  // s² of the whitened residuals
   Identifiability identifiability;
+  Uncertainty uncertainty;
   SolverReport solver;
   std::vector<std::string> warnings;
 
