@@ -53,6 +53,8 @@ std::string active_effects(const RigEffects& effects) {
 }
 
 void run_generate_friction(GenerateOptions& o, const std::vector<std::string>& argv) {
+  // The options by the names the user typed; the library re-checks everything it is given.
+  require_autocorrelation("--noise-ar1", o.friction.noise_ar1);
   o.friction.seed = o.seed;
   const RigEffects effects = resolve_effects(o.effects);
   const FrictionRigOutput made = generate_friction_log(o.friction, effects);
@@ -71,6 +73,10 @@ void run_generate_friction(GenerateOptions& o, const std::vector<std::string>& a
 }
 
 void run_generate_thermal(GenerateOptions& o, const std::vector<std::string>& argv) {
+  require_autocorrelation("--noise-ar1", o.thermal.noise_ar1);
+  require_non_negative("--heat-variation", o.thermal.heat_variation);
+  require_non_negative("--friction-gain-error", o.thermal.friction_gain_error);
+  require_non_negative("--stated-friction-uncertainty", o.thermal.stated_friction_uncertainty);
   o.thermal.seed = o.seed;
   const RigEffects effects = resolve_effects(o.effects);
   const ThermalRigOutput made = with_progress("simulating the thermal runs", [&](const Progress&) {
@@ -120,6 +126,8 @@ void setup_generate(CLI::App& app, const std::vector<std::string>& argv) {
   friction->add_option("--runs", f.runs, "Repeats of the whole sweep")->capture_default_str();
   friction->add_option("--noise", f.noise_N, "Load-cell noise per sample (sigma), N")->capture_default_str();
   friction->add_option("--run-offset", f.run_offset_N, "Zero offset per run (sigma), N")->capture_default_str();
+  friction->add_option("--noise-ar1", f.noise_ar1, "Lag-1 autocorrelation of the load-cell noise within a run, [0, 1)")
+      ->capture_default_str();
   friction->callback([o, &argv] { run_generate_friction(*o, argv); });
 
   CLI::App* thermal = generate->add_subcommand("thermal", "A thermal data set (manifest + runs) and its truth");
@@ -141,6 +149,17 @@ void setup_generate(CLI::App& app, const std::vector<std::string>& argv) {
   thermal->add_option("--ambient", t.ambient_C, "Ambient at the start, C")->capture_default_str();
   thermal->add_option("--ambient-drift", t.ambient_drift_K_per_h, "Ambient drift, K/h")->capture_default_str();
   thermal->add_option("--noise", t.noise_K, "Temperature noise (sigma), K")->capture_default_str();
+  thermal->add_option("--noise-ar1", t.noise_ar1, "Lag-1 autocorrelation of every temperature channel's noise, [0, 1)")
+      ->capture_default_str();
+  thermal->add_option("--heat-variation", t.heat_variation,
+                      "Run-to-run variation of the heat reaching the rail (relative sigma; no logged value sees it)")
+      ->capture_default_str();
+  thermal->add_option("--friction-gain-error", t.friction_gain_error,
+                      "Gain error of the load cell logging mean_friction_N (relative sigma, one per data set)")
+      ->capture_default_str();
+  thermal->add_option("--stated-friction-uncertainty", t.stated_friction_uncertainty,
+                      "Write mean_friction_uncertainty_N = this x mean_friction_N for every run (0: not written)")
+      ->capture_default_str();
   thermal->add_option("--tc-bias", t.tc_bias_K, "Thermocouple bias bound (uniform +-), K")->capture_default_str();
   thermal->callback([o, &argv] { run_generate_thermal(*o, argv); });
 

@@ -61,7 +61,7 @@ TEST(ThermalFit, NoisyBiasedRunsGiveAnIntervalThatContainsTheTruth) {
   rig.seed = 3;
   const auto data = generate_thermal_dataset(rig, {}, "noisy").set;
   auto o = options_for_rig();
-  o.fit_offsets = true;  // thermocouple bias is a per-sensor offset
+  o.offsets = ThermalOffsets::fitted;  // thermocouple bias is a per-sensor offset
   o.fit_initial_temperature = true;
   o.per_run_fits = false;
   const auto result = fit_thermal(data, o);

@@ -247,6 +247,35 @@ TEST_F(ThermalRunTest, DataSetLoadsUnitsSensorsAndOverrides) {
   EXPECT_TRUE(b.guide_overrides.empty());
 }
 
+TEST_F(ThermalRunTest, FrictionUncertaintyTakesAnyForceUnit) {
+  write("thermal/run.csv", thermal_trace_csv(awkward_trace(5, 5.0)));
+  constexpr const char* run = R"(
+[[run]]
+id = "{}"
+file = "thermal/run.csv"
+guide = "SRN 35C"
+velocity_m_s = 0.11
+load_N = 3000
+stroke_m = 0.2
+rail_length_m = 0.6
+{}
+[run.sensors_m]
+tc1_C = 0.0
+tc2_C = 0.05
+)";
+  const ThermalDataSet set = load_thermal_dataset(
+      write("set.toml", fmt::format(run, "kgf", "mean_friction_kgf = 3\nmean_friction_uncertainty_kgf = 0.1") +
+                            fmt::format(run, "N", "mean_friction_N = 30\nmean_friction_uncertainty_N = 0") +
+                            fmt::format(run, "none", "mean_friction_N = 30")));
+  ASSERT_EQ(set.runs.size(), 3u);
+  EXPECT_DOUBLE_EQ(*set.runs[0].mean_friction_N, 3 * 9.80665);
+  EXPECT_DOUBLE_EQ(*set.runs[0].mean_friction_uncertainty_N, 0.1 * 9.80665);
+  EXPECT_EQ(set.runs[1].mean_friction_uncertainty_N, 0.0);  // zero is a statement too
+  EXPECT_FALSE(set.runs[2].mean_friction_uncertainty_N);
+  const std::string written = thermal_manifest_toml(set, dir_);
+  EXPECT_NE(written.find("mean_friction_uncertainty_N = 0.0\n"), std::string::npos) << written;
+}
+
 TEST_F(ThermalRunTest, WrittenManifestLoadsBackIdentically) {
   ThermalDataSet set;
   set.name = "round \"trip\"";
@@ -266,6 +295,7 @@ TEST_F(ThermalRunTest, WrittenManifestLoadsBackIdentically) {
       run.contact_length_mm = 82.2;
       run.block_length_mm = 120.2;
       run.mean_friction_N = 44.1 + 1e-9;
+      run.mean_friction_uncertainty_N = 0.9 / 7;
       run.guide_overrides = {{"conductivity_W_mK", 36.0}, {"perimeter_m", 0.14 / 3}};
     }
     run.trace = awkward_trace(20 + 10 * k, 5.0);
@@ -298,6 +328,7 @@ TEST_F(ThermalRunTest, WrittenManifestLoadsBackIdentically) {
     EXPECT_EQ(b.contact_length_mm, a.contact_length_mm);
     EXPECT_EQ(b.block_length_mm, a.block_length_mm);
     EXPECT_EQ(b.mean_friction_N, a.mean_friction_N);
+    EXPECT_EQ(b.mean_friction_uncertainty_N, a.mean_friction_uncertainty_N);
     EXPECT_EQ(b.sensor_position_m, a.sensor_position_m);
     for (const auto& [name, x] : a.sensor_position_m) {
       EXPECT_TRUE(same_bits(b.sensor_position_m.at(name), x)) << name;  // -0.0 included

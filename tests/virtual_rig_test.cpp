@@ -34,6 +34,55 @@ ThermalRigConfig short_thermal_rig() {
   return c;
 }
 
+// Standard deviation and lag-1 autocorrelation of noise series, pooled over the series
+// (each about its own mean; no product spans two series).
+struct NoiseStats {
+  double sd = 0;
+  double lag1 = 0;
+};
+
+NoiseStats noise_stats(const std::vector<std::vector<double>>& series) {
+  double sum2 = 0, sum_lag = 0, count = 0;
+  for (const auto& x : series) {
+    double mean = 0;
+    for (double v : x) mean += v;
+    mean /= static_cast<double>(x.size());
+    for (std::size_t t = 0; t < x.size(); ++t) {
+      sum2 += (x[t] - mean) * (x[t] - mean);
+      if (t > 0) sum_lag += (x[t] - mean) * (x[t - 1] - mean);
+    }
+    count += static_cast<double>(x.size());
+  }
+  return {std::sqrt(sum2 / count), sum_lag / sum2};
+}
+
+// The load cell's noise, run by run in time order: the log minus the same log made
+// without noise (same seed: same offsets, same draws).
+std::vector<std::vector<double>> load_cell_noise(FrictionRigConfig config) {
+  const FrictionLog noisy = generate_friction_log(config, {}).log;
+  config.noise_N = 0;
+  const FrictionLog clean = generate_friction_log(config, {}).log;
+  std::vector<std::vector<double>> noise(noisy.run_names.size());
+  for (std::size_t i = 0; i < noisy.size(); ++i)
+    noise[noisy.run[i]].push_back(noisy.friction_N[i] - clean.friction_N[i]);
+  return noise;
+}
+
+// A rail thermocouple's noise: the trace minus the same run made without noise.
+std::vector<std::vector<double>> thermocouple_noise(ThermalRigConfig config) {
+  const auto noisy = generate_thermal_dataset(config, {}, "noisy");
+  config.noise_K = 0;
+  const auto clean = generate_thermal_dataset(config, {}, "clean");
+  std::vector<std::vector<double>> noise;
+  for (std::size_t r = 0; r < noisy.set.runs.size(); ++r) {
+    const auto& a = noisy.set.runs[r].trace.rail[0].values;
+    const auto& b = clean.set.runs[r].trace.rail[0].values;
+    noise.emplace_back(a.size());
+    for (std::size_t t = 0; t < a.size(); ++t) noise.back()[t] = a[t] - b[t];
+  }
+  return noise;
+}
+
 TEST(VirtualRig, SameSeedSameDataOtherSeedOtherData) {
   const auto a = generate_friction_log(small_friction_rig(), {});
   const auto b = generate_friction_log(small_friction_rig(), {});
@@ -144,6 +193,153 @@ TEST(VirtualRig, ThermalEffectsLeaveTheirMark) {
   EXPECT_THROW(set_rig_effect(moving, "warp_drive", 1), InvalidParameter);
 }
 
+TEST(VirtualRig, LoadCellNoiseHasTheRequestedAutocorrelationAndSd) {
+  FrictionRigConfig config;  // the full sweep: ~2000 samples per run, 10 runs
+  config.noise_ar1 = 0.9;
+  const NoiseStats red = noise_stats(load_cell_noise(config));
+  EXPECT_NEAR(red.lag1, 0.9, 0.05);
+  EXPECT_NEAR(red.sd, config.noise_N, 0.1 * config.noise_N);
+  config.noise_ar1 = 0;
+  const NoiseStats white = noise_stats(load_cell_noise(config));
+  EXPECT_NEAR(white.lag1, 0, 0.05);
+  EXPECT_NEAR(white.sd, config.noise_N, 0.1 * config.noise_N);
+}
+
+TEST(VirtualRig, ThermocoupleNoiseHasTheRequestedAutocorrelationAndSd) {
+  ThermalRigConfig config;
+  config.velocity_m_s = {0.11};
+  config.duration_s = 100000;  // 20 000 records at 5 s
+  config.noise_K = 0.2;        // well above the logger's 0.01 K
+  config.noise_ar1 = 0.9;
+  const NoiseStats red = noise_stats(thermocouple_noise(config));
+  EXPECT_NEAR(red.lag1, 0.9, 0.05);
+  EXPECT_NEAR(red.sd, config.noise_K, 0.1 * config.noise_K);
+  config.noise_ar1 = 0;
+  const NoiseStats white = noise_stats(thermocouple_noise(config));
+  EXPECT_NEAR(white.lag1, 0, 0.05);
+  EXPECT_NEAR(white.sd, config.noise_K, 0.1 * config.noise_K);
+}
+
+TEST(VirtualRig, HeatVariationScalesEachRunsRiseAndHidesFromTheLoggedFriction) {
+  auto config = short_thermal_rig();
+  config.repeats = 40;
+  config.record_every_s = 30;
+  config.noise_K = config.ambient_drift_K_per_h = config.ambient_wave_K = 0;  // the rise is the heating alone
+  const auto steady = generate_thermal_dataset(config, {}, "steady");
+  config.heat_variation = 0.1;
+  const auto varied = generate_thermal_dataset(config, {}, "varied");
+  const auto truth = nlohmann::json::parse(varied.truth_json);
+  EXPECT_EQ(truth["heat_variation"].get<double>(), 0.1);
+
+  double sum = 0, sum2 = 0;
+  for (std::size_t r = 0; r < 40; ++r) {
+    const double factor = truth["runs"][r]["heat_factor"].get<double>();
+    sum += factor;
+    sum2 += factor * factor;
+    const auto rise = [&](const ThermalRigOutput& o) {
+      const auto& tc1 = o.set.runs[r].trace.rail[0].values;
+      return tc1.back() - tc1.front();
+    };
+    // Linear in the heat: the rise scales with the factor (to the logger's 0.01 K, twice).
+    EXPECT_NEAR(rise(varied), factor * rise(steady), 0.01 * (1 + factor) + 1e-9) << "run " << r;
+    EXPECT_EQ(varied.set.runs[r].mean_friction_N, steady.set.runs[r].mean_friction_N) << "run " << r;
+  }
+  const double mean = sum / 40, sd = std::sqrt(sum2 / 40 - mean * mean);
+  EXPECT_NEAR(mean, 1, 4 * 0.1 / std::sqrt(40.0));
+  EXPECT_NEAR(sd, 0.1, 0.03);
+}
+
+TEST(VirtualRig, FrictionGainErrorShiftsEveryRunByTheSameFactor) {
+  auto config = short_thermal_rig();
+  config.velocity_m_s = {0.066, 0.083, 0.11};
+  config.repeats = 2;
+  config.record_every_s = 30;
+  config.friction_noise_N = 0;  // the logged friction is then the true one times the gain, at 0.01 N
+  config.friction_gain_error = 0.05;
+  const auto made = generate_thermal_dataset(config, {}, "gain");
+  const auto truth = nlohmann::json::parse(made.truth_json);
+  const double g = truth["friction_gain_error"].get<double>();
+  EXPECT_EQ(truth["friction_gain_error_sigma"].get<double>(), 0.05);
+  ASSERT_GT(std::abs(g) * 20, 0.1) << "this seed's gain error is too small to see against the 0.01 N rounding";
+  ASSERT_EQ(made.set.runs.size(), 6u);
+  for (std::size_t r = 0; r < 6; ++r) {
+    const double true_N = truth["runs"][r]["mean_friction_true_N"].get<double>();
+    EXPECT_GT(true_N, 20);
+    EXPECT_NEAR(*made.set.runs[r].mean_friction_N, true_N * (1 + g), 0.005 + 1e-9) << "run " << r;
+  }
+}
+
+TEST(VirtualRig, StatedFrictionUncertaintyIsRelativeToTheLoggedFriction) {
+  auto config = short_thermal_rig();
+  config.velocity_m_s = {0.066, 0.11};
+  config.stated_friction_uncertainty = 0.02;
+  const auto made = generate_thermal_dataset(config, {}, "stated");
+  for (const ThermalRun& run : made.set.runs) {
+    ASSERT_TRUE(run.mean_friction_uncertainty_N) << run.id;
+    EXPECT_NEAR(*run.mean_friction_uncertainty_N, 0.02 * *run.mean_friction_N, 0.00005 + 1e-12) << run.id;
+  }
+  EXPECT_FALSE(generate_thermal_dataset(short_thermal_rig(), {}, "unstated").set.runs[0].mean_friction_uncertainty_N);
+}
+
+// The bytes a data set is made of: every run's CSV, the manifest and the truth.
+std::string thermal_bytes(const ThermalRigOutput& o) {
+  std::string bytes = thermal_manifest_toml(o.set, "") + o.truth_json;
+  for (const ThermalRun& run : o.set.runs) bytes += thermal_trace_csv(run.trace);
+  return bytes;
+}
+
+TEST(VirtualRig, NewImperfectionsOffLeaveTheBytesAsBefore) {
+  auto friction = small_friction_rig();
+  const auto friction_default = generate_friction_log(friction, {});
+  friction.noise_ar1 = 0;
+  const auto friction_zero = generate_friction_log(friction, {});
+  EXPECT_EQ(friction_log_csv(friction_zero.log), friction_log_csv(friction_default.log));
+  EXPECT_EQ(friction_zero.truth_json, friction_default.truth_json);
+
+  auto thermal = short_thermal_rig();
+  thermal.repeats = 2;
+  const auto thermal_default = generate_thermal_dataset(thermal, {}, "x");
+  thermal.noise_ar1 = thermal.heat_variation = thermal.friction_gain_error = thermal.stated_friction_uncertainty = 0;
+  EXPECT_EQ(thermal_bytes(generate_thermal_dataset(thermal, {}, "x")), thermal_bytes(thermal_default));
+
+  // Switched on, they draw from a stream of their own: what they do not touch stays put.
+  friction.noise_ar1 = 0.5;
+  const auto friction_red = generate_friction_log(friction, {});
+  EXPECT_EQ(friction_red.log.temperature_C, friction_default.log.temperature_C);
+  EXPECT_NE(friction_red.log.friction_N, friction_default.log.friction_N);
+  thermal.heat_variation = 0.1;
+  thermal.friction_gain_error = 0.05;
+  const auto thermal_on = generate_thermal_dataset(thermal, {}, "x");
+  for (std::size_t r = 0; r < 2; ++r) {
+    const auto& on = thermal_on.set.runs[r].trace;
+    const auto& off = thermal_default.set.runs[r].trace;
+    for (std::size_t a = 0; a < on.ambient.size(); ++a) EXPECT_EQ(on.ambient[a].values, off.ambient[a].values);
+    EXPECT_NE(on.rail[0].values, off.rail[0].values);
+  }
+}
+
+TEST(VirtualRig, RefusesBadImperfectionSettings) {
+  auto friction = small_friction_rig();
+  friction.noise_ar1 = 1;
+  EXPECT_THROW(generate_friction_log(friction, {}), InvalidParameter);
+  auto thermal = short_thermal_rig();
+  thermal.noise_ar1 = -0.1;
+  EXPECT_THROW(generate_thermal_dataset(thermal, {}, "x"), InvalidParameter);
+  thermal = short_thermal_rig();
+  thermal.heat_variation = std::nan("");
+  EXPECT_THROW(generate_thermal_dataset(thermal, {}, "x"), InvalidParameter);
+  thermal = short_thermal_rig();
+  thermal.friction_gain_error = -0.01;
+  EXPECT_THROW(generate_thermal_dataset(thermal, {}, "x"), InvalidParameter);
+  thermal = short_thermal_rig();
+  thermal.stated_friction_uncertainty = INFINITY;
+  EXPECT_THROW(generate_thermal_dataset(thermal, {}, "x"), InvalidParameter);
+  thermal = short_thermal_rig();
+  thermal.heat_variation = 100;  // a factor 1 + 100 z <= 0 for about half the seeds
+  thermal.velocity_m_s = {0.05, 0.066, 0.083, 0.11, 0.15};
+  EXPECT_THROW(generate_thermal_dataset(thermal, {}, "x"), InvalidParameter);
+}
+
 }  // namespace
 }  // namespace lmcal
 
@@ -176,6 +372,7 @@ TEST(VirtualRig, GeneratedDataRoundTripsThroughTheLoaders) {
 
   auto config = short_thermal_rig();
   config.repeats = 2;
+  config.stated_friction_uncertainty = 0.02;
   const auto thermal = generate_thermal_dataset(config, {}, "roundtrip");
   const fs::path tdir = fresh_folder("thermal");
   ThermalDataSet placed = thermal.set;
@@ -194,6 +391,8 @@ TEST(VirtualRig, GeneratedDataRoundTripsThroughTheLoaders) {
     EXPECT_EQ(b.id, a.id);
     EXPECT_EQ(b.velocity_m_s, a.velocity_m_s);
     EXPECT_EQ(b.mean_friction_N, a.mean_friction_N);
+    ASSERT_TRUE(b.mean_friction_uncertainty_N);
+    EXPECT_EQ(b.mean_friction_uncertainty_N, a.mean_friction_uncertainty_N);
     EXPECT_EQ(b.sensor_position_m, a.sensor_position_m);
     EXPECT_EQ(b.trace.time_s, a.trace.time_s);
     for (std::size_t s = 0; s < a.trace.rail.size(); ++s) EXPECT_EQ(b.trace.rail[s].values, a.trace.rail[s].values);

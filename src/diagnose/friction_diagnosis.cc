@@ -171,7 +171,7 @@ FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagno
   d.accepted = detail::accepted_scores(d.rounds, selection.accepted,
                                        [&](const std::string& name) { return &current.fit.parameter(name); });
   for (std::size_t j = 0; j < 7; ++j)
-    d.shifts.push_back({kFrictionConstantNames[j], baseline.fit.parameters[j].value, current.fit.parameters[j].value});
+    d.shifts.push_back(parameter_shift(baseline.fit.parameters[j], current.fit.parameters[j]));
 
   detail::conclude(d, "The published law", "N", d.cv_rmse_before_N, d.cv_rmse_after_N, d.baseline.rmse_N);
   d.final_fit = current;

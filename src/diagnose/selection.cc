@@ -179,7 +179,12 @@ nlohmann::json verdict_json(const std::string& verdict, const std::string& summa
   nlohmann::json causes = nlohmann::json::array();
   for (const auto& c : accepted) causes.push_back(candidate_json(c, unit));
   nlohmann::json moves = nlohmann::json::array();
-  for (const auto& s : shifts) moves.push_back({{"parameter", s.name}, {"baseline", s.baseline}, {"extended", s.extended}});
+  for (const auto& s : shifts)
+    moves.push_back({{"parameter", s.name},
+                     {"baseline", s.baseline},
+                     {"baseline_ci95", {number(s.baseline_low), number(s.baseline_high)}},
+                     {"extended", s.extended},
+                     {"extended_ci95", {number(s.extended_low), number(s.extended_high)}}});
   return {{"verdict", verdict},
           {"summary", summary},
           {"causes", causes},
@@ -200,3 +205,13 @@ nlohmann::json covariates_json(const std::vector<CovariateTest>& tests) {
 }
 
 }  // namespace lmcal::detail
+
+namespace lmcal {
+
+ParameterShift parameter_shift(const ParameterEstimate& baseline, const ParameterEstimate& extended) {
+  auto low = [](const ParameterEstimate& p) { return p.interval == "profile" ? p.profile_low : p.ci_low; };
+  auto high = [](const ParameterEstimate& p) { return p.interval == "profile" ? p.profile_high : p.ci_high; };
+  return {baseline.name, baseline.value, extended.value, low(baseline), high(baseline), low(extended), high(extended)};
+}
+
+}  // namespace lmcal

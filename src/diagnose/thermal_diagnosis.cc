@@ -20,7 +20,7 @@ namespace {
 // (warm-started from the model before), no profiles, leave-one-run-out scores.
 ThermalFitOptions model_options(const ThermalDiagnosisOptions& o) {
   ThermalFitOptions f = o.fit;
-  f.fit_offsets = true;
+  f.offsets = ThermalOffsets::fitted;
   f.fit_heat_scales = true;
   f.per_run_fits = false;
   f.compare_sources = false;
@@ -165,16 +165,23 @@ ThermalFitResult fit_model(const ThermalDataSet& data, const ThermalDiagnosisOpt
 
 }  // namespace
 
+ThermalFitOptions diagnosis_fit_options(const ThermalDataSet& data, const ThermalDiagnosisOptions& options) {
+  ThermalFitOptions f = model_options(options);
+  const std::vector<double> none;
+  const auto& times = data.runs.empty() ? none : data.runs.front().trace.time_s;
+  if (options.min_record_spacing_s > 0 && f.every == 1 && times.size() >= 2) {
+    const double spacing = (times.back() - times.front()) / static_cast<double>(times.size() - 1);
+    f.every = static_cast<std::size_t>(std::max(1.0, std::ceil(options.min_record_spacing_s / spacing - 1e-9)));
+  }
+  return f;
+}
+
 ThermalDiagnosis diagnose_thermal(const ThermalDataSet& data, const ThermalDiagnosisOptions& options) {
   if (data.runs.size() < kMinDiagnosisRuns)
     throw InvalidParameter("runs", fmt::format("a diagnosis needs at least {} runs (it holds one out at a time)",
                                                kMinDiagnosisRuns));
   ThermalDiagnosisOptions o = options;
-  const auto& times = data.runs.front().trace.time_s;
-  if (o.min_record_spacing_s > 0 && o.fit.every == 1 && times.size() >= 2) {
-    const double spacing = (times.back() - times.front()) / static_cast<double>(times.size() - 1);
-    o.fit.every = static_cast<std::size_t>(std::max(1.0, std::ceil(o.min_record_spacing_s / spacing - 1e-9)));
-  }
+  o.fit.every = diagnosis_fit_options(data, options).every;
   ThermalDiagnosis d;
 
   // 1. The baseline.
@@ -245,7 +252,7 @@ ThermalDiagnosis diagnose_thermal(const ThermalDataSet& data, const ThermalDiagn
     return e.parameters.empty() ? nullptr : &d.final_fit.joint.parameter(e.parameters.front());
   });
   for (const auto& p : d.baseline_fit.joint.parameters)
-    if (p.name == "alpha" || p.name == "h_W_m2K") d.shifts.push_back({p.name, p.value, d.final_fit.joint.parameter(p.name).value});
+    if (p.name == "alpha" || p.name == "h_W_m2K") d.shifts.push_back(parameter_shift(p, d.final_fit.joint.parameter(p.name)));
 
   detail::conclude(d, "The published rail model", "K", d.cv_rmse_before_K, d.cv_rmse_after_K, d.baseline.rmse_K);
   return d;

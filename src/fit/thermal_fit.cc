@@ -46,6 +46,28 @@ double rise(const std::vector<double>& values) {
   return mean_of_finite(values, n - k, n) - mean_of_finite(values, 0, k);
 }
 
+// Whether run's thermocouple offsets are fitted (ThermalOffsets); `note` says why not.
+bool offsets_determined(const ThermalRun& run, double ambient_start_C, const ThermalFitOptions& o, std::string& note) {
+  if (o.offsets == ThermalOffsets::fitted) return true;
+  if (o.offsets == ThermalOffsets::held) {
+    note = "offsets held at 0 (asked)";
+    return false;
+  }
+  const ThermalTrace& trace = run.trace;
+  for (const auto& channel : trace.rail) {
+    std::size_t end = 0;
+    while (end < trace.size() && trace.time_s[end] - trace.time_s.front() <= 60.0) ++end;
+    const double start = mean_of_finite(channel.values, 0, std::max<std::size_t>(end, 1));
+    if (!(std::abs(start - ambient_start_C) <= o.isothermal_tolerance_K)) {
+      note = fmt::format("offsets held at 0: {} starts {:.2f} K from the ambient (more than {} K), so the run does not "
+                         "start isothermal and its offsets cannot be told from the rail's own temperature",
+                         channel.name, start - ambient_start_C, o.isothermal_tolerance_K);
+      return false;
+    }
+  }
+  return true;
+}
+
 struct Prepared {
   PreparedRun run;
   RunInfo info;
@@ -106,19 +128,22 @@ Prepared prepare_run(const ThermalRun& run, const ThermalFitOptions& o) {
     pr.measured.push_back(std::move(row));
   }
 
-  // Initial rail temperature: the thermocouples' first reading.
+  // Initial rail temperature: the thermocouples' first reading, or (offsets fitted) the
+  // ambient at the start, averaged over the first minute: one noisy sample would start the
+  // rail off its equilibrium by the sensors' noise, a transient of the rail's time constant.
   std::vector<double> first;
   for (const auto& channel : trace.rail) first.push_back(channel.values.front());
   double T0 = mean_of_finite(first, 0, first.size());
-  if (std::isnan(T0) || o.fit_offsets) {
-    // The ambient at the start, averaged over the first minute: one noisy sample would start
-    // the rail off its equilibrium by the sensors' noise, a transient of the rail's time constant.
-    double sum = 0;
+  double ambient_start = 0;
+  {
     std::size_t n = 0;
     for (std::size_t i = 0; i < pr.ambient.time_s.size() && (n == 0 || pr.ambient.time_s[i] <= 60.0); ++i, ++n)
-      sum += pr.ambient.temperature_C[i];
-    T0 = sum / static_cast<double>(n);
+      ambient_start += pr.ambient.temperature_C[i];
+    ambient_start /= static_cast<double>(n);
   }
+  out.info.offsets_fitted = offsets_determined(run, ambient_start, o, out.info.offsets_note);
+  pr.fit_offsets = out.info.offsets_fitted;
+  if (std::isnan(T0) || pr.fit_offsets) T0 = ambient_start;
 
   // Heat: the friction law at the start (the rail and grease at the ambient, which the two
   // ambient sensors measure better than one biased thermocouple), or the measured mean friction.
@@ -204,7 +229,7 @@ std::pair<ThermalLayout, std::vector<ParameterSpec>> layout_for(const std::vecto
   }
   for (const auto& run : runs) {
     std::vector<int> offsets(run.sensor_names.size(), -1);
-    for (std::size_t s = 0; s < offsets.size() && o.fit_offsets; ++s) {
+    for (std::size_t s = 0; s < offsets.size() && run.fit_offsets; ++s) {
       offsets[s] = static_cast<int>(specs.size());
       specs.push_back({fmt::format("offset {} {}", run.id, run.sensor_names[s]), "K", 0.0, -5.0, 5.0, true, 1.0});
     }
@@ -297,7 +322,143 @@ double leave_one_run_out_rmse(const ThermalModel& model, const FitResult& joint,
   return std::sqrt(ss / static_cast<double>(rows.size()));
 }
 
+// The heat's uncertainty (two-stage): the covariance of the runs' ln Q_f, and, when the
+// friction fit brought bootstrap replicates, each replicate's ln Q* − ln Q̂.
+struct HeatUncertainty {
+  Eigen::MatrixXd covariance;          // runs × runs
+  std::vector<Eigen::VectorXd> draws;
+  std::string description;             // how it was counted; empty: not counted
+  std::string missing;                 // what is not counted, and why
+};
+
+// ∂ ln Q_f(run) / ∂θ over the friction fit's parameters (central differences of the one law).
+Eigen::RowVectorXd log_heat_gradient(const PreparedRun& run, const FitResult& friction) {
+  const auto p = static_cast<Eigen::Index>(friction.parameters.size());
+  Eigen::RowVectorXd g = Eigen::RowVectorXd::Zero(p);
+  auto log_q = [&](std::size_t j, double value) {
+    FrictionConstants<double> k = run.friction;
+    FrictionEffects<double> e = run.friction_effects;
+    const std::string& name = friction.parameters[j].name;
+    const auto c = std::find(kFrictionConstantNames.begin(), kFrictionConstantNames.end(), name);
+    if (c != kFrictionConstantNames.end()) fittable_constant(k, static_cast<std::size_t>(c - kFrictionConstantNames.begin())) = value;
+    else if (const auto slot = find_friction_effect(name)) e[*slot] = value;
+    return std::log(heat_rate_with_effects_W(k, e, run.conditions));
+  };
+  for (std::size_t j = 0; j < friction.parameters.size(); ++j) {
+    const ParameterEstimate& q = friction.parameters[j];
+    if (!std::isfinite(q.se) || !(q.se > 0)) continue;
+    const double h = 1e-3 * q.se;
+    g[static_cast<Eigen::Index>(j)] = (log_q(j, q.value + h) - log_q(j, q.value - h)) / (2 * h);
+  }
+  return g;
+}
+
+HeatUncertainty heat_uncertainty(const std::vector<PreparedRun>& runs, const std::vector<RunInfo>& infos,
+                                 const ThermalDataSet& data, const ThermalFitOptions& o) {
+  const auto G = static_cast<Eigen::Index>(runs.size());
+  HeatUncertainty h;
+  h.covariance = Eigen::MatrixXd::Zero(G, G);
+  std::vector<std::string> counted, missing;
+  // Friction law: V₁ through ∇ ln Q_f, the replicates likewise.
+  Eigen::MatrixXd gradient = Eigen::MatrixXd::Zero(G, o.friction_fit ? static_cast<Eigen::Index>(o.friction_fit->parameters.size()) : 0);
+  // Measured mean friction: its stated uncertainty, one systematic error common to all runs.
+  Eigen::VectorXd measured = Eigen::VectorXd::Zero(G);
+  for (Eigen::Index r = 0; r < G; ++r) {
+    const auto i = static_cast<std::size_t>(r);
+    if (infos[i].heat_source == "measured mean friction") {
+      const auto& run = data.runs[i];
+      if (run.mean_friction_uncertainty_N) measured[r] = *run.mean_friction_uncertainty_N / *run.mean_friction_N;
+      else missing.push_back(run.id + ": no mean_friction_uncertainty_N in the manifest");
+    } else if (o.friction_fit && o.friction_fit->covariance.allFinite()) {
+      gradient.row(r) = log_heat_gradient(runs[i], *o.friction_fit);
+    } else {
+      missing.push_back(runs[i].id + (o.friction ? ": the friction fit's covariance is not known" : ": the paper's constants"));
+    }
+  }
+  if (gradient.cols() > 0 && !gradient.isZero()) {
+    h.covariance += gradient * o.friction_fit->covariance * gradient.transpose();
+    counted.push_back("the friction fit's covariance through the law (delta method)");
+    const Eigen::MatrixXd& d = o.friction_fit->uncertainty.bootstrap_draws;
+    for (Eigen::Index b = 0; b < d.rows() && d.cols() == gradient.cols(); ++b)
+      h.draws.push_back(gradient * d.row(b).transpose().unaryExpr([](double x) { return std::isnan(x) ? 0.0 : x; }));
+  }
+  if (!measured.isZero()) {
+    h.covariance += measured * measured.transpose();
+    counted.push_back("the measured mean friction's stated uncertainty, as one systematic error of all runs");
+    h.draws.clear();  // a mixture: the bootstrap draws from the covariance instead
+  }
+  h.description = fmt::format("{}", fmt::join(counted, "; "));
+  if (!missing.empty()) h.missing = fmt::format("the heat's uncertainty is not counted for {}", fmt::join(missing, ", "));
+  return h;
+}
+
+// E = ∂r/∂ln Q_f per run (rows × runs): the heat-scale columns of the Jacobian (data rows;
+// a prior row does not depend on Q), from an auxiliary model with one held scale per run when
+// the fit has none.
+std::optional<Eigen::MatrixXd> heat_jacobian(const ThermalModel& model, const std::vector<double>& theta,
+                                             const detail::FinalState& state) {
+  const ThermalLayout& layout = model.layout();
+  const auto G = static_cast<Eigen::Index>(model.runs().size());
+  const auto data_rows = static_cast<Eigen::Index>(model.rows().size());
+  Eigen::MatrixXd E = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(model.num_residuals()), G);
+  const bool scaled = !layout.heat_scale.empty() && layout.heat_scale.front() >= 0;
+  Eigen::MatrixXd J_aux;
+  std::vector<int> column(static_cast<std::size_t>(G));
+  if (scaled) {
+    for (Eigen::Index r = 0; r < G; ++r) column[static_cast<std::size_t>(r)] = layout.heat_scale[static_cast<std::size_t>(r)];
+  } else {
+    ThermalLayout aux_layout = layout;
+    aux_layout.heat_scale.clear();
+    std::vector<double> aux_theta = theta;
+    for (Eigen::Index r = 0; r < G; ++r) {
+      column[static_cast<std::size_t>(r)] = aux_layout.size;
+      aux_layout.heat_scale.push_back(aux_layout.size++);
+      aux_theta.push_back(1.0);
+    }
+    const ThermalModel aux(model.runs(), aux_layout, model.numerics());
+    if (aux.max_local_parameters() > 8) return std::nullopt;
+    detail::evaluate_residuals(aux, aux_theta, {}, &J_aux);
+  }
+  const Eigen::MatrixXd& J = scaled ? state.jacobian : J_aux;
+  for (Eigen::Index k = 0; k < data_rows; ++k) {
+    const auto r = static_cast<Eigen::Index>(model.rows()[static_cast<std::size_t>(k)].run);
+    const int c = column[static_cast<std::size_t>(r)];
+    E(k, r) = J(k, c) * (scaled ? theta[static_cast<std::size_t>(c)] : 1.0);
+  }
+  return E;
+}
+
+// Step 2 of the two-stage fit: the heat's uncertainty into the joint fit's covariance.
+void add_heat_uncertainty(const ThermalDataSet& data, const std::vector<PreparedRun>& runs, const ThermalModel& model,
+                          const detail::FinalState& state, const ThermalFitOptions& o, ThermalFitResult& result) {
+  const HeatUncertainty heat = heat_uncertainty(runs, result.runs, data, o);
+  for (std::size_t r = 0; r < runs.size(); ++r) result.runs[r].heat_relative_se = std::sqrt(heat.covariance(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(r)));
+  if (!heat.missing.empty()) result.joint.uncertainty.notes.push_back(heat.missing + ": alpha's interval may be too narrow");
+  if (heat.description.empty()) return;
+  if (o.fit.loss != RobustLoss::none) {
+    result.joint.uncertainty.notes.push_back("the heat's uncertainty is not propagated through a robust loss");
+    return;
+  }
+  const auto E = heat_jacobian(model, state.theta, state);
+  if (!E) {
+    result.joint.uncertainty.notes.push_back("the heat's uncertainty is not propagated: the runs depend on too many parameters");
+    return;
+  }
+  detail::add_input_uncertainty(model.row_structure(), o.fit, state, *E, heat.covariance, heat.draws.empty() ? nullptr : &heat.draws,
+                                "heat", result.joint);
+  result.heat_uncertainty = heat.description;
+}
+
 }  // namespace
+
+const char* to_string(ThermalOffsets offsets) {
+  switch (offsets) {
+    case ThermalOffsets::automatic: return "auto";
+    case ThermalOffsets::fitted: return "fit";
+    case ThermalOffsets::held: return "hold";
+  }
+  return "?";
+}
 
 double thermocouple_noise_K(const ThermalTrace& trace) {
   double ss = 0;
@@ -343,12 +504,15 @@ ThermalFitResult fit_thermal(const ThermalDataSet& data, const ThermalFitOptions
   detail::FinalState final_state;
   result.joint = detail::solve_least_squares(model, specs, o.fit, &final_state);
   result.sum_of_squares_K2 = final_state.residuals.squaredNorm();
+  add_heat_uncertainty(data, runs, model, final_state, o, result);
   if (o.cross_validate && runs.size() >= 2 && o.fit.loss == RobustLoss::none)
     result.cv_rmse_K = leave_one_run_out_rmse(model, result.joint, final_state);
   std::vector<double> alphas;
   if (o.per_run_fits && runs.size() >= 2) {
+    ThermalFitOptions one_run = o;  // for the spread across runs: estimates and SEs, no profiles
+    one_run.fit.profile = ProfileMode::none;
     for (const auto& run : runs) {
-      result.per_run.push_back(fit_runs({run}, o));
+      result.per_run.push_back(fit_runs({run}, one_run));
       alphas.push_back(result.per_run.back().parameter("alpha").value);
     }
     result.alpha_spread = spread(alphas, o.fit.confidence);
@@ -450,6 +614,34 @@ ThermalFitResult fit_thermal(const ThermalDataSet& data, const ThermalFitOptions
   return result;
 }
 
+namespace {
+
+// The estimates and covariance of a friction fit JSON (se and correlation), for the two-stage
+// uncertainty; its bootstrap replicates are not in the file.
+FitResult friction_fit_uncertainty(const nlohmann::json& j) {
+  FitResult fit;
+  for (const auto& p : j["parameters"]) {
+    ParameterEstimate e;
+    e.name = p.value("name", "");
+    e.value = p.contains("value") && p["value"].is_number() ? p["value"].get<double>() : kNaN;
+    e.se = p.contains("se") && p["se"].is_number() ? p["se"].get<double>() : kNaN;
+    e.free = p.value("free", false) && !p.value("held_unidentifiable", false);
+    fit.parameters.push_back(e);
+  }
+  const auto n = static_cast<Eigen::Index>(fit.parameters.size());
+  fit.covariance = Eigen::MatrixXd::Zero(n, n);
+  const auto& matrix = j["correlation"]["matrix"];
+  for (Eigen::Index a = 0; a < n; ++a)
+    for (Eigen::Index b = 0; b < n; ++b) {
+      const auto& c = matrix.at(static_cast<std::size_t>(a)).at(static_cast<std::size_t>(b));
+      const double sa = fit.parameters[static_cast<std::size_t>(a)].se, sb = fit.parameters[static_cast<std::size_t>(b)].se;
+      if (c.is_number() && std::isfinite(sa) && std::isfinite(sb)) fit.covariance(a, b) = c.get<double>() * sa * sb;
+    }
+  return fit;
+}
+
+}  // namespace
+
 void read_friction_fit(const std::string& json_file, ThermalFitOptions& options) {
   std::ifstream in(json_file);
   if (!in) throw InputError(json_file, 0, 0, "cannot open friction fit file");
@@ -477,6 +669,7 @@ void read_friction_fit(const std::string& json_file, ThermalFitOptions& options)
   }
   options.friction = k;
   options.friction_effects = e;
+  options.friction_fit = friction_fit_uncertainty(j);
 }
 
 // ---- output ---------------------------------------------------------------------------------
@@ -525,7 +718,7 @@ std::string thermal_fit_json(const ThermalFitResult& r, const ThermalFitOptions&
                         {"every", o.every},
                         {"ambient", o.ambient},
                         {"fit_h", o.fit_h},
-                        {"fit_offsets", o.fit_offsets},
+                        {"offsets", to_string(o.offsets)},
                         {"fit_initial_temperature", o.fit_initial_temperature},
                         {"extensions", o.extensions}}},
                       {"cv_rmse_K", number(r.cv_rmse_K)},

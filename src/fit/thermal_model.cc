@@ -295,3 +295,34 @@ std::vector<RailProfile> ThermalModel::end_profiles(const std::vector<double>& t
 }
 
 }  // namespace lmcal::detail
+
+namespace lmcal {
+
+RailSolution<double> simulate_rail_with_mechanisms(const RailGeometry& geometry, RailNumerics numerics,
+                                                   const RailOutputs& outputs, const RailParams<double>& params,
+                                                   const AmbientTrace& ambient, const FrictionConstants<double>& friction,
+                                                   const FrictionEffects<double>& effects,
+                                                   const FrictionConditions<double>& conditions,
+                                                   const std::vector<std::string>& mechanisms,
+                                                   const std::vector<std::pair<std::string, double>>& values) {
+  detail::ThermalRunSetup<double> setup{.velocity_m_s = geometry.velocity_m_s,
+                                        .friction = &friction,
+                                        .friction_effects = &effects,
+                                        .conditions = conditions,
+                                        .params = params};
+  if (!(setup.params.heat_rate_W > 0)) setup.params.heat_rate_W = heat_rate_with_effects_W(friction, effects, conditions);
+  for (const auto& name : mechanisms) {
+    const detail::ThermalExtension& e = detail::thermal_extension(name);
+    if (e.source) numerics.source = *e.source;
+    std::vector<double> v;
+    for (const auto& p : e.parameters) {
+      const auto it = std::find_if(values.begin(), values.end(), [&](auto& nv) { return nv.first == p.name; });
+      if (it == values.end()) throw InvalidParameter(name, fmt::format("mechanism '{}' needs a value for '{}'", name, p.name));
+      v.push_back(it->second);
+    }
+    e.apply(setup, v.data());
+  }
+  return simulate_rail(geometry, numerics, outputs, setup.params, ambient, setup.heat_rate);
+}
+
+}  // namespace lmcal

@@ -88,9 +88,13 @@ enum NumberKeyIndex : std::size_t {
   kRailLength,
   kContactLength,
   kBlockLength,
+  kMeanFrictionUncertainty,
   kMeanFriction
 };
-constexpr std::array<NumberKey, 8> kNumberKeys{{
+// A key is matched against the bases in this order; a base that extends another
+// (mean_friction_uncertainty) comes first, so a bad unit on it is reported as its own
+// ("mean_friction_uncertainty_kgs": unknown unit 'kgs'), not as mean_friction's.
+constexpr std::array<NumberKey, 9> kNumberKeys{{
     {"velocity", Quantity::velocity, true, true},
     {"load", Quantity::force, true, false},
     {"preload", Quantity::preload, false, false},
@@ -98,8 +102,14 @@ constexpr std::array<NumberKey, 8> kNumberKeys{{
     {"rail_length", Quantity::distance_m, true, true},
     {"contact_length", Quantity::length_mm, false, true},
     {"block_length", Quantity::length_mm, false, true},
+    {"mean_friction_uncertainty", Quantity::force, false, false},
     {"mean_friction", Quantity::force, false, false},
 }};
+// A number key in internal units ("mean_friction_N"), as the writer writes it.
+std::string canonical_key(NumberKeyIndex i) {
+  return csv::canonical_name(kNumberKeys[i].base, kNumberKeys[i].quantity);
+}
+
 constexpr std::string_view kSensors = "sensors";  // [run.sensors_m]: positions, any distance unit
 constexpr std::string_view kOverrides = "guide_overrides";
 enum TextKeyIndex : std::size_t { kId, kFile, kGuide };
@@ -277,6 +287,12 @@ ThermalRun read_run(const Manifest& m, const toml::table& table) {
   run.contact_length_mm = value(kContactLength);
   run.block_length_mm = value(kBlockLength);
   run.mean_friction_N = value(kMeanFriction);
+  run.mean_friction_uncertainty_N = value(kMeanFrictionUncertainty);
+  if (run.mean_friction_uncertainty_N && !run.mean_friction_N) {
+    const Given& u = *keys.number[kMeanFrictionUncertainty];
+    m.fail(u.key->source(), fmt::format("{} given without {}: it is the uncertainty of the measured mean friction",
+                                        u.key->str(), canonical_key(kMeanFriction)));
+  }
 
   // The guide must be in the catalog; overrides name its fields.
   run.guide = text(kGuide);
@@ -529,19 +545,19 @@ std::string thermal_manifest_toml(const ThermalDataSet& set, const fs::path& fol
 
   std::string out = fmt::format("name = {}\n", toml_string(set.name));
   if (!set.description.empty()) out += fmt::format("description = {}\n", toml_string(set.description));
-  const auto key = [](NumberKeyIndex i) { return csv::canonical_name(kNumberKeys[i].base, kNumberKeys[i].quantity); };
   for (const ThermalRun& run : set.runs) {
     out += "\n[[run]]\n";
     out += fmt::format("id = {}\nfile = {}\nguide = {}\n", toml_string(run.id), toml_string(relative(run.file)),
                        toml_string(run.guide));
-    number(out, key(kVelocity), run.velocity_m_s);
-    number(out, key(kLoad), run.load_N);
-    optional(out, key(kPreload), run.preload_um);
-    number(out, key(kStroke), run.stroke_m);
-    number(out, key(kRailLength), run.rail_length_m);
-    optional(out, key(kContactLength), run.contact_length_mm);
-    optional(out, key(kBlockLength), run.block_length_mm);
-    optional(out, key(kMeanFriction), run.mean_friction_N);
+    number(out, canonical_key(kVelocity), run.velocity_m_s);
+    number(out, canonical_key(kLoad), run.load_N);
+    optional(out, canonical_key(kPreload), run.preload_um);
+    number(out, canonical_key(kStroke), run.stroke_m);
+    number(out, canonical_key(kRailLength), run.rail_length_m);
+    optional(out, canonical_key(kContactLength), run.contact_length_mm);
+    optional(out, canonical_key(kBlockLength), run.block_length_mm);
+    optional(out, canonical_key(kMeanFriction), run.mean_friction_N);
+    optional(out, canonical_key(kMeanFrictionUncertainty), run.mean_friction_uncertainty_N);
     if (!run.sensor_position_m.empty()) {
       out += fmt::format("[run.{}]\n", csv::canonical_name(kSensors, Quantity::distance_m));
       for (const auto& [name, x] : run.sensor_position_m) number(out, name, x);

@@ -8,6 +8,7 @@
 #include "diagnose/selection.hpp"
 #include "fit/fit_json.hpp"
 #include "lmcal/error.hpp"
+#include "lmcal/fit/model_file.hpp"
 #include "lmcal/io/hash.hpp"
 #include "lmcal/report/html_report.hpp"
 
@@ -38,6 +39,51 @@ CalibrationSet find_calibration_set(const fs::path& dir) {
   return set;
 }
 
+namespace {
+
+// The calibrated friction model: the law with the causes the diagnosis accepted, each run's
+// load-cell zero a nuisance offset (as the diagnosis fits it), refitted in full.
+void calibrate_friction_model(Calibration& c) {
+  CalibratedModel& m = c.calibrated;
+  if (c.friction_diagnosis)
+    for (const auto& cause : c.friction_diagnosis->accepted) m.friction_causes.push_back(cause.effect);
+  m.friction_options = c.friction_options;
+  m.friction_options.effects = m.friction_causes;
+  m.friction_options.effect_start.clear();
+  for (const auto& name : m.friction_causes) m.friction_options.effect_start.push_back(c.friction_diagnosis->final_fit.fit.parameter(name).value);
+  m.friction_options.zero_offset_per_run = true;
+  m.friction_options.cross_validate = c.friction_log->run_names.size() >= 2;
+  m.friction = fit_friction(*c.friction_log, m.friction_options);
+}
+
+// The calibrated rail model: the mechanisms the diagnosis accepted, fitted as the diagnosis
+// fits its models (offsets where the data determine them, a heat scale per run), with the heat
+// from the calibrated friction model and that model's uncertainty carried into α.
+void calibrate_thermal_model(Calibration& c, const CalibrationOptions& options) {
+  CalibratedModel& m = c.calibrated;
+  ThermalFitOptions& t = m.thermal_options;
+  t = diagnosis_fit_options(*c.thermal_data, options.thermal_diagnosis);
+  t.offsets = ThermalOffsets::automatic;
+  t.per_run_fits = true;
+  t.fit.profile = ProfileMode::automatic;
+  t.fit.bootstrap = options.thermal.fit.bootstrap;
+  if (c.thermal_diagnosis) {
+    const ThermalFitResult& final_fit = c.thermal_diagnosis->final_fit;
+    for (const auto& cause : c.thermal_diagnosis->accepted) m.thermal_causes.push_back(cause.effect);
+    t.extensions = m.thermal_causes;
+    t.alpha_start = std::clamp(final_fit.joint.parameter("alpha").value, t.alpha_lower, t.alpha_upper);
+    for (const auto& p : final_fit.joint.parameters) t.extension_start.emplace_back(p.name, p.value);
+  }
+  if (m.friction) {
+    t.friction = m.friction->constants();
+    t.friction_effects = m.friction->effects();
+    t.friction_fit = m.friction->fit;
+  }
+  m.thermal = fit_thermal(*c.thermal_data, t);
+}
+
+}  // namespace
+
 Calibration calibrate(const CalibrationSet& set, const CalibrationOptions& options, const CalibrationProgress& progress) {
   Calibration c;
   c.set = set;
@@ -45,7 +91,8 @@ Calibration calibrate(const CalibrationSet& set, const CalibrationOptions& optio
   const bool friction = !set.friction_logs.empty(), thermal = set.thermal_manifest.has_value();
   std::vector<std::string> steps = {"loading the measurements"};
   if (friction) steps.insert(steps.end(), {"friction fit", "friction diagnosis"});
-  if (thermal) steps.insert(steps.end(), {"thermal fit", "thermal diagnosis"});
+  if (friction) steps.insert(steps.end(), {"calibrated friction model"});
+  if (thermal) steps.insert(steps.end(), {"thermal fit", "thermal diagnosis", "calibrated thermal model"});
   if (!options.diagnose) std::erase_if(steps, [](const std::string& s) { return s.ends_with("diagnosis"); });
   std::size_t step = 0;
   auto start = [&](const char* name) {
@@ -79,6 +126,8 @@ Calibration calibrate(const CalibrationSet& set, const CalibrationOptions& optio
                                       kMinDiagnosisRuns, c.friction_log->run_names.size()));
       }
     }
+    start("calibrated friction model");
+    calibrate_friction_model(c);
   } else {
     c.notes.push_back("no friction logs (friction*.csv): the friction steps were skipped");
   }
@@ -105,10 +154,22 @@ Calibration calibrate(const CalibrationSet& set, const CalibrationOptions& optio
                                       kMinDiagnosisRuns, c.thermal_data->runs.size()));
       }
     }
+    start("calibrated thermal model");
+    calibrate_thermal_model(c, options);
   } else {
     c.notes.push_back("no thermal manifest (thermal*.toml): the thermal steps were skipped");
   }
   return c;
+}
+
+ModelFile calibrated_model_file(const Calibration& c) {
+  const CalibratedModel& m = c.calibrated;
+  ModelFile file = model_file_of(m.friction ? &*m.friction : nullptr, m.friction_options, m.thermal ? &*m.thermal : nullptr,
+                                 m.thermal_options);
+  file.set = c.set.name;
+  file.command = c.command;
+  file.inputs = c.inputs;
+  return file;
 }
 
 std::vector<std::pair<std::string, std::string>> calibration_outputs(const Calibration& c) {
@@ -118,6 +179,14 @@ std::vector<std::pair<std::string, std::string>> calibration_outputs(const Calib
   };
   // c.inputs: the friction logs first, then the thermal files.
   const auto thermal_inputs = c.inputs.begin() + static_cast<std::ptrdiff_t>(c.set.friction_logs.size());
+  out.emplace_back("model.toml", model_file_toml(calibrated_model_file(c)));
+  const CalibratedModel& m = c.calibrated;
+  if (m.friction)
+    out.emplace_back("calibrated_friction.json", friction_fit_json(*m.friction, m.friction_options,
+                                                                   {"calibrated_friction", {c.inputs.begin(), thermal_inputs}, c.command}));
+  if (m.thermal)
+    out.emplace_back("calibrated_thermal.json",
+                     thermal_fit_json(*m.thermal, m.thermal_options, {thermal_inputs, c.inputs.end()}, c.command, "calibrated_thermal"));
   if (c.friction)
     append(friction_fit_files(*c.friction, *c.friction_log, c.friction_options,
                               {"friction", {c.inputs.begin(), thermal_inputs}, c.command}));
@@ -146,6 +215,59 @@ nlohmann::json brief_verdict(nlohmann::json verdict) {
   return verdict;
 }
 
+// A fit's quoted covariance: method, why, dof, and the SEs of every method side by side.
+nlohmann::json how_sure_json(const FitResult& fit) {
+  nlohmann::json j = detail::uncertainty_json(fit);
+  j.erase("between_run_heterogeneity");
+  return j;
+}
+
+nlohmann::json friction_json(const FrictionFitResult& f) {
+  nlohmann::json constants = nlohmann::json::array();
+  for (const auto& p : f.fit.parameters) constants.push_back(estimate_json(p));
+  return {{"rmse_N", number(f.rmse_N)},
+          {"cv_rmse_N", number(f.cv_rmse_N)},
+          {"max_relative_error", number(f.max_relative_error)},
+          {"runs", f.runs.size()},
+          {"parameters", constants},
+          {"uncertainty", how_sure_json(f.fit)},
+          {"converged", f.fit.solver.converged},
+          {"identifiable", f.fit.identifiability.identifiable}};
+}
+
+nlohmann::json thermal_json(const ThermalFitResult& t, const ThermalFitOptions& o) {
+  nlohmann::json parameters = nlohmann::json::array();
+  for (const auto& p : t.joint.parameters)
+    if (!p.name.starts_with("offset ") && !p.name.starts_with("heat_scale ") && !p.name.starts_with("T0 "))
+      parameters.push_back(estimate_json(p));
+  const Spread& s = t.alpha_spread;
+  return {{"alpha", estimate_json(t.joint.parameter("alpha"))},
+          {"parameters", parameters},
+          {"alpha_across_runs", {{"n", s.n}, {"mean", number(s.mean)}, {"sd", number(s.sd)}, {"half_width", number(s.half_width)}}},
+          {"source", to_string(o.source)},
+          {"heat_uncertainty", t.heat_uncertainty},
+          {"uncertainty", how_sure_json(t.joint)},
+          {"cv_rmse_K", number(t.cv_rmse_K)},
+          {"max_error_percent", number(t.max_error_percent)},
+          {"converged", t.joint.solver.converged}};
+}
+
+// How the calibrated model differs from the published one, every value with its interval.
+nlohmann::json shifts_json(const FitResult& published, const FitResult& calibrated) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const auto& p : published.parameters) {
+    const auto it = std::find_if(calibrated.parameters.begin(), calibrated.parameters.end(), [&](auto& q) { return q.name == p.name; });
+    if (it == calibrated.parameters.end() || p.name.starts_with("offset ") || p.name.starts_with("T0 ")) continue;
+    const ParameterShift s = parameter_shift(p, *it);
+    out.push_back({{"parameter", s.name},
+                   {"published", number(s.baseline)},
+                   {"published_ci95", {number(s.baseline_low), number(s.baseline_high)}},
+                   {"calibrated", number(s.extended)},
+                   {"calibrated_ci95", {number(s.extended_low), number(s.extended_high)}}});
+  }
+  return out;
+}
+
 }  // namespace
 
 std::string calibration_json(const Calibration& c) {
@@ -153,44 +275,83 @@ std::string calibration_json(const Calibration& c) {
   for (const auto& [file, hash] : c.inputs) inputs.push_back({{"file", file}, {"sha256", hash}});
   nlohmann::json j{{"kind", "calibration"},  {"lmcal_version", LMCAL_VERSION}, {"set", c.set.name},
                    {"command", c.command},   {"inputs", inputs},               {"notes", c.notes}};
-  if (c.friction) {
-    nlohmann::json constants = nlohmann::json::array();
-    for (const auto& p : c.friction->fit.parameters) constants.push_back(estimate_json(p));
-    j["friction"] = {{"rmse_N", number(c.friction->rmse_N)},
-                     {"max_relative_error", number(c.friction->max_relative_error)},
-                     {"runs", c.friction->runs.size()},
-                     {"parameters", constants},
-                     {"converged", c.friction->fit.solver.converged},
-                     {"identifiable", c.friction->fit.identifiability.identifiable}};
+  const CalibratedModel& m = c.calibrated;
+  nlohmann::json calibrated = {{"what", "the published models with the causes the diagnoses accepted, refitted: the result"},
+                               {"file", "model.toml"}};
+  if (m.friction) {
+    calibrated["friction"] = friction_json(*m.friction);
+    calibrated["friction"]["causes"] = m.friction_causes;
+    if (c.friction) calibrated["friction"]["shifts_from_published"] = shifts_json(c.friction->fit, m.friction->fit);
   }
+  if (m.thermal) {
+    calibrated["thermal"] = thermal_json(*m.thermal, m.thermal_options);
+    calibrated["thermal"]["causes"] = m.thermal_causes;
+    if (c.thermal) calibrated["thermal"]["shifts_from_published"] = shifts_json(c.thermal->joint, m.thermal->joint);
+  }
+  j["calibrated_model"] = calibrated;
+  nlohmann::json published = {{"what", "the published models (Cheng et al. 2017) fitted as printed, for comparison: conditional "
+                                        "on a model the diagnosis rejects where it finds a cause"}};
+  if (c.friction) published["friction"] = friction_json(*c.friction);
+  if (c.thermal) published["thermal"] = thermal_json(*c.thermal, c.thermal_options);
+  j["published_model"] = published;
   if (c.friction_diagnosis)
     j["friction_diagnosis"] = brief_verdict(detail::verdict_json(*c.friction_diagnosis, c.friction_diagnosis->cv_rmse_before_N,
                                                                  c.friction_diagnosis->cv_rmse_after_N, "N"));
-  if (c.thermal) {
-    const Spread& s = c.thermal->alpha_spread;
-    j["thermal"] = {{"alpha", estimate_json(c.thermal->joint.parameter("alpha"))},
-                    {"alpha_across_runs", {{"n", s.n}, {"mean", number(s.mean)}, {"sd", number(s.sd)},
-                                           {"half_width", number(s.half_width)}}},
-                    {"source", to_string(c.thermal_options.source)},
-                    {"max_error_percent", number(c.thermal->max_error_percent)},
-                    {"converged", c.thermal->joint.solver.converged}};
-  }
   if (c.thermal_diagnosis)
     j["thermal_diagnosis"] = brief_verdict(detail::verdict_json(*c.thermal_diagnosis, c.thermal_diagnosis->cv_rmse_before_K,
                                                                 c.thermal_diagnosis->cv_rmse_after_K, "K"));
   return j.dump(2) + "\n";
 }
 
+namespace {
+
+// "name value [low, high]" for the free parameters of a fit (per-run nuisance left out).
+std::string parameter_lines(const FitResult& fit) {
+  std::string s;
+  for (const auto& p : fit.parameters) {
+    if (p.interval == "none" || p.name.starts_with("offset ") || p.name.starts_with("heat_scale ") || p.name.starts_with("T0 "))
+      continue;
+    const bool profile = p.interval == "profile";
+    s += fmt::format("    {:<22} {:>11.5g}  [{:.5g}, {:.5g}]{}\n", p.name, p.value, profile ? p.profile_low : p.ci_low,
+                     profile ? p.profile_high : p.ci_high, profile ? " profile" : "");
+  }
+  return s;
+}
+
+std::string how_sure_line(const FitResult& fit) {
+  const Uncertainty& u = fit.uncertainty;
+  return fmt::format("    95 % intervals: {} — {}\n", u.method, u.reason);
+}
+
+}  // namespace
+
 std::string calibration_summary(const Calibration& c) {
   std::string s;
-  if (c.friction) {
-    s += fmt::format("friction: {} samples, {} runs; law fitted with residual RMSE {:.3f} N\n", c.friction_log->size(),
-                     c.friction->runs.size(), c.friction->rmse_N);
+  const CalibratedModel& m = c.calibrated;
+  s += "THE CALIBRATED MODEL (model.toml): the published models with the causes the diagnoses accepted\n";
+  if (m.friction) {
+    s += fmt::format("  friction law{}: RMSE {:.3f} N, held-out {:.3f} N\n",
+                     m.friction_causes.empty() ? "" : fmt::format(" + {}", fmt::join(m.friction_causes, " + ")), m.friction->rmse_N,
+                     m.friction->cv_rmse_N);
+    s += parameter_lines(m.friction->fit) + how_sure_line(m.friction->fit);
   }
+  if (m.thermal) {
+    s += fmt::format("  rail model{} ({} source): held-out RMSE {:.4f} K\n",
+                     m.thermal_causes.empty() ? "" : fmt::format(" + {}", fmt::join(m.thermal_causes, " + ")),
+                     to_string(m.thermal_options.source), m.thermal->cv_rmse_K);
+    s += parameter_lines(m.thermal->joint) + how_sure_line(m.thermal->joint);
+    const auto& share = m.thermal->joint.uncertainty.input_variance_share;
+    if (!share.empty() && std::isfinite(share[0]))
+      s += fmt::format("    the heat's uncertainty is {:.0f} % of alpha's variance ({})\n", 100 * share[0], m.thermal->heat_uncertainty);
+  }
+  s += "the published models, for comparison (conditional on a model the diagnosis rejects where it names a cause):\n";
+  if (c.friction)
+    s += fmt::format("  friction: {} samples, {} runs; the law alone, residual RMSE {:.3f} N\n", c.friction_log->size(),
+                     c.friction->runs.size(), c.friction->rmse_N);
   if (c.friction_diagnosis) s += fmt::format("  diagnosis: {}\n  {}\n", c.friction_diagnosis->verdict, c.friction_diagnosis->summary);
   if (c.thermal) {
     const auto& a = c.thermal->joint.parameter("alpha");
-    s += fmt::format("thermal: {} runs; alpha {:.3f} [{:.3f}, {:.3f}] ({} source), across runs {:.3f} ± {:.3f}\n",
+    s += fmt::format("  thermal: {} runs; alpha {:.3f} [{:.3f}, {:.3f}] ({} source), across runs {:.3f} ± {:.3f}\n",
                      c.thermal_data->runs.size(), a.value, a.ci_low, a.ci_high, to_string(c.thermal_options.source),
                      c.thermal->alpha_spread.mean, c.thermal->alpha_spread.half_width);
   }

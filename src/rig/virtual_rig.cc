@@ -41,6 +41,40 @@ std::uint64_t derive_seed(std::uint64_t seed, std::uint64_t stream) {
   return z ^ (z >> 31);
 }
 
+// The random numbers of the later options (heat_factor, the gain error) come from a
+// generator of their own, so the per-run streams above, and every data set made without
+// these options, stay as they were.
+constexpr std::uint64_t kLaterStreamKey = 0x6A09E667F3BCC909ull;
+
+// Sensor noise with memory: an AR(1) series of marginal σ and lag-1 autocorrelation φ,
+// e_0 = σ z_0, e_t = φ e_{t-1} + sqrt(1 − φ²) σ z_t. The caller draws the white z_t, so the
+// stream is the same for any φ, and φ = 0 gives σ z_t exactly (the bytes of old data).
+class Ar1Noise {
+ public:
+  Ar1Noise(double sigma, double phi) : sigma_(sigma), phi_(phi), innovation_(std::sqrt(1 - phi * phi)) {}
+  double next(double z) {
+    unit_ = started_ ? phi_ * unit_ + innovation_ * z : z;
+    started_ = true;
+    return sigma_ * unit_;
+  }
+
+ private:
+  double sigma_, phi_, innovation_;
+  double unit_ = 0;  // e_t / σ
+  bool started_ = false;
+};
+
+// 1 + relative_sigma · z, refused when it is not > 0 (no negative heat or gain).
+double positive_factor(const char* parameter, double relative_sigma, double z, const std::string& what) {
+  const double factor = 1 + relative_sigma * z;
+  if (!(factor > 0)) {
+    throw InvalidParameter(parameter, relative_sigma,
+                           fmt::format("small enough that 1 + {}·z > 0 ({}; this seed drew z = {:.3f})", parameter,
+                                       what, z));
+  }
+  return factor;
+}
+
 // Rounds to `decimals` places; dividing the integer by a power of ten gives the double
 // nearest to the decimal, so the CSV shows "22.08", not "22.080000000000002".
 double round_to(double value, int decimals) {
@@ -133,10 +167,15 @@ double rig_effect(const RigEffects& effects, std::string_view name) {
   return find_effect(name).value(effects);
 }
 
+void require_autocorrelation(const char* parameter, double phi) {
+  if (!(phi >= 0 && phi < 1)) throw InvalidParameter(parameter, phi, "a value in [0, 1)");
+}
+
 FrictionRigOutput generate_friction_log(const FrictionRigConfig& config, const RigEffects& effects) {
   validate(config.constants);
   if (config.runs < 1) throw InvalidParameter("runs", config.runs, "at least 1");
   require_non_negative("noise_N", config.noise_N);
+  require_autocorrelation("noise_ar1", config.noise_ar1);
   require_non_negative("run_offset_N", config.run_offset_N);
   require_non_negative("temperature_noise_K", config.temperature_noise_K);
   require_positive("load_cell_range_N", config.load_cell_range_N);
@@ -148,6 +187,7 @@ FrictionRigOutput generate_friction_log(const FrictionRigConfig& config, const R
   for (int r = 0; r < config.runs; ++r) {
     Rng rng(derive_seed(config.seed, static_cast<std::uint64_t>(r)));
     const double offset_N = config.run_offset_N * rng.normal();
+    Ar1Noise load_cell(config.noise_N, config.noise_ar1);
     const std::string run_name = fmt::format("run{:02d}", r + 1);
     runs.push_back({{"run", run_name}, {"zero_offset_N", offset_N}});
     const std::uint32_t run_index = index_of(log.run_names, run_name);
@@ -166,8 +206,9 @@ FrictionRigOutput generate_friction_log(const FrictionRigConfig& config, const R
                                                    .direction = double(direction)};
                 validate(c);
                 const double F = friction_force_with_effects_N(config.constants, effects.friction, c);
-                // Draw the noise even for skipped conditions, so the sequence does not depend on them.
-                const double noise = config.noise_N * rng.normal();
+                // Draw the noise even for skipped conditions, so the sequence does not depend on them;
+                // the load cell's noise series runs over the logged samples only.
+                const double z = rng.normal();
                 const double temperature_noise = config.temperature_noise_K * rng.normal();
                 if (F > 0.95 * config.load_cell_range_N) {
                   if (r == 0) ++out_of_range;
@@ -175,7 +216,7 @@ FrictionRigOutput generate_friction_log(const FrictionRigConfig& config, const R
                 }
                 FrictionConditions<double> logged = c;
                 logged.temperature_C = round_to(T + temperature_noise, 2);
-                log.append(run_index, guide_index, time_s, logged, round_to(F + offset_N + noise, 3),
+                log.append(run_index, guide_index, time_s, logged, round_to(F + offset_N + load_cell.next(z), 3),
                            config.constants.nu_ref_mm2_s);
                 time_s += config.seconds_per_sample;
               }
@@ -195,6 +236,7 @@ FrictionRigOutput generate_friction_log(const FrictionRigConfig& config, const R
       {"runs", runs},
       {"note", "friction_N = law with effects at the true temperature + zero_offset_N (per run) + noise; "
                "temperature_C is the true temperature plus noise"}};
+  if (config.noise_ar1 != 0) truth["noise_ar1"] = config.noise_ar1;
   out.truth_json = truth.dump(2) + "\n";
   return out;
 }
@@ -207,6 +249,10 @@ ThermalRigOutput generate_thermal_dataset(const ThermalRigConfig& config, const 
   require_positive("record_every_s", config.record_every_s);
   require_positive("duration_s", config.duration_s);
   require_non_negative("tc_lag", effects.thermal.tc_lag);
+  require_autocorrelation("noise_ar1", config.noise_ar1);
+  require_non_negative("heat_variation", config.heat_variation);
+  require_non_negative("friction_gain_error", config.friction_gain_error);
+  require_non_negative("stated_friction_uncertainty", config.stated_friction_uncertainty);
   const GuideSpec spec = with_overrides(builtin_catalog().find(config.guide), config.guide_overrides);
   const double Lb = require(spec, &GuideSpec::block_length_mm, "block_length_mm");
   const double Lb1 = require(spec, &GuideSpec::contact_length_mm, "contact_length_mm");
@@ -230,12 +276,24 @@ ThermalRigOutput generate_thermal_dataset(const ThermalRigConfig& config, const 
   out.set.name = name;
   out.set.description = "Synthetic: made by the lmcal virtual rig (see the truth file); not measured.";
   nlohmann::json runs_truth = nlohmann::json::array();
+  // The logger's temperature: truth + bias + AR(1) noise, at 0.01 K.
+  const auto logged_channel = [&](std::string column, const std::vector<double>& true_C, double bias_K, Rng& rng) {
+    TemperatureChannel channel{std::move(column), {}};
+    Ar1Noise noise(config.noise_K, config.noise_ar1);
+    for (double T : true_C) channel.values.push_back(round_to(T + bias_K + noise.next(rng.normal()), 2));
+    return channel;
+  };
+  Rng later(config.seed ^ kLaterStreamKey);
+  const double friction_gain =  // 1 + g
+      positive_factor("friction_gain_error", config.friction_gain_error, later.normal(), "the load cell's gain");
   std::size_t stream = 0;
   for (double V : config.velocity_m_s) {
     for (int r = 0; r < config.repeats; ++r, ++stream) {
       Rng rng(derive_seed(config.seed, stream));
       const std::string id = config.repeats == 1 ? fmt::format("v{:03.0f}", V * 1000)
                                                  : fmt::format("v{:03.0f}_r{}", V * 1000, r + 1);
+      const double heat_factor =
+          positive_factor("heat_variation", config.heat_variation, later.normal(), "the heat factor of run " + id);
       // The true ambient: drift plus a slow wave with a random phase.
       const double phase = rng.uniform(0, 2 * std::numbers::pi);
       AmbientTrace ambient;
@@ -248,7 +306,7 @@ ThermalRigOutput generate_thermal_dataset(const ThermalRigConfig& config, const 
       auto heat_at = [&](double T) {
         const FrictionConditions<double> c{.load_N = config.load_N, .preload_um = pc, .block_length_mm = Lb,
                                            .velocity_m_s = V, .temperature_C = T};
-        return heat_rate_with_effects_W(config.constants, effects.friction, c);
+        return heat_factor * heat_rate_with_effects_W(config.constants, effects.friction, c);
       };
       const RailGeometry geometry{.rail_length_m = config.rail_length_m,
                                   .area_m2 = require(spec, &GuideSpec::area_m2, "area_m2"),
@@ -285,8 +343,8 @@ ThermalRigOutput generate_thermal_dataset(const ThermalRigConfig& config, const 
       nlohmann::json ambient_truth = nlohmann::json::array(), tc_truth = nlohmann::json::array();
       for (int a = 0; a < config.ambient_sensors; ++a) {
         const double bias = rng.uniform(-config.ambient_bias_K, config.ambient_bias_K);
-        TemperatureChannel channel{fmt::format("ambient{}_C", a + 1), {}};
-        for (double T : ambient.temperature_C) channel.values.push_back(round_to(T + bias + config.noise_K * rng.normal(), 2));
+        TemperatureChannel channel =
+            logged_channel(fmt::format("ambient{}_C", a + 1), ambient.temperature_C, bias, rng);
         ambient_truth.push_back({{"column", channel.name}, {"bias_K", bias}});
         run.trace.ambient.push_back(std::move(channel));
       }
@@ -295,8 +353,7 @@ ThermalRigOutput generate_thermal_dataset(const ThermalRigConfig& config, const 
         for (std::size_t t = 0; t < times.size(); ++t) truth[t] = sol.temperature_C(t, s);
         const auto lagged = first_order_lag(times, truth, effects.thermal.tc_lag);
         const double bias = rng.uniform(-config.tc_bias_K, config.tc_bias_K);
-        TemperatureChannel channel{fmt::format("tc{}_C", s + 1), {}};
-        for (double T : lagged) channel.values.push_back(round_to(T + bias + config.noise_K * rng.normal(), 2));
+        TemperatureChannel channel = logged_channel(fmt::format("tc{}_C", s + 1), lagged, bias, rng);
         run.sensor_position_m[channel.name] = config.sensor_position_m[s];
         tc_truth.push_back({{"column", channel.name}, {"position_m", config.sensor_position_m[s]}, {"bias_K", bias},
                             {"true_final_C", truth.back()}});
@@ -305,7 +362,12 @@ ThermalRigOutput generate_thermal_dataset(const ThermalRigConfig& config, const 
       double mean_Q = 0;
       for (double q : sol.heat_rate_W) mean_Q += q;
       mean_Q /= static_cast<double>(sol.heat_rate_W.size());
-      run.mean_friction_N = round_to(mean_Q / V + config.friction_noise_N * rng.normal(), 2);
+      // The load cell sees the friction, not the heat factor; it has the data set's gain error.
+      const double mean_friction_true_N = mean_Q / heat_factor / V;
+      run.mean_friction_N =
+          round_to(mean_friction_true_N * friction_gain + config.friction_noise_N * rng.normal(), 2);
+      if (config.stated_friction_uncertainty > 0)
+        run.mean_friction_uncertainty_N = round_to(config.stated_friction_uncertainty * *run.mean_friction_N, 4);
       runs_truth.push_back({{"id", id},
                             {"velocity_m_s", V},
                             {"alpha", params.heat_partition},
@@ -315,7 +377,7 @@ ThermalRigOutput generate_thermal_dataset(const ThermalRigConfig& config, const 
                             {"heat_rate_start_W", sol.heat_rate_W.front()},
                             {"heat_rate_end_W", sol.heat_rate_W.back()},
                             {"heat_rate_mean_W", mean_Q},
-                            {"mean_friction_true_N", mean_Q / V},
+                            {"mean_friction_true_N", mean_friction_true_N},
                             {"ambient", {{"base_C", config.ambient_C},
                                          {"drift_K_per_h", config.ambient_drift_K_per_h},
                                          {"wave_K", config.ambient_wave_K},
@@ -323,6 +385,7 @@ ThermalRigOutput generate_thermal_dataset(const ThermalRigConfig& config, const 
                                          {"wave_phase_rad", phase},
                                          {"sensors", ambient_truth}}},
                             {"thermocouples", tc_truth}});
+      if (config.heat_variation != 0) runs_truth.back()["heat_factor"] = heat_factor;
       out.set.runs.push_back(std::move(run));
     }
   }
@@ -347,6 +410,18 @@ ThermalRigOutput generate_thermal_dataset(const ThermalRigConfig& config, const 
                           {"half_rail_segments", numerics.half_rail_segments},
                           {"time_step_s", numerics.time_step_s}}},
       {"runs", runs_truth}};
+  if (config.noise_ar1 != 0) truth["noise_ar1"] = config.noise_ar1;
+  if (config.heat_variation != 0) {
+    truth["heat_variation"] = config.heat_variation;
+    truth["heat_variation_note"] = "runs[].heat_factor multiplies the heat reaching the rail (heat_rate_* include "
+                                   "it); mean_friction_true_N and the logged mean_friction_N do not see it";
+  }
+  if (config.friction_gain_error != 0) {
+    truth["friction_gain_error_sigma"] = config.friction_gain_error;
+    truth["friction_gain_error"] = friction_gain - 1;
+  }
+  if (config.stated_friction_uncertainty != 0)
+    truth["stated_friction_uncertainty"] = config.stated_friction_uncertainty;
   out.truth_json = truth.dump(2) + "\n";
   return out;
 }

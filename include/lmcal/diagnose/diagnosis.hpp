@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "lmcal/fit/fit_result.hpp"
+
 namespace lmcal {
 
 // A diagnosis holds one run out at a time and scores it from the others.
@@ -37,9 +39,13 @@ struct CandidateScore {
   std::string reason;                   // why it was or was not accepted
 };
 
+// How a parameter moves once the causes are modelled, each value with its 95 % interval
+// (the quoted one: linear or profile).
 struct ParameterShift {
   std::string name;
   double baseline = 0, extended = 0;
+  double baseline_low = 0, baseline_high = 0, extended_low = 0, extended_high = 0;
 };
+ParameterShift parameter_shift(const ParameterEstimate& baseline, const ParameterEstimate& extended);
 
 }  // namespace lmcal

@@ -85,6 +85,10 @@ struct ThermalDiagnosis {
 };
 
 ThermalDiagnosis diagnose_thermal(const ThermalDataSet& data, const ThermalDiagnosisOptions& options);
+// How the diagnosis fits every model of these data: its numerics (records thinned to
+// min_record_spacing_s), every thermocouple's offset and every run's heat scale fitted, one
+// start, leave-one-run-out scores, no per-run fits or profiles.
+ThermalFitOptions diagnosis_fit_options(const ThermalDataSet& data, const ThermalDiagnosisOptions& options);
 std::string thermal_diagnosis_json(const ThermalDiagnosis& d);
 
 }  // namespace lmcal

@@ -31,6 +31,15 @@
 
 namespace lmcal {
 
+// Thermocouple offsets: fitted where the data determine them, or as asked.
+enum class ThermalOffsets {
+  automatic,  // fitted for a run that starts isothermal (every thermocouple's first minute
+              // within isothermal_tolerance_K of the ambient): the rail then starts at the
+              // ambient and each offset is the sensor's bias; held at 0 otherwise, and said so
+  fitted,     // fitted for every run
+  held        // never fitted (the thermocouples' readings are taken as true)
+};
+
 enum class HeatInput {
   automatic,        // friction law when constants are given, else the measured mean friction
   friction_law,     // Q = F(constants, effects; run conditions at the ambient at the start) · V
@@ -48,13 +57,20 @@ struct ThermalFitOptions {
   HeatInput heat = HeatInput::automatic;
   std::optional<FrictionConstants<double>> friction;  // from a friction fit
   FrictionEffects<double> friction_effects;
+  // Two-stage uncertainty: the friction fit the constants come from. Its covariance (and
+  // bootstrap replicates) carry through the heat rate Q_f into α's interval (the rail sees only
+  // αQ, so Q's relative error is α's). With the measured mean friction instead, the manifest's
+  // mean_friction_uncertainty_N does (taken as one systematic error of the load cell, common
+  // to all runs). Neither: the heat's uncertainty is not counted, and the result says so.
+  std::optional<FitResult> friction_fit;
   double alpha_start = 0.6, alpha_lower = 0.0, alpha_upper = 1.0;
   bool fit_h = false;                        // one h for all runs
   double h_W_m2K = 5.3, h_lower = 0.5, h_upper = 50.0;
   // One offset per thermocouple and run; the rail then starts at the ambient (at rest, in
   // equilibrium with the room), and the offsets take each thermocouple's bias against the
   // ambient sensors.
-  bool fit_offsets = false;
+  ThermalOffsets offsets = ThermalOffsets::automatic;
+  double isothermal_tolerance_K = 1.0;  // T-type class ±0.5 K on either side
   bool fit_initial_temperature = false;      // one T0 per run
   // One heat-rate scale per run ("heat_scale <run>"), tied to 1 by a Gaussian prior of the
   // heat rate's relative uncertainty σ_Q: the temperature the friction law is evaluated at is
@@ -100,6 +116,9 @@ struct RunInfo {
   std::string id;
   double velocity_m_s = 0, load_N = 0, heat_rate_W = 0, initial_temperature_C = 0;
   std::string heat_source;  // "friction law" or "measured mean friction"
+  double heat_relative_se = 0;  // of the heat rate, as counted in the intervals (NaN: not known)
+  bool offsets_fitted = false;
+  std::string offsets_note;     // why the offsets were held, when they were
   double ambient_difference_percent = 0;  // Eq. 2 between the first two ambient sensors' rise
 };
 
@@ -136,10 +155,12 @@ struct ThermalFitResult {
   std::vector<EndState> end_states;
   double cv_rmse_K = std::numeric_limits<double>::quiet_NaN();  // leave-one-run-out, when asked
   double sum_of_squares_K2 = 0;  // the fit's objective: data rows and the heat-scale priors
+  std::string heat_uncertainty;  // how the heat's uncertainty entered α's interval, in words
   std::vector<std::vector<std::string>> sensor_names;  // [run][sensor]
 };
 
 ThermalFitResult fit_thermal(const ThermalDataSet& data, const ThermalFitOptions& options);
+const char* to_string(ThermalOffsets offsets);  // "auto", "fit", "hold"
 
 // The thermal extension library, in a fixed order (src/fit/thermal_extensions/).
 struct ThermalExtensionInfo {
@@ -149,6 +170,22 @@ struct ThermalExtensionInfo {
   std::optional<SourceModel> source;         // the source model a switch selects
 };
 std::vector<ThermalExtensionInfo> thermal_extension_library();
+
+// The rail model with mechanisms of the extension library switched on, at given parameter
+// values (what `lmcal simulate thermal --model` runs with a calibrated model): `mechanisms`
+// names them, `values` gives each of their parameters by name (thermal_extension_library()
+// lists them). The heat comes from the friction law (constants, effects, the conditions at the
+// start temperature) unless `params.heat_rate_W` > 0 is given; the coupling mechanism makes it
+// follow the rail temperature. A thermocouple lag is a property of a sensor, not of the rail:
+// the rail's own temperature is returned, without it. The source model comes from `numerics`
+// unless a switch among the mechanisms selects one.
+RailSolution<double> simulate_rail_with_mechanisms(const RailGeometry& geometry, RailNumerics numerics,
+                                                   const RailOutputs& outputs, const RailParams<double>& params,
+                                                   const AmbientTrace& ambient, const FrictionConstants<double>& friction,
+                                                   const FrictionEffects<double>& effects,
+                                                   const FrictionConditions<double>& conditions,
+                                                   const std::vector<std::string>& mechanisms,
+                                                   const std::vector<std::pair<std::string, double>>& values);
 
 // The thermocouples' noise σ (K), from the second differences of the rail channels:
 // insensitive to the slow warm-up, exact for white noise.

@@ -17,6 +17,7 @@
 //   contact_length_mm = 82.2        # optional: the catalog's
 //   block_length_mm = 120.2         # optional: the catalog's
 //   mean_friction_N = 44.1          # optional: measured mean friction force
+//   mean_friction_uncertainty_N = 0.9  # optional: its standard uncertainty (1 σ)
 //   [run.sensors_m]                 # position of every tc column from the rail centre
 //   tc1_C = 0.0
 //   tc2_C = 0.05
@@ -26,7 +27,8 @@
 // Rules: time strictly increasing; an empty or NaN temperature cell is kept as NaN and
 // counted in report.missing (fits skip it); intervals longer than 1.5x the median step
 // are counted in report.time_gaps. A thermal run needs velocity > 0, load >= 0,
-// stroke > 0, rail length > stroke + contact length, and a position for every tc column.
+// stroke > 0, rail length > stroke + contact length, and a position for every tc column;
+// mean_friction_uncertainty_N needs mean_friction_N (it is that value's uncertainty).
 // Bad input throws InputError(file, line, column, what was expected), for the CSV and
 // for the manifest alike, before anything is returned.
 #pragma once
@@ -70,6 +72,7 @@ struct ThermalRun {
   std::optional<double> contact_length_mm;
   std::optional<double> block_length_mm;
   std::optional<double> mean_friction_N;
+  std::optional<double> mean_friction_uncertainty_N;  // standard uncertainty (1 σ) of mean_friction_N
   std::map<std::string, double> sensor_position_m;  // tc column name -> x from the rail centre
   std::map<std::string, double> guide_overrides;    // catalog field -> value
   ThermalTrace trace;

@@ -1,7 +1,13 @@
 // lmcal calibrate: the whole story of one measurement set, in one call.
 //
 //   load → friction fit → friction diagnosis → thermal fit (heat from that friction fit)
-//        → thermal diagnosis,   with the spread across runs inside each fit
+//        → thermal diagnosis → the calibrated model,   with the spread across runs inside each fit
+//
+// The answer is the calibrated model: the published law and rail model with the causes the
+// diagnoses accepted, refitted in full (every constant and mechanism with SE, interval and
+// correlation; the thermal one takes its heat, and the heat's uncertainty, from the calibrated
+// friction model). The fits of the published models stay, for comparison: they are
+// conditional on a model the diagnosis rejects.
 //
 // A measurement set is a folder: its friction logs are the `friction*.csv` files in it, its
 // thermal data the `thermal*.toml` manifest (at most one). Either half may be missing; the
@@ -63,6 +69,15 @@ struct CalibrationProgress {
   Progress detail;
 };
 
+// The published models with the accepted causes, refitted: the result of a calibration.
+struct CalibratedModel {
+  std::vector<std::string> friction_causes, thermal_causes;  // the accepted effects/mechanisms
+  FrictionFitOptions friction_options;
+  std::optional<FrictionFitResult> friction;
+  ThermalFitOptions thermal_options;
+  std::optional<ThermalFitResult> thermal;
+};
+
 struct Calibration {
   CalibrationSet set;
   std::vector<std::pair<std::string, std::string>> inputs;  // file -> sha256
@@ -76,15 +91,17 @@ struct Calibration {
   ThermalFitOptions thermal_options;
   std::optional<ThermalFitResult> thermal;
   std::optional<ThermalDiagnosis> thermal_diagnosis;
+  CalibratedModel calibrated;
 };
 
 Calibration calibrate(const CalibrationSet& set, const CalibrationOptions& options,
                       const CalibrationProgress& progress = {});
 
-// Every output file, name -> contents, in a fixed order: friction.json, friction_samples.csv,
-// friction_conditions.csv, friction_diagnosis.json, thermal.json, thermal_samples.csv,
-// thermal_alpha_curve.csv, thermal_diagnosis.json (those of the steps that ran),
-// calibration.json and report.html.
+// Every output file, name -> contents, in a fixed order: model.toml (the calibrated model),
+// calibrated_friction.json, calibrated_thermal.json (its fits in full), friction.json,
+// friction_samples.csv, friction_conditions.csv, friction_diagnosis.json, thermal.json,
+// thermal_samples.csv, thermal_alpha_curve.csv, thermal_diagnosis.json (the published models
+// and the diagnoses; those of the steps that ran), calibration.json and report.html.
 std::vector<std::pair<std::string, std::string>> calibration_outputs(const Calibration& c);
 
 // calibration.json: the set, its inputs and their hashes, the steps, the headline numbers and

@@ -9,6 +9,25 @@
 //   thermal:  thermocouple bias (T-type class: uniform within ±0.5 K) and noise per
 //             sensor, two ambient sensors with their own biases, ambient drift and a
 //             slow wave, logger resolution 0.01 K.
+// Off by default (0), as real rigs show them:
+//   noise_ar1 (both)   the sensor noise has memory: an AR(1) series in time order of
+//                      marginal σ (noise_N, noise_K) and lag-1 autocorrelation φ,
+//                      e_0 = σ z_0, e_t = φ e_{t-1} + sqrt(1 − φ²) σ z_t, restarted per run
+//                      (friction: the load cell over a run's samples; thermal: every
+//                      temperature channel, before the 0.01 K rounding). 0 <= φ < 1.
+//   heat_variation     the heat reaching the rail differs from run to run: the run's true
+//                      heat rate (and with coupling its friction-law heat) is multiplied by
+//                      1 + heat_variation·z_run. No logged quantity sees it: the manifest's
+//                      mean_friction_N does not. Truth: runs[].heat_factor.
+//   friction_gain_error the load cell that logs mean_friction_N has one gain error g ~
+//                      N(0, friction_gain_error) for the whole data set: mean_friction_N =
+//                      F_true (1 + g) + N(0, friction_noise_N). Truth: friction_gain_error.
+//   stated_friction_uncertainty  > 0: every run states mean_friction_uncertainty_N =
+//                      stated_friction_uncertainty · mean_friction_N in the manifest (the
+//                      user's claim; the rig's actual errors are the two above).
+// A truth key of these options is written only when the option is on, so data made
+// without them keeps its bytes. Trap: a large heat_variation or friction_gain_error can
+// draw a factor <= 0; the rig refuses that seed rather than make negative heat or force.
 //
 // Effects (rig_effects() lists them with units and neutral values):
 //   friction: the library in friction_effects.hpp (stribeck_exponent, viscous_load,
@@ -19,7 +38,8 @@
 //
 // Determinism: the same config and seed give bit-identical output on any machine
 // (the random numbers come from std::mt19937_64, whose sequence the standard fixes, and
-// our own normal transform, not from std::normal_distribution).
+// our own normal transform, not from std::normal_distribution). The AR(1) noise filters
+// the same white draws as before; heat_factor and g come from a stream of their own.
 #pragma once
 
 #include <cstdint>
@@ -71,6 +91,7 @@ struct FrictionRigConfig {
   std::vector<int> directions{+1, -1};
   int runs = 10;                        // repeats of the whole sweep
   double noise_N = 0.15;                // load-cell noise per sample, σ
+  double noise_ar1 = 0;                 // lag-1 autocorrelation of that noise within a run, [0, 1)
   double run_offset_N = 0.2;            // zero offset per run, σ
   double temperature_noise_K = 0.1;     // σ of the logged temperature
   double load_cell_range_N = 98.0665;   // 10 kgf: conditions above 95 % of it are skipped
@@ -99,7 +120,11 @@ struct ThermalRigConfig {
   double ambient_bias_K = 0.5;          // each ambient sensor: uniform within ±
   double tc_bias_K = 0.5;               // each rail thermocouple: uniform within ±
   double noise_K = 0.05;                // σ, every temperature channel
+  double noise_ar1 = 0;                 // lag-1 autocorrelation of that noise per channel, [0, 1)
+  double heat_variation = 0;            // relative σ of a run's true heat rate, one draw per run
   double friction_noise_N = 0.25;       // σ of the logged mean friction force
+  double friction_gain_error = 0;       // relative σ of the load cell's gain, one draw per data set
+  double stated_friction_uncertainty = 0;  // > 0: mean_friction_uncertainty_N = this · mean_friction_N
   std::uint64_t seed = 1;
 };
 
@@ -112,6 +137,9 @@ struct ThermalRigOutput {
   ThermalDataSet set;  // runs[i].file is "thermal/<id>.csv", relative to the data set's folder
   std::string truth_json;
 };
+
+// Throws InvalidParameter naming `parameter` unless 0 <= phi < 1 (a lag-1 autocorrelation).
+void require_autocorrelation(const char* parameter, double phi);
 
 FrictionRigOutput generate_friction_log(const FrictionRigConfig& config, const RigEffects& effects);
 ThermalRigOutput generate_thermal_dataset(const ThermalRigConfig& config, const RigEffects& effects,

@@ -1,0 +1,66 @@
+// The calibrated model as a file, model.toml: what `lmcal calibrate` found — the friction law
+// with the accepted effects, the rail model with the accepted mechanisms — every parameter
+// with its value, standard error and 95 % interval (and the covariance method they come from),
+// and where it came from (inputs with SHA-256, command, lmcal version). Calibrate once, use
+// everywhere: `lmcal simulate friction --model FILE` and `lmcal simulate thermal --model FILE`
+// read it.
+//
+//   kind = "lmcal calibrated model"
+//   [friction]   causes = [...], covariance = "...", reference_temperature_C, viscosity40_mm2_s
+//   [[friction.parameter]]  name, unit, value, se, ci95 = [low, high], held
+//   [thermal]    source = "averaged", mechanisms = [...], covariance = "...", heat_uncertainty
+//   [[thermal.parameter]]   name, unit, value, se, ci95, held      (alpha, h_W_m2K, mechanisms')
+//
+// Trap: α belongs to the source model it was fitted with (the file records it, and the reader
+// returns it: simulate with that source).
+#pragma once
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "lmcal/fit/friction_fit.hpp"
+#include "lmcal/fit/thermal_fit.hpp"
+
+namespace lmcal {
+
+struct ModelParameter {
+  std::string name, unit;
+  double value = 0, se = 0, ci_low = 0, ci_high = 0;
+  bool held = false;
+};
+
+struct ModelFile {
+  std::string set, lmcal_version;
+  std::vector<std::string> command;
+  std::vector<std::pair<std::string, std::string>> inputs;  // file -> sha256
+
+  bool has_friction = false;
+  FrictionConstants<double> constants = paper_friction_constants();
+  FrictionEffects<double> effects;
+  std::vector<std::string> friction_causes;
+  std::vector<ModelParameter> friction_parameters;
+  std::string friction_covariance;
+
+  bool has_thermal = false;
+  double alpha = 0;
+  std::optional<double> h_W_m2K;
+  SourceModel source = SourceModel::averaged;
+  std::vector<std::string> mechanisms;                       // thermal extension names
+  std::vector<std::pair<std::string, double>> mechanism_parameters;  // their parameters, name -> value
+  std::vector<ModelParameter> thermal_parameters;
+  std::string thermal_covariance, heat_uncertainty;
+
+  const ModelParameter* find(const std::string& name) const;
+};
+
+// The model file's text. Either fit may be missing (a folder with one half).
+std::string model_file_toml(const ModelFile& model);
+ModelFile model_file_of(const FrictionFitResult* friction, const FrictionFitOptions& friction_options,
+                        const ThermalFitResult* thermal, const ThermalFitOptions& thermal_options);
+// Reads a model file; InputError (file, line, column, what was expected) on bad input.
+ModelFile read_model_file(const std::filesystem::path& file);
+
+}  // namespace lmcal
