@@ -290,9 +290,10 @@ void add_input_uncertainty(const RowStructure& rows, const FitOptions& o, const 
   if (o.bootstrap > 0 && rows.clusters >= 2) {
     std::vector<Eigen::VectorXd> own;
     if (!draws || draws->empty()) {
-      const Eigen::LLT<Eigen::MatrixXd> llt(input_covariance);
-      const Eigen::MatrixXd L = llt.info() == Eigen::Success ? Eigen::MatrixXd(llt.matrixL())
-                                                             : Eigen::MatrixXd(input_covariance.diagonal().cwiseMax(0).cwiseSqrt().asDiagonal());
+      // A square root of Σ_u that also serves a singular one (one error common to all runs):
+      // V diag(√λ₊).
+      const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(input_covariance);
+      const Eigen::MatrixXd L = eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal();
       own = standard_normal_draws(o.bootstrap, input_covariance.rows(), o.seed ^ 0x5eedULL);
       for (auto& z : own) z = L * z;
       draws = &own;

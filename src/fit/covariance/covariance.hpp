@@ -66,7 +66,7 @@ std::vector<Eigen::MatrixXd> run_score_series(const ScoreInputs& in);
 CovarianceEstimate iid_covariance(const ScoreInputs& in);
 // Newey-West over every run's score series; `max_bandwidth_fraction` caps L at that share of
 // the shortest run's length.
-CovarianceEstimate hac_covariance(const ScoreInputs& in, double max_bandwidth_fraction = 0.25);
+CovarianceEstimate hac_covariance(const ScoreInputs& in, double max_bandwidth_fraction = 0.5);
 // The HAC meat of one run's score series with `lags` Bartlett lags (O(T m²) by moving sums).
 Eigen::MatrixXd bartlett_meat(const Eigen::MatrixXd& series, std::size_t lags);
 // Andrews' (1991) AR(1) plug-in bandwidth for a Bartlett kernel over the runs' score series.
