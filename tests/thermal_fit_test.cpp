@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <nlohmann/json.hpp>
 
 #include "fit/thermal_model.hpp"
 #include "support/finite_differences.hpp"
@@ -127,6 +128,48 @@ TEST(ThermalFit, ReportsEquationTwoBetweenAmbientSensorsAndRepeats) {
   EXPECT_EQ(result.repeat_differences[0].first, "v110_r1/v110_r2");
   EXPECT_LT(result.repeat_differences[0].second, 1.0);  // same conditions, clean: α agrees
   for (const auto& run : result.runs) EXPECT_NEAR(run.ambient_difference_percent, 0.0, 1e-9);  // unbiased sensors
+}
+
+}  // namespace
+}  // namespace lmcal
+
+namespace lmcal {
+namespace {
+
+// Offsets by default where the data determine them: a run that starts at the ambient (at rest
+// in the room) has its thermocouples' offsets fitted; a run that starts 3 K warm cannot tell
+// an offset from the rail's own temperature, so its offsets are held, and the result says so.
+TEST(ThermalFit, OffsetsAreFittedWhereARunStartsIsothermalAndHeldWhereNot) {
+  auto rig = clean_rig(2 * 3600.0);
+  rig.tc_bias_K = 0.3;
+  const auto generated = generate_thermal_dataset(rig, {}, "offsets");
+  ThermalFitOptions o = options_for_rig();
+  o.per_run_fits = false;
+  o.time_step_s = 30;
+  o.half_rail_segments = 100;
+  // Every run starts at rest: every offset fitted, and equal to its thermocouple's bias.
+  const auto fit = fit_thermal(generated.set, o);
+  const auto truth = nlohmann::json::parse(generated.truth_json);
+  for (std::size_t r = 0; r < fit.runs.size(); ++r) {
+    EXPECT_TRUE(fit.runs[r].offsets_fitted);
+    for (const auto& tc : truth["runs"][r]["thermocouples"])
+      EXPECT_NEAR(fit.joint.parameter("offset " + fit.runs[r].id + " " + tc["column"].get<std::string>()).value,
+                  tc["bias_K"].get<double>(), 0.03);
+  }
+  EXPECT_NEAR(fit.joint.parameter("alpha").value, 0.6, 0.01);
+  // The second run still warm from a run before: its offsets held, and said why.
+  auto data = generated.set;
+  for (auto& channel : data.runs[1].trace.rail)
+    for (double& T : channel.values) T += 3.0;
+  const auto warm = fit_thermal(data, o);
+  EXPECT_TRUE(warm.runs[0].offsets_fitted);
+  EXPECT_FALSE(warm.runs[1].offsets_fitted);
+  EXPECT_NE(warm.runs[1].offsets_note.find("does not start isothermal"), std::string::npos) << warm.runs[1].offsets_note;
+  std::size_t offsets = 0;
+  for (const auto& p : warm.joint.parameters) offsets += p.name.starts_with("offset ") ? 1 : 0;
+  EXPECT_EQ(offsets, 2 * data.runs[0].trace.rail.size());  // runs 0 and 2
+  o.offsets = ThermalOffsets::held;
+  for (const auto& run : fit_thermal(data, o).runs) EXPECT_FALSE(run.offsets_fitted);
 }
 
 }  // namespace

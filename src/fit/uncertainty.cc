@@ -148,7 +148,7 @@ Choice choose(const FitOptions& o, const Uncertainty& u, const CovarianceEstimat
                           "in the intervals",
                           disagree, u.runs);
   else if (u.runs >= 2)
-    reason += "; the runs agree within their noise";
+    reason += "; no run disagrees with the others beyond that within-run noise";
   return {*hac, reason};
 }
 

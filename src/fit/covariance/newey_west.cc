@@ -44,10 +44,13 @@ double andrews_bandwidth(const std::vector<Eigen::MatrixXd>& series) {
     };
     const double c0 = autocovariance(0);
     if (!(c0 > 0)) continue;
+    // Longer lags count only where lag 1 and they themselves stand out of the noise (3/√N):
+    // the k-th root of a chance 0.02 would be 0.6 at lag 8.
+    const double noise = 3 / std::sqrt(length * static_cast<double>(series.size()));
     double rho = autocovariance(1) / c0;
     for (const Eigen::Index lag : {2, 4, 8}) {
       const double c = autocovariance(lag) / c0;
-      if (c > 0) rho = std::max(rho, std::pow(c, 1.0 / static_cast<double>(lag)));
+      if (rho > noise && c > noise) rho = std::max(rho, std::pow(c, 1.0 / static_cast<double>(lag)));
     }
     rho = std::clamp(rho, -0.97, 0.97);
     num += 4 * rho * rho / (std::pow(1 - rho, 6) * std::pow(1 + rho, 2));
