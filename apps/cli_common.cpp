@@ -123,24 +123,82 @@ nlohmann::json GuideOptions::record() const {
 
 void FrictionOptions::add_to(CLI::App& app) {
   auto* group = app.add_option_group("Friction constants", "Eq. 8 constants (default: the paper's)");
-  group->add_option("--k1", constants.k1, "Coulomb coefficient k1")->capture_default_str();
-  group->add_option("--k2", constants.k2, "Preload reduction k2, 1/um")->capture_default_str();
-  group->add_option("--mu-st", constants.mu_st, "Stribeck coefficient muSt")->capture_default_str();
-  group->add_option("--v-st", constants.v_st_m_s, "Stribeck velocity VSt, m/s")->capture_default_str();
-  group->add_option("--mu-v", constants.mu_v, "Viscous coefficient muv")->capture_default_str();
-  group->add_option("--beta", constants.beta_per_K, "Viscosity-temperature coefficient beta, 1/K")->capture_default_str();
-  group->add_option("--f0", constants.f0, "Viscous offset f0, N/mm")->capture_default_str();
-  group->add_option("--viscosity40", constants.nu_ref_mm2_s, "Oil viscosity at the reference temperature, mm2/s")
-      ->capture_default_str();
-  group->add_option("--reference-temperature", constants.T_ref_C, "Reference temperature of the viscosity, C")
-      ->capture_default_str();
+  options_ = {
+      group->add_option("--k1", constants.k1, "Coulomb coefficient k1")->capture_default_str(),
+      group->add_option("--k2", constants.k2, "Preload reduction k2, 1/um")->capture_default_str(),
+      group->add_option("--mu-st", constants.mu_st, "Stribeck coefficient muSt")->capture_default_str(),
+      group->add_option("--v-st", constants.v_st_m_s, "Stribeck velocity VSt, m/s")->capture_default_str(),
+      group->add_option("--mu-v", constants.mu_v, "Viscous coefficient muv")->capture_default_str(),
+      group->add_option("--beta", constants.beta_per_K, "Viscosity-temperature coefficient beta, 1/K")->capture_default_str(),
+      group->add_option("--f0", constants.f0, "Viscous offset f0, N/mm")->capture_default_str(),
+      group->add_option("--viscosity40", constants.nu_ref_mm2_s, "Oil viscosity at the reference temperature, mm2/s")
+          ->capture_default_str(),
+      group->add_option("--reference-temperature", constants.T_ref_C, "Reference temperature of the viscosity, C")
+          ->capture_default_str()};
 }
 
-nlohmann::json FrictionOptions::record() const {
+FrictionLaw FrictionOptions::law(const LoadedModel* model) const {
+  if (!model || !model->model.has_friction) return {.constants = constants};
+  model->refuse(given(options_), "the friction law's constants (and its viscosity at the reference temperature)");
+  return {.constants = model->model.constants, .effects = model->model.effects, .effect_names = model->model.friction_causes};
+}
+
+void FrictionLaw::record_into(nlohmann::json& record) const {
   const auto& k = constants;
-  return {{"k1", k.k1},       {"k2", k.k2},         {"mu_st", k.mu_st},
-          {"v_st_m_s", k.v_st_m_s}, {"mu_v", k.mu_v}, {"beta_per_K", k.beta_per_K},
-          {"f0", k.f0},       {"nu_ref_mm2_s", k.nu_ref_mm2_s}, {"T_ref_C", k.T_ref_C}};
+  record["friction_constants"] = {{"k1", k.k1},       {"k2", k.k2},         {"mu_st", k.mu_st},
+                                  {"v_st_m_s", k.v_st_m_s}, {"mu_v", k.mu_v}, {"beta_per_K", k.beta_per_K},
+                                  {"f0", k.f0},       {"nu_ref_mm2_s", k.nu_ref_mm2_s}, {"T_ref_C", k.T_ref_C}};
+  nlohmann::json e = nlohmann::json::object();
+  for (const auto& name : effect_names) e[name] = effects[friction_effect_slot(name)];
+  record["friction_effects"] = e;
+}
+
+std::string FrictionLaw::effects_text() const {
+  return effect_names.empty() ? "none" : fmt::format("{}", fmt::join(effect_names, ", "));
+}
+
+std::vector<std::string> given(const std::vector<const CLI::Option*>& options) {
+  std::vector<std::string> names;
+  for (const CLI::Option* o : options)
+    if (o->count() > 0) names.push_back(o->get_name());
+  return names;
+}
+
+void ModelOptions::add_to(CLI::App& app, const char* help) { app.add_option("--model", file, help); }
+
+std::optional<LoadedModel> LoadedModel::read(const ModelOptions& options, const char* table) {
+  if (options.file.empty()) return std::nullopt;
+  LoadedModel m{options.file, "", read_model_file(options.file)};
+  m.sha256 = sha256_file(options.file);
+  const bool has = table == std::string_view("friction") ? m.model.has_friction : m.model.has_thermal;
+  if (!has)
+    throw InputError(m.file, 0, 0,
+                     table == std::string_view("friction")
+                         ? "expected a [friction] table (the calibrated friction law); this model has only [thermal] "
+                           "(calibrate a folder with friction logs, friction*.csv)"
+                         : "expected a [thermal] table (the calibrated rail model); this model has only [friction] "
+                           "(calibrate a folder with a thermal manifest, thermal*.toml)");
+  return m;
+}
+
+void LoadedModel::refuse(const std::vector<std::string>& given, const std::string& what) const {
+  if (given.empty()) return;
+  const std::string names = fmt::format("{}", fmt::join(given, ", "));
+  throw InvalidParameter("--model", fmt::format("{} gives {}; {} cannot be given with it (leave out {} or --model)", file,
+                                                what, names, names));
+}
+
+void LoadedModel::record_into(nlohmann::json& record) const {
+  nlohmann::json inputs = nlohmann::json::array();
+  for (const auto& [f, hash] : model.inputs) inputs.push_back({{"file", f}, {"sha256", hash}});
+  const nlohmann::json this_file = {{"file", file}, {"sha256", sha256}};
+  record["inputs"] = nlohmann::json::array({this_file});
+  record["model"] = {{"file", file},
+                     {"sha256", sha256},
+                     {"set", model.set},
+                     {"lmcal_version", model.lmcal_version},
+                     {"command", model.command},
+                     {"inputs", inputs}};
 }
 
 void add_assignments(CLI::App& app, const char* name, std::map<std::string, double>& values, const char* help) {

@@ -30,10 +30,12 @@ nlohmann::json run_record(const std::vector<std::string>& argv);
 }  // namespace lmcal::cli
 
 #include <map>
+#include <optional>
 
 #include <CLI/CLI.hpp>
 
 #include "lmcal/io/catalog.hpp"
+#include "lmcal/fit/model_file.hpp"
 #include "lmcal/fit/thermal_fit.hpp"
 #include "lmcal/models/friction.hpp"
 
@@ -50,11 +52,50 @@ struct GuideOptions {
   nlohmann::json record() const;
 };
 
+// --model FILE: the calibrated model `lmcal calibrate` writes (model.toml), in place of the
+// options it gives ("calibrate once, use everywhere").
+struct ModelOptions {
+  std::string file;  // empty: no model
+  void add_to(CLI::App& app, const char* help);
+};
+
+// A model file as read, with its SHA-256.
+struct LoadedModel {
+  std::string file, sha256;
+  ModelFile model;
+  // Reads --model FILE, which must hold the table the command uses ("friction" or "thermal");
+  // none without --model. InputError naming the file and what was expected otherwise.
+  static std::optional<LoadedModel> read(const ModelOptions& options, const char* table);
+  // Refuses `given` (options the user gave that the model gives, `what`), naming them and --model.
+  void refuse(const std::vector<std::string>& given, const std::string& what) const;
+  // "inputs" (the file with its SHA-256) and "model" (also the model's provenance: set, lmcal
+  // version, command, its inputs) of a run's record.
+  void record_into(nlohmann::json& record) const;
+};
+
+// The names of those of `options` the user gave (on the command line or in --config).
+std::vector<std::string> given(const std::vector<const CLI::Option*>& options);
+
+// The friction law a command simulates: constants and effects.
+struct FrictionLaw {
+  FrictionConstants<double> constants = paper_friction_constants();
+  FrictionEffects<double> effects;        // neutral: the published law
+  std::vector<std::string> effect_names;  // the effects in use (a model's causes)
+  // "friction_constants" and "friction_effects" of a run's record.
+  void record_into(nlohmann::json& record) const;
+  std::string effects_text() const;  // "direction_asymmetry, seal_drag", or "none"
+};
+
 // The friction constants, defaulting to the paper's Eq. 8.
 struct FrictionOptions {
   FrictionConstants<double> constants = paper_friction_constants();
   void add_to(CLI::App& app);
-  nlohmann::json record() const;
+  // The law: a calibrated model's [friction] (constants and effects) when it has one, refusing
+  // a constant option given with it; else these constants, without effects.
+  FrictionLaw law(const LoadedModel* model) const;
+
+ private:
+  std::vector<const CLI::Option*> options_;  // as added, to tell which the user gave
 };
 
 // How a thermal model is set up: heat input, source model, numerics, ambient (lmcal fit

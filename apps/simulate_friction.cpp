@@ -1,11 +1,14 @@
-// lmcal simulate friction: friction force and heat rate over sweeps of V, P, pc, T
-// and Lb (the paper's Figs. 4-7), one tidy CSV row per condition.
+// lmcal simulate friction: friction force and heat rate over sweeps of V, P, pc, T, Lb and
+// the direction (the paper's Figs. 4-7), one tidy CSV row per condition. With --model, the
+// calibrated law of `lmcal calibrate` (model.toml): its constants and the effects it found.
 #include <fmt/format.h>
 
 #include <iostream>
 
 #include "cli_common.hpp"
+#include "lmcal/error.hpp"
 #include "lmcal/io/atomic_file.hpp"
+#include "lmcal/models/friction_effects.hpp"
 
 namespace lmcal::cli {
 
@@ -14,44 +17,57 @@ namespace {
 struct FrictionSweepOptions {
   GuideOptions guide;
   FrictionOptions friction;
+  ModelOptions model;
   std::vector<double> velocity_m_s = parse_list("--velocity", "0.005:0.2:0.005");
   std::vector<double> load_N{3000};
   std::vector<double> preload_um;       // empty: the catalog's
   std::vector<double> temperature_C{26};
   std::vector<double> block_length_mm;  // empty: the catalog's
+  std::vector<double> direction{1};     // +1 forward, -1 backward (only an effect tells them apart)
   std::string output;
 };
 
 void run_simulate_friction(const FrictionSweepOptions& o, const std::vector<std::string>& argv) {
-  validate(o.friction.constants);
-  CsvText csv({"guide", "velocity_m_s", "load_N", "preload_um", "block_length_mm", "temperature_C",
-               "viscosity_mm2_s", "coulomb_N", "stribeck_N", "viscous_N", "friction_N", "heat_W"});
+  const std::optional<LoadedModel> model = LoadedModel::read(o.model, "friction");
+  const FrictionLaw law = o.friction.law(model ? &*model : nullptr);
+  validate(law.constants);
+  for (double d : o.direction)
+    if (d != 1 && d != -1) throw InvalidParameter("--direction", d, "+1 or -1");
+  // The published law's three terms; effects_N is what the effects add to them.
+  CsvText csv({"guide", "velocity_m_s", "load_N", "preload_um", "block_length_mm", "temperature_C", "direction",
+               "viscosity_mm2_s", "coulomb_N", "stribeck_N", "viscous_N", "effects_N", "friction_N", "heat_W"});
   std::size_t rows = 0;
-  for (const auto& model : o.guide.guides) {
-    const GuideSpec spec = o.guide.resolve(model);
+  for (const auto& guide : o.guide.guides) {
+    const GuideSpec spec = o.guide.resolve(guide);
     for (double Lb : or_catalog(o.block_length_mm, spec, &GuideSpec::block_length_mm, "block_length_mm"))
       for (double pc : or_catalog(o.preload_um, spec, &GuideSpec::preload_um, "preload_um"))
         for (double P : o.load_N)
           for (double T : o.temperature_C)
-            for (double V : o.velocity_m_s) {
-              const FrictionConditions<double> c{
-                  .load_N = P, .preload_um = pc, .block_length_mm = Lb, .velocity_m_s = V, .temperature_C = T};
-              validate(c);
-              const auto f = friction_breakdown(o.friction.constants, c);
-              csv.cell(spec.model).cell(V).cell(P).cell(pc).cell(Lb).cell(T).cell(f.viscosity_mm2_s);
-              csv.cell(f.coulomb_N).cell(f.stribeck_N).cell(f.viscous_N).cell(f.total_N());
-              csv.cell(heat_rate_W(o.friction.constants, c));
-              csv.end_row();
-              ++rows;
-            }
+            for (double direction : o.direction)
+              for (double V : o.velocity_m_s) {
+                const FrictionConditions<double> c{.load_N = P, .preload_um = pc, .block_length_mm = Lb,
+                                                   .velocity_m_s = V, .temperature_C = T, .direction = direction};
+                validate(c);
+                const auto f = friction_breakdown(law.constants, c);
+                const double friction_N = friction_force_with_effects_N(law.constants, law.effects, c);
+                csv.cell(spec.model).cell(V).cell(P).cell(pc).cell(Lb).cell(T).cell(direction).cell(f.viscosity_mm2_s);
+                csv.cell(f.coulomb_N).cell(f.stribeck_N).cell(f.viscous_N).cell(friction_N - f.total_N()).cell(friction_N);
+                csv.cell(heat_rate_with_effects_W(law.constants, law.effects, c));
+                csv.end_row();
+                ++rows;
+              }
   }
   nlohmann::json record = run_record(argv);
   record["guide"] = o.guide.record();
-  record["friction_constants"] = o.friction.record();
+  law.record_into(record);
+  if (model) model->record_into(record);
   OutputSet out;
   out.add(o.output, csv.str());
   out.add(o.output + ".json", record.dump(2) + "\n");
   out.commit();
+  if (model)
+    std::cout << fmt::format("the calibrated friction law of {} (set {}, lmcal {}); effects: {}\n", model->file,
+                             model->model.set, model->model.lmcal_version, law.effects_text());
   std::cout << fmt::format("wrote {} conditions to {} (inputs in {}.json)\n", rows, o.output, o.output);
 }
 
@@ -62,11 +78,13 @@ void setup_simulate_friction(CLI::App& parent, const std::vector<std::string>& a
   CLI::App* app = parent.add_subcommand("friction", "Friction force and heat rate over sweeps (Figs. 4-7)");
   options->guide.add_to(*app);
   options->friction.add_to(*app);
+  options->model.add_to(*app, "Calibrated model (model.toml of lmcal calibrate): the friction law with its effects");
   add_list(*app, "--velocity", options->velocity_m_s, "Speeds, m/s (default 0.005:0.2:0.005)");
   add_list(*app, "--load", options->load_N, "Block loads, N (default 3000)");
   add_list(*app, "--preload", options->preload_um, "Preload amounts, um (default: the catalog's)");
   add_list(*app, "--temperature", options->temperature_C, "Lubricant temperatures, C (default 26)");
   add_list(*app, "--block-length", options->block_length_mm, "Block lengths Lb, mm (default: the catalog's)");
+  add_list(*app, "--direction", options->direction, "Directions of travel, +1 and/or -1 (default 1)");
   app->add_option("-o,--output", options->output, "Output CSV (a .json with the inputs is written beside it)")
       ->required();
   app->callback([options, &argv] { run_simulate_friction(*options, argv); });

@@ -4,7 +4,9 @@
 //
 // Writes PREFIX_time.csv, PREFIX_profile.csv and PREFIX.json (every input), and prints
 // one line per case. With --reference each case is also run on a converged grid and
-// step, and the difference is the numerical error of the chosen numerics.
+// step, and the difference is the numerical error of the chosen numerics. With --model, the
+// calibrated model of `lmcal calibrate` (model.toml): α, h, the source model and the
+// mechanisms of its [thermal], the heat rate from the friction law of its [friction].
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -15,6 +17,7 @@
 #include "progress.hpp"
 #include "lmcal/error.hpp"
 #include "lmcal/io/atomic_file.hpp"
+#include "lmcal/models/friction_effects.hpp"
 #include "lmcal/models/rail_thermal.hpp"
 
 namespace lmcal::cli {
@@ -47,14 +50,44 @@ struct ThermalSweepOptions {
   double output_every_s = 300;
   bool reference = false;
   std::string output;
+  ModelOptions model;
+  std::vector<const CLI::Option*> rail_options;  // --alpha, --h, --source: what a model's [thermal] gives
 };
+
+// The rail model simulated: from the options, or a calibrated model's [thermal].
+struct RailModel {
+  double alpha = 0.6, h_W_m2K = 5.3;
+  SourceModel source = SourceModel::averaged;
+  std::vector<std::string> mechanisms;                    // of the thermal extension library
+  std::vector<std::pair<std::string, double>> values;     // their parameters, name -> value
+  bool h_from_model = false;
+};
+
+RailModel rail_model(const ThermalSweepOptions& o, const LoadedModel* model) {
+  if (!model) return {.alpha = o.alpha, .h_W_m2K = o.h_W_m2K, .source = parse_source_model(o.source)};
+  model->refuse(given(o.rail_options), "the rail model (alpha, h and the source model, with its mechanisms)");
+  const ModelFile& m = model->model;
+  return {.alpha = m.alpha, .h_W_m2K = m.h_W_m2K.value_or(o.h_W_m2K), .source = m.source, .mechanisms = m.mechanisms,
+          .values = m.mechanism_parameters, .h_from_model = m.h_W_m2K.has_value()};
+}
+
+bool has_mechanism(const RailModel& rail, const char* name) {
+  return std::find(rail.mechanisms.begin(), rail.mechanisms.end(), name) != rail.mechanisms.end();
+}
+
+double value_of(const RailModel& rail, const char* name) {
+  for (const auto& [n, v] : rail.values)
+    if (n == name) return v;
+  return NAN;
+}
 
 struct Case {
   std::string guide;
   double velocity_m_s, load_N, preload_um, block_length_mm, contact_length_mm, stroke_m;
-  double heat_rate_W;
+  double heat_rate_W;  // at the start
   RailGeometry geometry;
   RailParams<double> params;
+  FrictionConditions<double> conditions;  // behind the heat rate (a coupled heat rate follows the rail)
 };
 
 AmbientTrace make_ambient(const ThermalSweepOptions& o) {
@@ -67,19 +100,22 @@ AmbientTrace make_ambient(const ThermalSweepOptions& o) {
   return trace;
 }
 
-std::vector<Case> enumerate_cases(const ThermalSweepOptions& o, double initial_C) {
+std::vector<Case> enumerate_cases(const ThermalSweepOptions& o, double initial_C, const RailModel& rail,
+                                  const FrictionLaw& law) {
   std::vector<Case> cases;
   for (const auto& model : o.guide.guides) {
     const GuideSpec spec = o.guide.resolve(model);
     const double area = require(spec, &GuideSpec::area_m2, "area_m2");
     const double perimeter = require(spec, &GuideSpec::perimeter_m, "perimeter_m");
-    RailParams<double> params{.heat_partition = o.alpha,
-                              .h_W_m2K = o.h_W_m2K,
+    RailParams<double> params{.heat_partition = rail.alpha,
+                              .h_W_m2K = rail.h_W_m2K,
                               .conductivity_W_mK = require(spec, &GuideSpec::conductivity_W_mK, "conductivity_W_mK"),
                               .density_kg_m3 = require(spec, &GuideSpec::density_kg_m3, "density_kg_m3"),
                               .specific_heat_J_kgK = require(spec, &GuideSpec::specific_heat_J_kgK, "specific_heat_J_kgK"),
                               .initial_temperature_C = initial_C};
-    const std::vector<double> preloads = std::isnan(o.heat_rate_W)
+    // A given heat rate needs no friction conditions, unless a mechanism makes it follow the law.
+    const bool law_needed = std::isnan(o.heat_rate_W) || !rail.mechanisms.empty();
+    const std::vector<double> preloads = law_needed
                                              ? or_catalog(o.preload_um, spec, &GuideSpec::preload_um, "preload_um")
                                              : (o.preload_um.empty() ? std::vector<double>{NAN} : o.preload_um);
     for (double V : o.velocity_m_s)
@@ -88,16 +124,11 @@ std::vector<Case> enumerate_cases(const ThermalSweepOptions& o, double initial_C
           for (double Lb : or_catalog(o.block_length_mm, spec, &GuideSpec::block_length_mm, "block_length_mm"))
             for (double Lb1 : or_catalog(o.contact_length_mm, spec, &GuideSpec::contact_length_mm, "contact_length_mm"))
               for (double L1 : o.stroke_m) {
-                Case c{spec.model, V, P, pc, Lb, Lb1, L1, o.heat_rate_W, {}, params};
-                if (std::isnan(c.heat_rate_W)) {
-                  const FrictionConditions<double> fc{.load_N = P, .preload_um = pc, .block_length_mm = Lb,
-                                                      .velocity_m_s = V,
-                                                      .temperature_C = std::isnan(o.friction_temperature_C)
-                                                                           ? initial_C
-                                                                           : o.friction_temperature_C};
-                  validate(fc);
-                  c.heat_rate_W = heat_rate_W(o.friction.constants, fc);
-                }
+                Case c{spec.model, V, P, pc, Lb, Lb1, L1, o.heat_rate_W, {}, params, {}};
+                c.conditions = {.load_N = P, .preload_um = pc, .block_length_mm = Lb, .velocity_m_s = V,
+                                .temperature_C = std::isnan(o.friction_temperature_C) ? initial_C : o.friction_temperature_C};
+                if (law_needed) validate(c.conditions);
+                if (std::isnan(c.heat_rate_W)) c.heat_rate_W = heat_rate_with_effects_W(law.constants, law.effects, c.conditions);
                 c.params.heat_rate_W = c.heat_rate_W;
                 c.geometry = {.rail_length_m = o.rail_length_m, .area_m2 = area, .perimeter_m = perimeter,
                               .stroke_m = L1, .contact_length_m = Lb1 * 1e-3, .velocity_m_s = V};
@@ -116,6 +147,74 @@ RailNumerics converged(const RailNumerics& n) {
           .time_step_s = std::min(n.time_step_s, 5.0)};
 }
 
+// One case's transient: the plain rail model, or with the mechanisms of a calibrated model.
+RailSolution<double> simulate_case(const Case& c, const RailNumerics& numerics, const RailOutputs& outputs,
+                                   const RailParams<double>& params, const AmbientTrace& ambient, const RailModel& rail,
+                                   const FrictionLaw& law) {
+  if (rail.mechanisms.empty()) return simulate_rail(c.geometry, numerics, outputs, params, ambient);
+  return simulate_rail_with_mechanisms(c.geometry, numerics, outputs, params, ambient, law.constants, law.effects,
+                                       c.conditions, rail.mechanisms, rail.values);
+}
+
+// The steady state under the ambient at the end, along the rail, with its heat rate.
+struct SteadyState {
+  std::vector<double> x_m, temperature_C;
+  double heat_rate_W = 0;
+  double last_change_K = 0;  // with mechanisms: the largest change over the last 2 of the 40 time constants
+};
+
+// Exact for the plain model (steady_rail). A mechanism may make the heat follow the rail
+// (coupling), so with mechanisms it is the long-time limit: backward Euler over 40 time
+// constants ρcA/(hp) of the rail, in steps of 1/20 of one, from the ambient.
+SteadyState steady_state(const Case& c, const RailNumerics& numerics, double ambient_C, const RailModel& rail,
+                         const FrictionLaw& law) {
+  if (rail.mechanisms.empty()) {
+    const auto steady = steady_rail(c.geometry, numerics, {}, c.params, ambient_C);
+    return {steady.node_positions_m, steady.profiles_C.front(), c.heat_rate_W};
+  }
+  const double tau_s =
+      c.params.density_kg_m3 * c.params.specific_heat_J_kgK * c.geometry.area_m2 / (c.params.h_W_m2K * c.geometry.perimeter_m);
+  RailNumerics long_run = numerics;
+  long_run.scheme = TimeScheme::backward_euler;
+  long_run.time_step_s = tau_s / 20;
+  const RailOutputs outputs{.duration_s = 40 * tau_s, .output_times_s = {40 * tau_s}, .profile_times_s = {38 * tau_s, 40 * tau_s}};
+  RailParams<double> params = c.params;
+  params.initial_temperature_C = ambient_C;
+  const auto sol = simulate_case(c, long_run, outputs, params, AmbientTrace::constant(ambient_C), rail, law);
+  SteadyState out{sol.node_positions_m, sol.profiles_C.back(), sol.heat_rate_W.back()};
+  for (std::size_t i = 0; i < out.x_m.size(); ++i)
+    out.last_change_K = std::max(out.last_change_K, std::abs(sol.profiles_C[1][i] - sol.profiles_C[0][i]));
+  return out;
+}
+
+// What the calibrated model brings, in words (stdout) and in the record.
+void describe_model(const LoadedModel& model, const RailModel& rail, const FrictionLaw& law, nlohmann::json& record) {
+  const ModelFile& m = model.model;
+  const std::string mechanisms = fmt::format("{}", fmt::join(rail.mechanisms, ", "));
+  std::string values;
+  for (const auto& [name, value] : rail.values) values += fmt::format("{}{} = {:.4g}", values.empty() ? "" : ", ", name, value);
+  std::cout << fmt::format("model {} (set {}, lmcal {}): alpha = {:.4g}, h = {:.4g} W/m2K{}, source {}; mechanisms: {}{}\n",
+                           model.file, m.set, m.lmcal_version, rail.alpha, rail.h_W_m2K,
+                           rail.h_from_model ? "" : " (not in the model: the default)", to_string(rail.source),
+                           mechanisms.empty() ? "none" : mechanisms, values.empty() ? "" : " (" + values + ")");
+  std::cout << "heat rate: "
+            << (m.has_friction ? "the model's friction law, effects: " + law.effects_text()
+                               : std::string("the model has no [friction]: the friction constants given (default the paper's)"))
+            << "\n";
+  record["mechanisms"] = rail.mechanisms;
+  record["mechanism_parameters"] = nlohmann::json::object();
+  for (const auto& [name, value] : rail.values) record["mechanism_parameters"][name] = value;
+  record["h_W_m2K_from"] = rail.h_from_model ? "the model" : "the default (the model file has no h_W_m2K)";
+  if (has_mechanism(rail, "tc_lag")) {
+    const std::string note = fmt::format(
+        "tc_lag (tau = {:.4g} s) is a property of the thermocouples, not of the rail: the simulated temperature is the "
+        "rail's own; a thermocouple would read it through a first-order lag of tau",
+        value_of(rail, "tc_lag"));
+    record["sensor_note"] = note;
+    std::cout << "note: " << note << "\n";
+  }
+}
+
 void run_simulate_thermal(const ThermalSweepOptions& o, const std::vector<std::string>& argv) {
   // The options by the names the user typed; the library re-checks everything it is given.
   require_in_range("--alpha", o.alpha, 0.0, 1.0);
@@ -126,10 +225,16 @@ void run_simulate_thermal(const ThermalSweepOptions& o, const std::vector<std::s
   require_positive("--duration", o.duration_s);
   require_positive("--output-every", o.output_every_s);
   if (!std::isnan(o.heat_rate_W)) require_non_negative("--heat-rate", o.heat_rate_W);
-  validate(o.friction.constants);
+  const std::optional<LoadedModel> model = LoadedModel::read(o.model, "thermal");
+  const RailModel rail = rail_model(o, model ? &*model : nullptr);
+  const FrictionLaw law = o.friction.law(model ? &*model : nullptr);
+  validate(law.constants);
+  // simulate_rail_with_mechanisms takes a heat rate <= 0 as "from the law".
+  if (!rail.mechanisms.empty() && !std::isnan(o.heat_rate_W) && !(o.heat_rate_W > 0))
+    throw InvalidParameter("--heat-rate", o.heat_rate_W, "a value > 0 with a model's mechanisms");
   const AmbientTrace ambient = make_ambient(o);
   const double initial_C = std::isnan(o.initial_C) ? ambient.temperature_C.front() : o.initial_C;
-  const RailNumerics numerics{.source = parse_source_model(o.source),
+  const RailNumerics numerics{.source = rail.source,
                               .scheme = parse_time_scheme(o.scheme),
                               .half_rail_segments = o.segments,
                               .time_step_s = o.time_step_s};
@@ -150,27 +255,33 @@ void run_simulate_thermal(const ThermalSweepOptions& o, const std::vector<std::s
                                        : std::vector<std::string>{"time_s", "sensor_x_m", "temperature_C"}));
   CsvText profile_csv(columns({"profile", "x_m", "temperature_C"}));
 
+  nlohmann::json record = run_record(argv);
+  if (model) {
+    model->record_into(record);
+    describe_model(*model, rail, law, record);
+  }
   std::cout << fmt::format("{:>4}  {:<8} {:>7} {:>6} {:>7} {:>6} {:>7}  {:>8}  {}\n", "case", "guide", "V_m/s", "P_N",
                            "Lb_mm", "L1_m", "Q_W", "peak_dT", "T at end per sensor (C)");
-  const std::vector<Case> cases = enumerate_cases(o, initial_C);
-  nlohmann::json errors = nlohmann::json::array();
+  const std::vector<Case> cases = enumerate_cases(o, initial_C, rail, law);
+  nlohmann::json errors = nlohmann::json::array(), steady_changes = nlohmann::json::array();
   TerminalProgress progress;
   for (std::size_t k = 0; k < cases.size(); ++k) {
     const Case& c = cases[k];
     progress.step(k, cases.size(), "simulating case " + std::to_string(k));
-    const auto sol = simulate_rail(c.geometry, numerics, outputs, c.params, ambient);
-    const auto steady = steady_rail(c.geometry, numerics, {}, c.params, ambient.at(o.duration_s));
+    const auto sol = simulate_case(c, numerics, outputs, c.params, ambient, rail, law);
+    const SteadyState steady = steady_state(c, numerics, ambient.at(o.duration_s), rail, law);
     RailSolution<double> ref;
-    if (o.reference) ref = simulate_rail(c.geometry, converged(numerics), outputs, c.params, ambient);
+    if (o.reference) ref = simulate_case(c, converged(numerics), outputs, c.params, ambient, rail, law);
 
-    auto case_cells = [&](CsvText& csv) {
+    // heat_rate_W: Q_f at that time (it follows the rail with a coupled heat rate).
+    auto case_cells = [&](CsvText& csv, double heat_rate_W) {
       csv.cell(double(k)).cell(c.guide).cell(c.velocity_m_s).cell(c.load_N).cell(c.preload_um);
-      csv.cell(c.block_length_mm).cell(c.contact_length_mm).cell(c.stroke_m).cell(c.heat_rate_W);
+      csv.cell(c.block_length_mm).cell(c.contact_length_mm).cell(c.stroke_m).cell(heat_rate_W);
     };
     std::vector<double> max_error(o.sensors_m.size(), 0.0);
     for (std::size_t t = 0; t < outputs.output_times_s.size(); ++t)
       for (std::size_t s = 0; s < o.sensors_m.size(); ++s) {
-        case_cells(time_csv);
+        case_cells(time_csv, sol.heat_rate_W[t]);
         time_csv.cell(outputs.output_times_s[t]).cell(o.sensors_m[s]).cell(sol.temperature_C(t, s));
         if (o.reference) {
           time_csv.cell(ref.temperature_C(t, s));
@@ -178,17 +289,17 @@ void run_simulate_thermal(const ThermalSweepOptions& o, const std::vector<std::s
         }
         time_csv.end_row();
       }
-    auto write_profile = [&](const char* name, const std::vector<double>& x, const std::vector<double>& T) {
+    auto write_profile = [&](const char* name, double heat_rate_W, const std::vector<double>& x, const std::vector<double>& T) {
       for (std::size_t i = 0; i < x.size(); ++i) {
-        case_cells(profile_csv);
+        case_cells(profile_csv, heat_rate_W);
         profile_csv.cell(name).cell(x[i]).cell(T[i]);
         profile_csv.end_row();
       }
     };
-    write_profile("end_of_run", sol.node_positions_m, sol.profiles_C.front());
-    write_profile("steady_state", steady.node_positions_m, steady.profiles_C.front());
+    write_profile("end_of_run", sol.heat_rate_W.back(), sol.node_positions_m, sol.profiles_C.front());
+    write_profile("steady_state", steady.heat_rate_W, steady.x_m, steady.temperature_C);
 
-    const auto& peak = *std::max_element(steady.profiles_C.front().begin(), steady.profiles_C.front().end());
+    const double peak = *std::max_element(steady.temperature_C.begin(), steady.temperature_C.end());
     std::string at_end;
     for (std::size_t s = 0; s < o.sensors_m.size(); ++s)
       at_end += fmt::format("{}{:.2f}", s ? " " : "", sol.temperature_C(outputs.output_times_s.size() - 1, s));
@@ -196,6 +307,10 @@ void run_simulate_thermal(const ThermalSweepOptions& o, const std::vector<std::s
     std::cout << fmt::format("{:>4}  {:<8} {:>7.3f} {:>6.0f} {:>7.1f} {:>6.3f} {:>7.3f}  {:>8.2f}  {}\n", k, c.guide,
                              c.velocity_m_s, c.load_N, c.block_length_mm, c.stroke_m, c.heat_rate_W,
                              peak - ambient.at(o.duration_s), at_end);
+    if (sol.heat_rate_W.back() != sol.heat_rate_W.front())
+      std::cout << fmt::format("      Q_f follows the rail: {:.3f} W at the end of the run, {:.3f} W at steady state\n",
+                               sol.heat_rate_W.back(), steady.heat_rate_W);
+    if (!rail.mechanisms.empty()) steady_changes.push_back({{"case", k}, {"last_change_K", steady.last_change_K}});
     if (o.reference) {
       std::string e;
       for (std::size_t s = 0; s < o.sensors_m.size(); ++s)
@@ -205,13 +320,12 @@ void run_simulate_thermal(const ThermalSweepOptions& o, const std::vector<std::s
     }
   }
 
-  nlohmann::json record = run_record(argv);
   record["guide"] = o.guide.record();
-  record["friction_constants"] = o.friction.record();
+  law.record_into(record);
   record["heat_rate_W"] = std::isnan(o.heat_rate_W) ? nlohmann::json("from the friction law") : nlohmann::json(o.heat_rate_W);
   record["friction_temperature_C"] = std::isnan(o.friction_temperature_C) ? initial_C : o.friction_temperature_C;
-  record["alpha"] = o.alpha;
-  record["h_W_m2K"] = o.h_W_m2K;
+  record["alpha"] = rail.alpha;
+  record["h_W_m2K"] = rail.h_W_m2K;
   record["rail_length_m"] = o.rail_length_m;
   record["sensor_positions_m"] = o.sensors_m;
   record["ambient"] = {{"time_s", ambient.time_s}, {"temperature_C", ambient.temperature_C}};
@@ -221,6 +335,10 @@ void run_simulate_thermal(const ThermalSweepOptions& o, const std::vector<std::s
                         {"half_rail_segments", numerics.half_rail_segments},
                         {"time_step_s", numerics.time_step_s},
                         {"duration_s", o.duration_s}};
+  if (!rail.mechanisms.empty())
+    record["steady_state"] = {{"method", "long-time limit: backward Euler over 40 rail time constants rho c A / (h p), "
+                                         "steps of 1/20 of one, at the ambient at the end"},
+                              {"cases", steady_changes}};
   if (o.reference) {
     const RailNumerics r = converged(numerics);
     record["reference_numerics"] = {{"scheme", to_string(r.scheme)},
@@ -252,15 +370,18 @@ void setup_simulate_thermal(CLI::App& parent, const std::vector<std::string>& ar
   app->add_option("--heat-rate", o->heat_rate_W, "Frictional heat Q_f, W (default: from the friction law)");
   app->add_option("--friction-temperature", o->friction_temperature_C,
                   "Temperature at which the friction law gives Q_f, C (default: the initial temperature)");
-  app->add_option("--alpha", o->alpha, "Heat partition coefficient alpha")->capture_default_str();
-  app->add_option("--h", o->h_W_m2K, "Convection coefficient, W/m2K")->capture_default_str();
+  o->rail_options = {app->add_option("--alpha", o->alpha, "Heat partition coefficient alpha")->capture_default_str(),
+                     app->add_option("--h", o->h_W_m2K, "Convection coefficient, W/m2K")->capture_default_str()};
   app->add_option("--rail-length", o->rail_length_m, "Rail length L, m (the paper does not report it)")
       ->capture_default_str();
   add_list(*app, "--sensors", o->sensors_m, "Sensor positions from the rail centre, m (default 0,0.05,0.1)");
   app->add_option("--ambient", o->ambient_C, "Constant ambient temperature, C")->capture_default_str();
   app->add_option("--ambient-trace", o->ambient_trace, "Ambient trace as time_s:temperature_C pairs, e.g. 0:26,21600:27");
   app->add_option("--initial", o->initial_C, "Initial rail temperature, C (default: the ambient at t = 0)");
-  app->add_option("--source", o->source, "Heat source model: paper, averaged or moving")->capture_default_str();
+  o->rail_options.push_back(
+      app->add_option("--source", o->source, "Heat source model: paper, averaged or moving")->capture_default_str());
+  o->model.add_to(*app, "Calibrated model (model.toml of lmcal calibrate): alpha, h, source and mechanisms of its "
+                        "[thermal], the friction law of its [friction]");
   app->add_option("--scheme", o->scheme, "Time scheme: backward-euler (be) or crank-nicolson (cn)")->capture_default_str();
   app->add_option("--segments", o->segments, "Segments on the half rail")->capture_default_str();
   app->add_option("--dt", o->time_step_s, "Time step, s")->capture_default_str();

@@ -29,12 +29,19 @@ refused() {  # refused EXPECTED_TEXT ARGS...
   return 0
 }
 
+# The value of column NAME (found by its header) in the rows where column KEY equals VALUE.
+column_where() {  # column_where FILE NAME KEY VALUE
+  awk -F, -v name="$2" -v key="$3" -v value="$4" \
+    'NR == 1 { for (i = 1; i <= NF; ++i) col[$i] = i; next } $col[key] == value { print $col[name] }' "$1"
+}
+
 # --- friction sweep: the sanity figure of PHYSICS.md at V = 0.11 m/s -------------------------
 "$LMCAL" simulate friction -o f.csv --velocity 0.066,0.083,0.11 >/dev/null
 check "friction csv written" test -s f.csv -a -s f.csv.json
 check "friction csv has a header and 3 rows" test "$(wc -l < f.csv)" -eq 4
-f110=$(awk -F, 'NR > 1 && $2 == 0.11 {print $11}' f.csv)
+f110=$(column_where f.csv friction_N velocity_m_s 0.11)
 check "F(0.11 m/s) = 44.2 N" awk -v f="$f110" 'BEGIN { exit !(f > 44.15 && f < 44.25) }'
+check "the published law has no effects" test "$(column_where f.csv effects_N velocity_m_s 0.11)" = 0
 check "inputs recorded" grep -q '"k1": 0.315' f.csv.json
 
 # --- thermal run: CSVs with the declared columns, and the steady state above the run's end ----
@@ -113,10 +120,106 @@ check "calibrate writes the fits, the summary and the report" test -s calout/fri
 check "calibrate says the thermal half was skipped" grep -q 'note: no thermal manifest' calibrate.txt
 check "calibrate is quiet on stderr when it is not a terminal" test ! -s calibrate.err
 script -qec "'$LMCAL' calibrate calset -o ttyout --no-diagnosis" /dev/null >tty.txt 2>&1
-check "calibrate shows its steps on a terminal" grep -q '\[2/2\] friction fit' tty.txt
+check "calibrate shows its steps on a terminal" grep -q '\[2/[0-9]\] friction fit' tty.txt
 check "calibrate defaults to fits/<folder name>" bash -c "cd calset && '$LMCAL' calibrate . >/dev/null && test -s fits/calset/report.html"
 check "a folder without measurements refused" refused "expected friction logs (friction*.csv) or a thermal manifest" calibrate out
 check "a missing folder refused" refused "expected a measurement folder" calibrate no_such_folder -o out
+
+# --- calibrate once, use everywhere: simulate with the calibrated model ------------------------
+mkdir -p modelset
+"$LMCAL" generate friction -o modelset --runs 2 --guides "SRN 35C" >/dev/null
+"$LMCAL" generate thermal -o modelset --velocity 0.083,0.11 --duration 3600 --record-every 30 >/dev/null
+"$LMCAL" calibrate modelset -o modelout --no-diagnosis >/dev/null 2>&1
+check "calibrate writes the calibrated model" test -s modelout/model.toml
+model_sha=$(sha256sum modelout/model.toml | cut -c1-64)
+"$LMCAL" simulate friction --model modelout/model.toml -o mf.csv --velocity 0.066,0.11 --direction 1,-1 >mf.txt
+check "simulate friction --model writes its outputs" test -s mf.csv -a -s mf.csv.json
+check "simulate friction --model: 2 speeds x 2 directions" test "$(wc -l < mf.csv)" -eq 5
+check "simulate friction --model records the model with its SHA-256" grep -q "\"sha256\": \"$model_sha\"" mf.csv.json
+check "simulate friction --model records the model's provenance" grep -q '"set": "modelset"' mf.csv.json
+check "simulate friction --model names the model on stdout" grep -q 'calibrated friction law of modelout/model.toml' mf.txt
+"$LMCAL" simulate thermal --model modelout/model.toml -o mt --duration 3600 --output-every 600 >mt.txt
+check "simulate thermal --model writes its outputs" test -s mt_time.csv -a -s mt_profile.csv -a -s mt.json
+check "simulate thermal --model records the model with its SHA-256" grep -q "\"sha256\": \"$model_sha\"" mt.json
+model_alpha=$(awk '/^name = "alpha"/ {a = 1} a && /^value = / {print $3; exit}' modelout/model.toml)
+check "simulate thermal --model takes alpha from the model" grep -q "^  \"alpha\": $model_alpha,\$" mt.json
+check "--model with a friction constant refused" refused "--k1 cannot be given with it" \
+  simulate friction --model modelout/model.toml --k1 0.3 -o out/f.csv
+check "--model with alpha refused" refused "--alpha cannot be given with it" \
+  simulate thermal --model modelout/model.toml --alpha 0.5 -o out/t
+check "a friction-only model refused by simulate thermal" refused "calout/model.toml: expected a [thermal] table" \
+  simulate thermal --model calout/model.toml -o out/t
+check "a bad model file refused with its line and column" refused "unknown_mechanism.toml:7:" \
+  simulate thermal --model "$DATA/model/unknown_mechanism.toml" -o out/t
+
+# A model with an effect and mechanisms: the breakdown adds up, the heat follows the rail, and
+# the thermocouple lag is said to be the sensor's.
+cat > mechanisms.toml <<'MODEL'
+kind = "lmcal calibrated model"
+set = "hand-written"
+
+[friction]
+causes = ["seal_drag"]
+reference_temperature_C = 40
+viscosity40_mm2_s = 99
+[[friction.parameter]]
+name = "k1"
+value = 0.315
+[[friction.parameter]]
+name = "k2"
+value = 0.03
+[[friction.parameter]]
+name = "mu_st"
+value = 1.52
+[[friction.parameter]]
+name = "v_st_m_s"
+value = 0.015
+[[friction.parameter]]
+name = "mu_v"
+value = 0.003
+[[friction.parameter]]
+name = "beta_per_K"
+value = 0.067
+[[friction.parameter]]
+name = "f0"
+value = 0.029
+[[friction.parameter]]
+name = "seal_drag"
+value = 150
+
+[thermal]
+source = "averaged"
+mechanisms = ["coupling", "convection_velocity", "tc_lag"]
+[[thermal.parameter]]
+name = "alpha"
+value = 0.6
+[[thermal.parameter]]
+name = "h_W_m2K"
+value = 5.3
+[[thermal.parameter]]
+name = "coupling"
+value = 1
+[[thermal.parameter]]
+name = "convection_velocity"
+value = 6
+[[thermal.parameter]]
+name = "tc_lag"
+value = 30
+MODEL
+"$LMCAL" simulate friction --model mechanisms.toml -o me.csv --velocity 0.11 >/dev/null
+check "seal drag: effects_N = 150 x 0.11^2" \
+  awk -v e="$(column_where me.csv effects_N velocity_m_s 0.11)" 'BEGIN { exit !(e > 1.8149 && e < 1.8151) }'
+check "friction_N = the law's terms + effects_N" awk -F, 'NR == 1 { for (i = 1; i <= NF; ++i) c[$i] = i; next }
+  { d = $c["coulomb_N"] + $c["stribeck_N"] + $c["viscous_N"] + $c["effects_N"] - $c["friction_N"]; exit !(d < 1e-9 && d > -1e-9) }' me.csv
+check "the model's effect recorded" grep -q '"seal_drag": 150' me.csv.json
+"$LMCAL" simulate thermal --model mechanisms.toml -o mm --duration 7200 --output-every 600 >mm.txt
+check "simulate thermal with mechanisms writes its outputs" test -s mm_time.csv -a -s mm_profile.csv -a -s mm.json
+check "the thermocouple lag is the sensor's, on stdout" grep -q "tc_lag (tau = 30 s) is a property of the thermocouples" mm.txt
+check "the thermocouple lag is the sensor's, in the json" grep -q '"sensor_note": "tc_lag (tau = 30 s) is a property' mm.json
+check "coupled heat rate falls while the rail warms" awk -F, 'NR > 1 && $11 == 0 {
+  if (n++ && !($9 < q && $12 > t)) bad = 1; q = $9; t = $12 } END { exit bad || n < 10 }' mm_time.csv
+check "with mechanisms the steady state is hotter than after 2 h" awk -F, '$10 == "end_of_run" && $11 == 0 {e = $12}
+  $10 == "steady_state" && $11 == 0 {s = $12} END { exit !(s > e) }' mm_profile.csv
 
 # The bundled set is exactly what the recorded commands make (the command lines aside).
 LMCAL="$LMCAL" bash "$SOURCE/scripts/make-bundled-data.sh" "$work/bundled" >/dev/null

@@ -525,11 +525,14 @@ void profile_intervals(const LeastSquaresModel& model, const std::vector<Paramet
   const double base_threshold = 0.5 * s2 * fisher_f_quantile(options.confidence, 1, result.dof);
   const double t = student_t_quantile(1 - (1 - options.confidence) / 2, std::min(result.dof, 1e7));
   const CovarianceSummary* iid = result.uncertainty.find("iid");
+  // A model linear in its parameters has a profile that is the linear interval: only a bound
+  // inside the interval makes it differ.
+  const bool linear = model.linear(state.held) && options.loss == RobustLoss::none;
   for (std::size_t j = 0; j < specs.size(); ++j) {
     ParameterEstimate& e = result.parameters[j];
     if (state.held[j]) continue;
-    const bool unreliable = e.at_bound || !std::isfinite(e.se) || e.ci_low < e.lower || e.ci_high > e.upper ||
-                            e.se > 0.3 * relative_scale(specs[j], e.value);
+    const bool truncated = e.at_bound || e.ci_low < e.lower || e.ci_high > e.upper;
+    const bool unreliable = truncated || (!linear && (!std::isfinite(e.se) || e.se > 0.3 * relative_scale(specs[j], e.value)));
     if (options.profile == ProfileMode::automatic && !unreliable) continue;
     const double iid_se = iid ? iid->se[j] : kNaN;
     const double inflation = std::isfinite(e.se) && iid_se > 0 ? std::max(1.0, std::pow(e.se / iid_se, 2)) : 1.0;

@@ -32,16 +32,24 @@ std::vector<ModelParameter> parameters_of(const FitResult& fit) {
   return out;
 }
 
+// A TOML basic string: quotes, backslashes and control characters escaped.
 std::string quoted(const std::string& s) {
   std::string out = "\"";
   for (char c : s) {
     if (c == '"' || c == '\\') out += '\\';
-    out += c;
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) out += fmt::format("\\u{:04X}", static_cast<unsigned char>(c));
+    else out += c;
   }
   return out + "\"";
 }
 
-std::string number(double v) { return std::isnan(v) ? "nan" : std::isinf(v) ? (v > 0 ? "inf" : "-inf") : fmt::format("{}", v); }
+// The shortest text that reads back as the same double (-0 keeps its sign: "-0" would be an integer).
+std::string number(double v) {
+  if (std::isnan(v)) return "nan";
+  if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
+  if (v == 0 && std::signbit(v)) return "-0.0";
+  return fmt::format("{}", v);
+}
 
 std::string string_list(const std::vector<std::string>& items) {
   std::vector<std::string> q;
@@ -60,12 +68,34 @@ void write_parameters(std::string& out, const char* table, const std::vector<Mod
   throw InputError(file, static_cast<long>(where.begin.line), static_cast<long>(where.begin.column), what);
 }
 
+std::string known_list(const std::vector<std::string>& names) {
+  return names.empty() ? "none" : fmt::format("{}", fmt::join(names, ", "));
+}
+
+// Refuses a key of `t` that is not among `known` (a misspelt key would otherwise be ignored).
+void only_keys(const std::string& file, const toml::table& t, const char* table, const std::vector<std::string>& known) {
+  for (const auto& [key, node] : t)
+    if (std::find(known.begin(), known.end(), key.str()) == known.end())
+      fail(file, key.source(), fmt::format("unknown key '{}' in {}; expected {}", key.str(), table, known_list(known)));
+}
+
+// A number (an integer or a float, read as the double it is: value_or(NAN) would read a float).
+double number_of(const std::string& file, const toml::node& n, const std::string& what) {
+  if (const auto* i = n.as_integer()) return static_cast<double>(i->get());
+  if (const auto* f = n.as_floating_point()) return f->get();
+  fail(file, n.source(), what + ": expected a number");
+}
+
 double number_at(const std::string& file, const toml::table& t, const char* key) {
   const toml::node* n = t.get(key);
   if (!n) fail(file, t.source(), fmt::format("expected a number '{}'", key));
-  if (const auto* i = n->as_integer()) return static_cast<double>(i->get());
-  if (const auto* f = n->as_floating_point()) return f->get();
-  fail(file, n->source(), fmt::format("key '{}': expected a number", key));
+  return number_of(file, *n, fmt::format("key '{}'", key));
+}
+
+double finite_at(const std::string& file, const toml::table& t, const char* key) {
+  const double v = number_at(file, t, key);
+  if (!std::isfinite(v)) fail(file, t.get(key)->source(), fmt::format("key '{}': expected a finite number, found {}", key, v));
+  return v;
 }
 
 std::string string_at(const std::string& file, const toml::table& t, const char* key) {
@@ -75,8 +105,11 @@ std::string string_at(const std::string& file, const toml::table& t, const char*
   return s->get();
 }
 
-std::vector<std::string> strings_at(const std::string& file, const toml::table& t, const char* key) {
-  std::vector<std::string> out;
+// A list of texts, each with where it stands in the file; with `distinct`, a text listed twice
+// is refused (a mechanism listed twice would be applied twice).
+std::vector<std::pair<std::string, toml::source_region>> strings_at(const std::string& file, const toml::table& t,
+                                                                    const char* key, bool distinct = true) {
+  std::vector<std::pair<std::string, toml::source_region>> out;
   const toml::node* n = t.get(key);
   if (!n) return out;
   const auto* a = n->as_array();
@@ -84,33 +117,154 @@ std::vector<std::string> strings_at(const std::string& file, const toml::table& 
   for (const auto& item : *a) {
     const auto* s = item.as_string();
     if (!s) fail(file, item.source(), fmt::format("key '{}': expected a text", key));
-    out.push_back(s->get());
+    for (const auto& done : out)
+      if (distinct && done.first == s->get())
+        fail(file, item.source(), fmt::format("key '{}': '{}' is listed twice", key, done.first));
+    out.emplace_back(s->get(), item.source());
   }
   return out;
 }
 
-std::vector<ModelParameter> read_parameters(const std::string& file, const toml::table& t) {
-  std::vector<ModelParameter> out;
+std::vector<std::string> names_of(const std::vector<std::pair<std::string, toml::source_region>>& items) {
+  std::vector<std::string> out;
+  for (const auto& item : items) out.push_back(item.first);
+  return out;
+}
+
+// A parameter as read, with where its name and value stand.
+struct ReadParameter {
+  ModelParameter p;
+  toml::source_region name_at, value_at;
+};
+
+std::vector<ReadParameter> read_parameters(const std::string& file, const toml::table& t, const char* table) {
+  std::vector<ReadParameter> out;
   const toml::node* n = t.get("parameter");
   const auto* list = n ? n->as_array() : nullptr;
-  if (!list) fail(file, n ? n->source() : t.source(), "expected [[...parameter]] tables");
+  if (!list) fail(file, n ? n->source() : t.source(), fmt::format("expected [[{}.parameter]] tables", table));
   for (const auto& item : *list) {
     const auto* p = item.as_table();
     if (!p) fail(file, item.source(), "expected a parameter table");
-    ModelParameter m;
+    only_keys(file, *p, "a parameter", {"name", "unit", "value", "se", "ci95", "held"});
+    ReadParameter r;
+    ModelParameter& m = r.p;
     m.name = string_at(file, *p, "name");
+    r.name_at = p->get("name")->source();
+    for (const auto& done : out)
+      if (done.p.name == m.name) fail(file, r.name_at, fmt::format("parameter '{}' is given twice in [{}]", m.name, table));
     m.unit = p->get("unit") ? string_at(file, *p, "unit") : "";
     m.value = number_at(file, *p, "value");
-    if (!std::isfinite(m.value)) fail(file, p->get("value")->source(), fmt::format("parameter '{}': expected a finite value", m.name));
-    m.se = p->get("se") ? number_at(file, *p, "se") : NAN;
-    if (const auto* ci = p->get("ci95") ? p->get("ci95")->as_array() : nullptr; ci && ci->size() == 2) {
-      m.ci_low = ci->get(0)->value_or(NAN);
-      m.ci_high = ci->get(1)->value_or(NAN);
+    r.value_at = p->get("value")->source();
+    if (!std::isfinite(m.value))
+      fail(file, r.value_at, fmt::format("parameter '{}': expected a finite value, found {}", m.name, m.value));
+    m.se = p->get("se") ? number_at(file, *p, "se") : NAN;  // NaN: not known (written as nan)
+    if (const toml::node* ci = p->get("ci95")) {
+      const auto* a = ci->as_array();
+      if (!a || a->size() != 2) fail(file, ci->source(), fmt::format("parameter '{}': expected ci95 = [low, high]", m.name));
+      m.ci_low = number_of(file, (*a)[0], fmt::format("parameter '{}', ci95", m.name));
+      m.ci_high = number_of(file, (*a)[1], fmt::format("parameter '{}', ci95", m.name));
     }
-    m.held = p->get("held") && p->get("held")->value_or(false);
-    out.push_back(m);
+    if (const toml::node* held = p->get("held")) {
+      if (!held->is_boolean()) fail(file, held->source(), fmt::format("parameter '{}': expected held = true or false", m.name));
+      m.held = held->value_or(false);
+    }
+    out.push_back(std::move(r));
   }
   return out;
+}
+
+const ReadParameter* find_read(const std::vector<ReadParameter>& list, std::string_view name) {
+  for (const auto& r : list)
+    if (r.p.name == name) return &r;
+  return nullptr;
+}
+
+// [friction]: the seven constants, the viscosity's reference point and the effects of the causes.
+void read_friction(const std::string& file, const toml::table& f, ModelFile& m) {
+  only_keys(file, f, "[friction]", {"causes", "covariance", "reference_temperature_C", "viscosity40_mm2_s", "parameter"});
+  m.has_friction = true;
+  const auto causes = strings_at(file, f, "causes");
+  std::vector<std::string> effects;
+  for (const auto& info : FrictionEffectLibrary::infos) effects.emplace_back(info.name);
+  for (const auto& [name, where] : causes)
+    if (!find_friction_effect(name))
+      fail(file, where, fmt::format("unknown friction effect '{}' in causes; expected one of {}", name, known_list(effects)));
+  m.friction_causes = names_of(causes);
+  m.friction_covariance = f.get("covariance") ? string_at(file, f, "covariance") : "";
+  if (f.get("reference_temperature_C")) m.constants.T_ref_C = finite_at(file, f, "reference_temperature_C");
+  if (f.get("viscosity40_mm2_s")) m.constants.nu_ref_mm2_s = finite_at(file, f, "viscosity40_mm2_s");
+  const auto parameters = read_parameters(file, f, "friction");
+  const std::vector<std::string> constants(kFrictionConstantNames.begin(), kFrictionConstantNames.end());
+  for (const auto& r : parameters) {
+    const auto c = std::find(constants.begin(), constants.end(), r.p.name);
+    const auto cause = std::find(m.friction_causes.begin(), m.friction_causes.end(), r.p.name);
+    if (c != constants.end()) fittable_constant(m.constants, static_cast<std::size_t>(c - constants.begin())) = r.p.value;
+    else if (cause != m.friction_causes.end()) m.effects[*find_friction_effect(r.p.name)] = r.p.value;
+    else
+      fail(file, r.name_at,
+           fmt::format("unknown friction parameter '{}'; expected {} or an effect among causes ({})", r.p.name,
+                       known_list(constants), known_list(m.friction_causes)));
+  }
+  std::vector<std::string> needed = constants;
+  needed.insert(needed.end(), m.friction_causes.begin(), m.friction_causes.end());
+  for (const auto& name : needed)
+    if (!find_read(parameters, name)) fail(file, f.source(), fmt::format("expected a parameter '{}' in [friction]", name));
+  try {
+    validate(m.constants);
+  } catch (const InvalidParameter& e) {
+    const ReadParameter* r = find_read(parameters, e.parameter());
+    const char* key = e.parameter() == "T_ref_C" ? "reference_temperature_C" : "viscosity40_mm2_s";
+    fail(file, r ? r->value_at : f.get(key) ? f.get(key)->source() : f.source(), e.what());
+  }
+  for (auto& r : parameters) m.friction_parameters.push_back(std::move(r.p));
+}
+
+// [thermal]: α, h (optional), the source model and the mechanisms with their parameters.
+void read_thermal(const std::string& file, const toml::table& t, ModelFile& m) {
+  only_keys(file, t, "[thermal]", {"source", "mechanisms", "covariance", "heat_uncertainty", "parameter"});
+  m.has_thermal = true;
+  try {
+    m.source = parse_source_model(string_at(file, t, "source"));
+  } catch (const InvalidParameter& e) {
+    fail(file, t.get("source")->source(), e.what());
+  }
+  const auto library = thermal_extension_library();
+  std::vector<std::string> known;
+  for (const auto& e : library) known.push_back(e.name);
+  const auto mechanisms = strings_at(file, t, "mechanisms");
+  std::vector<std::string> allowed = {"alpha", "h_W_m2K"};  // and the mechanisms' parameters
+  for (const auto& [name, where] : mechanisms) {
+    const auto e = std::find_if(library.begin(), library.end(), [&](auto& x) { return x.name == name; });
+    if (e == library.end()) fail(file, where, fmt::format("unknown mechanism '{}'; expected one of {}", name, known_list(known)));
+    if (e->source && *e->source != m.source)
+      fail(file, where, fmt::format("mechanism '{}' selects the source model '{}', but source = \"{}\"", name,
+                                    to_string(*e->source), to_string(m.source)));
+    allowed.insert(allowed.end(), e->parameters.begin(), e->parameters.end());
+  }
+  m.mechanisms = names_of(mechanisms);
+  m.thermal_covariance = t.get("covariance") ? string_at(file, t, "covariance") : "";
+  m.heat_uncertainty = t.get("heat_uncertainty") ? string_at(file, t, "heat_uncertainty") : "";
+  const auto parameters = read_parameters(file, t, "thermal");
+  for (const auto& r : parameters) {
+    if (std::find(allowed.begin(), allowed.end(), r.p.name) == allowed.end())
+      fail(file, r.name_at,
+           fmt::format("unknown thermal parameter '{}'; expected alpha, h_W_m2K or a parameter of the mechanisms ({})",
+                       r.p.name, known_list(m.mechanisms)));
+    if (r.p.name == "alpha") {
+      if (!(r.p.value >= 0 && r.p.value <= 1))
+        fail(file, r.value_at, fmt::format("alpha = {}: expected a value in [0, 1]", r.p.value));
+      m.alpha = r.p.value;
+    } else if (r.p.name == "h_W_m2K") {
+      if (!(r.p.value > 0)) fail(file, r.value_at, fmt::format("h_W_m2K = {}: expected a value > 0", r.p.value));
+      m.h_W_m2K = r.p.value;
+    } else {
+      m.mechanism_parameters.emplace_back(r.p.name, r.p.value);
+    }
+  }
+  for (const auto& name : allowed)
+    if (name != "h_W_m2K" && !find_read(parameters, name))
+      fail(file, t.source(), fmt::format("expected a parameter '{}' in [thermal]", name));
+  for (auto& r : parameters) m.thermal_parameters.push_back(std::move(r.p));
 }
 
 }  // namespace
@@ -139,6 +293,9 @@ ModelFile model_file_of(const FrictionFitResult* friction, const FrictionFitOpti
     }
     m.mechanisms = to.extensions;
     m.thermal_parameters = parameters_of(thermal->joint);
+    // h held at the fit's value is part of the model too (simulate with the h α was fitted with).
+    if (std::none_of(m.thermal_parameters.begin(), m.thermal_parameters.end(), [](auto& p) { return p.name == "h_W_m2K"; }))
+      m.thermal_parameters.push_back({"h_W_m2K", "W/m2K", to.h_W_m2K, 0, to.h_W_m2K, to.h_W_m2K, true});
     for (const auto& p : m.thermal_parameters)
       if (p.name == "h_W_m2K") m.h_W_m2K = p.value;
       else if (p.name != "alpha") m.mechanism_parameters.emplace_back(p.name, p.value);
@@ -185,49 +342,33 @@ ModelFile read_model_file(const std::filesystem::path& path) {
   } catch (const toml::parse_error& e) {
     fail(file, e.source(), std::string(e.description()));
   }
-  if (!root.get("kind") || string_at(file, root, "kind") != "lmcal calibrated model")
-    fail(file, root.source(), "expected kind = \"lmcal calibrated model\" (a model.toml written by lmcal calibrate)");
+  constexpr const char* kKind = "lmcal calibrated model";
+  const toml::node* kind = root.get("kind");
+  if (!kind || kind->value_or(std::string_view{}) != kKind)
+    fail(file, kind ? kind->source() : toml::source_region{{1, 1}, {1, 1}, {}},
+         fmt::format("expected kind = \"{}\" (a model.toml written by lmcal calibrate)", kKind));
+  only_keys(file, root, "the model file", {"kind", "lmcal_version", "set", "command", "input", "friction", "thermal"});
   ModelFile m;
   m.lmcal_version = root.get("lmcal_version") ? string_at(file, root, "lmcal_version") : "";
   m.set = root.get("set") ? string_at(file, root, "set") : "";
-  m.command = strings_at(file, root, "command");
-  if (const auto* f = root.get("friction") ? root.get("friction")->as_table() : nullptr) {
-    m.has_friction = true;
-    m.friction_causes = strings_at(file, *f, "causes");
-    m.friction_covariance = f->get("covariance") ? string_at(file, *f, "covariance") : "";
-    if (f->get("reference_temperature_C")) m.constants.T_ref_C = number_at(file, *f, "reference_temperature_C");
-    if (f->get("viscosity40_mm2_s")) m.constants.nu_ref_mm2_s = number_at(file, *f, "viscosity40_mm2_s");
-    m.friction_parameters = read_parameters(file, *f);
-    for (const auto& p : m.friction_parameters) {
-      const auto c = std::find(kFrictionConstantNames.begin(), kFrictionConstantNames.end(), p.name);
-      if (c != kFrictionConstantNames.end()) fittable_constant(m.constants, static_cast<std::size_t>(c - kFrictionConstantNames.begin())) = p.value;
-      else if (const auto slot = find_friction_effect(p.name)) m.effects[*slot] = p.value;
-      else fail(file, f->source(), fmt::format("unknown friction parameter '{}'", p.name));
+  m.command = names_of(strings_at(file, root, "command", false));
+  if (const toml::node* inputs = root.get("input")) {
+    const auto* list = inputs->as_array();
+    if (!list) fail(file, inputs->source(), "expected [[input]] tables");
+    for (const auto& item : *list) {
+      const auto* i = item.as_table();
+      if (!i) fail(file, item.source(), "expected an [[input]] table");
+      only_keys(file, *i, "[[input]]", {"file", "sha256"});
+      m.inputs.emplace_back(string_at(file, *i, "file"), string_at(file, *i, "sha256"));
     }
-    validate(m.constants);
   }
-  if (const auto* t = root.get("thermal") ? root.get("thermal")->as_table() : nullptr) {
-    m.has_thermal = true;
-    try {
-      m.source = parse_source_model(string_at(file, *t, "source"));
-    } catch (const InvalidParameter& e) {
-      fail(file, t->get("source")->source(), e.what());
-    }
-    m.mechanisms = strings_at(file, *t, "mechanisms");
-    const auto library = thermal_extension_library();
-    for (const auto& name : m.mechanisms)
-      if (std::none_of(library.begin(), library.end(), [&](auto& e) { return e.name == name; }))
-        fail(file, t->get("mechanisms")->source(), fmt::format("unknown mechanism '{}'", name));
-    m.thermal_covariance = t->get("covariance") ? string_at(file, *t, "covariance") : "";
-    m.heat_uncertainty = t->get("heat_uncertainty") ? string_at(file, *t, "heat_uncertainty") : "";
-    m.thermal_parameters = read_parameters(file, *t);
-    bool alpha = false;
-    for (const auto& p : m.thermal_parameters) {
-      if (p.name == "alpha") m.alpha = p.value, alpha = true;
-      else if (p.name == "h_W_m2K") m.h_W_m2K = p.value;
-      else m.mechanism_parameters.emplace_back(p.name, p.value);
-    }
-    if (!alpha) fail(file, t->source(), "expected an 'alpha' parameter in [thermal]");
+  for (const char* table : {"friction", "thermal"}) {
+    const toml::node* n = root.get(table);
+    if (!n) continue;
+    const auto* t = n->as_table();
+    if (!t) fail(file, n->source(), fmt::format("expected a [{}] table", table));
+    if (table == std::string_view("friction")) read_friction(file, *t, m);
+    else read_thermal(file, *t, m);
   }
   if (!m.has_friction && !m.has_thermal) fail(file, root.source(), "expected a [friction] or a [thermal] table");
   return m;

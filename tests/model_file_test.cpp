@@ -1,0 +1,332 @@
+// The calibrated model file (model.toml, lmcal/fit/model_file.hpp) and the rail simulated with
+// a model's mechanisms (simulate_rail_with_mechanisms): every bad file of tests/data/model/
+// refused with its place and what was expected, a bitwise round trip, and the mechanisms
+// against the plain rail model they extend.
+#include "lmcal/fit/model_file.hpp"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "lmcal/error.hpp"
+#include "lmcal/fit/thermal_fit.hpp"
+#include "lmcal/models/friction_effects.hpp"
+#include "lmcal/models/thermal_effects.hpp"
+#include "support/srn35c.hpp"
+
+namespace lmcal {
+namespace {
+
+namespace fs = std::filesystem;
+
+const fs::path kModelDir = fs::path(LMCAL_TEST_DATA_DIR) / "model";
+
+// --- bad input --------------------------------------------------------------------------------
+
+struct BadFile {
+  std::string file, message;  // message: "<line>:<column>: <what>", after "<path>:"
+};
+
+// tests/data/model/expected.txt: "<file> | <line>:<column>: <what>", '#' comments.
+std::vector<BadFile> bad_files() {
+  std::ifstream in(kModelDir / "expected.txt");
+  EXPECT_TRUE(in) << "cannot open " << (kModelDir / "expected.txt");
+  std::vector<BadFile> out;
+  std::string text;
+  for (int line = 1; std::getline(in, text); ++line) {
+    if (text.empty() || text[0] == '#') continue;
+    const auto bar = text.find(" | ");
+    if (bar == std::string::npos) {
+      ADD_FAILURE() << "expected.txt:" << line << ": not '<file> | <message>': " << text;
+      continue;
+    }
+    out.push_back({text.substr(0, bar), text.substr(bar + 3)});
+  }
+  return out;
+}
+
+TEST(ModelFile, RefusesEveryBadFileWithFileLineColumnAndWhatWasExpected) {
+  const auto cases = bad_files();
+  ASSERT_GE(cases.size(), 5u);
+  std::set<std::string> listed;
+  for (const auto& c : cases) {
+    listed.insert(c.file);
+    const fs::path path = kModelDir / c.file;
+    try {
+      read_model_file(path);
+      ADD_FAILURE() << c.file << " was accepted";
+    } catch (const InputError& e) {
+      EXPECT_EQ(std::string(e.what()), path.string() + ":" + c.message) << c.file;
+      EXPECT_GT(e.line(), 0) << c.file;
+      EXPECT_GT(e.column(), 0) << c.file;
+    }
+  }
+  for (const auto& entry : fs::directory_iterator(kModelDir)) {
+    if (entry.path().filename() == "expected.txt") continue;
+    EXPECT_TRUE(listed.count(entry.path().filename().string())) << entry.path() << " is not listed in expected.txt";
+  }
+}
+
+TEST(ModelFile, AMissingFileIsRefusedNamingIt) {
+  try {
+    read_model_file(kModelDir / "no_such_model.toml");
+    FAIL() << "a missing file was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("no_such_model.toml: cannot open the model file"), std::string::npos) << e.what();
+  }
+}
+
+// --- round trip -------------------------------------------------------------------------------
+
+std::uint64_t bits(double v) { return std::bit_cast<std::uint64_t>(v); }
+
+// A temporary file, removed afterwards.
+class TempFile {
+ public:
+  explicit TempFile(const std::string& text)
+      : path_(fs::temp_directory_path() / ("lmcal_model_file_test_" + std::to_string(::getpid()) + ".toml")) {
+    std::ofstream(path_, std::ios::binary) << text;
+  }
+  ~TempFile() { fs::remove(path_); }
+  TempFile(const TempFile&) = delete;
+  TempFile& operator=(const TempFile&) = delete;
+  const fs::path& path() const { return path_; }
+
+ private:
+  fs::path path_;
+};
+
+// A model with awkward numbers: not short in decimal, tiny, huge, subnormal, negative zero.
+ModelFile awkward_model() {
+  ModelFile m;
+  m.set = "set with \"quotes\", a \\ and a\ttab";
+  m.lmcal_version = "0.1.0";
+  m.command = {"lmcal", "calibrate", "measurements/cheng2017"};
+  m.inputs = {{"measurements/cheng2017/friction.csv", std::string(64, 'a')}};
+  m.has_friction = true;
+  m.constants = {.k1 = 0.1 + 0.2, .k2 = 1.0 / 3.0, .mu_st = 1.52e-3 * 1000.0 / 7.0, .v_st_m_s = 0.015000000000000001,
+                 .mu_v = 2.9999999999999997e-3, .beta_per_K = std::nextafter(0.067, 1.0), .f0 = -0.0,
+                 .nu_ref_mm2_s = 98.76543210987654, .T_ref_C = 40.000000000000007};
+  m.friction_causes = {"seal_drag", "direction_asymmetry"};
+  m.effects[*find_friction_effect("seal_drag")] = 149.12345678901234;
+  m.effects[*find_friction_effect("direction_asymmetry")] = 0.030000000000000002;
+  for (std::size_t j = 0; j < kFrictionConstantNames.size(); ++j) {
+    const double v = fittable_constant(m.constants, j);
+    m.friction_parameters.push_back({kFrictionConstantNames[j], "", v, v * 1e-3, v - 1e-300, v + 5e-324, j == 1});
+  }
+  for (const auto& name : m.friction_causes) {
+    const double v = m.effects[*find_friction_effect(name)];
+    m.friction_parameters.push_back({name, "", v, std::numeric_limits<double>::quiet_NaN(), v / 3, v * 3, false});
+  }
+  m.friction_covariance = "cluster-robust by run";
+  m.has_thermal = true;
+  m.alpha = 0.58123456789012345;
+  m.h_W_m2K = 5.3 + 1e-15;
+  m.source = SourceModel::moving;
+  m.mechanisms = {"coupling", "convection_velocity", "tc_lag", "base_loss", "source_moving"};
+  m.mechanism_parameters = {{"coupling", 1.0512345678901234},
+                            {"convection_velocity", 5.8e-7},
+                            {"tc_lag", 33.333333333333336},
+                            {"base_loss", 4.9406564584124654e-324}};
+  m.thermal_parameters = {{"alpha", "1", m.alpha, 0.0123, 0.55, 0.61, false},
+                          {"h_W_m2K", "W/m2K", *m.h_W_m2K, 0, *m.h_W_m2K, *m.h_W_m2K, true}};
+  for (const auto& [name, v] : m.mechanism_parameters)
+    m.thermal_parameters.push_back({name, "", v, 1.7976931348623157e308, -v, v, false});
+  m.thermal_covariance = "iid";
+  m.heat_uncertainty = "two-stage:\nthe friction fit's covariance";
+  return m;
+}
+
+void expect_same_parameters(const std::vector<ModelParameter>& a, const std::vector<ModelParameter>& b) {
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(a[i].name, b[i].name);
+    EXPECT_EQ(a[i].unit, b[i].unit) << a[i].name;
+    EXPECT_EQ(bits(a[i].value), bits(b[i].value)) << a[i].name << ": " << a[i].value << " vs " << b[i].value;
+    if (std::isnan(a[i].se)) {
+      EXPECT_TRUE(std::isnan(b[i].se)) << a[i].name;
+    } else {
+      EXPECT_EQ(bits(a[i].se), bits(b[i].se)) << a[i].name;
+    }
+    EXPECT_EQ(bits(a[i].ci_low), bits(b[i].ci_low)) << a[i].name;
+    EXPECT_EQ(bits(a[i].ci_high), bits(b[i].ci_high)) << a[i].name;
+    EXPECT_EQ(a[i].held, b[i].held) << a[i].name;
+  }
+}
+
+TEST(ModelFile, RoundTripGivesTheSameModelBitForBit) {
+  const ModelFile m = awkward_model();
+  const TempFile file(model_file_toml(m));
+  const ModelFile r = read_model_file(file.path());
+
+  EXPECT_EQ(r.set, m.set);
+  EXPECT_EQ(r.lmcal_version, m.lmcal_version);
+  EXPECT_EQ(r.command, m.command);
+  EXPECT_EQ(r.inputs, m.inputs);
+
+  ASSERT_TRUE(r.has_friction);
+  for (std::size_t j = 0; j < kFrictionConstantNames.size(); ++j)
+    EXPECT_EQ(bits(fittable_constant(r.constants, j)), bits(fittable_constant(m.constants, j))) << kFrictionConstantNames[j];
+  EXPECT_EQ(bits(r.constants.nu_ref_mm2_s), bits(m.constants.nu_ref_mm2_s));
+  EXPECT_EQ(bits(r.constants.T_ref_C), bits(m.constants.T_ref_C));
+  for (std::size_t slot = 0; slot < kFrictionEffectCount; ++slot)
+    EXPECT_EQ(bits(r.effects[slot]), bits(m.effects[slot])) << FrictionEffectLibrary::infos[slot].name;
+  EXPECT_EQ(r.friction_causes, m.friction_causes);
+  EXPECT_EQ(r.friction_covariance, m.friction_covariance);
+  expect_same_parameters(r.friction_parameters, m.friction_parameters);
+
+  ASSERT_TRUE(r.has_thermal);
+  EXPECT_EQ(bits(r.alpha), bits(m.alpha));
+  ASSERT_TRUE(r.h_W_m2K.has_value());
+  EXPECT_EQ(bits(*r.h_W_m2K), bits(*m.h_W_m2K));
+  EXPECT_EQ(r.source, m.source);
+  EXPECT_EQ(r.mechanisms, m.mechanisms);
+  ASSERT_EQ(r.mechanism_parameters.size(), m.mechanism_parameters.size());
+  for (std::size_t i = 0; i < m.mechanism_parameters.size(); ++i) {
+    EXPECT_EQ(r.mechanism_parameters[i].first, m.mechanism_parameters[i].first);
+    EXPECT_EQ(bits(r.mechanism_parameters[i].second), bits(m.mechanism_parameters[i].second)) << m.mechanism_parameters[i].first;
+  }
+  EXPECT_EQ(r.thermal_covariance, m.thermal_covariance);
+  EXPECT_EQ(r.heat_uncertainty, m.heat_uncertainty);
+  expect_same_parameters(r.thermal_parameters, m.thermal_parameters);
+
+  // Written again, the same text.
+  EXPECT_EQ(model_file_toml(r), model_file_toml(m));
+}
+
+TEST(ModelFile, OneHalfAloneRoundTrips) {
+  ModelFile m = awkward_model();
+  m.has_thermal = false;
+  const TempFile file(model_file_toml(m));
+  const ModelFile r = read_model_file(file.path());
+  EXPECT_TRUE(r.has_friction);
+  EXPECT_FALSE(r.has_thermal);
+  EXPECT_EQ(model_file_toml(r), model_file_toml(m));
+}
+
+// --- the rail with a model's mechanisms ------------------------------------------------------
+
+constexpr double kDuration_s = 4 * 3600.0;
+
+struct RailCase {
+  RailGeometry geometry = test::srn35c_geometry();
+  RailNumerics numerics{.source = SourceModel::averaged, .scheme = TimeScheme::crank_nicolson, .half_rail_segments = 50,
+                        .time_step_s = 60};
+  RailOutputs outputs{.duration_s = kDuration_s, .sensor_positions_m = {0.0, 0.05, 0.1}};
+  FrictionConditions<double> conditions = test::srn35c_conditions();
+  FrictionConstants<double> constants = paper_friction_constants();
+  FrictionEffects<double> effects;
+  AmbientTrace ambient = AmbientTrace::constant(26.0);
+
+  RailCase() {
+    for (double t = 0; t <= kDuration_s; t += 600) outputs.output_times_s.push_back(t);
+  }
+  // The rail with `mechanisms`; the heat rate from the law (heat_rate_W 0 in the parameters).
+  RailSolution<double> with(const std::vector<std::string>& mechanisms,
+                            const std::vector<std::pair<std::string, double>>& values) const {
+    return simulate_rail_with_mechanisms(geometry, numerics, outputs, test::srn35c_params(0.0), ambient, constants, effects,
+                                         conditions, mechanisms, values);
+  }
+  // The plain rail model with the heat rate `heat_rate_W` and convection `h_W_m2K`.
+  RailSolution<double> plain(double heat_rate_W, double h_W_m2K = 5.3) const {
+    RailParams<double> p = test::srn35c_params(heat_rate_W);
+    p.h_W_m2K = h_W_m2K;
+    return simulate_rail(geometry, numerics, outputs, p, ambient);
+  }
+};
+
+// The largest difference of two runs at the sensors.
+double max_difference_K(const RailSolution<double>& a, const RailSolution<double>& b) {
+  EXPECT_EQ(a.sensor_temperature_C.size(), b.sensor_temperature_C.size());
+  double most = 0;
+  for (std::size_t i = 0; i < a.sensor_temperature_C.size(); ++i)
+    most = std::max(most, std::abs(a.sensor_temperature_C[i] - b.sensor_temperature_C[i]));
+  return most;
+}
+
+// The rise at the rail centre at the end of the run.
+double rise_K(const RailSolution<double>& s) { return s.temperature_C(s.output_times_s.size() - 1, 0) - 26.0; }
+
+TEST(ModelFile, WithoutMechanismsTheRailIsThePlainModelWithTheLawsHeatRate) {
+  RailCase rail;
+  const double q_W = heat_rate_W(rail.constants, rail.conditions);
+  EXPECT_NEAR(q_W, 4.86, 0.01);  // PHYSICS.md: 4.86 W at 0.11 m/s
+  const auto with = rail.with({}, {});
+  const auto plain = rail.plain(q_W);
+  ASSERT_GT(rise_K(plain), 5.0);
+  EXPECT_EQ(with.sensor_temperature_C, plain.sensor_temperature_C);
+  for (double q : with.heat_rate_W) EXPECT_EQ(q, q_W);
+
+  // With effects the heat rate is the law's with them, and the temperatures follow.
+  rail.effects[*find_friction_effect("seal_drag")] = 150;
+  const double q_effects_W = heat_rate_with_effects_W(rail.constants, rail.effects, rail.conditions);
+  EXPECT_GT(q_effects_W, q_W + 0.1);  // 150 N s²/m² × (0.11 m/s)² × 0.11 m/s adds 0.2 W
+  const auto with_effects = rail.with({}, {});
+  EXPECT_EQ(with_effects.sensor_temperature_C, rail.plain(q_effects_W).sensor_temperature_C);
+  EXPECT_GT(max_difference_K(with_effects, plain), 0.2);
+}
+
+TEST(ModelFile, ConvectionVelocityIsTheRailWithHPlusCvTimesRootV) {
+  const RailCase rail;
+  const double q_W = heat_rate_W(rail.constants, rail.conditions);
+  const double c_V = 6.0, h0 = 5.3;
+  const auto with = rail.with({"convection_velocity"}, {{"convection_velocity", c_V}});
+  const auto expected = rail.plain(q_W, h0 + c_V * std::sqrt(rail.geometry.velocity_m_s));
+  EXPECT_LT(max_difference_K(with, expected), 1e-12);
+  // and not the rail with h0: forced convection takes a third of the rise off.
+  EXPECT_GT(max_difference_K(with, rail.plain(q_W, h0)), 0.2 * rise_K(expected));
+}
+
+TEST(ModelFile, CouplingLowersTheHeatRateAsTheRailWarms) {
+  const RailCase rail;
+  const double q_start_W = heat_rate_W(rail.constants, rail.conditions);
+  const auto coupled = rail.with({"coupling"}, {{"coupling", 1.0}});
+  ASSERT_EQ(coupled.heat_rate_W.size(), rail.outputs.output_times_s.size());
+  EXPECT_NEAR(coupled.heat_rate_W.front(), q_start_W, 1e-12);
+  for (std::size_t t = 1; t < coupled.heat_rate_W.size(); ++t) {
+    EXPECT_GT(coupled.source_temperature_C[t], coupled.source_temperature_C[t - 1]) << "t = " << coupled.output_times_s[t];
+    EXPECT_LT(coupled.heat_rate_W[t], coupled.heat_rate_W[t - 1]) << "t = " << coupled.output_times_s[t];
+  }
+  // κ = 1: the law at the rail temperature under the block (to the step's first-order lag).
+  FrictionConditions<double> end = rail.conditions;
+  end.temperature_C = coupled.source_temperature_C.back();
+  EXPECT_NEAR(coupled.heat_rate_W.back(), heat_rate_W(rail.constants, end), 2e-3 * q_start_W);
+  EXPECT_LT(coupled.heat_rate_W.back(), 0.8 * q_start_W);  // ~5 %/K over a rise of several K
+  // so the rail ends cooler than with the constant heat rate; κ = 0 is the constant heat rate.
+  EXPECT_LT(rise_K(coupled), 0.9 * rise_K(rail.plain(q_start_W)));
+  EXPECT_LT(max_difference_K(rail.with({"coupling"}, {{"coupling", 0.0}}), rail.plain(q_start_W)), 1e-12);
+}
+
+TEST(ModelFile, ThermocoupleLagLeavesTheRailsOwnTemperature) {
+  const RailCase rail;
+  const auto lagged = rail.with({"tc_lag"}, {{"tc_lag", 300.0}});
+  EXPECT_EQ(lagged.sensor_temperature_C, rail.with({}, {}).sensor_temperature_C);
+}
+
+TEST(ModelFile, ASourceSwitchSelectsItsSourceModel) {
+  RailCase rail;
+  const double q_W = heat_rate_W(rail.constants, rail.conditions);
+  const auto switched = rail.with({"source_paper"}, {});
+  rail.numerics.source = SourceModel::paper;
+  EXPECT_EQ(switched.sensor_temperature_C, rail.plain(q_W).sensor_temperature_C);
+  rail.numerics.source = SourceModel::averaged;
+  EXPECT_GT(max_difference_K(switched, rail.plain(q_W)), 1.0);  // paper: L1/Lb1 = 2.4 times the power
+}
+
+TEST(ModelFile, AMechanismWithoutItsValueIsRefused) {
+  const RailCase rail;
+  EXPECT_THROW(rail.with({"coupling"}, {{"tc_lag", 30.0}}), InvalidParameter);
+  EXPECT_THROW(rail.with({"radiation"}, {}), InvalidParameter);
+}
+
+}  // namespace
+}  // namespace lmcal
