@@ -19,12 +19,17 @@ struct CalibrateOptions {
   std::string set;
   std::string output_dir;  // empty: fits/<set name>
   bool diagnose = true;
+  FitOptions uncertainty;  // --covariance, --bootstrap: for the fits of the calibrated model
 };
 
 void run_calibrate(const CalibrateOptions& o) {
   const CalibrationSet set = find_calibration_set(o.set);
   CalibrationOptions options;
   options.diagnose = o.diagnose;
+  for (FitOptions* fit : {&options.friction.fit, &options.thermal.fit}) {
+    fit->covariance = o.uncertainty.covariance;
+    fit->bootstrap = o.uncertainty.bootstrap;
+  }
   TerminalProgress progress;
   const Calibration c = calibrate(set, options,
                                   {.step = [&](std::size_t i, std::size_t n, const std::string& name) { progress.step(i, n, name); },
@@ -45,6 +50,7 @@ void setup_calibrate(CLI::App& app) {
   calibrate->add_option("set", o->set, "Measurement folder (friction*.csv logs, a thermal*.toml manifest)")->required();
   calibrate->add_option("-o,--output-dir", o->output_dir, "Output folder (default: fits/<folder name>)");
   calibrate->add_flag("!--no-diagnosis", o->diagnose, "Skip the two diagnoses (fits and report only)");
+  add_uncertainty_options(*calibrate, o->uncertainty);
   calibrate->callback([o] { run_calibrate(*o); });
 }
 

@@ -216,6 +216,18 @@ void add_assignments(CLI::App& app, const char* name, std::map<std::string, doub
       ->delimiter(',');
 }
 
+void add_uncertainty_options(CLI::App& app, FitOptions& fit) {
+  app.add_option("--covariance", fit.covariance,
+                 "Covariance the intervals quote: auto (by the data's structure), iid, hac, cluster or bootstrap")
+      ->transform(CLI::CheckedTransformer(std::map<std::string, CovarianceMethod>{{"auto", CovarianceMethod::automatic},
+                                                                                 {"iid", CovarianceMethod::iid},
+                                                                                 {"hac", CovarianceMethod::hac},
+                                                                                 {"cluster", CovarianceMethod::cluster},
+                                                                                 {"bootstrap", CovarianceMethod::bootstrap}},
+                                          CLI::ignore_case));
+  app.add_option("--bootstrap", fit.bootstrap, "Cluster-bootstrap replicates (runs resampled; 0: none)")->capture_default_str();
+}
+
 void add_list(CLI::App& app, const char* name, std::vector<double>& values, const char* help) {
   app.add_option_function<std::string>(
       name, [&values, name](const std::string& text) { values = parse_list(name, text); }, help);

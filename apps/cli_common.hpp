@@ -128,6 +128,10 @@ void setup_calibrate(CLI::App& app);
 // NAME=VALUE options (repeatable, or comma-separated) collected into `values`.
 void add_assignments(CLI::App& app, const char* name, std::map<std::string, double>& values, const char* help);
 
+// --covariance (which covariance the intervals quote: auto, iid, hac, cluster, bootstrap) and
+// --bootstrap (cluster-bootstrap replicates, 0: none), into `fit`.
+void add_uncertainty_options(CLI::App& app, FitOptions& fit);
+
 // A list option parsed with parse_list.
 void add_list(CLI::App& app, const char* name, std::vector<double>& values, const char* help);
 

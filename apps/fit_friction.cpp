@@ -38,6 +38,7 @@ struct FitFrictionOptions {
   std::uint64_t seed = 1;
   std::string profile = "auto";
   bool run_fits = true;
+  FitOptions uncertainty;  // --covariance, --bootstrap
 };
 
 std::size_t constant_index(const std::string& option, const std::string& name) {
@@ -79,6 +80,8 @@ FrictionFitOptions to_fit_options(const FitFrictionOptions& o) {
   else if (o.weights == "per-condition") f.weighting = FrictionWeighting::per_condition;
   else throw InvalidParameter("--weights", "unknown weighting '" + o.weights + "'; expected none, per-run or per-condition");
   if (o.starts < 1) throw InvalidParameter("--starts", o.starts, "at least 1");
+  f.fit.covariance = o.uncertainty.covariance;
+  f.fit.bootstrap = o.uncertainty.bootstrap;
   f.fit.starts = o.starts;
   f.fit.seed = o.seed;
   if (o.profile == "auto") f.fit.profile = ProfileMode::automatic;
@@ -125,6 +128,7 @@ void setup_fit(CLI::App& app, const std::vector<std::string>& argv) {
   friction->add_option("--seed", o->seed, "Seed of the multi-start sequence")->capture_default_str();
   friction->add_option("--profile", o->profile, "Profile-likelihood intervals: auto, all or none")->capture_default_str();
   friction->add_flag("!--no-run-fits", o->run_fits, "Skip the per-run fits (spread across runs)");
+  add_uncertainty_options(*friction, o->uncertainty);
   friction->callback([o, &argv] { run_fit_friction(*o, argv); });
   setup_fit_thermal(*fit, argv);
 }

@@ -69,6 +69,7 @@ void setup_fit_thermal(CLI::App& fit, const std::vector<std::string>& argv) {
   app->add_flag("--cross-validate", o->fit.cross_validate, "Also report the leave-one-run-out prediction RMSE");
   app->add_flag("!--no-run-fits", o->fit.per_run_fits, "Skip the per-run fits");
   app->add_flag("!--no-source-comparison", o->fit.compare_sources, "Skip the paper/averaged comparison");
+  add_uncertainty_options(*app, o->fit.fit);
   app->callback([o, &argv] { run_fit_thermal(*o, argv); });
 }
 

@@ -1,5 +1,7 @@
 #include "fit_json.hpp"
 
+#include <fmt/format.h>
+
 #include <cmath>
 
 namespace lmcal::detail {
@@ -37,6 +39,23 @@ nlohmann::json uncertainty_json(const FitResult& fit) {
     j["input"] = {{"name", u.input}, {"variance_share", share}};
   }
   return j;
+}
+
+std::string uncertainty_summary(const FitResult& fit) {
+  const Uncertainty& u = fit.uncertainty;
+  std::string s = fmt::format("95 % intervals: {} (t with {:.3g} dof) — {}\n", u.method, u.dof, u.reason);
+  std::string header = fmt::format("  {:<22}", "SE by method:");
+  for (const auto& m : u.methods) header += fmt::format(" {:>12}", m.method);
+  s += header + "\n";
+  for (std::size_t j = 0; j < fit.parameters.size(); ++j) {
+    const auto& p = fit.parameters[j];
+    if (p.interval == "none" || p.name.starts_with("offset ") || p.name.starts_with("heat_scale ") || p.name.starts_with("T0 ")) continue;
+    std::string row = fmt::format("  {:<22}", p.name);
+    for (const auto& m : u.methods) row += fmt::format(" {:>12.4g}", m.se[j]);
+    s += row + "\n";
+  }
+  for (const auto& note : u.notes) s += "  note: " + note + "\n";
+  return s;
 }
 
 nlohmann::json fit_json(const FitResult& fit) {

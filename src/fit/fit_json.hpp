@@ -11,6 +11,9 @@ namespace lmcal::detail {
 nlohmann::json number(double v);
 // The covariance methods side by side, the one quoted and why, the between-run tests.
 nlohmann::json uncertainty_json(const FitResult& fit);
+// The quoted covariance in a few lines for a terminal: method and why, the SE of each free
+// (non-nuisance) parameter by every method, notes.
+std::string uncertainty_summary(const FitResult& fit);
 // Parameters, uncertainty, correlation, identifiability, solver and warnings.
 nlohmann::json fit_json(const FitResult& fit);
 

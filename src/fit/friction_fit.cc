@@ -437,6 +437,7 @@ std::string friction_fit_summary(const FrictionFitResult& r) {
     else if (p.interval == "linear") interval = fmt::format("[{:.5g}, {:.5g}]", p.ci_low, p.ci_high);
     s += fmt::format("  {:<20} {:>12.6g} {:>11.3g}  {:<27} {}\n", p.name, p.value, p.se, interval, note);
   }
+  s += detail::uncertainty_summary(f);
   if (f.identifiability.identifiable) {
     s += fmt::format("identifiability: all requested parameters determined (condition number {:.3g})\n",
                      f.identifiability.condition_number);

@@ -778,6 +778,10 @@ std::string thermal_fit_summary(const ThermalFitResult& r) {
     s += fmt::format("  {:<24} {:>10.5g} ± {:<9.3g} {}{}\n", p.name, p.value, p.se, interval, p.at_bound ? "  at a bound" : "");
   }
   s += fmt::format("  residual sigma {:.3f} K; {}\n", std::sqrt(r.joint.residual_variance), r.joint.solver.termination);
+  s += detail::uncertainty_summary(r.joint);
+  if (!r.heat_uncertainty.empty()) s += "  the heat's uncertainty: " + r.heat_uncertainty + "\n";
+  for (const auto& run : r.runs)
+    if (!run.offsets_note.empty()) s += fmt::format("  {}: {}\n", run.id, run.offsets_note);
   if (std::isfinite(r.cv_rmse_K)) s += fmt::format("  leave-one-run-out prediction RMSE {:.4f} K\n", r.cv_rmse_K);
   for (const auto& issue : r.joint.identifiability.issues)
     s += fmt::format("  NOT IDENTIFIABLE: {} -> held {}; {}\n", issue.why, fmt::join(issue.held, ", "), issue.measure);

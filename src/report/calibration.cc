@@ -67,6 +67,7 @@ void calibrate_thermal_model(Calibration& c, const CalibrationOptions& options) 
   t.per_run_fits = true;
   t.fit.profile = ProfileMode::automatic;
   t.fit.bootstrap = options.thermal.fit.bootstrap;
+  t.fit.covariance = options.thermal.fit.covariance;
   if (c.thermal_diagnosis) {
     const ThermalFitResult& final_fit = c.thermal_diagnosis->final_fit;
     for (const auto& cause : c.thermal_diagnosis->accepted) m.thermal_causes.push_back(cause.effect);
