@@ -79,6 +79,8 @@ std::vector<std::string> expected_plots(const Calibration& c) {
       ids.push_back(p);
   }
   if (c.thermal_diagnosis) ids.insert(ids.end(), {"thermal-diagnosis-before", "thermal-diagnosis-after"});
+  if (c.calibrated.friction && !c.calibrated.friction->spread.empty()) ids.push_back("calibrated-friction-runs-k1");
+  if (c.calibrated.thermal) ids.push_back("calibrated-thermal-runs-alpha");
   return ids;
 }
 
@@ -101,6 +103,57 @@ void expect_complete_report(const Calibration& c, const std::string& html) {
   for (const auto& [file, hash] : c.inputs) EXPECT_NE(html.find(hash), std::string::npos) << file;
 }
 
+// The text of `html` from the first `from` to the next `to` after it ("" when `from` is absent).
+std::string between(const std::string& html, const std::string& from, const std::string& to) {
+  const auto at = html.find(from);
+  if (at == std::string::npos) return "";
+  return html.substr(at, html.find(to, at + from.size()) - at);
+}
+
+// A number as the report writes it (`digits` significant digits).
+std::string shown(double v, int digits) { return fmt::format("{:.{}g}", v, digits); }
+
+// The page opens with the calibrated model: its heading is the first of the page (before any
+// published model's); its table names each accepted cause with its value.
+void expect_calibrated_model_first(const Calibration& c, const std::string& html) {
+  const std::string heading = "<h2 id=\"calibrated\">The calibrated model</h2>";
+  EXPECT_EQ(html.find("<h2"), html.find(heading)) << "the calibrated model is not the first section";
+  std::smatch published;
+  ASSERT_TRUE(std::regex_search(html, published, std::regex("<h2[^>]*>[^<]*published model"))) << "no published-model heading";
+  EXPECT_LT(html.find(heading), static_cast<std::size_t>(published.position(0)));
+  const std::string section = between(html, heading, "</section>");
+  ASSERT_TRUE(c.calibrated.friction);
+  ASSERT_FALSE(c.calibrated.friction_causes.empty());
+  for (const auto& cause : c.calibrated.friction_causes) {
+    EXPECT_NE(section.find("+ " + cause), std::string::npos) << cause << " is not named with the law";
+    const std::string row = between(section, "<tr><td>" + cause + "</td>", "</tr>");
+    ASSERT_FALSE(row.empty()) << cause << " has no row in the calibrated table";
+    EXPECT_NE(row.find("<td>" + shown(c.calibrated.friction->fit.parameter(cause).value, 5) + "</td>"), std::string::npos) << row;
+  }
+  EXPECT_NE(section.find("model.toml"), std::string::npos);
+  EXPECT_NE(section.find("95 % intervals: " + c.calibrated.friction->fit.uncertainty.method), std::string::npos);
+  ASSERT_TRUE(c.calibrated.thermal);
+  EXPECT_NE(section.find("95 % intervals: " + c.calibrated.thermal->joint.uncertainty.method), std::string::npos);
+}
+
+// The how-sure panel of one fit lists the SE of every covariance method for `parameter`.
+void expect_every_method(const std::string& panel, const FitResult& fit, const std::string& parameter) {
+  std::vector<std::string> methods;
+  for (const auto& m : fit.uncertainty.methods) methods.push_back(m.method);
+  for (const char* m : {"iid", "hac", "cluster", "bootstrap"})
+    EXPECT_NE(std::find(methods.begin(), methods.end(), m), methods.end()) << parameter << ": no " << m << " covariance";
+  const std::string header = between(panel, "<thead>", "</thead>");
+  const std::string row = between(panel, "<tr><td>" + parameter + "</td>", "</tr>");
+  ASSERT_FALSE(row.empty()) << parameter << " has no row in the how-sure panel";
+  const auto j = static_cast<std::size_t>(&fit.parameter(parameter) - fit.parameters.data());
+  for (const auto& m : fit.uncertainty.methods) {
+    EXPECT_NE(header.find("<th>" + m.method), std::string::npos) << m.method << " is not a column";
+    if (m.ok && j < m.se.size() && std::isfinite(m.se[j]))
+      EXPECT_NE(row.find("<td>" + shown(m.se[j], 3) + "</td>"), std::string::npos) << m.method << " SE of " << parameter << ": " << row;
+  }
+  EXPECT_NE(header.find("<th>quoted: " + fit.uncertainty.method + "</th>"), std::string::npos);
+}
+
 TEST_F(CalibrationTest, AFullFolderGoesThroughEveryStepIntoACompleteReport) {
   write_friction();
   write_thermal();
@@ -109,8 +162,9 @@ TEST_F(CalibrationTest, AFullFolderGoesThroughEveryStepIntoACompleteReport) {
   ASSERT_TRUE(set.thermal_manifest);
   std::vector<std::string> steps;
   const Calibration c = calibrate(set, {}, {.step = [&](std::size_t, std::size_t, const std::string& s) { steps.push_back(s); }});
-  EXPECT_EQ(steps, (std::vector<std::string>{"loading the measurements", "friction fit", "friction diagnosis", "thermal fit",
-                                             "thermal diagnosis"}));
+  EXPECT_EQ(steps, (std::vector<std::string>{"loading the measurements", "friction fit", "friction diagnosis",
+                                             "calibrated friction model", "thermal fit", "thermal diagnosis",
+                                             "calibrated thermal model"}));
   ASSERT_TRUE(c.friction && c.friction_diagnosis && c.thermal && c.thermal_diagnosis);
   EXPECT_TRUE(c.notes.empty());
   // The hidden seal drag is found, and the thermal heat came from the fitted law.
@@ -122,18 +176,36 @@ TEST_F(CalibrationTest, AFullFolderGoesThroughEveryStepIntoACompleteReport) {
   const auto outputs = calibration_outputs(c);
   std::vector<std::string> names;
   for (const auto& [name, text] : outputs) names.push_back(name);
-  EXPECT_EQ(names, (std::vector<std::string>{"friction.json", "friction_samples.csv", "friction_conditions.csv",
-                                             "friction_diagnosis.json", "thermal.json", "thermal_samples.csv",
-                                             "thermal_alpha_curve.csv", "thermal_diagnosis.json", "calibration.json",
-                                             "report.html"}));
-  const auto summary = nlohmann::json::parse(outputs[8].second);
+  EXPECT_EQ(names, (std::vector<std::string>{"model.toml", "calibrated_friction.json", "calibrated_thermal.json", "friction.json",
+                                             "friction_samples.csv", "friction_conditions.csv", "friction_diagnosis.json",
+                                             "thermal.json", "thermal_samples.csv", "thermal_alpha_curve.csv",
+                                             "thermal_diagnosis.json", "calibration.json", "report.html"}));
+  const auto summary = nlohmann::json::parse(outputs[outputs.size() - 2].second);
   EXPECT_EQ(summary["friction_diagnosis"]["verdict"], c.friction_diagnosis->verdict);
-  EXPECT_EQ(summary["thermal"]["alpha"]["value"].get<double>(), c.thermal->joint.parameter("alpha").value);
+  EXPECT_EQ(summary["published_model"]["thermal"]["alpha"]["value"].get<double>(), c.thermal->joint.parameter("alpha").value);
   EXPECT_EQ(summary["inputs"].size(), 2u + c.thermal_data->runs.size());
   const std::string& html = outputs.back().second;
   expect_complete_report(c, html);
   EXPECT_NE(html.find(c.friction_diagnosis->verdict), std::string::npos);
   EXPECT_NE(html.find(c.thermal_diagnosis->verdict), std::string::npos);
+
+  // The calibrated model first; how sure it is, method by method; the published models labelled.
+  expect_calibrated_model_first(c, html);
+  const std::string panel = between(html, "<h2 id=\"how-sure\"", "<h2 id=\"friction\"");
+  expect_every_method(between(panel, "Friction law: how sure", "Rail model: how sure"), c.calibrated.friction->fit, "k1");
+  expect_every_method(between(panel, "Rail model: how sure", "</svg>"), c.calibrated.thermal->joint, "alpha");
+  const std::string alpha_runs = between(html, "data-plot=\"calibrated-thermal-runs-alpha\"", "</svg>");
+  EXPECT_NE(alpha_runs.find("class=\"error-bars\""), std::string::npos) << "each run's α without its interval";
+  EXPECT_NE(alpha_runs.find("stroke-dasharray"), std::string::npos) << "no pooled 95 % interval";
+  const std::string label = "published model (for comparison; conditional on a model the diagnosis rejects)";
+  EXPECT_NE(between(html, "<h2 id=\"friction\">", "</h2>").find(label), std::string::npos);
+  if (!c.thermal_diagnosis->accepted.empty())
+    EXPECT_NE(between(html, "<h2 id=\"thermal\">", "</h2>").find(label), std::string::npos);
+  ASSERT_FALSE(c.friction_diagnosis->shifts.empty());
+  const ParameterShift& shift = c.friction_diagnosis->shifts.front();
+  const std::string shift_row = between(between(html, "The parameters that move", "</table>"), "<tr><td>" + shift.name + "</td>", "</tr>");
+  for (const auto& [low, high] : {std::pair{shift.baseline_low, shift.baseline_high}, std::pair{shift.extended_low, shift.extended_high}})
+    EXPECT_NE(shift_row.find(fmt::format("[{}, {}]", shown(low, 4), shown(high, 4))), std::string::npos) << shift_row;
 }
 
 TEST_F(CalibrationTest, AFolderWithOneHalfCalibratesThatHalfAndSaysWhatWasSkipped) {
@@ -216,6 +288,21 @@ TEST(BundledCalibration, AFreshRunReproducesTheCommittedResults) {
     else
       expect_same_text(text, stored, committed.extension() == ".html" ? 0.011 : 1e-9, name);  // SVG: 0.01 px
   }
+  // The answer covers the truth the set was made with: the calibrated model's 95 % intervals of
+  // the seven constants, the two friction effects and α (measurements/cheng2017/*_truth.json).
+  const auto truth = [&](const char* file) { return nlohmann::json::parse(read(root / "measurements" / "cheng2017" / file)); };
+  const auto friction_truth = truth("friction_truth.json"), thermal_truth = truth("thermal_truth.json");
+  ASSERT_TRUE(c.calibrated.friction && c.calibrated.thermal);
+  auto expect_covers = [](const ParameterEstimate& p, double value) {
+    const bool profile = p.interval == "profile";
+    EXPECT_LE(profile ? p.profile_low : p.ci_low, value) << p.name << " " << p.value << " ± " << p.se;
+    EXPECT_GE(profile ? p.profile_high : p.ci_high, value) << p.name << " " << p.value << " ± " << p.se;
+  };
+  for (const auto& name : kFrictionConstantNames)
+    expect_covers(c.calibrated.friction->fit.parameter(name), friction_truth["friction_constants"][name].get<double>());
+  for (const char* effect : {"seal_drag", "direction_asymmetry"})
+    expect_covers(c.calibrated.friction->fit.parameter(effect), friction_truth["effects"][effect]["value"].get<double>());
+  expect_covers(c.calibrated.thermal->joint.parameter("alpha"), thermal_truth["alpha_reference"].get<double>());
 }
 
 }  // namespace

@@ -113,7 +113,7 @@ Plot velocity_panel(const Calibration& c, const Varied& varied) {
     FrictionConstants<double> k = c.friction->constants();
     k.T_ref_C = c.friction_options.start.T_ref_C;
     plot.series.push_back(std::move(points));
-    plot.series.push_back({.label = index == 0 ? "fitted law" : "",
+    plot.series.push_back({.label = index == 0 ? "published law" : "",
                            .x = grid,
                            .y = law_over_velocity(log, sample, temperature_C, k, c.friction->effects(), grid),
                            .color = colour(index)});
@@ -162,30 +162,18 @@ constexpr Covariate kCovariates[] = {{"velocity_m_s", "velocity (m/s)", &Conditi
 
 void spread_section(Page& page, const FrictionFitResult& f) {
   if (f.spread.empty()) return;
-  page.heading(3, "Spread across runs");
+  page.heading(3, "Spread across runs of the published law");
   page.paragraph(
       "Each run fitted alone. Eq. 1 σ is the runs' standard deviation; the interval is the Student-t 95 % interval "
       "of their mean. The ratio σ_runs / (SE_pooled √runs) is about 1 when the runs differ by noise only.");
   std::vector<std::vector<std::string>> rows;
-  std::vector<Plot> plots;
   for (const auto& sp : f.spread) {
     const auto& pooled = f.fit.parameter(sp.parameter);
     rows.push_back({sp.parameter, num(pooled.value), num(pooled.se, 3), num(sp.spread.mean), num(sp.spread.sd, 3),
-                    fmt::format("[{}, {}]", num(sp.spread.low), num(sp.spread.high)), num(sp.spread.min), num(sp.spread.max),
-                    num(sp.ratio, 3)});
-    Plot plot{.id = plot_id("friction-spread-" + sp.parameter), .title = sp.parameter + " per run",
-              .x_label = "run", .y_label = sp.parameter + " (" + pooled.unit + ")", .width_px = 300, .height_px = 220};
-    Series s{.mark = Mark::points};
-    for (std::size_t r = 0; r < sp.per_run.size(); ++r) {
-      s.x.push_back(static_cast<double>(r + 1));
-      s.y.push_back(sp.per_run[r]);
-    }
-    plot.series.push_back(std::move(s));
-    plot.references.push_back({.at = pooled.value, .label = "pooled"});
-    plots.push_back(std::move(plot));
+                    bracket(sp.spread.low, sp.spread.high), num(sp.spread.min), num(sp.spread.max), num(sp.ratio, 3)});
   }
   page.table({"parameter", "pooled", "SE", "run mean", "Eq. 1 σ", "95 % interval of the mean", "min", "max", "ratio"}, rows);
-  page.figures(plots);
+  friction_run_figures(page, f, "friction-spread-");
 }
 
 void diagnosis_section(Page& page, const Calibration& c) {
@@ -196,9 +184,7 @@ void diagnosis_section(Page& page, const Calibration& c) {
   page.paragraph(fmt::format("Held-out (leave-one-run-out) RMSE: {} N before, {} N after: a gain of {:.1f} %.",
                              num(d.cv_rmse_before_N), num(d.cv_rmse_after_N), d.cv_gain_percent));
   candidate_tables(page, d.rounds, "N");
-  std::vector<std::vector<std::string>> shifts;
-  for (const auto& s : d.shifts) shifts.push_back({s.name, num(s.baseline), num(s.extended)});
-  if (!d.accepted.empty()) page.table({"constant", "the law alone", "with the causes"}, shifts);
+  if (!d.accepted.empty()) shift_table(page, d.shifts, "the law alone");
   // Before/after against velocity and against the covariate the baseline residuals follow most.
   std::vector<std::string> shown{"velocity_m_s"};
   if (!d.baseline.covariates.empty() && d.baseline.covariates.front().covariate != shown.front())
@@ -219,7 +205,7 @@ void diagnosis_section(Page& page, const Calibration& c) {
 void friction_section(Page& page, const Calibration& c) {
   const FrictionFitResult& f = *c.friction;
   const FrictionLog& log = *c.friction_log;
-  page.heading(2, "Friction", "friction");
+  page.heading(2, "Friction: " + published_label(rejects(c.friction_diagnosis)), "friction");
   page.paragraph(fmt::format("{} samples in {} runs from {} file(s). The published law (Eqs. 3-7) fitted by weighted least "
                              "squares; residual RMSE {} N, largest relative error {} %.",
                              log.size(), f.runs.size(), c.set.friction_logs.size(), num(f.rmse_N), num(100 * f.max_relative_error, 3)));
@@ -227,7 +213,7 @@ void friction_section(Page& page, const Calibration& c) {
   for (const Varied& varied : kVaried) panels.push_back(velocity_panel(c, varied));
   page.figures(panels);
 
-  page.heading(3, "Constants");
+  page.heading(3, "Constants of the published law");
   parameter_tables(page, f.fit, [](const ParameterEstimate&) { return true; });
 
   page.heading(3, "Residuals against the covariates");
@@ -255,12 +241,41 @@ void candidate_tables(Page& page, const std::vector<std::vector<CandidateScore>>
   for (std::size_t r = 0; r < rounds.size(); ++r) {
     std::vector<std::vector<std::string>> rows;
     for (const auto& cand : rounds[r])
-      rows.push_back({cand.effect, num(cand.value), fmt::format("[{}, {}]", num(cand.ci_low), num(cand.ci_high)),
+      rows.push_back({cand.effect, num(cand.value), bracket(cand.ci_low, cand.ci_high),
                       num(cand.lrt_p, 2), num(cand.cv_rmse), fmt::format("{:+.2f} %", cand.cv_gain_percent),
                       (cand.accepted ? "accepted: " : "") + cand.reason});
     page.paragraph(fmt::format("Candidates, step {} (held-out RMSE in {}, gain against the model so far):", r + 1, unit));
     page.table({"cause", "estimate", "95 % interval", "LRT p", "held-out RMSE", "gain", "decision"}, rows);
   }
+}
+
+void shift_table(Page& page, const std::vector<ParameterShift>& shifts, const std::string& published) {
+  std::vector<std::vector<std::string>> rows;
+  for (const auto& s : shifts)
+    rows.push_back({s.name, num(s.baseline), bracket(s.baseline_low, s.baseline_high), num(s.extended),
+                    bracket(s.extended_low, s.extended_high)});
+  page.paragraph("The parameters that move once the causes are modelled (95 % intervals as quoted: linear or profile):");
+  page.table({"parameter", published, "95 % interval", "with the causes", "95 % interval"}, rows);
+}
+
+void friction_run_figures(Page& page, const FrictionFitResult& f, const std::string& id_prefix) {
+  std::vector<Plot> plots;
+  std::string runs;
+  for (std::size_t r = 0; r < f.runs.size(); ++r) runs += fmt::format("{}{} {}", r ? ", " : "", r + 1, f.runs[r]);
+  for (const auto& sp : f.spread) {
+    if (std::none_of(sp.per_run.begin(), sp.per_run.end(), [](double v) { return std::isfinite(v); })) continue;
+    Plot plot = per_run_plot(plot_id(id_prefix + sp.parameter), sp.parameter + " per run", f.fit.parameter(sp.parameter),
+                             {.value = sp.per_run}, "");
+    plot.width_px = 300, plot.height_px = 220;
+    plots.push_back(std::move(plot));
+  }
+  if (plots.empty()) return;
+  page.paragraph(fmt::format("Points: each run fitted alone (runs {}); solid line: the pooled estimate; dashed lines: its "
+                             "quoted 95 % interval. A run alone is about √runs times less certain than the pooled fit, so "
+                             "its points scatter beyond that interval without disagreeing (the ratio σ_runs / (SE √runs) and "
+                             "the between-run test say whether they do).",
+                             runs));
+  page.figures(plots);
 }
 
 }  // namespace lmcal::report

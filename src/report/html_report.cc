@@ -16,7 +16,8 @@ using report::Page;
 constexpr const char* kStyle = R"(
 body{font:14px/1.45 system-ui,-apple-system,"Segoe UI",Roboto,sans-serif;margin:0 auto;max-width:1280px;padding:0 24px 48px;color:#222}
 h1{font-size:24px;margin:24px 0 4px}h2{font-size:20px;border-bottom:2px solid #0072B2;margin-top:40px}h3{font-size:16px;margin-top:28px}
-nav a{margin-right:16px}.brief{background:#f4f7fb;border:1px solid #d0dbe8;border-radius:6px;padding:8px 16px}
+nav a{margin-right:16px}.calibrated{background:#f3faf6;border:1px solid #bfe3cf;border-radius:6px;padding:0 16px 8px;margin-top:16px}
+.calibrated h2{margin-top:12px}.brief{background:#f4f7fb;border:1px solid #d0dbe8;border-radius:6px;padding:8px 16px}
 .figures{display:flex;flex-wrap:wrap;gap:12px}figure{margin:0}
 table{border-collapse:collapse;margin:8px 0;font-size:13px}th,td{border:1px solid #ddd;padding:3px 8px;text-align:left}
 th{background:#f2f2f2}td.num{text-align:right;font-variant-numeric:tabular-nums}
@@ -36,11 +37,14 @@ if(!b||!(b.width>0&&b.height>0)||!s.querySelector('.series,text'))missing.push(i
 document.body.dataset.rendered=missing.length?'missing '+missing.join(' '):'all '+ids.length});
 )";
 
+// The verdicts, and the published models' headline numbers under their label.
 void brief(Page& page, const Calibration& c) {
+  page.heading(2, "Verdicts", "verdicts");
   page << "<div class=\"brief\">\n";
   if (c.friction) {
-    page << fmt::format("<p><b>Friction</b>: the published law fitted to {} samples of {} runs, residual RMSE {} N.",
-                        c.friction_log->size(), c.friction->runs.size(), num(c.friction->rmse_N));
+    page << fmt::format("<p><b>Friction</b>, {}: the law fitted to {} samples of {} runs, residual RMSE {} N.",
+                        escape_xml(report::published_label(report::rejects(c.friction_diagnosis))), c.friction_log->size(),
+                        c.friction->runs.size(), num(c.friction->rmse_N));
     if (c.friction_diagnosis)
       page << fmt::format(" Diagnosis: <b>{}</b>. {}", escape_xml(c.friction_diagnosis->verdict),
                           escape_xml(c.friction_diagnosis->summary));
@@ -48,7 +52,8 @@ void brief(Page& page, const Calibration& c) {
   }
   if (c.thermal) {
     const auto& a = c.thermal->joint.parameter("alpha");
-    page << fmt::format("<p><b>Thermal</b>: heat partition α = {} {} from {} runs; across runs {} ± {}.", num(a.value),
+    page << fmt::format("<p><b>Thermal</b>, {}: heat partition α = {} {} from {} runs; across runs {} ± {}.",
+                        escape_xml(report::published_label(report::rejects(c.thermal_diagnosis))), num(a.value),
                         escape_xml(report::interval(a)), c.thermal_data->runs.size(), num(c.thermal->alpha_spread.mean),
                         num(c.thermal->alpha_spread.half_width, 3));
     if (c.thermal_diagnosis)
@@ -85,11 +90,17 @@ void provenance(Page& page, const Calibration& c) {
 Page build(const Calibration& c) {
   Page body;
   body.heading(1, "lmcal calibration: " + c.set.name);
+  const bool calibrated = c.calibrated.friction || c.calibrated.thermal;
   body << "<nav>";
-  if (c.friction) body << "<a href=\"#friction\">Friction</a>";
-  if (c.thermal) body << "<a href=\"#thermal\">Thermal</a>";
+  if (calibrated) body << "<a href=\"#calibrated\">The calibrated model</a>";
+  body << "<a href=\"#verdicts\">Verdicts</a>";
+  if (calibrated) body << "<a href=\"#how-sure\">How sure</a>";
+  if (c.friction) body << "<a href=\"#friction\">Friction (published model)</a>";
+  if (c.thermal) body << "<a href=\"#thermal\">Thermal (published model)</a>";
   body << "<a href=\"#inputs\">Inputs and versions</a></nav>\n";
+  report::calibrated_section(body, c);
   brief(body, c);
+  report::how_sure_section(body, c);
   if (c.friction) report::friction_section(body, c);
   if (c.thermal) report::thermal_section(body, c);
   provenance(body, c);

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "lmcal/fit/fit_result.hpp"
@@ -65,11 +66,27 @@ inline std::string num(double v, int digits = 4) {
   return std::isfinite(v) ? fmt::format("{:.{}g}", v, digits) : "–";
 }
 
-// The interval a fit says to quote.
+// "[low, high]".
+inline std::string bracket(double low, double high) { return fmt::format("[{}, {}]", num(low), num(high)); }
+
+// The bounds of the 95 % interval a fit says to quote (profile or linear); NaN where none.
+inline std::pair<double, double> quoted_bounds(const ParameterEstimate& p) {
+  if (p.interval == "profile") return {p.profile_low, p.profile_high};
+  if (p.interval == "none" || !std::isfinite(p.se)) return {std::nan(""), std::nan("")};
+  return {p.ci_low, p.ci_high};
+}
+
+// The interval a fit says to quote, in words.
 inline std::string interval(const ParameterEstimate& p) {
-  if (p.interval == "profile") return fmt::format("[{}, {}] (profile)", num(p.profile_low), num(p.profile_high));
-  if (p.interval == "none" || !std::isfinite(p.se)) return "–";
-  return fmt::format("[{}, {}]", num(p.ci_low), num(p.ci_high));
+  const auto [low, high] = quoted_bounds(p);
+  if (!std::isfinite(low) && !std::isfinite(high)) return "–";
+  return bracket(low, high) + (p.interval == "profile" ? " (profile)" : "");
+}
+
+// A per-run nuisance parameter (thermocouple offset, start temperature, heat scale): left out
+// of the tables of the model's parameters.
+inline bool nuisance(const ParameterEstimate& p) {
+  return p.name.starts_with("offset ") || p.name.starts_with("T0 ") || p.name.starts_with("heat_scale ");
 }
 
 inline std::string flags(const ParameterEstimate& p) {

@@ -1,13 +1,42 @@
 // The report's sections (private to the report layer); html_report.cc puts them together.
 #pragma once
 
+#include <optional>
+#include <string>
+#include <vector>
+
 #include "lmcal/report/calibration.hpp"
 #include "page.hpp"
 
 namespace lmcal::report {
 
+// The first screen: the calibrated model, every parameter with its interval and where it comes from.
+void calibrated_section(Page& page, const Calibration& c);
+// How sure the calibrated model is: the standard errors of every covariance method, the
+// residuals' autocorrelation, the between-run tests, the per-run estimates against the pooled band.
+void how_sure_section(Page& page, const Calibration& c);
 void friction_section(Page& page, const Calibration& c);
 void thermal_section(Page& page, const Calibration& c);
+
+// Did the diagnosis accept causes, i.e. reject the published model?
+template <class Diagnosis>
+bool rejects(const std::optional<Diagnosis>& d) {
+  return d && !d->accepted.empty();
+}
+
+// How a fit of the published model is named wherever it appears.
+inline std::string published_label(bool rejected) {
+  return rejected ? "published model (for comparison; conditional on a model the diagnosis rejects)" : "published model";
+}
+
+// "95 % intervals: <method> — <reason>".
+inline std::string intervals_statement(const Uncertainty& u) { return fmt::format("95 % intervals: {} — {}", u.method, u.reason); }
+
+// What the data cannot determine, and the fit's warnings.
+void fit_caveats(Page& page, const FitResult& fit);
+
+// The correlation matrix of the parameters `shown` (indices into fit.parameters).
+void correlation_table(Page& page, const FitResult& fit, const std::vector<std::size_t>& shown);
 
 // The fit's parameters (those `show` accepts) with intervals, and their correlation matrix.
 template <class Show>
@@ -21,22 +50,28 @@ void parameter_tables(Page& page, const FitResult& fit, const Show& show) {
     rows.push_back({p.name, p.unit, num(p.value, 5), num(p.se, 3), interval(p), flags(p)});
   }
   page.table({"parameter", "unit", "estimate", "standard error", "95 % interval", ""}, rows);
-  for (const auto& issue : fit.identifiability.issues)
-    page.paragraph("Not identifiable: " + issue.why + ". To separate them: " + issue.measure + ".", "warning");
-  for (const auto& w : fit.warnings) page.paragraph("Warning: " + w, "warning");
-  if (shown.size() < 2 || fit.correlation.rows() == 0) return;
-  std::vector<std::string> header{"correlation"};
-  for (std::size_t j : shown) header.push_back(fit.parameters[j].name);
-  rows.clear();
-  for (std::size_t i : shown) {
-    rows.push_back({fit.parameters[i].name});
-    for (std::size_t j : shown)
-      rows.back().push_back(correlation_cell(fit.correlation(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j))));
-  }
-  page.table(header, rows);
+  fit_caveats(page, fit);
+  correlation_table(page, fit, shown);
 }
 
 // The candidates of every forward step, and the accepted causes.
 void candidate_tables(Page& page, const std::vector<std::vector<CandidateScore>>& rounds, const char* unit);
+
+// The parameters that move once the causes are modelled, both values with their 95 % intervals.
+void shift_table(Page& page, const std::vector<ParameterShift>& shifts, const std::string& published);
+
+// The per-run estimates of one parameter (`half_width_95`: their own ±t·SE, empty or NaN where
+// unknown), beside the pooled estimate and its quoted 95 % interval (dashed lines).
+struct PerRun {
+  std::vector<double> value, half_width_95;
+};
+Plot per_run_plot(const std::string& id, const std::string& title, const ParameterEstimate& pooled, const PerRun& runs,
+                  const std::string& pooled_label);
+// One small plot per parameter of the friction fit's spread across runs (those with a per-run
+// value), IDs `id_prefix` + the parameter, with a caption naming the runs.
+void friction_run_figures(Page& page, const FrictionFitResult& f, const std::string& id_prefix);
+
+// Each run's own estimate of a parameter of the rail model, with its ±t·SE.
+PerRun per_run_estimates(const ThermalFitResult& f, const std::string& parameter);
 
 }  // namespace lmcal::report

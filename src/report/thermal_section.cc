@@ -9,10 +9,6 @@ namespace {
 constexpr std::size_t kPointsPerSeries = 120;
 constexpr double kHour_s = 3600.0;
 
-bool nuisance(const ParameterEstimate& p) {
-  return p.name.starts_with("offset ") || p.name.starts_with("T0 ") || p.name.starts_with("heat_scale ");
-}
-
 // Measured points (thinned) and the simulated line of every sensor of run r, with the
 // measured ambient (the paper's Figs. 14-15).
 Plot time_plot(const Calibration& c, std::size_t r) {
@@ -139,33 +135,26 @@ std::vector<Plot> covariate_plots(const Calibration& c) {
 
 void spread_section(Page& page, const Calibration& c) {
   const ThermalFitResult& f = *c.thermal;
-  page.heading(3, "Spread across runs");
+  page.heading(3, "Spread across runs of the published model");
   const Spread& s = f.alpha_spread;
   page.paragraph(fmt::format("α of each run fitted alone: mean {}, Eq. 1 σ {}, 95 % interval of the mean [{}, {}] "
                              "({} runs; the joint fit gives {}).",
                              num(s.mean), num(s.sd, 3), num(s.low), num(s.high), s.n,
                              num(f.joint.parameter("alpha").value)));
   std::vector<std::vector<std::string>> rows;
-  Plot plot{.id = "thermal-spread-alpha", .title = "α of each run (95 % interval)", .x_label = "run", .y_label = "α"};
-  Series points{.mark = Mark::points};
   for (std::size_t r = 0; r < f.runs.size(); ++r) {
     const RunInfo& info = f.runs[r];
     const ParameterEstimate* a = r < f.per_run.size() ? &f.per_run[r].parameter("alpha") : nullptr;
     rows.push_back({info.id, num(info.velocity_m_s), num(info.load_N), num(info.heat_rate_W), info.heat_source,
                     a ? num(a->value) : "–", a ? interval(*a) : "–", num(info.ambient_difference_percent, 3)});
-    if (!a) continue;
-    points.x.push_back(static_cast<double>(r + 1));
-    points.y.push_back(a->value);
-    points.y_error.push_back(0.5 * (a->ci_high - a->ci_low));
   }
   page.table({"run", "velocity (m/s)", "load (N)", "Q_f (W)", "heat from", "α", "95 % interval", "ambient sensors' Eq. 2 difference (%)"},
              rows);
   rows.clear();
   for (const auto& [pair, difference] : f.repeat_differences) rows.push_back({pair, num(difference, 3)});
   if (!rows.empty()) page.table({"repeated runs", "Eq. 2 difference of α (%)"}, rows);
-  plot.series.push_back(std::move(points));
-  plot.references.push_back({.at = f.joint.parameter("alpha").value, .label = "joint"});
-  page.figures({plot});
+  page.figures({per_run_plot("thermal-spread-alpha", "α of each run (95 % interval)", f.joint.parameter("alpha"),
+                             per_run_estimates(f, "alpha"), "joint")});
 }
 
 void diagnosis_section(Page& page, const Calibration& c) {
@@ -178,9 +167,7 @@ void diagnosis_section(Page& page, const Calibration& c) {
                              num(d.cv_rmse_before_K), num(d.cv_rmse_after_K), d.cv_gain_percent, num(d.noise_K, 3)));
   candidate_tables(page, d.rounds, "K");
   for (const auto& skipped : d.skipped) page.paragraph("Not tried: " + skipped);
-  std::vector<std::vector<std::string>> rows;
-  for (const auto& s : d.shifts) rows.push_back({s.name, num(s.baseline), num(s.extended)});
-  if (!d.accepted.empty()) page.table({"parameter", "published model", "with the causes"}, rows);
+  if (!d.accepted.empty()) shift_table(page, d.shifts, "published model");
   // Before and after on one scale.
   double lo = 0, hi = 0;
   for (const auto* fit : {&d.baseline_fit, &d.final_fit})
@@ -195,7 +182,7 @@ void diagnosis_section(Page& page, const Calibration& c) {
 void thermal_section(Page& page, const Calibration& c) {
   const ThermalFitResult& f = *c.thermal;
   const auto& runs = c.thermal_data->runs;
-  page.heading(2, "Thermal", "thermal");
+  page.heading(2, "Thermal: " + published_label(rejects(c.thermal_diagnosis)), "thermal");
   const ParameterEstimate& alpha = f.joint.parameter("alpha");
   page.paragraph(fmt::format("{} runs; the rail model (Eq. 11, {} source) driven by each run's measured ambient, heat Q_f "
                              "from {}. Heat partition α = {} {} (joint fit); largest error {} % of the rise.",
@@ -208,7 +195,7 @@ void thermal_section(Page& page, const Calibration& c) {
                                f.other_source, num(f.other_source_alpha), num(f.alpha_ratio_paper_over_averaged),
                                num(f.contact_over_stroke)));
 
-  page.heading(3, "Parameters");
+  page.heading(3, "Parameters of the published model");
   parameter_tables(page, f.joint, [](const ParameterEstimate& p) { return !nuisance(p); });
   std::vector<std::vector<std::string>> rows;
   for (const auto& p : f.joint.parameters)

@@ -1,0 +1,110 @@
+// The first screen of the report: the calibrated model — the published friction law and rail
+// model with the causes the diagnoses accepted, refitted — every parameter with its standard
+// error, its quoted 95 % interval and the covariance that interval comes from.
+#include <fmt/ranges.h>
+
+#include "sections.hpp"
+
+namespace lmcal::report {
+
+namespace {
+
+// "the published law (Eqs. 3-7) + seal_drag", or why it has no cause.
+std::string with_causes(const std::string& model, const std::vector<std::string>& causes, bool diagnosed) {
+  if (!causes.empty()) return fmt::format("{} + {}", model, fmt::join(causes, " + "));
+  return model + (diagnosed ? " (the diagnosis accepted no cause)" : " (no diagnosis ran)");
+}
+
+// The model's parameters (per-run nuisance left out): value, SE, quoted interval, covariance.
+void parameter_table(Page& page, const FitResult& fit) {
+  std::vector<std::vector<std::string>> rows;
+  for (const auto& p : fit.parameters) {
+    if (nuisance(p)) continue;
+    const bool estimated = p.free && !p.held_unidentifiable;
+    rows.push_back({p.name, p.unit, num(p.value, 5), num(p.se, 3), interval(p), estimated ? fit.uncertainty.method : "–", flags(p)});
+  }
+  page.table({"parameter", "unit", "estimate", "standard error", "95 % interval", "covariance", ""}, rows);
+  page.paragraph(intervals_statement(fit.uncertainty));
+}
+
+// The uncertainty's caveats (fallbacks, few runs), what the data cannot determine, the warnings.
+void caveats(Page& page, const FitResult& fit) {
+  for (const auto& note : fit.uncertainty.notes) page.paragraph("Caveat: " + note, "warning");
+  fit_caveats(page, fit);
+}
+
+void friction_model(Page& page, const Calibration& c) {
+  const CalibratedModel& m = c.calibrated;
+  const FrictionFitResult& f = *m.friction;
+  page.heading(3, "Friction: " + with_causes("the published law (Eqs. 3-7)", m.friction_causes, c.friction_diagnosis.has_value()));
+  page.paragraph(fmt::format("Fitted to {} samples of {} runs, each run with its own load-cell zero (profiled out). Held-out "
+                             "(leave-one-run-out) RMSE {} N; residual RMSE {} N.",
+                             c.friction_log->size(), f.runs.size(), num(f.cv_rmse_N), num(f.rmse_N)));
+  parameter_table(page, f.fit);
+  caveats(page, f.fit);
+}
+
+// "The heat's uncertainty is 12 % of α's variance: …", where the fit carried it into α.
+std::string heat_share(const ThermalFitResult& t) {
+  const Uncertainty& u = t.joint.uncertainty;
+  for (std::size_t j = 0; j < t.joint.parameters.size() && j < u.input_variance_share.size(); ++j)
+    if (t.joint.parameters[j].name == "alpha" && std::isfinite(u.input_variance_share[j]))
+      return fmt::format("The heat's uncertainty is {} % of α's variance: {}", num(100 * u.input_variance_share[j], 2),
+                         t.heat_uncertainty);
+  return t.heat_uncertainty.empty() ? "" : "Heat: " + t.heat_uncertainty;
+}
+
+void thermal_model(Page& page, const Calibration& c) {
+  const CalibratedModel& m = c.calibrated;
+  const ThermalFitResult& t = *m.thermal;
+  const std::string model = fmt::format("the published rail model (Eq. 11, {} source)", to_string(m.thermal_options.source));
+  page.heading(3, "Rail temperature: " + with_causes(model, m.thermal_causes, c.thermal_diagnosis.has_value()));
+  const bool nuisances = std::any_of(t.joint.parameters.begin(), t.joint.parameters.end(), nuisance);
+  page.paragraph(fmt::format("{} runs, heat Q_f from {}. Held-out (leave-one-run-out) RMSE {} K; largest error {} % of the "
+                             "rise.{}",
+                             t.runs.size(), m.thermal_options.friction ? "the calibrated friction model" : "the measured mean friction",
+                             num(t.cv_rmse_K), num(t.max_error_percent, 3),
+                             nuisances ? " Per-run nuisance parameters (thermocouple offsets, start temperatures, heat scales) "
+                                         "are fitted and not shown."
+                                       : ""));
+  parameter_table(page, t.joint);
+  if (const std::string heat = heat_share(t); !heat.empty()) page.paragraph(heat);
+  caveats(page, t.joint);
+}
+
+}  // namespace
+
+void calibrated_section(Page& page, const Calibration& c) {
+  const CalibratedModel& m = c.calibrated;
+  if (!m.friction && !m.thermal) return;
+  page << "<section class=\"calibrated\">\n";
+  page.heading(2, "The calibrated model", "calibrated");
+  page.paragraph("The published friction law and rail model with the causes the diagnoses accepted, refitted: the result of "
+                 "this calibration. The fits of the published models further down are for comparison.");
+  page << "<p>Written to <code>model.toml</code>. Calibrate once, use everywhere: <code>lmcal simulate friction --model "
+          "model.toml</code>, <code>lmcal simulate thermal --model model.toml</code>.</p>\n";
+  if (m.friction) friction_model(page, c);
+  if (m.thermal) thermal_model(page, c);
+  page << "</section>\n";
+}
+
+void fit_caveats(Page& page, const FitResult& fit) {
+  for (const auto& issue : fit.identifiability.issues)
+    page.paragraph("Not identifiable: " + issue.why + ". To separate them: " + issue.measure + ".", "warning");
+  for (const auto& w : fit.warnings) page.paragraph("Warning: " + w, "warning");
+}
+
+void correlation_table(Page& page, const FitResult& fit, const std::vector<std::size_t>& shown) {
+  if (shown.size() < 2 || fit.correlation.rows() == 0) return;
+  std::vector<std::string> header{"correlation"};
+  for (std::size_t j : shown) header.push_back(fit.parameters[j].name);
+  std::vector<std::vector<std::string>> rows;
+  for (std::size_t i : shown) {
+    rows.push_back({fit.parameters[i].name});
+    for (std::size_t j : shown)
+      rows.back().push_back(correlation_cell(fit.correlation(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j))));
+  }
+  page.table(header, rows);
+}
+
+}  // namespace lmcal::report
