@@ -193,6 +193,7 @@ Prepared prepare_run(const ThermalRun& run, const ThermalFitOptions& o) {
     const double sigma_T = std::max(thermocouple_noise_K(trace), 1e-3);
     if (!(sigma_Q > 0)) throw InvalidParameter("heat_law_uncertainty", "the heat rate's uncertainty must be positive");
     pr.heat_prior_weight = sigma_T / sigma_Q;
+    pr.heat_prior_sigma_K = sigma_T;
   }
   out.info.id = run.id;
   out.info.velocity_m_s = run.velocity_m_s;

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <set>
 
 #include "lmcal/error.hpp"
@@ -199,8 +200,8 @@ ThermalModel::ThermalModel(const std::vector<PreparedRun>& runs, ThermalLayout l
 }
 
 // A run is a cluster and its records are the time steps (its sensors read at once share one);
-// every sensor of every run is its own series. A heat scale's prior row joins its run, one
-// step after its last record.
+// every sensor of every run is its own series. A heat scale's prior row belongs to its run
+// (for the cluster methods) but is not data (RowStructure::prior).
 RowStructure ThermalModel::row_structure() const {
   RowStructure rows;
   rows.clusters = runs_.size();
@@ -211,10 +212,12 @@ RowStructure ThermalModel::row_structure() const {
     rows.time.push_back(row.time);
     rows.series.push_back(first_series[row.run] + row.sensor);
   }
+  rows.prior_variance.assign(rows_.size(), std::numeric_limits<double>::quiet_NaN());
   for (std::size_t k = 0; k < priors_.size(); ++k) {
     rows.cluster.push_back(priors_[k]);
-    rows.time.push_back(runs_[priors_[k]].times_s.size());
+    rows.time.push_back(0);
     rows.series.push_back(first_series.back() + k);
+    rows.prior_variance.push_back(std::pow(runs_[priors_[k]].heat_prior_sigma_K, 2));
   }
   return rows;
 }

@@ -32,6 +32,7 @@ struct PreparedRun {
   // With a fitted heat scale: the weight σ_T/σ_Q of its prior row (σ_T the thermocouple
   // noise, σ_Q the relative uncertainty of Q_f), r = weight · (scale - 1).
   double heat_prior_weight = 0;
+  double heat_prior_sigma_K = 0;  // σ_T: the prior row's standard deviation, by construction
 };
 
 // Where each kind of parameter sits in the global parameter vector (-1: not fitted).

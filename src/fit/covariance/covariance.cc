@@ -13,19 +13,21 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 namespace lmcal::detail {
 
-std::vector<Eigen::MatrixXd> run_score_series(const ScoreInputs& in) {
+std::vector<Eigen::MatrixXd> run_score_series(const ScoreInputs& in, bool with_priors) {
   const RowStructure& rows = in.rows;
   const auto m = in.jacobian.cols();
   LMCAL_ASSERT(static_cast<Eigen::Index>(rows.cluster.size()) == in.jacobian.rows() && rows.time.size() == rows.cluster.size(),
                "a run and a time step for every residual row");
   std::vector<std::size_t> steps(rows.clusters, 0);
   for (std::size_t i = 0; i < rows.cluster.size(); ++i)
-    steps[rows.cluster[i]] = std::max(steps[rows.cluster[i]], rows.time[i] + 1);
+    steps[rows.cluster[i]] = std::max(steps[rows.cluster[i]], rows.is_prior(i) ? std::size_t{1} : rows.time[i] + 1);
   std::vector<Eigen::MatrixXd> series(rows.clusters);
   for (std::size_t c = 0; c < rows.clusters; ++c) series[c] = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(steps[c]), m);
   for (std::size_t i = 0; i < rows.cluster.size(); ++i) {
+    if (rows.is_prior(i) && !with_priors) continue;
     const auto row = static_cast<Eigen::Index>(i);
-    series[rows.cluster[i]].row(static_cast<Eigen::Index>(rows.time[i])) += in.residuals[row] * in.jacobian.row(row);
+    const auto step = static_cast<Eigen::Index>(rows.is_prior(i) ? 0 : rows.time[i]);
+    series[rows.cluster[i]].row(step) += in.residuals[row] * in.jacobian.row(row);
   }
   return series;
 }

@@ -21,6 +21,8 @@
 
 #include <Eigen/Core>
 
+#include <cmath>
+
 #include <cstddef>
 #include <cstdint>
 #include <limits>
@@ -37,7 +39,13 @@ struct RowStructure {
   std::vector<std::size_t> cluster;  // per row: its run, 0 .. clusters-1
   std::vector<std::size_t> time;     // per row: time step within its run, non-decreasing per run
   std::vector<std::size_t> series;   // per row: its time series (optional; empty = the run)
+  // Per row (optional): for a prior's pseudo-observation (not data), its variance, known by
+  // construction: the within-run sandwich counts the row at that variance (or at its squared
+  // residual, if larger) rather than from one residual, and keeps it out of the time series.
+  // NaN for data rows.
+  std::vector<double> prior_variance;
   std::size_t clusters = 0;
+  bool is_prior(std::size_t row) const { return !prior_variance.empty() && !std::isnan(prior_variance[row]); }
   bool empty() const { return cluster.empty(); }
 };
 
@@ -60,8 +68,8 @@ struct CovarianceEstimate {
 };
 
 // Each run's score series: row t = Σ_{rows of the run at time step t} r_i g_i (time steps
-// without rows are zero rows).
-std::vector<Eigen::MatrixXd> run_score_series(const ScoreInputs& in);
+// without rows are zero rows); prior rows join their run's first step unless left out.
+std::vector<Eigen::MatrixXd> run_score_series(const ScoreInputs& in, bool with_priors = true);
 
 CovarianceEstimate iid_covariance(const ScoreInputs& in);
 // Newey-West over every run's score series; `max_bandwidth_fraction` caps L at that share of

@@ -69,7 +69,7 @@ constexpr double kBandwidthFactor = 6.0;
 CovarianceEstimate hac_covariance(const ScoreInputs& in, double max_bandwidth_fraction) {
   CovarianceEstimate e;
   e.method = "hac";
-  const auto series = run_score_series(in);
+  const auto series = run_score_series(in, false);
   std::size_t shortest = series.empty() ? 0 : static_cast<std::size_t>(series.front().rows());
   for (const auto& s : series) shortest = std::min(shortest, static_cast<std::size_t>(s.rows()));
   const double cap = max_bandwidth_fraction * static_cast<double>(shortest);
@@ -91,6 +91,13 @@ CovarianceEstimate hac_covariance(const ScoreInputs& in, double max_bandwidth_fr
   }
   const double G = static_cast<double>(std::max<std::size_t>(series.size(), 1));
   const double n = static_cast<double>(in.residuals.size()), m = static_cast<double>(in.jacobian.cols());
+  // Priors at their known variance, or their squared residual if larger.
+  for (std::size_t i = 0; i < in.rows.cluster.size(); ++i)
+    if (in.rows.is_prior(i)) {
+      const auto row = static_cast<Eigen::Index>(i);
+      const double variance = std::max(in.residuals[row] * in.residuals[row], in.rows.prior_variance[i]);
+      meat += variance * in.jacobian.row(row).transpose() * in.jacobian.row(row);
+    }
   e.dof = std::min(n - m, b_sum > 0 ? G * G / b_sum : n - m);
   e.ok = n - m > 0 && meat.allFinite();
   e.covariance = in.bread * meat * in.bread * (n / std::max(n - m, 1.0));
