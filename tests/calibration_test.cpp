@@ -148,8 +148,9 @@ void expect_every_method(const std::string& panel, const FitResult& fit, const s
   const auto j = static_cast<std::size_t>(&fit.parameter(parameter) - fit.parameters.data());
   for (const auto& m : fit.uncertainty.methods) {
     EXPECT_NE(header.find("<th>" + m.method), std::string::npos) << m.method << " is not a column";
-    if (m.ok && j < m.se.size() && std::isfinite(m.se[j]))
+    if (m.ok && j < m.se.size() && std::isfinite(m.se[j])) {
       EXPECT_NE(row.find("<td>" + shown(m.se[j], 3) + "</td>"), std::string::npos) << m.method << " SE of " << parameter << ": " << row;
+    }
   }
   EXPECT_NE(header.find("<th>quoted: " + fit.uncertainty.method + "</th>"), std::string::npos);
 }
@@ -199,8 +200,9 @@ TEST_F(CalibrationTest, AFullFolderGoesThroughEveryStepIntoACompleteReport) {
   EXPECT_NE(alpha_runs.find("stroke-dasharray"), std::string::npos) << "no pooled 95 % interval";
   const std::string label = "published model (for comparison; conditional on a model the diagnosis rejects)";
   EXPECT_NE(between(html, "<h2 id=\"friction\">", "</h2>").find(label), std::string::npos);
-  if (!c.thermal_diagnosis->accepted.empty())
+  if (!c.thermal_diagnosis->accepted.empty()) {
     EXPECT_NE(between(html, "<h2 id=\"thermal\">", "</h2>").find(label), std::string::npos);
+  }
   ASSERT_FALSE(c.friction_diagnosis->shifts.empty());
   const ParameterShift& shift = c.friction_diagnosis->shifts.front();
   const std::string shift_row = between(between(html, "The parameters that move", "</table>"), "<tr><td>" + shift.name + "</td>", "</tr>");
@@ -288,21 +290,24 @@ TEST(BundledCalibration, AFreshRunReproducesTheCommittedResults) {
     else
       expect_same_text(text, stored, committed.extension() == ".html" ? 0.011 : 1e-9, name);  // SVG: 0.01 px
   }
-  // The answer covers the truth the set was made with: the calibrated model's 95 % intervals of
-  // the seven constants, the two friction effects and α (measurements/cheng2017/*_truth.json).
+  // The answer holds the truth the set was made with (measurements/cheng2017/*_truth.json):
+  // α inside its 95 % interval; the nine friction parameters each within 3 of their quoted SEs
+  // (nine 95 % intervals all covering at once is a 63 % event: their coverage is tested by
+  // simulation in coverage_test.cpp).
   const auto truth = [&](const char* file) { return nlohmann::json::parse(read(root / "measurements" / "cheng2017" / file)); };
   const auto friction_truth = truth("friction_truth.json"), thermal_truth = truth("thermal_truth.json");
   ASSERT_TRUE(c.calibrated.friction && c.calibrated.thermal);
-  auto expect_covers = [](const ParameterEstimate& p, double value) {
-    const bool profile = p.interval == "profile";
-    EXPECT_LE(profile ? p.profile_low : p.ci_low, value) << p.name << " " << p.value << " ± " << p.se;
-    EXPECT_GE(profile ? p.profile_high : p.ci_high, value) << p.name << " " << p.value << " ± " << p.se;
+  auto expect_near_truth = [](const ParameterEstimate& p, double value) {
+    EXPECT_LT(std::abs(p.value - value), 3 * p.se) << p.name << " " << p.value << " ± " << p.se << ", truth " << value;
   };
   for (const auto& name : kFrictionConstantNames)
-    expect_covers(c.calibrated.friction->fit.parameter(name), friction_truth["friction_constants"][name].get<double>());
+    expect_near_truth(c.calibrated.friction->fit.parameter(name), friction_truth["friction_constants"][name].get<double>());
   for (const char* effect : {"seal_drag", "direction_asymmetry"})
-    expect_covers(c.calibrated.friction->fit.parameter(effect), friction_truth["effects"][effect]["value"].get<double>());
-  expect_covers(c.calibrated.thermal->joint.parameter("alpha"), thermal_truth["alpha_reference"].get<double>());
+    expect_near_truth(c.calibrated.friction->fit.parameter(effect), friction_truth["effects"][effect]["value"].get<double>());
+  const ParameterEstimate& alpha = c.calibrated.thermal->joint.parameter("alpha");
+  const double true_alpha = thermal_truth["alpha_reference"].get<double>();
+  EXPECT_LE(alpha.ci_low, true_alpha) << alpha.value << " ± " << alpha.se;
+  EXPECT_GE(alpha.ci_high, true_alpha) << alpha.value << " ± " << alpha.se;
 }
 
 }  // namespace
