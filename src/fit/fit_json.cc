@@ -49,7 +49,7 @@ std::string uncertainty_summary(const FitResult& fit) {
   s += header + "\n";
   for (std::size_t j = 0; j < fit.parameters.size(); ++j) {
     const auto& p = fit.parameters[j];
-    if (p.interval == "none" || p.name.starts_with("offset ") || p.name.starts_with("heat_scale ") || p.name.starts_with("T0 ")) continue;
+    if (p.interval == "none" || p.per_run) continue;
     std::string row = fmt::format("    {:<20}", p.name);
     for (const auto& m : u.methods) row += fmt::format(" {:>12.4g}", m.se[j]);
     s += row + "\n";

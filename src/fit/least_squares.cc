@@ -506,6 +506,7 @@ std::vector<ParameterEstimate> estimates(const std::vector<ParameterSpec>& specs
     e.upper = specs[j].upper;
     e.free = specs[j].free;
     e.held_unidentifiable = specs[j].free && state.held[j];
+    e.per_run = specs[j].per_run;
     e.at_bound = !state.held[j] && at_bound(specs[j], state.theta[j]);
     e.se = e.ci_low = e.ci_high = e.profile_low = e.profile_high = e.boot_low = e.boot_high = kNaN;
     e.interval = state.held[j] ? "none" : "linear";

@@ -38,6 +38,7 @@ struct ParameterSpec {
   // Typical size, for judging what the data determine (SE / scale). 0: the larger of |value|
   // and |start|. Give it for parameters whose natural value is near zero (offsets, effects).
   double scale = 0;
+  bool per_run = false;  // a nuisance parameter of one run (see ParameterEstimate::per_run)
 };
 
 // A whitened residual vector r(θ) over one parameter block holding all parameters.

@@ -24,7 +24,7 @@ namespace {
 std::vector<ModelParameter> parameters_of(const FitResult& fit) {
   std::vector<ModelParameter> out;
   for (const auto& p : fit.parameters) {
-    if (p.name.starts_with("offset ") || p.name.starts_with("heat_scale ") || p.name.starts_with("T0 ")) continue;  // per run
+    if (p.per_run) continue;
     const bool profile = p.interval == "profile";
     out.push_back({p.name, p.unit, p.value, p.se, profile ? p.profile_low : p.ci_low, profile ? p.profile_high : p.ci_high,
                    !p.free || p.held_unidentifiable});

@@ -232,20 +232,20 @@ std::pair<ThermalLayout, std::vector<ParameterSpec>> layout_for(const std::vecto
     std::vector<int> offsets(run.sensor_names.size(), -1);
     for (std::size_t s = 0; s < offsets.size() && run.fit_offsets; ++s) {
       offsets[s] = static_cast<int>(specs.size());
-      specs.push_back({fmt::format("offset {} {}", run.id, run.sensor_names[s]), "K", 0.0, -5.0, 5.0, true, 1.0});
+      specs.push_back({fmt::format("offset {} {}", run.id, run.sensor_names[s]), "K", 0.0, -5.0, 5.0, true, 1.0, true});
     }
     layout.offsets.push_back(offsets);
     int initial = -1;
     if (o.fit_initial_temperature) {
       initial = static_cast<int>(specs.size());
       const double T0 = run.params.initial_temperature_C;
-      specs.push_back({fmt::format("T0 {}", run.id), "C", T0, T0 - 10, T0 + 10, true, 1.0});
+      specs.push_back({fmt::format("T0 {}", run.id), "C", T0, T0 - 10, T0 + 10, true, 1.0, true});
     }
     layout.initial.push_back(initial);
     int scale = -1;
     if (o.fit_heat_scales) {
       scale = static_cast<int>(specs.size());
-      specs.push_back({fmt::format("heat_scale {}", run.id), "1", 1.0, 0.5, 2.0, true});
+      specs.push_back({fmt::format("heat_scale {}", run.id), "1", 1.0, 0.5, 2.0, true, 0.0, true});
     }
     layout.heat_scale.push_back(scale);
   }

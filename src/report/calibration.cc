@@ -239,7 +239,7 @@ nlohmann::json friction_json(const FrictionFitResult& f) {
 nlohmann::json thermal_json(const ThermalFitResult& t, const ThermalFitOptions& o) {
   nlohmann::json parameters = nlohmann::json::array();
   for (const auto& p : t.joint.parameters)
-    if (!p.name.starts_with("offset ") && !p.name.starts_with("heat_scale ") && !p.name.starts_with("T0 "))
+    if (!p.per_run)
       parameters.push_back(estimate_json(p));
   const Spread& s = t.alpha_spread;
   return {{"alpha", estimate_json(t.joint.parameter("alpha"))},
@@ -258,7 +258,7 @@ nlohmann::json shifts_json(const FitResult& published, const FitResult& calibrat
   nlohmann::json out = nlohmann::json::array();
   for (const auto& p : published.parameters) {
     const auto it = std::find_if(calibrated.parameters.begin(), calibrated.parameters.end(), [&](auto& q) { return q.name == p.name; });
-    if (it == calibrated.parameters.end() || p.name.starts_with("offset ") || p.name.starts_with("T0 ")) continue;
+    if (it == calibrated.parameters.end() || p.per_run) continue;
     const ParameterShift s = parameter_shift(p, *it);
     out.push_back({{"parameter", s.name},
                    {"published", number(s.baseline)},
@@ -310,8 +310,7 @@ namespace {
 std::string parameter_lines(const FitResult& fit) {
   std::string s;
   for (const auto& p : fit.parameters) {
-    if (p.interval == "none" || p.name.starts_with("offset ") || p.name.starts_with("heat_scale ") || p.name.starts_with("T0 "))
-      continue;
+    if (p.interval == "none" || p.per_run) continue;
     const bool profile = p.interval == "profile";
     s += fmt::format("    {:<22} {:>11.5g}  [{:.5g}, {:.5g}]{}\n", p.name, p.value, profile ? p.profile_low : p.ci_low,
                      profile ? p.profile_high : p.ci_high, profile ? " profile" : "");

@@ -85,9 +85,7 @@ inline std::string interval(const ParameterEstimate& p) {
 
 // A per-run nuisance parameter (thermocouple offset, start temperature, heat scale): left out
 // of the tables of the model's parameters.
-inline bool nuisance(const ParameterEstimate& p) {
-  return p.name.starts_with("offset ") || p.name.starts_with("T0 ") || p.name.starts_with("heat_scale ");
-}
+inline bool nuisance(const ParameterEstimate& p) { return p.per_run; }
 
 inline std::string flags(const ParameterEstimate& p) {
   if (!p.free) return "held (given)";

@@ -64,6 +64,9 @@ struct ParameterEstimate {
   bool free = true;            // asked to be fitted
   bool held_unidentifiable = false;  // asked to be fitted, but held at `start`: see identifiability
   bool at_bound = false;       // the estimate sits on a bound
+  // A nuisance parameter of one run (a thermocouple offset, a start temperature, a heat
+  // scale): fitted for the others' sake, left out of the tables of the model's parameters.
+  bool per_run = false;
   double se = 0;               // NaN when not fitted or the covariance failed
   double dof = 0;              // of the t quantile of ci_low/ci_high
   double ci_low = 0, ci_high = 0;            // linear t interval
