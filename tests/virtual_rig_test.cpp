@@ -193,16 +193,21 @@ TEST(VirtualRig, ThermalEffectsLeaveTheirMark) {
   EXPECT_THROW(set_rig_effect(moving, "warp_drive", 1), InvalidParameter);
 }
 
+// With φ = 0.9 the noise isolated from a generation has lag-1 autocorrelation 0.9 and the
+// requested σ; with φ = 0, about 0 and the same σ.
+template <class Config, class Noise>
+void expect_ar1_noise(Config config, double sigma, Noise noise_of) {
+  for (const double phi : {0.9, 0.0}) {
+    config.noise_ar1 = phi;
+    const NoiseStats stats = noise_stats(noise_of(config));
+    EXPECT_NEAR(stats.lag1, phi, 0.05) << "phi " << phi;
+    EXPECT_NEAR(stats.sd, sigma, 0.1 * sigma) << "phi " << phi;
+  }
+}
+
 TEST(VirtualRig, LoadCellNoiseHasTheRequestedAutocorrelationAndSd) {
   FrictionRigConfig config;  // the full sweep: ~2000 samples per run, 10 runs
-  config.noise_ar1 = 0.9;
-  const NoiseStats red = noise_stats(load_cell_noise(config));
-  EXPECT_NEAR(red.lag1, 0.9, 0.05);
-  EXPECT_NEAR(red.sd, config.noise_N, 0.1 * config.noise_N);
-  config.noise_ar1 = 0;
-  const NoiseStats white = noise_stats(load_cell_noise(config));
-  EXPECT_NEAR(white.lag1, 0, 0.05);
-  EXPECT_NEAR(white.sd, config.noise_N, 0.1 * config.noise_N);
+  expect_ar1_noise(config, config.noise_N, [](const FrictionRigConfig& c) { return load_cell_noise(c); });
 }
 
 TEST(VirtualRig, ThermocoupleNoiseHasTheRequestedAutocorrelationAndSd) {
@@ -210,14 +215,7 @@ TEST(VirtualRig, ThermocoupleNoiseHasTheRequestedAutocorrelationAndSd) {
   config.velocity_m_s = {0.11};
   config.duration_s = 100000;  // 20 000 records at 5 s
   config.noise_K = 0.2;        // well above the logger's 0.01 K
-  config.noise_ar1 = 0.9;
-  const NoiseStats red = noise_stats(thermocouple_noise(config));
-  EXPECT_NEAR(red.lag1, 0.9, 0.05);
-  EXPECT_NEAR(red.sd, config.noise_K, 0.1 * config.noise_K);
-  config.noise_ar1 = 0;
-  const NoiseStats white = noise_stats(thermocouple_noise(config));
-  EXPECT_NEAR(white.lag1, 0, 0.05);
-  EXPECT_NEAR(white.sd, config.noise_K, 0.1 * config.noise_K);
+  expect_ar1_noise(config, config.noise_K, [](const ThermalRigConfig& c) { return thermocouple_noise(c); });
 }
 
 TEST(VirtualRig, HeatVariationScalesEachRunsRiseAndHidesFromTheLoggedFriction) {
