@@ -186,7 +186,8 @@ std::string friction_diagnosis_json(const FrictionDiagnosis& d) {
     for (const auto& [run, bias] : r.run_bias_N) runs[run] = number(bias);
     return nlohmann::json{{"rmse_N", number(r.rmse_N)},         {"sigma", number(r.sigma)},
                           {"durbin_watson", number(r.durbin_watson)}, {"run_bias_N", runs},
-                          {"covariates", detail::covariates_json(r.covariates)}, {"structured", r.structured}};
+                          {"covariates", detail::covariates_json(r.covariates)}, {"structured", r.structured},
+                          {"lack_of_fit", detail::lack_of_fit_json(r.lack_of_fit)}};
   };
   nlohmann::json j = detail::verdict_json(d, d.cv_rmse_before_N, d.cv_rmse_after_N, "N");
   j["kind"] = "friction diagnosis";

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <map>
+#include <numeric>
 
 #include "fit/fit_json.hpp"
 #include "lmcal/fit/statistics.hpp"
@@ -106,46 +107,114 @@ void set_estimate(CandidateScore& c, const ParameterEstimate& p) {
   c.ci_high = p.ci_high;
 }
 
+double change_correlation(const std::vector<double>& current, const std::vector<double>& a, const std::vector<double>& b) {
+  if (current.empty() || a.size() != current.size() || b.size() != current.size()) return 0;
+  double sab = 0, saa = 0, sbb = 0;
+  for (std::size_t i = 0; i < current.size(); ++i) {
+    const double da = a[i] - current[i], db = b[i] - current[i];
+    sab += da * db;
+    saa += da * da;
+    sbb += db * db;
+  }
+  return saa > 0 && sbb > 0 ? sab / std::sqrt(saa * sbb) : 0.0;
+}
+
+void holm_adjust(std::vector<CovariateTest>& tests) {
+  std::vector<std::size_t> order(tests.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return tests[a].p_value < tests[b].p_value; });
+  double running = 0;
+  const double m = static_cast<double>(tests.size());
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    running = std::max(running, std::min(1.0, (m - static_cast<double>(k)) * tests[order[k]].p_value));
+    tests[order[k]].p_adjusted = running;
+  }
+}
+
+namespace {
+
+// "a", "a or b", "a, b or c"
+std::string one_of(const std::vector<std::string>& names) {
+  std::string out;
+  for (std::size_t i = 0; i < names.size(); ++i)
+    out += (i == 0 ? "" : i + 1 == names.size() ? " or " : ", ") + names[i];
+  return out;
+}
+
+std::string lack_of_fit_words(const LackOfFit& l, const std::string& unit) {
+  return fmt::format("lack of fit against {}: F = {:.3g} on ({:.0f}, {:.0f}) dof, p = {:.2g}, {:.3g} {} beyond a noise of {:.3g} {}",
+                     l.basis, l.statistic, l.df1, l.df2, l.p_value, l.lack_rms, unit, l.pure_error_rms, unit);
+}
+
+}  // namespace
+
 Verdict make_verdict(const VerdictInput& in) {
   Verdict v;
   const CovariateTest none;
   const CovariateTest& baseline_top = in.baseline_covariates.empty() ? none : in.baseline_covariates.front();
   const CovariateTest& final_top = in.final_covariates.empty() ? none : in.final_covariates.front();
   v.cv_gain_percent = 100 * (1 - in.cv_after / in.cv_before);
-  const std::string remains = in.final_structured ? fmt::format("the residuals still follow {} (p = {:.2g})",
-                                                                final_top.covariate, final_top.p_value)
-                                                  : "no structure left beyond the noise";
+  const LackOfFit& lof = in.final_lack_of_fit;
+  std::string remains;
+  if (in.final_structured)
+    remains = fmt::format("the residuals still follow {} (p = {:.2g})", final_top.covariate, final_top.p_value);
+  if (lof.tested && !lof.fits)
+    remains += (remains.empty() ? "the residuals exceed the noise, " : "; and they exceed the noise, ") +
+               lack_of_fit_words(lof, in.unit);
+  if (remains.empty())
+    remains = lof.tested ? "no structure left beyond the noise (" + lack_of_fit_words(lof, in.unit) + ")"
+                         : "no structure left beyond the noise (" + lof.basis + ")";
   if (!in.accepted.empty()) {
-    v.verdict = "explained";
-    std::string causes;
+    // Explained only when nothing is left: no covariate the residuals follow, no lack of fit.
+    const bool complete = !in.final_structured && (!lof.tested || lof.fits);
+    v.verdict = complete ? "explained" : "partly explained";
+    std::string causes, ties;
     for (const auto& c : in.accepted) {
       causes += causes.empty() ? "" : "; ";
       causes += std::isfinite(c.value) ? fmt::format("{} = {:.4g} (95 % [{:.4g}, {:.4g}])", c.effect, c.value, c.ci_low, c.ci_high)
                                        : c.effect;
+      if (!c.tied_with.empty()) {
+        std::vector<std::string> all{c.effect};
+        all.insert(all.end(), c.tied_with.begin(), c.tied_with.end());
+        ties += fmt::format(" {}: these data cannot tell them apart (they change the fit alike); {} is kept as the "
+                            "representative.{}",
+                            one_of(all), c.effect, c.measure.empty() ? "" : " To separate them, log " + c.measure + ".");
+      }
     }
     std::string shift;
     for (const auto& s : in.shifts)
-      if (std::abs(s.extended - s.baseline) > 0.02 * std::max(std::abs(s.baseline), 1e-12))
-        shift += fmt::format("{}{} {:.4g} -> {:.4g}", shift.empty() ? "" : ", ", s.name, s.baseline, s.extended);
+      if (s.free && std::abs(s.extended - s.baseline) > 0.02 * std::max(std::abs(s.baseline), 1e-12))
+        shift += fmt::format("{}{} {:.4g} [{:.4g}, {:.4g}] -> {:.4g} [{:.4g}, {:.4g}]", shift.empty() ? "" : ", ", s.name,
+                             s.baseline, s.baseline_low, s.baseline_high, s.extended, s.extended_low, s.extended_high);
     v.summary = fmt::format(
-        "{} misses: {}. Modelled, the held-out (leave-one-run-out) RMSE goes from {:.4g} {} to {:.4g} {} ({:.1f} % better). "
+        "{} misses: {}.{} Modelled, the held-out (leave-one-run-out) RMSE goes from {:.4g} {} to {:.4g} {} ({:.1f} % better). "
         "Parameters that move: {}. What remains: {}.",
-        in.model, causes, in.cv_before, in.unit, in.cv_after, in.unit, v.cv_gain_percent,
+        in.model, causes, ties, in.cv_before, in.unit, in.cv_after, in.unit, v.cv_gain_percent,
         shift.empty() ? "none by more than 2 %" : shift, remains);
     if (in.final_structured) v.unexplained_covariate = final_top.covariate;
-  } else if (in.baseline_structured) {
+  } else if (in.baseline_structured || (in.baseline_lack_of_fit.tested && !in.baseline_lack_of_fit.fits)) {
     v.verdict = "unexplained";
-    v.unexplained_covariate = baseline_top.covariate;
-    v.summary = fmt::format(
-        "Unexplained: the residuals of {} follow {} (p = {:.2g}), but no mechanism of the library explains them on "
-        "held-out runs. Held-out RMSE {:.4g} {}.",
-        in.model, v.unexplained_covariate, baseline_top.p_value, in.cv_before, in.unit);
+    if (in.baseline_structured) {
+      v.unexplained_covariate = baseline_top.covariate;
+      v.summary = fmt::format(
+          "Unexplained: the residuals of {} follow {} (p = {:.2g}), but no mechanism of the library explains them on "
+          "held-out runs. Held-out RMSE {:.4g} {}.",
+          in.model, v.unexplained_covariate, baseline_top.p_value, in.cv_before, in.unit);
+    } else {
+      v.unexplained_covariate = "none identified";
+      v.summary = fmt::format(
+          "Unexplained: the residuals of {} exceed the noise ({}) without following any one covariate or pair, and no "
+          "mechanism of the library explains them on held-out runs. Held-out RMSE {:.4g} {}.",
+          in.model, lack_of_fit_words(in.baseline_lack_of_fit, in.unit), in.cv_before, in.unit);
+    }
   } else {
     v.verdict = "no significant discrepancy";
     v.summary = fmt::format(
-        "No significant discrepancy: {} fits to the noise (residual RMSE {:.4g} {}, held-out {:.4g} {}) and no mechanism "
-        "of the library improves it.",
-        in.model, in.baseline_rmse, in.unit, in.cv_before, in.unit);
+        "{} fits to the noise (residual RMSE {:.4g} {}, held-out {:.4g} {}; {}) and no mechanism of the library "
+        "improves it.",
+        in.model, in.baseline_rmse, in.unit, in.cv_before, in.unit,
+        in.baseline_lack_of_fit.tested ? lack_of_fit_words(in.baseline_lack_of_fit, in.unit)
+                                       : "lack of fit not tested: " + in.baseline_lack_of_fit.basis);
   }
   return v;
 }
@@ -163,7 +232,8 @@ nlohmann::json candidate_json(const CandidateScore& c, const std::string& unit) 
                         {"cv_rmse_" + unit, number(c.cv_rmse)},
                         {"cv_gain_percent", number(c.cv_gain_percent)},
                         {"accepted", c.accepted},
-                        {"reason", c.reason}};
+                        {"reason", c.reason},
+                        {"tied_with", c.tied_with}};
 }
 
 nlohmann::json verdict_json(const std::string& verdict, const std::string& summary,
@@ -184,7 +254,8 @@ nlohmann::json verdict_json(const std::string& verdict, const std::string& summa
                      {"baseline", s.baseline},
                      {"baseline_ci95", {number(s.baseline_low), number(s.baseline_high)}},
                      {"extended", s.extended},
-                     {"extended_ci95", {number(s.extended_low), number(s.extended_high)}}});
+                     {"extended_ci95", {number(s.extended_low), number(s.extended_high)}},
+                     {"estimated_in_both", s.free}});
   return {{"verdict", verdict},
           {"summary", summary},
           {"causes", causes},
@@ -196,10 +267,16 @@ nlohmann::json verdict_json(const std::string& verdict, const std::string& summa
           {"rounds", steps}};
 }
 
+nlohmann::json lack_of_fit_json(const LackOfFit& l) {
+  return {{"tested", l.tested}, {"basis", l.basis}, {"F", number(l.statistic)}, {"df", {number(l.df1), number(l.df2)}},
+          {"p", number(l.p_value)}, {"lack_rms", number(l.lack_rms)}, {"pure_error_rms", number(l.pure_error_rms)},
+          {"fits", l.fits}};
+}
+
 nlohmann::json covariates_json(const std::vector<CovariateTest>& tests) {
   nlohmann::json out = nlohmann::json::array();
   for (const auto& c : tests)
-    out.push_back({{"covariate", c.covariate}, {"strength", number(c.correlation)}, {"p", number(c.p_value)}, {"size", number(c.size)}, {"n", c.n},
+    out.push_back({{"covariate", c.covariate}, {"strength", number(c.correlation)}, {"p", number(c.p_value)}, {"p_holm", number(c.p_adjusted)}, {"size", number(c.size)}, {"n", c.n},
                    {"structured", c.structured}});
   return out;
 }
@@ -211,7 +288,10 @@ namespace lmcal {
 ParameterShift parameter_shift(const ParameterEstimate& baseline, const ParameterEstimate& extended) {
   auto low = [](const ParameterEstimate& p) { return p.interval == "profile" ? p.profile_low : p.ci_low; };
   auto high = [](const ParameterEstimate& p) { return p.interval == "profile" ? p.profile_high : p.ci_high; };
-  return {baseline.name, baseline.value, extended.value, low(baseline), high(baseline), low(extended), high(extended)};
+  // A parameter held (by the user, or as unidentifiable) in either model has not moved for a
+  // physical reason: it is reported, but not as a shift.
+  const bool free = baseline.free && extended.free && !baseline.held_unidentifiable && !extended.held_unidentifiable;
+  return {baseline.name, baseline.value, extended.value, low(baseline), high(baseline), low(extended), high(extended), free};
 }
 
 }  // namespace lmcal

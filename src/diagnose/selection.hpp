@@ -3,6 +3,7 @@
 #pragma once
 
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <string>
 #include <utility>
@@ -27,6 +28,10 @@ CovariateTest anova(const std::string& name, const std::vector<double>& covariat
 CovariateTest nested_anova(const std::string& name, const std::vector<std::size_t>& coarse,
                            const std::vector<std::size_t>& fine, const std::vector<double>& values);
 
+// Holm's step-down adjustment over all `tests` (sets p_adjusted; the family-wise error of
+// calling any of them structured stays at the level it is compared with).
+void holm_adjust(std::vector<CovariateTest>& tests);
+
 // A covariate's values as group labels: one per distinct value, or ten quantile bins when
 // there are more than twelve.
 std::vector<std::size_t> value_bins(const std::vector<double>& covariate);
@@ -39,6 +44,7 @@ struct ModelFit {
   std::size_t k = 0;      // free parameters
   double cv_rmse = 0;     // leave-one-run-out
   std::string problem;    // non-empty: the fit cannot be used (not identifiable, not converged)
+  std::vector<double> fitted;  // the fitted values, in the same order for every model (for ties)
 };
 
 struct SelectionRules {
@@ -50,6 +56,7 @@ struct SelectionRules {
   // (RMSE² - noise²); a tiny gain on residuals far above the noise is not an explanation.
   double noise_floor = 0;
   double min_excess_removed = 0.1;
+  double tie_correlation = 0.99;  // candidates whose fitted changes correlate above this are a tie
   std::size_t max_effects = 3;
   Progress progress;  // told of every candidate fit
 };
@@ -67,6 +74,10 @@ struct Selection {
   std::vector<std::string> accepted;
   Fit current;
 };
+
+// Correlation of the changes two candidate fits make to the current fitted values (0 when
+// either makes none or the fitted values are missing).
+double change_correlation(const std::vector<double>& current, const std::vector<double>& a, const std::vector<double>& b);
 
 // Forward selection: every effect of `library` not yet accepted is added to the current
 // model (fit_with(effects, current) -> Fit) and scored (summarise(fit, effect) -> the
@@ -104,6 +115,13 @@ Selection<Fit> forward_select(const std::vector<std::string>& library, Fit basel
       s.rounds.push_back(std::move(round));
       break;
     }
+    // Candidates that pass the significance test and change the fit as the best does are
+    // indistinguishable from it on these data: a tie, named with it.
+    for (std::size_t i = 0; i < round.size(); ++i)
+      if (i != best && models[i].problem.empty() && std::isfinite(round[i].cv_rmse) &&
+          change_correlation(current.fitted, models[best].fitted, models[i].fitted) > rules.tie_correlation &&
+          round[i].cv_rmse <= current.cv_rmse)
+        round[best].tied_with.push_back(round[i].effect);
     round[best].accepted = true;
     s.accepted.push_back(round[best].effect);
     s.current = std::move(fits[best]);
@@ -142,9 +160,12 @@ struct VerdictInput {
   double cv_before = 0, cv_after = 0, baseline_rmse = 0;
   bool baseline_structured = false, final_structured = false;
   std::vector<CovariateTest> baseline_covariates, final_covariates;  // strongest first
+  LackOfFit baseline_lack_of_fit, final_lack_of_fit;
 };
 struct Verdict {
-  std::string verdict;  // "explained", "unexplained", "no significant discrepancy"
+  // "explained", "partly explained" (causes found, but the residuals still exceed the noise),
+  // "unexplained", "no significant discrepancy"
+  std::string verdict;
   std::string summary;
   std::string unexplained_covariate;
   double cv_gain_percent = 0;
@@ -165,7 +186,9 @@ void conclude(Diagnosis& d, std::string model, std::string unit, double cv_befor
                                   .baseline_structured = d.baseline.structured,
                                   .final_structured = d.final.structured,
                                   .baseline_covariates = d.baseline.covariates,
-                                  .final_covariates = d.final.covariates});
+                                  .final_covariates = d.final.covariates,
+                                  .baseline_lack_of_fit = d.baseline.lack_of_fit,
+                                  .final_lack_of_fit = d.final.lack_of_fit});
   d.verdict = v.verdict;
   d.summary = v.summary;
   d.unexplained_covariate = v.unexplained_covariate;
@@ -175,6 +198,7 @@ void conclude(Diagnosis& d, std::string model, std::string unit, double cv_befor
 // JSON of candidate scores (the held-out RMSE as "cv_rmse_<unit>") and covariate tests.
 nlohmann::json candidate_json(const CandidateScore& c, const std::string& unit);
 nlohmann::json covariates_json(const std::vector<CovariateTest>& tests);
+nlohmann::json lack_of_fit_json(const LackOfFit& l);
 
 // What both diagnoses write of their verdict: verdict, summary, causes, the held-out RMSE
 // before and after ("cv_rmse_before_<unit>"), the gain, parameter shifts, the unexplained

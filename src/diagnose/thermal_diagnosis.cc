@@ -270,7 +270,8 @@ std::string thermal_diagnosis_json(const ThermalDiagnosis& d) {
                           {"n_eff", number(r.n_eff)},
                           {"sensors", sensors},
                           {"covariates", detail::covariates_json(r.covariates)},
-                          {"structured", r.structured}};
+                          {"structured", r.structured},
+                          {"lack_of_fit", detail::lack_of_fit_json(r.lack_of_fit)}};
   };
   nlohmann::json j = detail::verdict_json(d, d.cv_rmse_before_K, d.cv_rmse_after_K, "K");
   j["kind"] = "thermal diagnosis";

@@ -251,10 +251,20 @@ void candidate_tables(Page& page, const std::vector<std::vector<CandidateScore>>
 
 void shift_table(Page& page, const std::vector<ParameterShift>& shifts, const std::string& published) {
   std::vector<std::vector<std::string>> rows;
-  for (const auto& s : shifts)
+  std::vector<std::string> held;
+  for (const auto& s : shifts) {
+    if (!s.free) {
+      held.push_back(s.name);
+      continue;
+    }
     rows.push_back({s.name, num(s.baseline), bracket(s.baseline_low, s.baseline_high), num(s.extended),
                     bracket(s.extended_low, s.extended_high)});
-  page.paragraph("The parameters that move once the causes are modelled (95 % intervals as quoted: linear or profile):");
+  }
+  std::string held_note;
+  for (const auto& h : held) held_note += (held_note.empty() ? "" : ", ") + h;
+  page.paragraph("The parameters that move once the causes are modelled (95 % intervals as quoted: linear or profile)" +
+                 (held_note.empty() ? std::string(":")
+                                    : "; held in one of the two models, so not compared: " + held_note + ":"));
   page.table({"parameter", published, "95 % interval", "with the causes", "95 % interval"}, rows);
 }
 

@@ -22,7 +22,7 @@ nav a{margin-right:16px}.calibrated{background:#f3faf6;border:1px solid #bfe3cf;
 table{border-collapse:collapse;margin:8px 0;font-size:13px}th,td{border:1px solid #ddd;padding:3px 8px;text-align:left}
 th{background:#f2f2f2}td.num{text-align:right;font-variant-numeric:tabular-nums}
 .verdict{padding:6px 10px;border-left:4px solid #999}.verdict.explained{border-color:#D55E00}
-.verdict.unexplained{border-color:#CC79A7}.verdict.no-significant-discrepancy{border-color:#009E73}
+.verdict.unexplained,.verdict.partly-explained{border-color:#CC79A7}.verdict.no-significant-discrepancy{border-color:#009E73}
 .warning{color:#9a3b00}code{background:#f4f4f4;padding:1px 4px}
 )";
 

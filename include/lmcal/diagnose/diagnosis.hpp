@@ -22,6 +22,7 @@ struct CovariateTest {
   std::string covariate;
   double correlation = 0;  // η, the share of the residuals' variation the covariate's groups explain
   double p_value = 1;
+  double p_adjusted = 1;   // Holm-adjusted over every test of the same residuals
   double size = 0;         // RMS of the structure it explains, in the residuals' unit
   std::size_t n = 0;       // group means tested (condition or cell means, or runs for run order)
   bool structured = false; // counts as structure under the diagnosis's rule
@@ -37,6 +38,24 @@ struct CandidateScore {
   double cv_gain_percent = 0;           // against the current model
   bool accepted = false;
   std::string reason;                   // why it was or was not accepted
+  std::string measure;                  // what to log to see this cause directly
+  // Candidates of the same round whose change to the fit cannot be told from this one's
+  // (the changes they make to the fitted values correlate above 0.99): a tie, named together.
+  std::vector<std::string> tied_with;
+};
+
+// Lack of fit against pure error: do the model's residuals exceed the noise? Friction: the
+// condition means (after the run levels) against the spread of repeated conditions across
+// runs. Thermal: the residual variance against the thermocouples' noise floor.
+struct LackOfFit {
+  bool tested = false;
+  std::string basis;       // what the pure error is, or why it was not tested
+  double statistic = 0;    // F
+  double df1 = 0, df2 = 0;
+  double p_value = 1;
+  double lack_rms = 0;     // RMS of the lack of fit beyond the noise, in the residuals' unit
+  double pure_error_rms = 0;  // the noise it is judged against
+  bool fits = true;        // not rejected at the diagnosis's structure_p (or not tested)
 };
 
 // How a parameter moves once the causes are modelled, each value with its 95 % interval
@@ -45,6 +64,7 @@ struct ParameterShift {
   std::string name;
   double baseline = 0, extended = 0;
   double baseline_low = 0, baseline_high = 0, extended_low = 0, extended_high = 0;
+  bool free = true;  // estimated in both models (a held parameter is never reported as moving)
 };
 ParameterShift parameter_shift(const ParameterEstimate& baseline, const ParameterEstimate& extended);
 

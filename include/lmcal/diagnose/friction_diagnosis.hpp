@@ -36,6 +36,7 @@ struct ResidualDiagnostics {
   std::vector<std::pair<std::string, double>> run_bias_N;
   std::vector<CovariateTest> covariates;    // strongest first
   bool structured = false;                  // a covariate significant at p < 0.001
+  LackOfFit lack_of_fit;
 };
 
 struct FrictionDiagnosisOptions {

@@ -49,6 +49,7 @@ struct ThermalResidualDiagnostics {
   std::vector<SensorResiduals> sensors;
   std::vector<CovariateTest> covariates;  // strongest first
   bool structured = false;                // a covariate significant at structure_p, and large enough
+  LackOfFit lack_of_fit;
 };
 
 struct ThermalDiagnosisOptions {
