@@ -72,7 +72,7 @@ TEST(Coverage, FrictionConstantsUnderAutocorrelatedNoiseRunOffsetsAndAMissingEff
   effects.friction.of<SealDrag>() = 1;  // left out of the fitted model: 0.012 N at 0.11 m/s
 
   FrictionFitOptions o;  // fitted as the calibrated model is: a zero per run profiled out
-  o.zero_offset_per_run = true;
+  o.run_offsets = RunOffsets::random;
   o.per_run_fits = false;
   o.fit.starts = 2;
   o.fit.bootstrap = 0;

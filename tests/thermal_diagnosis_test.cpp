@@ -4,8 +4,11 @@
 // close to what the truth allows.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <string>
+#include <vector>
 
 #include "lmcal/diagnose/thermal_diagnosis.hpp"
 #include "lmcal/rig/virtual_rig.hpp"
@@ -94,6 +97,81 @@ TEST(ThermalDiagnosis, ADisturbanceOutsideTheLibraryIsUnexplainedWithItsCovariat
   EXPECT_EQ(d.verdict, "unexplained") << d.summary;
   EXPECT_EQ(d.unexplained_covariate, "time_s") << d.summary;
   EXPECT_TRUE(d.accepted.empty()) << d.summary;
+}
+
+// Three repeats at one speed (the diagnosis holds one run out at a time), 4 h each.
+ThermalDataSet one_speed(std::uint64_t seed, const RigEffects& effects, double h_W_m2K = 5.3) {
+  ThermalRigConfig rig;
+  rig.velocity_m_s = {0.11};
+  rig.repeats = 3;
+  rig.duration_s = 4 * 3600;
+  rig.record_every_s = 15;
+  rig.h_W_m2K = h_W_m2K;
+  rig.seed = seed;
+  return generate_thermal_dataset(rig, effects, "test").set;
+}
+
+// The accepted cause and the candidates it ties with.
+std::vector<std::string> tie_of(const CandidateScore& c) {
+  std::vector<std::string> names{c.effect};
+  names.insert(names.end(), c.tied_with.begin(), c.tied_with.end());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+// A base loss b is a larger h on the rail's sides (b = Δh·p): a tie, named as one, with
+// either as its representative, and the same loss either way.
+TEST(ThermalDiagnosis, BaseLossAndALargerHAreATie) {
+  for (std::uint64_t seed : {1, 2}) {
+    RigEffects effects;
+    set_rig_effect(effects, "base_loss", 0.2);
+    const ThermalDiagnosis d = diagnose(one_speed(seed, effects));
+    ASSERT_EQ(d.accepted.size(), 1u) << d.summary;
+    const CandidateScore& c = d.accepted[0];
+    EXPECT_EQ(tie_of(c), (std::vector<std::string>{"base_loss", "convection_scale"})) << d.summary;
+    const std::string named = c.effect == "base_loss" ? "base_loss or convection_scale" : "convection_scale or base_loss";
+    EXPECT_NE(d.summary.find(named + ": these data cannot tell them apart"), std::string::npos) << d.summary;
+    EXPECT_NE(d.summary.find("To separate them, log " + c.measure), std::string::npos) << d.summary;
+    const double loss_W_mK = c.effect == "base_loss" ? c.value : c.value * 5.3 * 0.14;  // b = Δh·p
+    EXPECT_NEAR(loss_W_mK, 0.2, 0.02) << d.summary;
+    EXPECT_NEAR(d.shifts.front().extended, 0.6, 0.02) << d.summary;
+  }
+}
+
+// A rail convecting less than assumed (h = 4 instead of 5.3 W/m²K): a base loss cannot lower
+// the loss (b >= 0), so "h differs" is named, alone, with its size.
+TEST(ThermalDiagnosis, ASmallerHIsNamedAsHDiffers) {
+  for (std::uint64_t seed : {1, 2}) {
+    const ThermalDiagnosis d = diagnose(one_speed(seed, {}, 4.0));
+    ASSERT_EQ(d.accepted.size(), 1u) << d.summary;
+    EXPECT_EQ(d.accepted[0].effect, "convection_scale") << d.summary;
+    EXPECT_TRUE(d.accepted[0].tied_with.empty()) << d.summary;
+    EXPECT_NEAR(d.accepted[0].value, 4.0 / 5.3 - 1, 0.03) << d.summary;
+    EXPECT_NEAR(d.shifts.front().extended, 0.6, 0.02) << d.summary;
+    EXPECT_EQ(d.verdict, "explained") << d.summary;
+  }
+}
+
+// Coupled data whose heat is a load cell's run mean (mean_friction_N, below the friction of
+// the cold rail): the coupling keeps that mean, so it is named with κ and α at the truth, and
+// no α(V) is invented to make up the heat.
+TEST(ThermalDiagnosis, CouplingWithARunMeanFrictionIsNamedWithTheTrueAlpha) {
+  for (std::uint64_t seed : {1, 2}) {
+    ThermalRigConfig rig;
+    rig.duration_s = 4 * 3600;
+    rig.record_every_s = 15;
+    rig.seed = seed;
+    RigEffects effects;
+    set_rig_effect(effects, "coupling", 1);
+    ThermalDiagnosisOptions o;
+    o.fit.heat = HeatInput::measured_friction;
+    const ThermalDiagnosis d = diagnose_thermal(generate_thermal_dataset(rig, effects, "test").set, o);
+    ASSERT_FALSE(d.accepted.empty()) << d.summary;
+    EXPECT_EQ(d.accepted[0].effect, "coupling") << d.summary;
+    EXPECT_NEAR(d.accepted[0].value, 1.0, 0.1) << d.summary;
+    for (const auto& c : d.accepted) EXPECT_NE(c.effect, "alpha_velocity") << d.summary;
+    EXPECT_NEAR(d.shifts.front().extended, 0.6, 0.012) << d.summary;  // 2 %
+  }
 }
 
 // Modelled, the held-out error is what the truth itself would score: the thermocouples'

@@ -86,8 +86,9 @@ TEST(ThermalFit, FitsHTooAndTheSourceModelRatioIsAboutContactOverStroke) {
   EXPECT_NEAR(result.alpha_ratio_paper_over_averaged, result.contact_over_stroke, 0.1 * result.contact_over_stroke);
 }
 
-// ∂r/∂θ through the templated solver equals central finite differences.
-TEST(ThermalFit, ResidualDerivativesEqualFiniteDifferences) {
+// Two noisy 1 h runs (0.083, 0.11 m/s) ready for the model: every 12th record of two sensors,
+// Q_f = 4 W at the start temperature (24 °C, SRN 35C at 3 kN and 4 µm).
+std::vector<detail::PreparedRun> prepared_runs() {
   auto rig = clean_rig(3600);
   rig.velocity_m_s = {0.083, 0.11};
   rig.noise_K = 0.05;
@@ -99,6 +100,8 @@ TEST(ThermalFit, ResidualDerivativesEqualFiniteDifferences) {
     pr.geometry = {.rail_length_m = 0.6, .area_m2 = 8.88e-4, .perimeter_m = 0.14, .stroke_m = 0.2,
                    .contact_length_m = 0.0822, .velocity_m_s = run.velocity_m_s};
     pr.params = {.heat_partition = 0.6, .heat_rate_W = 4.0, .initial_temperature_C = 24.0};
+    pr.conditions = {.load_N = 3000, .preload_um = 4, .block_length_mm = 120.2, .velocity_m_s = run.velocity_m_s,
+                     .temperature_C = 24.0};
     pr.ambient = {run.trace.time_s, run.trace.ambient[0].values};
     for (std::size_t t = 0; t < run.trace.size(); t += 12) {
       pr.times_s.push_back(run.trace.time_s[t]);
@@ -108,6 +111,12 @@ TEST(ThermalFit, ResidualDerivativesEqualFiniteDifferences) {
     pr.sensor_positions_m = {0.0, 0.05};
     runs.push_back(pr);
   }
+  return runs;
+}
+
+// ∂r/∂θ through the templated solver equals central finite differences.
+TEST(ThermalFit, ResidualDerivativesEqualFiniteDifferences) {
+  const auto runs = prepared_runs();
   // α, h, two offsets of the first run, T0 of the second.
   detail::ThermalLayout layout{.alpha = 0, .h = 1, .offsets = {{2, 3}, {-1, -1}}, .initial = {-1, 4}, .size = 5};
   const detail::ThermalModel model(runs, layout, {.half_rail_segments = 40, .time_step_s = 60});
@@ -115,6 +124,58 @@ TEST(ThermalFit, ResidualDerivativesEqualFiniteDifferences) {
                                                     1e-6);
   EXPECT_TRUE(model.linear({false, true, false, false, false}));
   EXPECT_FALSE(model.linear({false, false, false, false, false}));
+}
+
+// With the heat a measured run mean, the coupled heat is scaled to keep that mean: a fixed
+// point solved by repeated simulation, whose derivatives must still be the model's.
+TEST(ThermalFit, RunMeanCoupledHeatHasTheModelsDerivatives) {
+  auto runs = prepared_runs();
+  for (auto& run : runs) run.heat_is_run_mean = true;
+  // α and κ, T0 of the second run.
+  const detail::ThermalLayout layout{.alpha = 0,
+                                     .extensions = {&detail::thermal_extension("coupling")},
+                                     .extension_first = {1},
+                                     .offsets = {{-1, -1}, {-1, -1}},
+                                     .initial = {-1, 2},
+                                     .size = 3};
+  const detail::ThermalModel model(runs, layout, {.half_rail_segments = 40, .time_step_s = 60});
+  test::expect_jacobian_matches_central_differences(*model.cost_function({}, {}), {0.55, 0.8, 24.3}, 1e-5, 1e-6);
+  // And the scaling matters: a heat at the start temperature gives other temperatures.
+  auto at_start = runs;
+  for (auto& run : at_start) run.heat_is_run_mean = false;
+  const detail::ThermalModel started(at_start, layout, {.half_rail_segments = 40, .time_step_s = 60});
+  const auto mean = model.simulate({0.55, 0.8, 24.3}), start = started.simulate({0.55, 0.8, 24.3});
+  EXPECT_GT(mean[1].back()[0] - start[1].back()[0], 0.05);  // the same mean is more heat than the warming start's
+}
+
+// A load cell's mean over a run that warms is below the friction of the cold rail. With the
+// heat from that mean, the coupled heat keeps it as its run mean, and α and κ come back; with
+// start_friction_N, the heat starts from the friction at the start temperature and so do they.
+TEST(ThermalFit, CoupledHeatFromAMeasuredFrictionRecoversAlpha) {
+  auto rig = clean_rig(3 * 3600.0);
+  rig.velocity_m_s = {0.083, 0.11};
+  RigEffects effects;
+  effects.thermal.coupling = 1;
+  auto generated = generate_thermal_dataset(rig, effects, "coupled");
+  const auto truth = nlohmann::json::parse(generated.truth_json);
+  ThermalFitOptions o = options_for_rig();
+  o.heat = HeatInput::measured_friction;
+  o.extensions = {"coupling"};
+  o.per_run_fits = false;
+  for (std::size_t r = 0; r < generated.set.runs.size(); ++r) {
+    const double start_N = truth["runs"][r]["heat_rate_start_W"].get<double>() / rig.velocity_m_s[r];
+    EXPECT_LT(*generated.set.runs[r].mean_friction_N, 0.97 * start_N);  // the run mean is well below the start
+  }
+  const auto from_mean = fit_thermal(generated.set, o);
+  EXPECT_EQ(from_mean.runs[0].heat_source, "measured mean friction");
+  EXPECT_NEAR(from_mean.joint.parameter("alpha").value, 0.6, 0.006);
+  EXPECT_NEAR(from_mean.joint.parameter("coupling").value, 1.0, 0.05);
+  for (std::size_t r = 0; r < generated.set.runs.size(); ++r)
+    generated.set.runs[r].start_friction_N = truth["runs"][r]["heat_rate_start_W"].get<double>() / rig.velocity_m_s[r];
+  const auto from_start = fit_thermal(generated.set, o);
+  EXPECT_EQ(from_start.runs[0].heat_source, "measured friction at the start temperature");
+  EXPECT_NEAR(from_start.joint.parameter("alpha").value, 0.6, 0.006);
+  EXPECT_NEAR(from_start.joint.parameter("coupling").value, 1.0, 0.05);
 }
 
 TEST(ThermalFit, ReportsEquationTwoBetweenAmbientSensorsAndRepeats) {

@@ -264,12 +264,15 @@ tc1_C = 0.0
 tc2_C = 0.05
 )";
   const ThermalDataSet set = load_thermal_dataset(
-      write("set.toml", fmt::format(run, "kgf", "mean_friction_kgf = 3\nmean_friction_uncertainty_kgf = 0.1") +
+      write("set.toml", fmt::format(run, "kgf",
+                                    "mean_friction_kgf = 3\nmean_friction_uncertainty_kgf = 0.1\nstart_friction_kgf = 3.5") +
                             fmt::format(run, "N", "mean_friction_N = 30\nmean_friction_uncertainty_N = 0") +
                             fmt::format(run, "none", "mean_friction_N = 30")));
   ASSERT_EQ(set.runs.size(), 3u);
   EXPECT_DOUBLE_EQ(*set.runs[0].mean_friction_N, 3 * 9.80665);
   EXPECT_DOUBLE_EQ(*set.runs[0].mean_friction_uncertainty_N, 0.1 * 9.80665);
+  EXPECT_DOUBLE_EQ(*set.runs[0].start_friction_N, 3.5 * 9.80665);
+  EXPECT_FALSE(set.runs[1].start_friction_N);
   EXPECT_EQ(set.runs[1].mean_friction_uncertainty_N, 0.0);  // zero is a statement too
   EXPECT_FALSE(set.runs[2].mean_friction_uncertainty_N);
   const std::string written = thermal_manifest_toml(set, dir_);
@@ -296,6 +299,7 @@ TEST_F(ThermalRunTest, WrittenManifestLoadsBackIdentically) {
       run.block_length_mm = 120.2;
       run.mean_friction_N = 44.1 + 1e-9;
       run.mean_friction_uncertainty_N = 0.9 / 7;
+      run.start_friction_N = 47.3 + 1.0 / 3.0;
       run.guide_overrides = {{"conductivity_W_mK", 36.0}, {"perimeter_m", 0.14 / 3}};
     }
     run.trace = awkward_trace(20 + 10 * k, 5.0);
@@ -329,6 +333,7 @@ TEST_F(ThermalRunTest, WrittenManifestLoadsBackIdentically) {
     EXPECT_EQ(b.block_length_mm, a.block_length_mm);
     EXPECT_EQ(b.mean_friction_N, a.mean_friction_N);
     EXPECT_EQ(b.mean_friction_uncertainty_N, a.mean_friction_uncertainty_N);
+    EXPECT_EQ(b.start_friction_N, a.start_friction_N);
     EXPECT_EQ(b.sensor_position_m, a.sensor_position_m);
     for (const auto& [name, x] : a.sensor_position_m) {
       EXPECT_TRUE(same_bits(b.sensor_position_m.at(name), x)) << name;  // -0.0 included

@@ -31,7 +31,7 @@ FrictionFitResult fit_with(const FrictionLog& log, const FrictionDiagnosisOption
     fittable_constant(f.start, j) = std::clamp(fittable_constant(f.start, j), f.bounds[j].first, f.bounds[j].second);
   f.per_run_fits = false;
   f.cross_validate = true;
-  f.zero_offset_per_run = true;
+  f.run_offsets = RunOffsets::random;
   f.fit.starts = 0;  // warm-started from the previous model's estimate: no multi-start
   f.fit.profile = ProfileMode::none;
   return fit_friction(log, f);
@@ -130,7 +130,7 @@ FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagno
   FrictionFitOptions base_options = o.fit;
   base_options.per_run_fits = false;
   base_options.cross_validate = true;
-  base_options.zero_offset_per_run = true;
+  base_options.run_offsets = RunOffsets::random;
   base_options.fit.profile = ProfileMode::none;
   const FrictionFitResult baseline = fit_friction(log, base_options);
   d.baseline = diagnose_residuals(log, baseline, o.structure_p);
@@ -143,11 +143,16 @@ FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagno
     return fit_with(log, o, effects, o.fit.start, effect_start);
   };
   auto summarise = [&](const FrictionFitResult& fit, const std::string& effect) {
-    detail::ModelFit m{.ss = sum_of_squares(log, fit.predicted_N),
+    // The likelihood of the random run offsets' fit (their variance included), and the
+    // law's own predictions (without the offsets) to tell ties.
+    detail::ModelFit m{.ss = fit.deviance_ss,
                        .n = static_cast<double>(n),
                        .n_eff = static_cast<double>(n),
-                       .k = fit.fit.free_parameters,
-                       .cv_rmse = fit.cv_rmse_N};
+                       .k = fit.fit.free_parameters + 1,
+                       .cv_rmse = fit.cv_rmse_N,
+                       .cv_shape_rmse = fit.cv_shape_rmse_N};
+    m.fitted = fit.predicted_N;
+    for (std::size_t i = 0; i < n; ++i) m.fitted[i] -= fit.run_offset_N[log.run[i]];
     CandidateScore c;
     if (!effect.empty()) {
       const auto& p = fit.fit.parameter(effect);

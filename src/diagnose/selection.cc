@@ -62,6 +62,11 @@ std::pair<double, double> information_criteria(double ss, double n, double n_eff
   return {aic + 2 * K * (K + 1) / std::max(n_eff - K - 1, 1.0), fit + K * std::log(n_eff)};
 }
 
+double counted_gain(const CandidateScore& c) {
+  if (!std::isfinite(c.cv_shape_gain_percent)) return c.cv_gain_percent;
+  return std::max(c.cv_gain_percent, c.cv_shape_gain_percent);
+}
+
 bool score_candidate(const ModelFit& current, const ModelFit& candidate, const SelectionRules& rules, CandidateScore& c) {
   const double n_eff = std::min(current.n_eff, candidate.n_eff);
   std::tie(c.aicc, c.bic) = information_criteria(candidate.ss, candidate.n, n_eff, candidate.k);
@@ -69,6 +74,8 @@ bool score_candidate(const ModelFit& current, const ModelFit& candidate, const S
   c.added_parameters = candidate.k >= current.k ? candidate.k - current.k : 0;
   c.cv_rmse = candidate.cv_rmse;
   c.cv_gain_percent = 100 * (1 - candidate.cv_rmse / current.cv_rmse);
+  c.cv_shape_gain_percent = 100 * (1 - candidate.cv_shape_rmse / current.cv_shape_rmse);
+  const double gain = counted_gain(c);
   bool significant;
   std::string why_not;
   if (c.added_parameters > 0) {
@@ -87,11 +94,11 @@ bool score_candidate(const ModelFit& current, const ModelFit& candidate, const S
   const bool at_noise = rules.noise_floor <= 0 || current.cv_rmse <= 1.02 * rules.noise_floor;
   const double removed = at_noise ? 1.0 : (current.cv_rmse * current.cv_rmse - candidate.cv_rmse * candidate.cv_rmse) / excess;
   const bool enough = removed >= rules.min_excess_removed;
-  const bool better = c.cv_gain_percent >= rules.min_cv_gain_percent && enough;
+  const bool better = gain >= rules.min_cv_gain_percent && enough;
   if (!candidate.problem.empty()) c.reason = candidate.problem;
   else if (!significant) c.reason = why_not;
-  else if (c.cv_gain_percent < rules.min_cv_gain_percent)
-    c.reason = fmt::format("held-out RMSE gain {:.2f} % < {:.2f} %", c.cv_gain_percent, rules.min_cv_gain_percent);
+  else if (gain < rules.min_cv_gain_percent)
+    c.reason = fmt::format("held-out RMSE gain {:.2f} % < {:.2f} %", gain, rules.min_cv_gain_percent);
   else if (!better)
     c.reason = fmt::format("removes {:.0f} % of the held-out RMSE above the noise ({:.4g}), less than {:.0f} %", 100 * removed,
                            rules.noise_floor, 100 * rules.min_excess_removed);
@@ -231,6 +238,7 @@ nlohmann::json candidate_json(const CandidateScore& c, const std::string& unit) 
                         {"lrt_p", number(c.lrt_p)},
                         {"cv_rmse_" + unit, number(c.cv_rmse)},
                         {"cv_gain_percent", number(c.cv_gain_percent)},
+                        {"cv_shape_gain_percent", number(c.cv_shape_gain_percent)},
                         {"accepted", c.accepted},
                         {"reason", c.reason},
                         {"tied_with", c.tied_with}};

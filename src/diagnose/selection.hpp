@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <cstddef>
 #include <string>
 #include <utility>
@@ -43,6 +44,10 @@ struct ModelFit {
   double n_eff = 0;       // effective independent residuals (n when they are white)
   std::size_t k = 0;      // free parameters
   double cv_rmse = 0;     // leave-one-run-out
+  // Leave-one-run-out with each held-out run's own level taken out (NaN: not scored). A
+  // candidate may gain on either: on the level of new runs (a cause that changes only
+  // between runs) or on their shape.
+  double cv_shape_rmse = std::numeric_limits<double>::quiet_NaN();
   std::string problem;    // non-empty: the fit cannot be used (not identifiable, not converged)
   std::vector<double> fitted;  // the fitted values, in the same order for every model (for ties)
 };
@@ -74,6 +79,13 @@ struct Selection {
   std::vector<std::string> accepted;
   Fit current;
 };
+
+// The held-out gain that counts for a candidate: on new runs' level (cv_gain_percent) or on
+// their shape (cv_shape_gain_percent), whichever it improves more (the plain gain when the
+// shape was not scored). The level of a held-out run rests on a few run means and its zero
+// offset's variance, so a cause of the runs' shape may not show there, and a cause that
+// changes only between runs shows nowhere else; the likelihood-ratio test guards both.
+double counted_gain(const CandidateScore& c);
 
 // Correlation of the changes two candidate fits make to the current fitted values (0 when
 // either makes none or the fitted values are missing).
@@ -109,7 +121,9 @@ Selection<Fit> forward_select(const std::vector<std::string>& library, Fit basel
     }
     std::size_t best = round.size();
     for (std::size_t i = 0; i < round.size(); ++i)
-      if (round[i].accepted && (best == round.size() || round[i].cv_gain_percent > round[best].cv_gain_percent)) best = i;
+      if (round[i].accepted &&
+          (best == round.size() || counted_gain(round[i]) > counted_gain(round[best])))
+        best = i;
     for (auto& c : round) c.accepted = false;
     if (best == round.size()) {
       s.rounds.push_back(std::move(round));

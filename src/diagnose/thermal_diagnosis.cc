@@ -9,6 +9,7 @@
 #include <set>
 
 #include "lmcal/error.hpp"
+#include "lmcal/fit/statistics.hpp"
 #include "fit/fit_json.hpp"
 #include "selection.hpp"
 
@@ -63,14 +64,63 @@ double effective_sample_size(double n, double rho) {
   return std::max(n * (1 - rho) / (1 + rho), 2.0);
 }
 
-ThermalResidualDiagnostics diagnose_residuals(const ThermalFitResult& fit, const ThermalDiagnosisOptions& o) {
+// The thermocouples' noise over all runs (RMS of each run's second-difference estimate) and
+// the degrees of freedom of that estimate: for white noise, the mean square of m second
+// differences is as good as 18/35 m independent squares (they overlap).
+struct NoiseFloor {
+  double sigma_K = 0, dof = 0;
+};
+
+NoiseFloor noise_floor(const ThermalDataSet& data) {
+  double ss = 0, differences = 0;
+  for (const auto& run : data.runs) {
+    ss += std::pow(thermocouple_noise_K(run.trace), 2);
+    for (const auto& channel : run.trace.rail)
+      for (std::size_t i = 1; i + 1 < channel.values.size(); ++i)
+        differences += std::isnan(channel.values[i - 1] + channel.values[i] + channel.values[i + 1]) ? 0 : 1;
+  }
+  return {std::sqrt(ss / static_cast<double>(data.runs.size())), differences * 18.0 / 35.0};
+}
+
+// Lack of fit against the noise floor: F = s² / σ², the residual variance per degree of
+// freedom the fit leaves (n − k: every offset, heat scale and global parameter counted) against
+// the thermocouples' noise variance. The residuals' degrees of freedom are counted on n_eff
+// (serially correlated residuals carry less evidence than their number). Rejected at
+// structure_p, but called a lack of fit only when the excess sqrt(s² − σ²) is at least
+// min_structure_fraction of σ: on thousands of records millikelvin are significant without
+// mattering.
+LackOfFit lack_of_fit(double ss, double n, double n_eff, std::size_t k, const NoiseFloor& noise,
+                      const ThermalDiagnosisOptions& o) {
+  LackOfFit l;
+  const auto K = static_cast<double>(k);
+  if (!(noise.sigma_K > 0) || !(noise.dof > 0) || !(n > K + 1)) {
+    l.basis = "not tested: no noise estimate from the thermocouples' second differences, or no residual degrees of freedom";
+    return l;
+  }
+  l.tested = true;
+  l.basis = "the thermocouples' noise (second differences of the traces)";
+  const double variance = ss / (n - K);
+  l.pure_error_rms = noise.sigma_K;
+  l.lack_rms = std::sqrt(std::max(variance - noise.sigma_K * noise.sigma_K, 0.0));
+  l.statistic = variance / (noise.sigma_K * noise.sigma_K);
+  l.df1 = std::max(n_eff * (n - K) / n, 1.0);
+  l.df2 = noise.dof;
+  l.p_value = fisher_f_upper_p(l.statistic, l.df1, l.df2);
+  l.fits = !(l.p_value < o.structure_p && l.lack_rms >= o.min_structure_fraction * noise.sigma_K);
+  return l;
+}
+
+ThermalResidualDiagnostics diagnose_residuals(const ThermalFitResult& fit, const ThermalDiagnosisOptions& o,
+                                              const NoiseFloor& noise) {
   ThermalResidualDiagnostics d;
   const auto& samples = fit.samples;
   double ss = 0;
   for (const auto& s : samples) ss += std::pow(s.measured_C - s.simulated_C, 2);
-  d.rmse_K = std::sqrt(ss / static_cast<double>(std::max<std::size_t>(samples.size(), 1)));
+  const auto n = static_cast<double>(samples.size());
+  d.rmse_K = std::sqrt(ss / std::max(n, 1.0));
   d.lag1_autocorrelation = lag1_autocorrelation(fit);
-  d.n_eff = effective_sample_size(static_cast<double>(samples.size()), d.lag1_autocorrelation);
+  d.n_eff = effective_sample_size(n, d.lag1_autocorrelation);
+  d.lack_of_fit = lack_of_fit(ss, n, d.n_eff, fit.joint.free_parameters, noise, o);
 
   // Per sensor series, and cell means (time bins of the run's duration).
   const int bins = std::max(o.time_bins, 2);
@@ -134,9 +184,12 @@ ThermalResidualDiagnostics diagnose_residuals(const ThermalFitResult& fit, const
   const std::vector<std::size_t> coarse = by_time_and(condition), fine = by_time_and(cell_run);
   d.covariates.push_back(detail::nested_anova("run order", coarse, fine, cell_e));
   std::erase_if(d.covariates, [](const CovariateTest& t) { return t.n == 0; });
+  detail::holm_adjust(d.covariates);  // seven tests of the same residuals: the family's error stays at structure_p
   std::sort(d.covariates.begin(), d.covariates.end(), [](auto& a, auto& b) { return a.p_value < b.p_value; });
   // Strongest first: the significant ones by size, then the rest by p.
-  auto counts = [&](const CovariateTest& t) { return t.p_value < o.structure_p && t.size >= o.min_structure_fraction * d.rmse_K; };
+  auto counts = [&](const CovariateTest& t) {
+    return t.p_adjusted < o.structure_p && t.size >= o.min_structure_fraction * d.rmse_K;
+  };
   std::stable_sort(d.covariates.begin(), d.covariates.end(), [&](auto& a, auto& b) {
     if (counts(a) != counts(b)) return counts(a);
     return counts(a) ? a.size > b.size : a.p_value < b.p_value;
@@ -183,10 +236,13 @@ ThermalDiagnosis diagnose_thermal(const ThermalDataSet& data, const ThermalDiagn
   ThermalDiagnosisOptions o = options;
   o.fit.every = diagnosis_fit_options(data, options).every;
   ThermalDiagnosis d;
+  // The noise floor of the residuals and of the held-out RMSE: the thermocouples' own noise.
+  const NoiseFloor noise = noise_floor(data);
+  d.noise_K = noise.sigma_K;
 
   // 1. The baseline.
   d.baseline_fit = fit_thermal(data, model_options(o));
-  d.baseline = diagnose_residuals(d.baseline_fit, o);
+  d.baseline = diagnose_residuals(d.baseline_fit, o, noise);
 
   // 2-3. The library, less what these data cannot show.
   std::set<double> speeds;
@@ -200,6 +256,10 @@ ThermalDiagnosis diagnose_thermal(const ThermalDataSet& data, const ThermalDiagn
     if (e.source && (*e.source == o.fit.source || *e.source == SourceModel::paper)) continue;  // no step back to the paper's
     if ((e.name == "convection_velocity" || e.name == "alpha_velocity") && speeds.size() < 2) {
       d.skipped.push_back(e.name + ": all runs at one speed");
+      continue;
+    }
+    if (e.name == "convection_scale" && o.fit.fit_h) {
+      d.skipped.push_back(e.name + ": h is fitted in every model");
       continue;
     }
     library.push_back(e.name);
@@ -221,18 +281,16 @@ ThermalDiagnosis diagnose_thermal(const ThermalDataSet& data, const ThermalDiagn
     m.n_eff = effective_sample_size(m.n, lag1_autocorrelation(fit));
     m.k = fit.joint.free_parameters;
     m.cv_rmse = fit.cv_rmse_K;
+    for (const auto& s : fit.samples) m.fitted.push_back(s.simulated_C);
     if (!fit.joint.solver.usable) m.problem = "the fit did not converge: " + fit.joint.solver.termination;
     for (const auto& issue : fit.joint.identifiability.issues) m.problem = "not identifiable: " + issue.why;
     if (!effect.empty()) {
       const auto& e = info(effect);
+      c.measure = e.measure;
       if (!e.parameters.empty()) detail::set_estimate(c, fit.joint.parameter(e.parameters.front()));
     }
     return std::make_pair(m, c);
   };
-  // The noise floor of the held-out RMSE: the thermocouples' own noise, over all runs.
-  double noise_ss = 0;
-  for (const auto& run : data.runs) noise_ss += std::pow(thermocouple_noise_K(run.trace), 2);
-  d.noise_K = std::sqrt(noise_ss / static_cast<double>(data.runs.size()));
   const detail::SelectionRules rules{.lrt_p = o.lrt_p,
                                      .min_cv_gain_percent = o.min_cv_gain_percent,
                                      .noise_floor = std::isfinite(d.noise_K) ? d.noise_K : 0.0,
@@ -244,7 +302,7 @@ ThermalDiagnosis diagnose_thermal(const ThermalDataSet& data, const ThermalDiagn
   d.rounds = std::move(selection.rounds);
 
   // 4. Verdict.
-  d.final = diagnose_residuals(d.final_fit, o);
+  d.final = diagnose_residuals(d.final_fit, o, noise);
   d.cv_rmse_before_K = d.baseline_fit.cv_rmse_K;
   d.cv_rmse_after_K = d.final_fit.cv_rmse_K;
   d.accepted = detail::accepted_scores(d.rounds, selection.accepted, [&](const std::string& name) {

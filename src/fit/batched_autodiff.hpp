@@ -60,11 +60,13 @@ template <typename RowFunctor>
 class BatchedAutoDiffCostFunction final : public ceres::CostFunction {
  public:
   // `groups` (one id per row, optional): residuals and their derivatives are centred within
-  // each group, which profiles out one free offset per group (e.g. a load cell's zero per
-  // run). Not combined with a robust loss.
+  // each group, r_i - c_g · mean_g(r), which profiles out one free offset per group (c_g = 1,
+  // e.g. a load cell's zero per run) or whitens a random one (c_g = 1 - 1/sqrt(1 + n_g λ) for
+  // an offset of variance λ σ²: generalised least squares). `shrink` holds c_g per group
+  // (empty: 1 for all). Not combined with a robust loss.
   BatchedAutoDiffCostFunction(RowFunctor functor, int num_parameters, std::size_t rows, RowLoss loss = {},
-                              std::vector<std::size_t> groups = {})
-      : functor_(std::move(functor)), rows_(rows), loss_(loss), groups_(std::move(groups)) {
+                              std::vector<std::size_t> groups = {}, std::vector<double> shrink = {})
+      : functor_(std::move(functor)), rows_(rows), loss_(loss), groups_(std::move(groups)), shrink_(std::move(shrink)) {
     LMCAL_ASSERT(groups_.empty() || (groups_.size() == rows && loss.kind == RobustLoss::none),
                  "group centring needs one group per row and no robust loss");
     LMCAL_ASSERT(num_parameters >= 1 && num_parameters <= 16, "1 to 16 parameters");
@@ -119,9 +121,9 @@ class BatchedAutoDiffCostFunction final : public ceres::CostFunction {
     }
     for (std::size_t i = 0; i < rows_; ++i) {
       const double* s = &sum[groups_[i] * (p + 1)];
-      const double n = count[groups_[i]];
-      residuals[i] -= s[0] / n;
-      for (std::size_t j = 0; jacobian && j < p; ++j) jacobian[i * p + j] -= s[j + 1] / n;
+      const double c = (shrink_.empty() ? 1.0 : shrink_[groups_[i]]) / count[groups_[i]];
+      residuals[i] -= c * s[0];
+      for (std::size_t j = 0; jacobian && j < p; ++j) jacobian[i * p + j] -= c * s[j + 1];
     }
   }
 
@@ -129,6 +131,7 @@ class BatchedAutoDiffCostFunction final : public ceres::CostFunction {
   std::size_t rows_;
   RowLoss loss_;
   std::vector<std::size_t> groups_;
+  std::vector<double> shrink_;
 };
 
 }  // namespace lmcal::detail

@@ -159,6 +159,81 @@ std::vector<std::size_t> effect_slots(const FrictionFitOptions& o) {
   return slots;
 }
 
+// The variance of a random run offset relative to the noise, λ = τ²/σ², by maximum likelihood
+// from the residuals `raw` (whitened, offsets not taken out) grouped by run: with n_g
+// residuals of mean ē_g and within-run sum of squares W_g per run,
+//   -2 log L(λ) = n log(Q(λ)/n) + Σ_g log(1 + n_g λ),   Q(λ) = Σ_g W_g + n_g ē_g² / (1 + n_g λ),
+// σ² = Q/n profiled. A grid over log λ, then golden-section refinement; λ = 0 when no
+// offset variance is seen. (ML: with few runs τ² is biased low by about the between-run
+// share of the constants; the intervals do not rest on it — see assess_uncertainty.)
+struct RunOffsetVariance {
+  double ratio = 0, sigma2 = 1, deviance_ss = 0;
+  std::vector<double> count;  // residuals per run
+};
+
+RunOffsetVariance run_offset_variance(const std::vector<double>& raw, const std::vector<std::size_t>& run, std::size_t runs) {
+  RunOffsetVariance v;
+  v.count.assign(runs, 0.0);
+  std::vector<double> sum(runs, 0.0), sq(runs, 0.0);
+  for (std::size_t i = 0; i < raw.size(); ++i) {
+    v.count[run[i]] += 1;
+    sum[run[i]] += raw[i];
+    sq[run[i]] += raw[i] * raw[i];
+  }
+  const double n = static_cast<double>(raw.size());
+  double within = 0;
+  for (std::size_t g = 0; g < runs; ++g)
+    if (v.count[g] > 0) within += sq[g] - sum[g] * sum[g] / v.count[g];
+  auto q = [&](double lambda) {
+    double Q = within;
+    for (std::size_t g = 0; g < runs; ++g)
+      if (v.count[g] > 0) Q += sum[g] * sum[g] / v.count[g] / (1 + v.count[g] * lambda);
+    return Q;
+  };
+  auto deviance = [&](double lambda) {
+    double logdet = 0;
+    for (double c : v.count) logdet += std::log1p(c * lambda);
+    return n * std::log(std::max(q(lambda), 1e-300) / n) + logdet;
+  };
+  double best = 0, best_d = deviance(0);
+  for (double e = -8; e <= 6; e += 0.25)
+    if (const double d = deviance(std::pow(10.0, e)); d < best_d) best = std::pow(10.0, e), best_d = d;
+  if (best > 0) {
+    double a = std::log10(best) - 0.25, b = std::log10(best) + 0.25;
+    const double g = (std::sqrt(5.0) - 1) / 2;
+    for (int it = 0; it < 40; ++it) {
+      const double x1 = b - g * (b - a), x2 = a + g * (b - a);
+      if (deviance(std::pow(10.0, x1)) < deviance(std::pow(10.0, x2))) b = x2;
+      else a = x1;
+    }
+    const double refined = std::pow(10.0, (a + b) / 2);
+    if (deviance(refined) < best_d) best = refined;
+  }
+  v.ratio = best;
+  v.sigma2 = q(best) / n;
+  v.deviance_ss = n * std::exp(deviance(best) / n);
+  return v;
+}
+
+// The residuals before the whitening of BatchedAutoDiffCostFunction's group centring: r_i +
+// c/(1 - c) · mean_g(r) per group (the inverse of r_i - c · mean_g(r)); groups with c = 1
+// (a profiled offset) stay centred.
+std::vector<double> unwhitened(const Eigen::VectorXd& whitened, const std::vector<std::size_t>& group,
+                               const std::vector<double>& shrink) {
+  std::vector<double> out(whitened.data(), whitened.data() + whitened.size());
+  if (shrink.empty()) return out;
+  std::vector<double> sum(shrink.size(), 0.0), count(shrink.size(), 0.0);
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    sum[group[i]] += out[i];
+    count[group[i]] += 1;
+  }
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    const double c = shrink[group[i]];
+    if (c < 1) out[i] += c / (1 - c) * sum[group[i]] / count[group[i]];
+  }
+  return out;
+}
+
 }  // namespace
 
 const std::vector<std::string>& friction_effect_names() {
@@ -193,65 +268,109 @@ FrictionFitResult fit_friction(const FrictionLog& log, const FrictionFitOptions&
 
   FrictionFitResult out;
   out.sigma_N = sample_sigmas(log, options.weighting);
-  if (options.zero_offset_per_run && options.fit.loss != RobustLoss::none)
-    throw InvalidParameter("zero_offset_per_run", "per-run offsets and a robust loss cannot be combined");
-  FrictionData data{&log, {}, {}, options.start.T_ref_C, options.zero_offset_per_run};
+  if (options.run_offsets != RunOffsets::none && options.fit.loss != RobustLoss::none)
+    throw InvalidParameter("run_offsets", "per-run offsets and a robust loss cannot be combined");
+  const std::size_t runs = log.run_names.size();
+  FrictionData data{&log, {}, {}, options.start.T_ref_C, {}};
   for (std::size_t i = 0; i < log.size(); ++i) {
     data.samples.push_back(i);
     data.inv_sigma.push_back(1.0 / out.sigma_N[i]);
   }
+  std::vector<std::size_t> run_of(log.size());
+  for (std::size_t i = 0; i < log.size(); ++i) run_of[i] = log.run[i];
+  if (options.run_offsets == RunOffsets::fixed) data.run_shrink.assign(runs, 1.0);
+  // Random offsets: start without them (λ = 0), then alternate the constants (warm-started)
+  // and λ (maximum likelihood given the constants) until the whitening settles.
+  if (options.run_offsets == RunOffsets::random) data.run_shrink.assign(runs, 0.0);
   const FrictionModel model(data, slots);
   detail::FinalState final_state;
-  out.fit = detail::solve_least_squares(model, specs, options.fit, options.cross_validate ? &final_state : nullptr);
-  if (options.cross_validate && log.run_names.size() >= 2 && options.fit.loss == RobustLoss::none) {
-    std::vector<std::size_t> group(log.size());
-    for (std::size_t i = 0; i < log.size(); ++i) group[i] = log.run[i];
+  const bool random = options.run_offsets == RunOffsets::random && runs >= 2;
+  auto run_specs = specs;
+  FitOptions fit_options = options.fit;
+  RunOffsetVariance variance;
+  for (int pass = 1;; ++pass) {
+    out.fit = detail::solve_least_squares(model, run_specs, fit_options, &final_state);
+    out.variance_passes = pass;
+    if (!random || !out.fit.solver.usable) break;
+    const std::vector<double> raw = unwhitened(final_state.residuals, run_of, data.run_shrink);
+    variance = run_offset_variance(raw, run_of, runs);
+    double change = 0;
+    for (std::size_t r = 0; r < runs; ++r) {
+      const double c = 1 - 1 / std::sqrt(1 + variance.count[r] * variance.ratio);
+      change = std::max(change, std::abs(c - data.run_shrink[r]));
+      data.run_shrink[r] = c;
+    }
+    if (change < 0.005 || pass >= options.max_variance_passes) break;
+    for (std::size_t j = 0; j < run_specs.size(); ++j)
+      if (run_specs[j].free && !out.fit.parameters[j].held_unidentifiable)
+        run_specs[j].start = std::clamp(out.fit.parameters[j].value, run_specs[j].lower, run_specs[j].upper);
+    fit_options.starts = 0;
+  }
+  {
+    const std::vector<double> raw = unwhitened(final_state.residuals, run_of, data.run_shrink);
+    if (random) variance = run_offset_variance(raw, run_of, runs);
+    double ss_w = 0;
+    for (Eigen::Index i = 0; i < final_state.residuals.size(); ++i) ss_w += final_state.residuals[i] * final_state.residuals[i];
+    out.deviance_ss = random ? variance.deviance_ss : ss_w;
+    out.run_offset_ratio = random ? variance.ratio : 0.0;
+  }
+  if (options.cross_validate && runs >= 2 && options.fit.loss == RobustLoss::none && final_state.jacobian.rows() > 0) {
     std::vector<bool> held;
     for (const auto& p : out.fit.parameters) held.push_back(!p.free || p.held_unidentifiable);
-    const Eigen::VectorXd held_out = detail::leave_group_out_residuals(final_state, group, held);
-    double ss = 0;
-    for (std::size_t i = 0; i < log.size(); ++i) ss += std::pow(held_out[static_cast<Eigen::Index>(i)] * out.sigma_N[i], 2);
+    const Eigen::VectorXd held_out = detail::leave_group_out_residuals(final_state, run_of, held);
+    // A held-out run under random offsets is a new setup with an unknown zero: predicted
+    // with the offsets' mean, 0 (its own mean is not taken out). Fixed offsets stay profiled.
+    const std::vector<double> prediction_error = unwhitened(held_out, run_of, data.run_shrink);
+    std::vector<double> shape_error = prediction_error, level(runs, 0.0), count(runs, 0.0);
+    for (std::size_t i = 0; i < log.size(); ++i) level[run_of[i]] += shape_error[i], count[run_of[i]] += 1;
+    for (std::size_t i = 0; i < log.size(); ++i) shape_error[i] -= level[run_of[i]] / count[run_of[i]];
+    double ss = 0, ss_shape = 0;
+    for (std::size_t i = 0; i < log.size(); ++i) {
+      ss += std::pow(prediction_error[i] * out.sigma_N[i], 2);
+      ss_shape += std::pow(shape_error[i] * out.sigma_N[i], 2);
+    }
     out.cv_rmse_N = std::sqrt(ss / static_cast<double>(log.size()));
+    out.cv_shape_rmse_N = std::sqrt(ss_shape / static_cast<double>(log.size()));
   }
 
   // Predictions and goodness of fit, in newtons.
   const FrictionConstants<double> k = out.constants();
   const FrictionEffects<double> e = out.effects();
-  double ss = 0;
   for (std::size_t i = 0; i < log.size(); ++i) {
     FrictionConstants<double> ki = k;
     ki.nu_ref_mm2_s = log.viscosity40_mm2_s[i];
     ki.T_ref_C = options.start.T_ref_C;
-    const double predicted = slots.empty() ? friction_force_N(ki, log.conditions(i))
-                                           : friction_force_with_effects_N(ki, e, log.conditions(i));
-    out.predicted_N.push_back(predicted);
-    const double r = log.friction_N[i] - predicted;
+    out.predicted_N.push_back(slots.empty() ? friction_force_N(ki, log.conditions(i))
+                                            : friction_force_with_effects_N(ki, e, log.conditions(i)));
+  }
+  // Per run: the mean residual of the law, and the zero offset the predictions carry.
+  std::vector<double> run_sum(runs, 0.0), run_count(runs, 0.0);
+  for (std::size_t i = 0; i < log.size(); ++i) {
+    run_sum[log.run[i]] += log.friction_N[i] - out.predicted_N[i];
+    run_count[log.run[i]] += 1;
+  }
+  for (std::size_t r = 0; r < runs; ++r) {
+    const double mean = run_count[r] > 0 ? run_sum[r] / run_count[r] : kNaN;
+    out.run_mean_residual_N.push_back(mean);
+    const double share = options.run_offsets == RunOffsets::fixed ? 1.0
+                         : random ? run_count[r] * variance.ratio / (1 + run_count[r] * variance.ratio)
+                                  : 0.0;
+    out.run_offset_N.push_back(share * mean);
+  }
+  if (random) {
+    double sigma2 = 0;
+    for (double s : out.sigma_N) sigma2 += s * s;
+    out.run_offset_sd_N = std::sqrt(variance.ratio * variance.sigma2 * sigma2 / static_cast<double>(log.size()));
+  }
+  double ss = 0;
+  for (std::size_t i = 0; i < log.size(); ++i) {
+    if (!out.run_offset_N.empty() && std::isfinite(out.run_offset_N[log.run[i]])) out.predicted_N[i] += out.run_offset_N[log.run[i]];
+    const double r = log.friction_N[i] - out.predicted_N[i];
     ss += r * r;
     const double relative = std::abs(r) / std::max(std::abs(log.friction_N[i]), 1e-9);
     if (relative > out.max_relative_error) {
       out.max_relative_error = relative;
       out.max_relative_error_sample = i;
-    }
-  }
-  // Per-run mean residual: the zero offset of each run (profiled out when asked).
-  std::vector<double> run_sum(log.run_names.size(), 0.0), run_count(log.run_names.size(), 0.0);
-  for (std::size_t i = 0; i < log.size(); ++i) {
-    run_sum[log.run[i]] += log.friction_N[i] - out.predicted_N[i];
-    run_count[log.run[i]] += 1;
-  }
-  for (std::size_t r = 0; r < run_sum.size(); ++r) out.run_offset_N.push_back(run_count[r] > 0 ? run_sum[r] / run_count[r] : kNaN);
-  if (options.zero_offset_per_run) {
-    ss = 0;
-    out.max_relative_error = 0;
-    for (std::size_t i = 0; i < log.size(); ++i) {
-      out.predicted_N[i] += out.run_offset_N[log.run[i]];
-      const double r = log.friction_N[i] - out.predicted_N[i];
-      ss += r * r;
-      const double relative = std::abs(r) / std::max(std::abs(log.friction_N[i]), 1e-9);
-      if (relative > out.max_relative_error) {
-        out.max_relative_error = relative;
-        out.max_relative_error_sample = i;
-      }
     }
   }
   out.rmse_N = std::sqrt(ss / static_cast<double>(log.size()));
@@ -292,7 +411,7 @@ FrictionFitResult fit_friction(const FrictionLog& log, const FrictionFitOptions&
     run_options.profile = ProfileMode::none;
     std::vector<std::vector<double>> values(specs.size(), std::vector<double>(log.run_names.size(), kNaN));
     for (std::uint32_t r = 0; r < log.run_names.size(); ++r) {
-      FrictionData run_data{&log, {}, {}, options.start.T_ref_C, options.zero_offset_per_run};
+      FrictionData run_data{&log, {}, {}, options.start.T_ref_C, data.run_shrink};
       for (std::size_t i = 0; i < log.size(); ++i)
         if (log.run[i] == r) {
           run_data.samples.push_back(i);
@@ -342,6 +461,17 @@ const char* to_string(RobustLoss l) {
   return "?";
 }
 
+nlohmann::json run_offsets_json(const FrictionFitResult& r, const FrictionFitOptions& o) {
+  const char* model = o.run_offsets == RunOffsets::random  ? "random (a run intercept of variance tau^2, ML, GLS)"
+                      : o.run_offsets == RunOffsets::fixed ? "fixed (one free offset per run, profiled)"
+                                                           : "none";
+  nlohmann::json per_run = nlohmann::json::object();
+  for (std::size_t k = 0; k < r.runs.size() && k < r.run_offset_N.size(); ++k)
+    per_run[r.runs[k]] = {{"offset_N", number(r.run_offset_N[k])}, {"mean_residual_N", number(r.run_mean_residual_N[k])}};
+  return {{"model", model}, {"sd_N", number(r.run_offset_sd_N)}, {"ratio_to_noise_variance", number(r.run_offset_ratio)},
+          {"fits", r.variance_passes}, {"per_run", per_run}};
+}
+
 }  // namespace
 
 std::string friction_fit_json(const FrictionFitResult& r, const FrictionFitOptions& o, const FitProvenance& prov) {
@@ -378,6 +508,7 @@ std::string friction_fit_json(const FrictionFitResult& r, const FrictionFitOptio
         {"effects", o.effects},
         {"reference_temperature_C", o.start.T_ref_C}}},
       {"runs", r.runs},
+      {"run_offsets", run_offsets_json(r, o)},
       {"goodness",
        {{"rmse_N", r.rmse_N},
         {"max_relative_error", r.max_relative_error},

@@ -73,11 +73,11 @@ std::unique_ptr<ceres::CostFunction> FrictionModel::cost_function(const std::vec
                                                                   const RowLoss& loss) const {
   const std::size_t n = rows.empty() ? data_.samples.size() : rows.size();
   std::vector<std::size_t> groups;
-  if (data_.zero_offset_per_run)
+  if (!data_.run_shrink.empty())
     for (std::size_t j = 0; j < n; ++j) groups.push_back(data_.log->run[data_.samples[rows.empty() ? j : rows[j]]]);
   return std::make_unique<BatchedAutoDiffCostFunction<FrictionResidual>>(
       FrictionResidual{&data_, rows, effect_slots_}, static_cast<int>(7 + effect_slots_.size()), n, loss,
-      std::move(groups));
+      std::move(groups), data_.run_shrink);
 }
 
 // A run is a cluster; its samples, in the log's order (time order within a run), are its

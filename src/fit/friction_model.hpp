@@ -21,7 +21,10 @@ struct FrictionData {
   std::vector<std::size_t> samples;  // indices into the log
   std::vector<double> inv_sigma;     // per entry of `samples`
   double T_ref_C = 40.0;
-  bool zero_offset_per_run = false;  // profile out one offset per run (centred residuals)
+  // Per run index: the share c of the run's mean residual taken out (1: a free zero offset per
+  // run, profiled; below 1: a random one, GLS-whitened; see BatchedAutoDiffCostFunction).
+  // Empty: no run offsets.
+  std::vector<double> run_shrink;
 };
 
 // Design facts that decide what the data can determine.

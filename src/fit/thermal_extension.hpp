@@ -37,6 +37,11 @@ struct ThermalRunSetup {
   FrictionConditions<double> conditions;                    // the run's, at the start temperature
   RailParams<T> params;
   HeatRateModel<T> heat_rate;  // empty: the constant params.heat_rate_W
+  // What params.heat_rate_W is once a mechanism makes Q_f follow the rail temperature
+  // (heat_rate set): false, Q_f at the start temperature, where the model starts (the
+  // friction law there, or start_friction_N·V); true, the run's mean of Q_f (a load cell's
+  // mean_friction_N·V), and the simulation scales the model so that its run mean stays that.
+  bool heat_rate_is_run_mean = false;
   T sensor_lag_s{0.0};         // thermocouple first-order time constant; 0: none
   bool lagged = false;
 };

@@ -6,6 +6,7 @@
 #include "thermal_extension.hpp"
 #include "thermal_extensions/alpha_velocity.hpp"
 #include "thermal_extensions/base_loss.hpp"
+#include "thermal_extensions/convection_scale.hpp"
 #include "thermal_extensions/convection_velocity.hpp"
 #include "thermal_extensions/coupling.hpp"
 #include "thermal_extensions/source_model.hpp"
@@ -17,6 +18,7 @@ const std::vector<ThermalExtension>& thermal_extensions() {
   static const std::vector<ThermalExtension> library = {
       ThermalExtension::of<ConvectionVelocity>(),
       ThermalExtension::of<BaseLoss>(),
+      ThermalExtension::of<ConvectionScale>(),
       ThermalExtension::of<Coupling>(),
       ThermalExtension::of<ThermocoupleLag>(),
       ThermalExtension::of<AlphaVelocity>(),

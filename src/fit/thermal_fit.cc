@@ -28,6 +28,9 @@ using detail::ThermalModel;
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+// RunInfo::heat_source of a heat from the manifest's friction force.
+constexpr const char* kMeasuredMeanFriction = "measured mean friction";
+constexpr const char* kMeasuredStartFriction = "measured friction at the start temperature";
 
 double mean_of_finite(const std::vector<double>& values, std::size_t from, std::size_t to) {
   double sum = 0;
@@ -146,16 +149,20 @@ Prepared prepare_run(const ThermalRun& run, const ThermalFitOptions& o) {
   if (std::isnan(T0) || pr.fit_offsets) T0 = ambient_start;
 
   // Heat: the friction law at the start (the rail and grease at the ambient, which the two
-  // ambient sensors measure better than one biased thermocouple), or the measured mean friction.
+  // ambient sensors measure better than one biased thermocouple), or the measured friction:
+  // at the start temperature when the manifest gives it, else the run's mean (and a
+  // temperature-following heat then keeps that mean).
   HeatInput heat = o.heat;
-  if (heat == HeatInput::automatic)
-    heat = o.friction || !run.mean_friction_N ? HeatInput::friction_law : HeatInput::measured_friction;
+  const bool measured = run.mean_friction_N || run.start_friction_N;
+  if (heat == HeatInput::automatic) heat = o.friction || !measured ? HeatInput::friction_law : HeatInput::measured_friction;
   double Q = 0;
   if (heat == HeatInput::measured_friction) {
-    if (!run.mean_friction_N)
-      throw InvalidParameter(run.id, "the run has no mean_friction_N in the manifest; give a friction fit (--friction)");
-    Q = *run.mean_friction_N * run.velocity_m_s;
-    out.info.heat_source = "measured mean friction";
+    if (!measured)
+      throw InvalidParameter(run.id, "the run has no mean_friction_N or start_friction_N in the manifest; give a friction "
+                                     "fit (--friction)");
+    pr.heat_is_run_mean = !run.start_friction_N;
+    Q = (run.start_friction_N ? *run.start_friction_N : *run.mean_friction_N) * run.velocity_m_s;
+    out.info.heat_source = run.start_friction_N ? kMeasuredStartFriction : kMeasuredMeanFriction;
   }
   {
     const FrictionConstants<double> k = o.friction ? *o.friction : paper_friction_constants();
@@ -366,7 +373,8 @@ HeatUncertainty heat_uncertainty(const std::vector<PreparedRun>& runs, const std
   Eigen::VectorXd measured = Eigen::VectorXd::Zero(G);
   for (Eigen::Index r = 0; r < G; ++r) {
     const auto i = static_cast<std::size_t>(r);
-    if (infos[i].heat_source == "measured mean friction") {
+    if (infos[i].heat_source == kMeasuredMeanFriction || infos[i].heat_source == kMeasuredStartFriction) {
+      // Relative: a load cell's error is mostly its gain, the same for the start and the mean.
       const auto& run = data.runs[i];
       if (run.mean_friction_uncertainty_N) measured[r] = *run.mean_friction_uncertainty_N / *run.mean_friction_N;
       else missing.push_back(run.id + ": no mean_friction_uncertainty_N in the manifest");

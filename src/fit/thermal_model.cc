@@ -29,6 +29,53 @@ std::vector<int> local_parameters(const ThermalLayout& layout, std::size_t r) {
   return local;
 }
 
+template <typename T>
+double value_of(const T& x) {
+  if constexpr (std::is_same_v<T, double>) return x;
+  else return x.a;
+}
+
+// The time mean of a quantity given at the output times (trapezoids; the value when there is one).
+template <typename T>
+T time_mean(const std::vector<double>& time_s, const std::vector<T>& values) {
+  if (values.size() < 2 || !(time_s.back() > time_s.front())) return values.front();
+  T sum(0.0);
+  for (std::size_t i = 0; i + 1 < values.size(); ++i) sum += 0.5 * (values[i] + values[i + 1]) * (time_s[i + 1] - time_s[i]);
+  return sum / (time_s.back() - time_s.front());
+}
+
+// The rail with a temperature-following heat rate scaled so that its mean over the run (the
+// outputs, which span it) is params.heat_rate_W, the measured run mean: Q(t) = c · model(T_s),
+// with c the root of ln mean(c) = ln Q_mean. The mean grows more slowly than c (a larger heat
+// warms the rail, and the friction falls), so secant steps on ln c converge in a few
+// simulations; a Jet's derivatives converge with its value.
+template <typename T>
+RailSolution<T> simulate_rail_keeping_mean_heat(const RailGeometry& geometry, const RailNumerics& numerics,
+                                                const RailOutputs& outputs, const RailParams<T>& params,
+                                                const AmbientTrace& ambient, const HeatRateModel<T>& heat_rate) {
+  using std::exp, std::log;
+  if (!(value_of(params.heat_rate_W) > 0)) return simulate_rail(geometry, numerics, outputs, params, ambient, heat_rate);
+  constexpr int kMaxSimulations = 12;
+  constexpr double kTolerance = 1e-9;  // of ln(mean / target)
+  const T log_target = log(params.heat_rate_W);
+  T log_c(0.0), previous_log_c(0.0), previous_miss(0.0);
+  RailSolution<T> sol;
+  for (int k = 0; k < kMaxSimulations; ++k) {
+    const T c = exp(log_c);
+    sol = simulate_rail<T>(geometry, numerics, outputs, params, ambient, [&](const T& source_C) { return c * heat_rate(source_C); });
+    const T miss = log(time_mean(sol.output_times_s, sol.heat_rate_W)) - log_target;
+    if (std::abs(value_of(miss)) < kTolerance) break;
+    // d ln mean / d ln c: 1 for the first step, then the secant's (kept within reason).
+    double slope = 1.0;
+    if (k > 0 && value_of(log_c) != value_of(previous_log_c))
+      slope = std::clamp(value_of(miss - previous_miss) / value_of(log_c - previous_log_c), 0.2, 5.0);
+    previous_log_c = log_c;
+    previous_miss = miss;
+    log_c = log_c - miss / slope;
+  }
+  return sol;
+}
+
 // Simulated temperatures of run r, [time][sensor], with the parameters given by `param`
 // (global index -> scalar) and the run's fixed values elsewhere; with `end_profile`, also the
 // rail's temperature profile at the last record.
@@ -50,7 +97,8 @@ std::vector<std::vector<T>> simulate_run(const PreparedRun& run, const RailNumer
                            .friction = &run.friction,
                            .friction_effects = &run.friction_effects,
                            .conditions = run.conditions,
-                           .params = p};
+                           .params = p,
+                           .heat_rate_is_run_mean = run.heat_is_run_mean};
   for (std::size_t e = 0; e < layout.extensions.size(); ++e) {
     std::vector<T> values;
     for (std::size_t j = 0; j < layout.extensions[e]->parameters.size(); ++j)
@@ -61,7 +109,10 @@ std::vector<std::vector<T>> simulate_run(const PreparedRun& run, const RailNumer
                             .sensor_positions_m = run.sensor_positions_m,
                             .output_times_s = run.times_s,
                             .profile_times_s = end_profile ? std::vector<double>{run.times_s.back()} : std::vector<double>{}};
-  const RailSolution<T> sol = simulate_rail(run.geometry, numerics, outputs, setup.params, run.ambient, setup.heat_rate);
+  const RailSolution<T> sol =
+      setup.heat_rate && setup.heat_rate_is_run_mean
+          ? simulate_rail_keeping_mean_heat(run.geometry, numerics, outputs, setup.params, run.ambient, setup.heat_rate)
+          : simulate_rail(run.geometry, numerics, outputs, setup.params, run.ambient, setup.heat_rate);
   if constexpr (std::is_same_v<T, double>) {
     if (end_profile) *end_profile = {run.times_s.back(), sol.node_positions_m, sol.profiles_C.front()};
   }

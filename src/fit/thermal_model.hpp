@@ -29,6 +29,7 @@ struct PreparedRun {
   FrictionConstants<double> friction = paper_friction_constants();
   FrictionEffects<double> friction_effects;
   FrictionConditions<double> conditions;  // at the temperature Q_f was evaluated at
+  bool heat_is_run_mean = false;          // params.heat_rate_W is the run's mean (ThermalRunSetup)
   // With a fitted heat scale: the weight σ_T/σ_Q of its prior row (σ_T the thermocouple
   // noise, σ_Q the relative uncertainty of Q_f), r = weight · (scale - 1).
   double heat_prior_weight = 0;

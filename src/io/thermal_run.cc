@@ -89,12 +89,13 @@ enum NumberKeyIndex : std::size_t {
   kContactLength,
   kBlockLength,
   kMeanFrictionUncertainty,
-  kMeanFriction
+  kMeanFriction,
+  kStartFriction
 };
 // A key is matched against the bases in this order; a base that extends another
 // (mean_friction_uncertainty) comes first, so a bad unit on it is reported as its own
 // ("mean_friction_uncertainty_kgs": unknown unit 'kgs'), not as mean_friction's.
-constexpr std::array<NumberKey, 9> kNumberKeys{{
+constexpr std::array<NumberKey, 10> kNumberKeys{{
     {"velocity", Quantity::velocity, true, true},
     {"load", Quantity::force, true, false},
     {"preload", Quantity::preload, false, false},
@@ -104,6 +105,7 @@ constexpr std::array<NumberKey, 9> kNumberKeys{{
     {"block_length", Quantity::length_mm, false, true},
     {"mean_friction_uncertainty", Quantity::force, false, false},
     {"mean_friction", Quantity::force, false, false},
+    {"start_friction", Quantity::force, false, false},
 }};
 // A number key in internal units ("mean_friction_N"), as the writer writes it.
 std::string canonical_key(NumberKeyIndex i) {
@@ -288,6 +290,7 @@ ThermalRun read_run(const Manifest& m, const toml::table& table) {
   run.block_length_mm = value(kBlockLength);
   run.mean_friction_N = value(kMeanFriction);
   run.mean_friction_uncertainty_N = value(kMeanFrictionUncertainty);
+  run.start_friction_N = value(kStartFriction);
   if (run.mean_friction_uncertainty_N && !run.mean_friction_N) {
     const Given& u = *keys.number[kMeanFrictionUncertainty];
     m.fail(u.key->source(), fmt::format("{} given without {}: it is the uncertainty of the measured mean friction",
@@ -558,6 +561,7 @@ std::string thermal_manifest_toml(const ThermalDataSet& set, const fs::path& fol
     optional(out, canonical_key(kBlockLength), run.block_length_mm);
     optional(out, canonical_key(kMeanFriction), run.mean_friction_N);
     optional(out, canonical_key(kMeanFrictionUncertainty), run.mean_friction_uncertainty_N);
+    optional(out, canonical_key(kStartFriction), run.start_friction_N);
     if (!run.sensor_position_m.empty()) {
       out += fmt::format("[run.{}]\n", csv::canonical_name(kSensors, Quantity::distance_m));
       for (const auto& [name, x] : run.sensor_position_m) number(out, name, x);

@@ -51,7 +51,7 @@ void calibrate_friction_model(Calibration& c) {
   m.friction_options.effects = m.friction_causes;
   m.friction_options.effect_start.clear();
   for (const auto& name : m.friction_causes) m.friction_options.effect_start.push_back(c.friction_diagnosis->final_fit.fit.parameter(name).value);
-  m.friction_options.zero_offset_per_run = true;
+  m.friction_options.run_offsets = RunOffsets::random;
   m.friction_options.cross_validate = c.friction_log->run_names.size() >= 2;
   m.friction = fit_friction(*c.friction_log, m.friction_options);
 }

@@ -363,6 +363,8 @@ ThermalRigOutput generate_thermal_dataset(const ThermalRigConfig& config, const 
       for (double q : sol.heat_rate_W) mean_Q += q;
       mean_Q /= static_cast<double>(sol.heat_rate_W.size());
       // The load cell sees the friction, not the heat factor; it has the data set's gain error.
+      // Logged as the run's mean (its time average over the records), as a load cell's log
+      // averages to: with coupling, below the friction at the start.
       const double mean_friction_true_N = mean_Q / heat_factor / V;
       run.mean_friction_N =
           round_to(mean_friction_true_N * friction_gain + config.friction_noise_N * rng.normal(), 2);

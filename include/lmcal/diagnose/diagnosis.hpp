@@ -4,6 +4,7 @@
 
 #include <cstddef>
 #include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -36,6 +37,7 @@ struct CandidateScore {
   double lrt_statistic = 0, lrt_p = 1;  // NaN for a switch (not nested: BIC decides)
   double cv_rmse = 0;                   // leave-one-run-out, in the data's unit
   double cv_gain_percent = 0;           // against the current model
+  double cv_shape_gain_percent = std::numeric_limits<double>::quiet_NaN();  // on the runs' shape (their level out)
   bool accepted = false;
   std::string reason;                   // why it was or was not accepted
   std::string measure;                  // what to log to see this cause directly

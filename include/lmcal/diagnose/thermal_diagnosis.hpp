@@ -6,25 +6,40 @@
 //   friction law is evaluated at a temperature known to a few tenths of a kelvin, and Q_f
 //   changes by about 5 %/K), fitted with α in every model. So the diagnosis looks at the
 //   course of the traces over time and at levels beyond what the heat rate's uncertainty
-//   allows, not at thermocouple biases.
+//   allows, not at thermocouple biases. Those two are the nuisance parameters that are always
+//   fitted; a global heat scale is α itself (the rail sees only αQ), and a bias of the ambient
+//   sensors shifts the ambient and the start temperature alike, hence the whole simulated
+//   field, by one constant (the model is linear in temperature): every thermocouple's offset
+//   takes it, and the heat scale the 5 %/K it makes in Q_f. Neither is a candidate.
 //
 //   1. baseline: α (and what the fit options free) with the published model; the residuals
 //      per run and sensor (bias, RMSE, Durbin-Watson), their lag-1 autocorrelation and the
 //      effective sample size n_eff = n (1 - ρ)/(1 + ρ) it leaves, and ANOVA F tests on cell
 //      means (run × sensor × time bin; one value per cell, so serially correlated samples do
 //      not count as independent evidence): time, heating vs steady phase, temperature rise,
-//      and how the course over time differs with speed, load, sensor position and run;
+//      and how the course over time differs with speed, load, sensor position and run, their
+//      p Holm-adjusted over the seven; and a lack-of-fit F test of the residual variance
+//      against the thermocouples' noise variance (second differences of the traces);
 //   2. candidates: each mechanism of the thermal extension library added on its own and
-//      fitted; scored by leave-one-run-out prediction RMSE (the run's global parameters from
+//      fitted, the nuisance "h differs" (convection_scale) among them; scored by leave-one-run-out prediction RMSE (the run's global parameters from
 //      the others, one Gauss-Newton step), AICc, BIC and a likelihood-ratio test, both on
 //      n_eff; a switch without parameters (the source model) needs a BIC 10 lower;
 //   3. forward selection: a candidate passes when significant, when it lowers the held-out
 //      RMSE by 0.1 % and removes a tenth of its excess over the thermocouple noise; the
 //      passing candidate with the largest held-out gain is
-//      accepted, the rest are tried on top of it, until nothing more passes;
+//      accepted, the rest are tried on top of it, until nothing more passes; candidates
+//      that change the fitted temperatures as the accepted one does (correlation > 0.99) are
+//      a tie, named with it (base_loss and convection_scale: b = Δh·p, only the rail's two
+//      end faces tell them apart);
 //   4. verdict: causes with magnitude and interval, held-out RMSE before and after, how α
-//      moves, what remains; "unexplained" with the covariate the residuals follow when no
-//      candidate passes, or "no significant discrepancy".
+//      moves, what remains; "explained" only when the final residuals follow no covariate and
+//      pass the lack-of-fit test, else "partly explained"; "unexplained" with the covariate
+//      the residuals follow (or their lack of fit) when no candidate passes, or "no
+//      significant discrepancy".
+//
+//   Trap: with the heat from a measured run-mean friction (mean_friction_N), the coupling
+//   candidate keeps the run mean of its heat at that value; give start_friction_N when the
+//   friction of the cold rail is known instead.
 #pragma once
 
 #include <string>
@@ -49,7 +64,7 @@ struct ThermalResidualDiagnostics {
   std::vector<SensorResiduals> sensors;
   std::vector<CovariateTest> covariates;  // strongest first
   bool structured = false;                // a covariate significant at structure_p, and large enough
-  LackOfFit lack_of_fit;
+  LackOfFit lack_of_fit;                  // the residual variance against the thermocouples' noise
 };
 
 struct ThermalDiagnosisOptions {
@@ -72,7 +87,7 @@ struct ThermalDiagnosisOptions {
 };
 
 struct ThermalDiagnosis {
-  std::string verdict;  // "no significant discrepancy", "explained", "unexplained"
+  std::string verdict;  // "no significant discrepancy", "explained", "partly explained", "unexplained"
   std::string summary;
   ThermalResidualDiagnostics baseline, final;
   std::vector<std::vector<CandidateScore>> rounds;

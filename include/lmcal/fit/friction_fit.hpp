@@ -41,6 +41,8 @@ enum class FrictionWeighting {
 // The named friction effects a fit may add, with their parameter names and units.
 const std::vector<std::string>& friction_effect_names();
 
+enum class RunOffsets { none, fixed, random };
+
 struct FrictionFitOptions {
   FitOptions fit;
   FrictionConstants<double> start = paper_friction_constants();  // start values; held constants keep them
@@ -53,9 +55,16 @@ struct FrictionFitOptions {
   FrictionWeighting weighting = FrictionWeighting::none;
   bool per_run_fits = true;
   bool cross_validate = false;  // leave-one-run-out prediction RMSE (one-step, no refits)
-  // Profile out one zero offset per run (the load cell's zero moves between runs): residuals
-  // are centred within each run. Not with a robust loss.
-  bool zero_offset_per_run = false;
+  // The load cell's zero moves between runs (not with a robust loss):
+  //   none:   no offsets;
+  //   fixed:  one free offset per run, profiled out (residuals centred within each run) — all
+  //           that changes only between runs (load, temperature on a one-setup-per-run rig)
+  //           is then lost to the offsets;
+  //   random: a random run intercept of variance τ², estimated by maximum likelihood with the
+  //           constants (alternating, at most `max_variance_passes` fits): generalised least
+  //           squares, so what changes between runs stays informative, weighed against τ².
+  RunOffsets run_offsets = RunOffsets::none;
+  int max_variance_passes = 4;
 };
 
 struct ConditionResidual {
@@ -83,8 +92,23 @@ struct FrictionFitResult {
   std::vector<double> predicted_N;
   std::vector<double> sigma_N;
   double rmse_N = 0;
-  double cv_rmse_N = std::numeric_limits<double>::quiet_NaN();  // leave-one-run-out, when asked
-  std::vector<double> run_offset_N;  // per run: mean of measured - predicted (the profiled offset)
+  // Leave-one-run-out, when asked: each run predicted from the others as a new setup (with
+  // random offsets its zero unknown, at the offsets' mean), and the same with the held-out
+  // run's own level taken out (its shape only; equal to the first with fixed offsets).
+  double cv_rmse_N = std::numeric_limits<double>::quiet_NaN();
+  double cv_shape_rmse_N = std::numeric_limits<double>::quiet_NaN();
+  // Per run: the zero offset in the predictions — the run's mean of measured - law (fixed
+  // offsets), its shrunken estimate (random: mean · nλ/(1 + nλ)), or 0 (none) — and that mean.
+  std::vector<double> run_offset_N;
+  std::vector<double> run_mean_residual_N;
+  double run_offset_sd_N = 0;     // τ of random offsets (ML; 0 otherwise)
+  double run_offset_ratio = 0;    // λ = τ²/σ² of the whitened residuals
+  int variance_passes = 0;        // fits the random offsets took
+  // -2 log-likelihood of the fit as n log(deviance_ss / n), σ² profiled: the residual sum of
+  // squares (whitened, offsets out) for none and fixed offsets, and with the random offsets'
+  // determinant Σ log(1 + n_r λ) folded in for random ones. Comparable between models fitted
+  // with the same offsets.
+  double deviance_ss = 0;
   double max_relative_error = 0;  // max over samples of |measured - predicted| / |measured|
   std::size_t max_relative_error_sample = 0;
   std::vector<ConditionResidual> conditions;

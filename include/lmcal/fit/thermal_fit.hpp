@@ -43,7 +43,8 @@ enum class ThermalOffsets {
 enum class HeatInput {
   automatic,        // friction law when constants are given, else the measured mean friction
   friction_law,     // Q = F(constants, effects; run conditions at the ambient at the start) · V
-  measured_friction // Q = mean_friction_N · V from the manifest
+  measured_friction // Q = start_friction_N · V from the manifest (Q_f at the start temperature), else
+                    // mean_friction_N · V (the run's mean: a coupled heat keeps that mean)
 };
 
 struct ThermalFitOptions {
@@ -115,7 +116,7 @@ struct SensorGoodness {
 struct RunInfo {
   std::string id;
   double velocity_m_s = 0, load_N = 0, heat_rate_W = 0, initial_temperature_C = 0;
-  std::string heat_source;  // "friction law" or "measured mean friction"
+  std::string heat_source;  // "friction law …", "measured mean friction" or "measured friction at the start temperature"
   double heat_relative_se = 0;  // of the heat rate, as counted in the intervals (NaN: not known)
   bool offsets_fitted = false;
   std::string offsets_note;     // why the offsets were held, when they were

@@ -16,8 +16,9 @@
 //   rail_length_m = 0.6
 //   contact_length_mm = 82.2        # optional: the catalog's
 //   block_length_mm = 120.2         # optional: the catalog's
-//   mean_friction_N = 44.1          # optional: measured mean friction force
+//   mean_friction_N = 44.1          # optional: measured friction force, its mean over the run
 //   mean_friction_uncertainty_N = 0.9  # optional: its standard uncertainty (1 σ)
+//   start_friction_N = 47.0         # optional: measured friction at the start temperature
 //   [run.sensors_m]                 # position of every tc column from the rail centre
 //   tc1_C = 0.0
 //   tc2_C = 0.05
@@ -29,6 +30,12 @@
 // are counted in report.time_gaps. A thermal run needs velocity > 0, load >= 0,
 // stroke > 0, rail length > stroke + contact length, and a position for every tc column;
 // mean_friction_uncertainty_N needs mean_friction_N (it is that value's uncertainty).
+//
+// Trap: mean_friction_N is the run's mean (what a load cell's log averages to), not the
+// friction of the cold rail: the grease thins as the rail warms, so a mean over a 6 h run is
+// below the start's. A thermal fit takes the heat from start_friction_N·V when it is given
+// (the heat at the start temperature, where a friction-temperature coupling starts), else
+// from mean_friction_N·V (and a coupled heat then keeps that mean over the run).
 // Bad input throws InputError(file, line, column, what was expected), for the CSV and
 // for the manifest alike, before anything is returned.
 #pragma once
@@ -71,8 +78,9 @@ struct ThermalRun {
   double rail_length_m = 0;
   std::optional<double> contact_length_mm;
   std::optional<double> block_length_mm;
-  std::optional<double> mean_friction_N;
+  std::optional<double> mean_friction_N;             // its mean over the run
   std::optional<double> mean_friction_uncertainty_N;  // standard uncertainty (1 σ) of mean_friction_N
+  std::optional<double> start_friction_N;             // friction at the start temperature (the run's first minutes)
   std::map<std::string, double> sensor_position_m;  // tc column name -> x from the rail centre
   std::map<std::string, double> guide_overrides;    // catalog field -> value
   ThermalTrace trace;

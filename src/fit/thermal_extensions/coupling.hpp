@@ -4,7 +4,11 @@
 //
 //   Q(T_s) = Q_0 · (1 + κ (Q_law(T_s) / Q_law(T_start) - 1))
 //
-// at the rail temperature under the block T_s; κ = 1 is the friction law as fitted.
+// at the rail temperature under the block T_s; κ = 1 is the friction law as fitted. Q_0 is
+// the run's heat at the start temperature (the friction law there, start_friction_N·V); when
+// the run's heat is a measured run mean (mean_friction_N·V), Q_0 is instead what makes the
+// run mean of Q that value (ThermalRunSetup::heat_rate_is_run_mean): a load cell's mean
+// over a run that warms is below the friction at the start.
 // Shows as a warm-up that levels off sooner than a constant heat rate gives.
 #pragma once
 
