@@ -7,7 +7,9 @@
 #include "lmcal/io/csv_writer.hpp"
 
 #include <filesystem>
+#include <map>
 #include <string>
+#include "lmcal/fit/friction_fit.hpp"
 #include <string_view>
 #include <vector>
 
@@ -131,6 +133,19 @@ void add_assignments(CLI::App& app, const char* name, std::map<std::string, doub
 // --covariance (which covariance the intervals quote: auto, iid, hac, cluster, bootstrap) and
 // --bootstrap (cluster-bootstrap replicates, 0: none), into `fit`.
 void add_uncertainty_options(CLI::App& app, FitOptions& fit);
+
+// The friction constants a command fits, holds and starts from: --free, --fix, --start,
+// --bound, and --run-offsets (how the load cell's zero moves between runs).
+struct FrictionConstantOptions {
+  std::vector<std::string> free;        // empty: all seven
+  std::map<std::string, double> fixed;  // held at these values
+  std::map<std::string, double> start;
+  std::vector<std::string> bounds;      // NAME=LO:HI
+  std::string run_offsets;              // none, fixed, random; empty: the command's default
+};
+void add_friction_constant_options(CLI::App& app, FrictionConstantOptions& o);
+// Into `f` (InvalidParameter naming the option for an unknown constant or a bad bound).
+void apply_friction_constant_options(const FrictionConstantOptions& o, FrictionFitOptions& f);
 
 // A list option parsed with parse_list.
 void add_list(CLI::App& app, const char* name, std::vector<double>& values, const char* help);

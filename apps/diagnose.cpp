@@ -20,6 +20,7 @@ struct DiagnoseFrictionOptions {
   std::vector<std::string> files;
   std::string name = "friction_diagnosis";
   std::string output_dir = "fits";
+  FrictionConstantOptions constants;
   FrictionDiagnosisOptions diagnosis;
 };
 
@@ -45,6 +46,7 @@ void print(const FrictionDiagnosis& d) {
                            d.baseline.rmse_N, d.baseline.durbin_watson);
   print_covariates(d.baseline.covariates, "N");
   print_rounds(d.rounds, "N");
+  for (const auto& note : d.design_notes) std::cout << "design: " << note << "\n";
   std::cout << "verdict: " << d.verdict << "\n  " << d.summary << "\n";
 }
 
@@ -82,6 +84,7 @@ void run_diagnose_thermal(DiagnoseThermalOptions& o) {
 }
 
 void run_diagnose_friction(DiagnoseFrictionOptions& o) {
+  apply_friction_constant_options(o.constants, o.diagnosis.fit);
   std::vector<std::filesystem::path> paths(o.files.begin(), o.files.end());
   const FrictionLog log = load_friction_logs(paths);
   const FrictionDiagnosis d = with_progress("friction diagnosis", [&](const Progress& progress) {
@@ -107,6 +110,7 @@ void setup_diagnose(CLI::App& app) {
   friction->add_option("--min-gain", o->diagnosis.min_cv_gain_percent, "Least held-out RMSE gain to accept a cause, %")
       ->capture_default_str();
   friction->add_option("--lrt-p", o->diagnosis.lrt_p, "Significance level of the likelihood-ratio test")->capture_default_str();
+  add_friction_constant_options(*friction, o->constants);
   friction->callback([o] { run_diagnose_friction(*o); });
 
   auto t = std::make_shared<DiagnoseThermalOptions>();

@@ -26,10 +26,7 @@ struct FitFrictionOptions {
   std::vector<std::string> files;
   std::string name = "friction";
   std::string output_dir = "fits";
-  std::vector<std::string> free;            // empty: all seven
-  std::map<std::string, double> fixed;      // held at these values
-  std::map<std::string, double> start;
-  std::vector<std::string> bounds;          // NAME=LO:HI
+  FrictionConstantOptions constants;
   std::vector<std::string> effects;
   std::string loss = "none";
   double loss_scale = 1.345;
@@ -41,33 +38,9 @@ struct FitFrictionOptions {
   FitOptions uncertainty;  // --covariance, --bootstrap
 };
 
-std::size_t constant_index(const std::string& option, const std::string& name) {
-  for (std::size_t j = 0; j < kFrictionConstantNames.size(); ++j)
-    if (name == kFrictionConstantNames[j]) return j;
-  throw InvalidParameter(option, fmt::format("unknown constant '{}'; expected one of k1, k2, mu_st, v_st_m_s, mu_v, "
-                                             "beta_per_K, f0",
-                                             name));
-}
-
 FrictionFitOptions to_fit_options(const FitFrictionOptions& o) {
   FrictionFitOptions f;
-  if (!o.free.empty()) {
-    f.free.fill(false);
-    for (const auto& name : o.free) f.free[constant_index("--free", name)] = true;
-  }
-  for (const auto& [name, value] : o.start) fittable_constant(f.start, constant_index("--start", name)) = value;
-  for (const auto& [name, value] : o.fixed) {
-    const std::size_t j = constant_index("--fix", name);
-    fittable_constant(f.start, j) = value;
-    f.free[j] = false;
-  }
-  for (const auto& item : o.bounds) {
-    const auto eq = item.find('='), colon = item.find(':', eq == std::string::npos ? 0 : eq);
-    if (eq == std::string::npos || colon == std::string::npos)
-      throw InvalidParameter("--bound", fmt::format("'{}' is not NAME=LOW:HIGH", item));
-    const auto range = parse_list("--bound", item.substr(eq + 1, colon - eq - 1) + "," + item.substr(colon + 1));
-    f.bounds[constant_index("--bound", item.substr(0, eq))] = {range[0], range[1]};
-  }
+  apply_friction_constant_options(o.constants, f);
   f.effects = o.effects;
   if (o.loss == "none") f.fit.loss = RobustLoss::none;
   else if (o.loss == "huber") f.fit.loss = RobustLoss::huber;
@@ -114,11 +87,7 @@ void setup_fit(CLI::App& app, const std::vector<std::string>& argv) {
   friction->add_option("files", o->files, "Friction log CSV files")->required();
   friction->add_option("--name", o->name, "Name of the fit (output file names)")->capture_default_str();
   friction->add_option("-o,--output-dir", o->output_dir, "Output folder")->capture_default_str();
-  friction->add_option("--free", o->free, "Constants to fit (default all): k1,k2,mu_st,v_st_m_s,mu_v,beta_per_K,f0")
-      ->delimiter(',');
-  add_assignments(*friction, "--fix", o->fixed, "Hold a constant at a value: --fix k2=0.03");
-  add_assignments(*friction, "--start", o->start, "Start value: --start mu_st=1 (default: the paper's)");
-  friction->add_option("--bound", o->bounds, "Bounds: --bound k1=0:1 (repeatable)");
+  add_friction_constant_options(*friction, o->constants);
   friction->add_option("--effect", o->effects, "Fit a named effect on top of the law (e.g. seal_drag)")->delimiter(',');
   friction->add_option("--loss", o->loss, "Robust loss: none, huber or cauchy")->capture_default_str();
   friction->add_option("--loss-scale", o->loss_scale, "Robust loss scale, in residual sigmas")->capture_default_str();

@@ -124,6 +124,9 @@ void setup_generate(CLI::App& app, const std::vector<std::string>& argv) {
   add_list(*friction, "--velocity", f.velocity_m_s, "Speeds, m/s (default 0.002 ... 0.15)");
   add_list(*friction, "--temperature", f.temperature_C, "Temperatures, C (default 22,26,32,40)");
   friction->add_option("--runs", f.runs, "Repeats of the whole sweep")->capture_default_str();
+  friction->add_flag("--one-setup-per-run", f.one_setup_per_run,
+                     "Each setup (guide, preload, load, temperature) a run of its own, swept over speed and direction");
+
   friction->add_option("--noise", f.noise_N, "Load-cell noise per sample (sigma), N")->capture_default_str();
   friction->add_option("--run-offset", f.run_offset_N, "Zero offset per run (sigma), N")->capture_default_str();
   friction->add_option("--noise-ar1", f.noise_ar1, "Lag-1 autocorrelation of the load-cell noise within a run, [0, 1)")

@@ -79,7 +79,8 @@ TEST(FrictionEffects, JetDerivativesOfTheEffectParametersEqualFiniteDifferences)
   }
 }
 
-// The registry's contract: names are unique and findable, the bounds hold the neutral value,
+// The registry's contract: names are unique and findable, the bounds hold the neutral value
+// (a physical one-sided bound may sit on it: a drag is >= 0),
 // and every correction vanishes at its neutral value, at every condition.
 TEST(FrictionEffects, EveryRegisteredEffectVanishesAtItsNeutralValueAndIsFindableByName) {
   const auto k = paper_friction_constants();
@@ -87,7 +88,8 @@ TEST(FrictionEffects, EveryRegisteredEffectVanishesAtItsNeutralValueAndIsFindabl
   FrictionEffectLibrary::for_each([&]<class Effect, std::size_t slot>() {
     const FrictionEffectInfo& info = Effect::info;
     EXPECT_EQ(friction_effect_slot(info.name), slot);
-    EXPECT_LT(info.lower, info.neutral) << info.name;
+    EXPECT_LE(info.lower, info.neutral) << info.name;
+    EXPECT_LT(info.lower, info.upper) << info.name;
     EXPECT_GT(info.upper, info.neutral) << info.name;
     EXPECT_GT(info.scale, 0) << info.name;
     bool acts = false;

@@ -7,6 +7,7 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <numeric>
+#include <set>
 #include <tuple>
 
 #include "lmcal/error.hpp"
@@ -22,8 +23,10 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 // A fit of the law plus `effects`, started at `start` (one start: the diagnosis refits many times).
 FrictionFitResult fit_with(const FrictionLog& log, const FrictionDiagnosisOptions& o, const std::vector<std::string>& effects,
-                           const FrictionConstants<double>& start, const std::vector<double>& effect_start = {}) {
+                           const FrictionConstants<double>& start, const std::vector<double>& effect_start,
+                           double run_offset_ratio) {
   FrictionFitOptions f = o.fit;
+  f.run_offset_ratio_start = run_offset_ratio;  // the current model's: its variance settles in fewer fits
   f.effects = effects;
   f.effect_start = effect_start;
   f.start = start;
@@ -31,90 +34,249 @@ FrictionFitResult fit_with(const FrictionLog& log, const FrictionDiagnosisOption
     fittable_constant(f.start, j) = std::clamp(fittable_constant(f.start, j), f.bounds[j].first, f.bounds[j].second);
   f.per_run_fits = false;
   f.cross_validate = true;
-  f.run_offsets = RunOffsets::random;
   f.fit.starts = 0;  // warm-started from the previous model's estimate: no multi-start
   f.fit.profile = ProfileMode::none;
+  f.fit.bootstrap = 0;  // the diagnosis quotes no bootstrap intervals
   return fit_friction(log, f);
 }
 
-// `fit` profiled one zero offset per run: its predictions include them, and the offsets
-// themselves are tested for a trend over the runs.
+// The covariates the residuals are tested against, one value per sample. Temperature at
+// its nominal (condition) value: grouping by the logged temperature itself would find the
+// thermocouple's noise (errors in variables), not a missing term.
+struct Covariate {
+  const char* name;
+  std::vector<double> value;
+  bool run_level = true;  // one value within every run: seen only between runs
+};
+
+std::vector<Covariate> covariates_of(const FrictionLog& log) {
+  std::vector<Covariate> c = {{"velocity_m_s", log.velocity_m_s}, {"load_N", log.load_N},
+                              {"preload_um", log.preload_um},     {"block_length_mm", log.block_length_mm},
+                              {"temperature_C", {}},              {"direction", {}}};
+  for (std::size_t i = 0; i < log.size(); ++i) {
+    c[4].value.push_back(std::round(log.temperature_C[i]));
+    c[5].value.push_back(log.direction[i]);
+  }
+  if (std::any_of(log.time_s.begin(), log.time_s.end(), [](double t) { return !std::isnan(t); }))
+    c.push_back({"time_s", log.time_s});
+  for (auto& cov : c) {
+    std::vector<double> first(log.run_names.size(), std::numeric_limits<double>::quiet_NaN());
+    for (std::size_t i = 0; i < log.size() && cov.run_level; ++i) {
+      double& f = first[log.run[i]];
+      if (std::isnan(f)) f = cov.value[i];
+      else if (cov.value[i] != f) cov.run_level = false;
+    }
+  }
+  return c;
+}
+
+// The law's residuals (measured - law, no offsets) per sample, and per run their mean.
+struct LawResiduals {
+  std::vector<double> raw, centred;  // centred: the run's mean taken out
+  std::vector<double> run_mean;
+};
+
+LawResiduals law_residuals(const FrictionLog& log, const FrictionFitResult& fit) {
+  LawResiduals r;
+  const std::size_t runs = log.run_names.size();
+  std::vector<double> count(runs, 0.0);
+  r.run_mean.assign(runs, 0.0);
+  for (std::size_t i = 0; i < log.size(); ++i) {
+    r.raw.push_back(log.friction_N[i] - (fit.predicted_N[i] - fit.run_offset_N[log.run[i]]));
+    r.run_mean[log.run[i]] += r.raw.back();
+    count[log.run[i]] += 1;
+  }
+  for (std::size_t g = 0; g < runs; ++g) r.run_mean[g] /= std::max(count[g], 1.0);
+  for (std::size_t i = 0; i < log.size(); ++i) r.centred.push_back(r.raw[i] - r.run_mean[log.run[i]]);
+  return r;
+}
+
+// Means of `values` per group key: the covariates' and the values' means, in key order.
+template <class Key>
+std::pair<std::vector<std::vector<double>>, std::vector<double>> group_means(const std::vector<Key>& key,
+                                                                             const std::vector<Covariate>& covariates,
+                                                                             const std::vector<double>& values) {
+  std::map<Key, std::vector<double>> sums;  // per group: covariates..., value, count
+  const std::size_t k = covariates.size();
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    auto& g = sums[key[i]];
+    g.resize(k + 2, 0.0);
+    for (std::size_t c = 0; c < k; ++c) g[c] += covariates[c].value[i];
+    g[k] += values[i];
+    g[k + 1] += 1;
+  }
+  std::vector<std::vector<double>> columns(k);
+  std::vector<double> means;
+  for (const auto& [key_value, g] : sums) {
+    for (std::size_t c = 0; c < k; ++c) columns[c].push_back(g[c] / g[k + 1]);
+    means.push_back(g[k] / g[k + 1]);
+  }
+  return {columns, means};
+}
+
+// Lack of fit against pure error: the cell means (run × condition; repeated samples of a
+// cell averaged, so serially correlated samples count once) fitted by run + condition
+// (backfitting), against run alone. What the conditions add beyond the runs' levels is the
+// model's lack of fit; the run × condition remainder is the pure error — the spread of a
+// condition repeated in other runs. Needs conditions repeated across runs.
+LackOfFit lack_of_fit(const FrictionLog& log, const std::vector<double>& centred, std::size_t parameters, double structure_p) {
+  LackOfFit l;
+  using Condition = std::tuple<std::uint32_t, double, double, double, double, double>;
+  std::map<Condition, std::size_t> condition_index;
+  std::map<std::pair<std::size_t, std::size_t>, std::pair<double, double>> cells;  // (run, condition) -> sum, count
+  for (std::size_t i = 0; i < log.size(); ++i) {
+    const Condition c{log.guide[i], log.preload_um[i], log.load_N[i], std::round(log.temperature_C[i]), log.velocity_m_s[i],
+                      double(log.direction[i])};
+    const std::size_t ci = condition_index.try_emplace(c, condition_index.size()).first->second;
+    auto& cell = cells[{log.run[i], ci}];
+    cell.first += centred[i];
+    cell.second += 1;
+  }
+  const std::size_t R = log.run_names.size(), C = condition_index.size(), N = cells.size();
+  // Connected components of the run-condition graph: the additive model's rank is R + C - components.
+  std::vector<std::size_t> parent(R + C);
+  std::iota(parent.begin(), parent.end(), 0);
+  auto find = [&](std::size_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  for (const auto& [rc, cell] : cells) parent[find(rc.first)] = find(R + rc.second);
+  std::set<std::size_t> roots;
+  for (const auto& [rc, cell] : cells) roots.insert(find(rc.first));
+  const double df_pure = static_cast<double>(N) - static_cast<double>(R + C) + static_cast<double>(roots.size());
+  const double df_lack = static_cast<double>(C) - static_cast<double>(roots.size()) - static_cast<double>(parameters);
+  if (df_pure < 3 || df_lack < 1) {
+    l.basis = "no pure error: no condition is repeated in another run";
+    return l;
+  }
+  std::vector<double> run_effect(R, 0.0), condition_effect(C, 0.0);
+  auto sweep = [&](bool runs) {
+    std::vector<double> sum(runs ? R : C, 0.0), count(runs ? R : C, 0.0);
+    for (const auto& [rc, cell] : cells) {
+      const double m = cell.first / cell.second;
+      if (runs) sum[rc.first] += m - condition_effect[rc.second], count[rc.first] += 1;
+      else sum[rc.second] += m - run_effect[rc.first], count[rc.second] += 1;
+    }
+    auto& effect = runs ? run_effect : condition_effect;
+    for (std::size_t g = 0; g < effect.size(); ++g) effect[g] = count[g] > 0 ? sum[g] / count[g] : 0.0;
+  };
+  auto ss = [&](bool with_conditions) {
+    double total = 0;
+    for (const auto& [rc, cell] : cells)
+      total += std::pow(cell.first / cell.second - run_effect[rc.first] - (with_conditions ? condition_effect[rc.second] : 0.0), 2);
+    return total;
+  };
+  sweep(true);
+  const double ss_runs = ss(false);
+  for (int it = 0; it < 500; ++it) {
+    const double before = ss(true);
+    sweep(false);
+    sweep(true);
+    if (before - ss(true) < 1e-14 * std::max(before, 1e-300)) break;
+  }
+  const double ss_pure = ss(true);
+  l.tested = true;
+  l.basis = fmt::format("pure error from {} conditions repeated across runs", C);
+  l.df1 = df_lack;
+  l.df2 = df_pure;
+  l.statistic = ((ss_runs - ss_pure) / df_lack) / std::max(ss_pure / df_pure, 1e-300);
+  l.p_value = fisher_f_upper_p(std::max(l.statistic, 0.0), l.df1, l.df2);
+  l.pure_error_rms = std::sqrt(ss_pure / df_pure);
+  l.lack_rms = std::sqrt(std::max((ss_runs - ss_pure) / df_lack - ss_pure / df_pure, 0.0));
+  l.fits = l.p_value >= structure_p;
+  return l;
+}
+
+// The residuals of `fit` (random zero offsets per run): within-run structure on the condition
+// means of the run-centred residuals; what changes only between runs on the run means,
+// judged against their spread (the offsets' variance is the error term); interactions of
+// every pair; lack of fit against pure error. Holm over all tests.
 ResidualDiagnostics diagnose_residuals(const FrictionLog& log, const FrictionFitResult& fit, double structure_p) {
-  const std::vector<double>& predicted = fit.predicted_N;
-  const double sigma = std::sqrt(fit.fit.residual_variance);
   ResidualDiagnostics d;
-  d.sigma = sigma;
+  d.sigma = std::sqrt(fit.fit.residual_variance);
   const std::size_t n = log.size();
-  std::vector<double> e(n);
-  double ss = 0;
+  const LawResiduals law = law_residuals(log, fit);
+  double ss = 0, dw_num = 0, dw_den = 0;
   for (std::size_t i = 0; i < n; ++i) {
-    e[i] = log.friction_N[i] - predicted[i];
-    ss += e[i] * e[i];
+    const double e = log.friction_N[i] - fit.predicted_N[i];
+    ss += e * e;
+    dw_den += law.centred[i] * law.centred[i];
+    if (i > 0 && log.run[i] == log.run[i - 1]) dw_num += std::pow(law.centred[i] - law.centred[i - 1], 2);
   }
   d.rmse_N = std::sqrt(ss / static_cast<double>(n));
-
-  // Within runs in file (time) order: Durbin-Watson. Per run: the zero offset.
-  double dw_num = 0, dw_den = 0;
-  for (std::size_t i = 0; i < n; ++i) {
-    dw_den += e[i] * e[i];
-    if (i > 0 && log.run[i] == log.run[i - 1]) dw_num += (e[i] - e[i - 1]) * (e[i] - e[i - 1]);
-  }
   d.durbin_watson = dw_den > 0 ? dw_num / dw_den : kNaN;
-  const std::vector<double>& run_bias = fit.run_offset_N;
-  for (std::size_t r = 0; r < run_bias.size(); ++r) d.run_bias_N.emplace_back(log.run_names[r], run_bias[r]);
+  for (std::size_t r = 0; r < fit.run_offset_N.size(); ++r) d.run_bias_N.emplace_back(log.run_names[r], fit.run_offset_N[r]);
 
-  // Condition means: one residual per (guide, preload, load, temperature to 1 K, speed, direction).
-  // Covariates take their nominal (condition) values: grouping by the logged temperature
-  // itself would find the thermocouple's noise (errors in variables), not a missing term.
-  using Key = std::tuple<std::uint32_t, double, double, double, double, double>;
-  std::map<Key, std::array<double, 9>> groups;  // sums: e, V, P, pc, Lb, T, dir, time, count
-  for (std::size_t i = 0; i < n; ++i) {
-    auto& g = groups[{log.guide[i], log.preload_um[i], log.load_N[i], std::round(log.temperature_C[i]), log.velocity_m_s[i],
-                      double(log.direction[i])}];
-    const double values[] = {e[i], log.velocity_m_s[i], log.load_N[i], log.preload_um[i], log.block_length_mm[i],
-                             std::round(log.temperature_C[i]), double(log.direction[i]),
-                             std::isnan(log.time_s[i]) ? 0.0 : log.time_s[i], 1.0};
-    for (std::size_t k = 0; k < 9; ++k) g[k] += values[k];
+  const std::vector<Covariate> covariates = covariates_of(log);
+  const std::size_t k = covariates.size();
+  // Condition means of the centred residuals (within runs).
+  std::vector<std::tuple<std::uint32_t, double, double, double, double, double>> condition(n);
+  for (std::size_t i = 0; i < n; ++i)
+    condition[i] = {log.guide[i], log.preload_um[i], log.load_N[i], std::round(log.temperature_C[i]), log.velocity_m_s[i],
+                    double(log.direction[i])};
+  const auto [within_x, within_e] = group_means(condition, covariates, law.centred);
+  // Run means of the raw residuals (between runs).
+  std::vector<std::uint32_t> run_key(log.run.begin(), log.run.end());
+  const auto [run_x, run_e] = group_means(run_key, covariates, law.raw);
+  const std::size_t runs = run_e.size();
+  auto between = [&](const std::string& name, const std::vector<double>& x) {
+    std::set<double> distinct(x.begin(), x.end());
+    if (distinct.size() < 2) return CovariateTest{.covariate = name, .n = 0};
+    // Replicated values: one-way ANOVA of the run means; otherwise a linear trend.
+    return distinct.size() < runs ? detail::anova(name, x, run_e) : detail::regression_test(name, {}, {x}, run_e);
+  };
+  for (std::size_t c = 0; c < k; ++c) {
+    if (!covariates[c].run_level) d.covariates.push_back(detail::anova(covariates[c].name, within_x[c], within_e));
+    else d.covariates.push_back(between(std::string(covariates[c].name) + " (between runs)", run_x[c]));
   }
-  std::array<std::vector<double>, 8> columns;
-  for (const auto& [key, g] : groups)
-    for (std::size_t k = 0; k < 8; ++k) columns[k].push_back(g[k] / g[8]);
-  const char* names[] = {"velocity_m_s", "load_N", "preload_um", "block_length_mm", "temperature_C", "direction", "time_s"};
-  for (std::size_t k = 0; k < 7; ++k) {
-    if (k == 6 && std::all_of(log.time_s.begin(), log.time_s.end(), [](double t) { return std::isnan(t); })) continue;
-    d.covariates.push_back(detail::anova(names[k], columns[k + 1], columns[0]));
+  // Run order: a trend of the runs' levels (random levels are not a trend).
+  if (runs >= 4) {
+    std::vector<double> order(runs);
+    std::iota(order.begin(), order.end(), 0.0);
+    d.covariates.push_back(detail::regression_test("run order", {}, {order}, run_e));
   }
-  // Run order: a trend of the runs' zero offsets (random offsets per run are not a trend).
-  if (run_bias.size() >= 4) {
-    std::vector<double> index(run_bias.size());
-    std::iota(index.begin(), index.end(), 0.0);
-    const double mi = (index.size() - 1) / 2.0;
-    const double mb = std::accumulate(run_bias.begin(), run_bias.end(), 0.0) / static_cast<double>(run_bias.size());
-    double sxy = 0, sxx = 0, syy = 0;
-    for (std::size_t r = 0; r < run_bias.size(); ++r) {
-      sxy += (index[r] - mi) * (run_bias[r] - mb);
-      sxx += (index[r] - mi) * (index[r] - mi);
-      syy += (run_bias[r] - mb) * (run_bias[r] - mb);
+  // Pairs: within runs when either varies within runs, else between runs (product term).
+  for (std::size_t a = 0; a < k; ++a)
+    for (std::size_t b = a + 1; b < k; ++b) {
+      if (std::string(covariates[a].name) == "time_s" || std::string(covariates[b].name) == "time_s") continue;
+      const std::string name = fmt::format("{} x {}", covariates[a].name, covariates[b].name);
+      if (!covariates[a].run_level || !covariates[b].run_level) {
+        d.covariates.push_back(detail::interaction_anova(name, within_x[a], within_x[b], within_e));
+      } else if (runs >= 6) {
+        std::vector<double> product(runs);
+        for (std::size_t r = 0; r < runs; ++r) product[r] = run_x[a][r] * run_x[b][r];
+        d.covariates.push_back(detail::regression_test(name + " (between runs)", {run_x[a], run_x[b]}, {product}, run_e));
+      }
     }
-    const double rho = syy > 0 ? sxy / std::sqrt(sxx * syy) : 0.0;
-    const double dof = static_cast<double>(run_bias.size() - 2);
-    const double t = rho * std::sqrt(dof / std::max(1 - rho * rho, 1e-12));
-    d.covariates.push_back({.covariate = "run order",
-                            .correlation = rho,
-                            .p_value = student_t_two_sided_p(t, dof),
-                            .size = std::abs(rho) * std::sqrt(syy / static_cast<double>(run_bias.size())),
-                            .n = run_bias.size()});
-  }
+  std::erase_if(d.covariates, [](const CovariateTest& t) { return t.n == 0; });
+  detail::holm_adjust(d.covariates);
   std::sort(d.covariates.begin(), d.covariates.end(), [](auto& a, auto& b) { return a.p_value < b.p_value; });
-  for (auto& c : d.covariates) c.structured = c.p_value < structure_p;
+  for (auto& c : d.covariates) c.structured = c.p_adjusted < structure_p;
   d.structured = !d.covariates.empty() && d.covariates.front().structured;
+  d.lack_of_fit = lack_of_fit(log, law.centred, fit.fit.free_parameters, structure_p);
   return d;
 }
 
-double sum_of_squares(const FrictionLog& log, const std::vector<double>& predicted) {
-  double ss = 0;
-  for (std::size_t i = 0; i < log.size(); ++i) ss += std::pow(log.friction_N[i] - predicted[i], 2);
-  return ss;
+// What the design hides or makes costly, in words.
+std::vector<std::string> design_notes(const FrictionLog& log, const FrictionFitResult& baseline, const LackOfFit& lack) {
+  std::vector<std::string> notes;
+  std::string between, single;
+  for (const Covariate& c : covariates_of(log)) {
+    const std::set<double> values(c.value.begin(), c.value.end());
+    if (std::string(c.name) == "time_s" || std::string(c.name) == "direction") continue;
+    if (values.size() == 1) single += fmt::format("{}{} ({:g})", single.empty() ? "" : ", ", c.name, *values.begin());
+    else if (c.run_level) between += (between.empty() ? "" : ", ") + std::string(c.name);
+  }
+  if (!between.empty())
+    notes.push_back(fmt::format(
+        "{} change only between runs (each run holds one value): their effects are judged on the {} run means against "
+        "the spread of the runs' zero offsets (tau = {:.3g} N), not on the samples; to see them within runs, log two "
+        "setups per run or repeat setups",
+        between, log.run_names.size(), baseline.run_offset_sd_N));
+  if (!single.empty())
+    notes.push_back(fmt::format("one value only of {}: no effect of these can be seen in these data", single));
+  if (!lack.tested) notes.push_back("lack of fit not tested (" + lack.basis + "): repeat a setup in a second run to get it");
+  return notes;
 }
 
 }  // namespace
@@ -130,8 +292,8 @@ FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagno
   FrictionFitOptions base_options = o.fit;
   base_options.per_run_fits = false;
   base_options.cross_validate = true;
-  base_options.run_offsets = RunOffsets::random;
   base_options.fit.profile = ProfileMode::none;
+  base_options.fit.bootstrap = 0;
   const FrictionFitResult baseline = fit_friction(log, base_options);
   d.baseline = diagnose_residuals(log, baseline, o.structure_p);
 
@@ -140,7 +302,7 @@ FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagno
     std::vector<double> effect_start;
     for (std::size_t j = 7; j < current.fit.parameters.size(); ++j) effect_start.push_back(current.fit.parameters[j].value);
     // From the given start (not the current estimate: a misspecified fit may sit on a bound).
-    return fit_with(log, o, effects, o.fit.start, effect_start);
+    return fit_with(log, o, effects, o.fit.start, effect_start, current.run_offset_ratio);
   };
   auto summarise = [&](const FrictionFitResult& fit, const std::string& effect) {
     // The likelihood of the random run offsets' fit (their variance included), and the
@@ -179,6 +341,7 @@ FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagno
     d.shifts.push_back(parameter_shift(baseline.fit.parameters[j], current.fit.parameters[j]));
 
   detail::conclude(d, "The published law", "N", d.cv_rmse_before_N, d.cv_rmse_after_N, d.baseline.rmse_N);
+  d.design_notes = design_notes(log, baseline, d.baseline.lack_of_fit);
   d.final_fit = current;
   d.baseline_fit = baseline;
   return d;
@@ -196,6 +359,7 @@ std::string friction_diagnosis_json(const FrictionDiagnosis& d) {
   };
   nlohmann::json j = detail::verdict_json(d, d.cv_rmse_before_N, d.cv_rmse_after_N, "N");
   j["kind"] = "friction diagnosis";
+  j["design_notes"] = d.design_notes;
   j["lmcal_version"] = LMCAL_VERSION;
   j["baseline_residuals"] = diagnostics(d.baseline);
   j["final_residuals"] = diagnostics(d.final);

@@ -4,6 +4,8 @@
 
 #include <cmath>
 #include <map>
+
+#include <Eigen/Dense>
 #include <numeric>
 
 #include "fit/fit_json.hpp"
@@ -39,16 +41,89 @@ CovariateTest nested_anova(const std::string& name, const std::vector<std::size_
   return t;
 }
 
-std::vector<std::size_t> value_bins(const std::vector<double>& covariate) {
+std::vector<std::size_t> value_bins(const std::vector<double>& covariate, std::size_t max_groups, std::size_t quantile_bins) {
   std::vector<double> sorted = covariate;
   std::sort(sorted.begin(), sorted.end());
   sorted.erase(std::unique(sorted.begin(), sorted.end()), sorted.end());
   std::vector<std::size_t> bins;
   for (double v : covariate) {
     const auto pos = static_cast<std::size_t>(std::lower_bound(sorted.begin(), sorted.end(), v) - sorted.begin());
-    bins.push_back(sorted.size() <= 12 ? pos : pos * 10 / sorted.size());
+    bins.push_back(sorted.size() <= max_groups ? pos : pos * quantile_bins / sorted.size());
   }
   return bins;
+}
+
+namespace {
+
+// Residual sum of squares and rank of the least-squares fit of `y` on the columns of X.
+std::pair<double, Eigen::Index> least_squares_ss(const Eigen::MatrixXd& X, const Eigen::VectorXd& y) {
+  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(X);
+  qr.setThreshold(1e-10);
+  const Eigen::VectorXd fitted = X * qr.solve(y);
+  return {(y - fitted).squaredNorm(), qr.rank()};
+}
+
+// F test of the larger model against the smaller nested one (residual sums of squares and ranks).
+CovariateTest f_test(const std::string& name, double ss0, Eigen::Index rank0, double ss1, Eigen::Index rank1, std::size_t n) {
+  CovariateTest t{.covariate = name, .n = n};
+  const auto N = static_cast<Eigen::Index>(n);
+  if (rank1 <= rank0 || N <= rank1) {
+    t.n = 0;
+    return t;
+  }
+  const double d1 = static_cast<double>(rank1 - rank0), d2 = static_cast<double>(N - rank1);
+  const double F = (std::max(ss0 - ss1, 0.0) / d1) / std::max(ss1 / d2, 1e-300);
+  t.p_value = fisher_f_upper_p(F, d1, d2);
+  t.correlation = std::sqrt(std::max(ss0 - ss1, 0.0) / std::max(ss0, 1e-300));
+  t.size = std::sqrt(std::max(ss0 - ss1, 0.0) / static_cast<double>(n));
+  return t;
+}
+
+}  // namespace
+
+CovariateTest regression_test(const std::string& name, const std::vector<std::vector<double>>& base,
+                              const std::vector<std::vector<double>>& extra, const std::vector<double>& values) {
+  const auto n = static_cast<Eigen::Index>(values.size());
+  const auto p0 = static_cast<Eigen::Index>(base.size() + 1), p1 = p0 + static_cast<Eigen::Index>(extra.size());
+  if (n <= p1 + 1) return {.covariate = name, .n = 0};
+  Eigen::MatrixXd X(n, p1);
+  X.col(0).setOnes();
+  for (Eigen::Index j = 1; j < p1; ++j) {
+    const auto& column = j < p0 ? base[static_cast<std::size_t>(j - 1)] : extra[static_cast<std::size_t>(j - p0)];
+    // Standardised, so the rank threshold does not depend on units.
+    const double mean = std::accumulate(column.begin(), column.end(), 0.0) / static_cast<double>(n);
+    double sd = 0;
+    for (double v : column) sd += (v - mean) * (v - mean);
+    sd = std::sqrt(sd / static_cast<double>(n));
+    for (Eigen::Index i = 0; i < n; ++i) X(i, j) = sd > 0 ? (column[static_cast<std::size_t>(i)] - mean) / sd : 0.0;
+  }
+  const Eigen::VectorXd y = Eigen::Map<const Eigen::VectorXd>(values.data(), n);
+  const auto [ss0, rank0] = least_squares_ss(X.leftCols(p0), y);
+  const auto [ss1, rank1] = least_squares_ss(X, y);
+  return f_test(name, ss0, rank0, ss1, rank1, values.size());
+}
+
+CovariateTest interaction_anova(const std::string& name, const std::vector<double>& a, const std::vector<double>& b,
+                                const std::vector<double>& values) {
+  const std::vector<std::size_t> ga = value_bins(a, 4, 4), gb = value_bins(b, 4, 4);
+  const std::size_t la = *std::max_element(ga.begin(), ga.end()) + 1, lb = *std::max_element(gb.begin(), gb.end()) + 1;
+  const auto n = static_cast<Eigen::Index>(values.size());
+  if (la < 2 || lb < 2) return {.covariate = name, .n = 0};
+  // Additive: intercept + level dummies of each; full: one mean per occupied cell.
+  Eigen::MatrixXd additive = Eigen::MatrixXd::Zero(n, static_cast<Eigen::Index>(la + lb - 1));
+  std::map<std::size_t, Eigen::Index> cells;
+  Eigen::MatrixXd full = Eigen::MatrixXd::Zero(n, static_cast<Eigen::Index>(la * lb));
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const std::size_t x = ga[static_cast<std::size_t>(i)], z = gb[static_cast<std::size_t>(i)];
+    additive(i, 0) = 1;
+    if (x > 0) additive(i, static_cast<Eigen::Index>(x)) = 1;
+    if (z > 0) additive(i, static_cast<Eigen::Index>(la - 1 + z)) = 1;
+    full(i, static_cast<Eigen::Index>(x * lb + z)) = 1;
+  }
+  const Eigen::VectorXd y = Eigen::Map<const Eigen::VectorXd>(values.data(), n);
+  const auto [ss0, rank0] = least_squares_ss(additive, y);
+  const auto [ss1, rank1] = least_squares_ss(full, y);
+  return f_test(name, ss0, rank0, ss1, rank1, values.size());
 }
 
 CovariateTest anova(const std::string& name, const std::vector<double>& covariate, const std::vector<double>& residual) {

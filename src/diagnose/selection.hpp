@@ -33,9 +33,20 @@ CovariateTest nested_anova(const std::string& name, const std::vector<std::size_
 // calling any of them structured stays at the level it is compared with).
 void holm_adjust(std::vector<CovariateTest>& tests);
 
+// Does the effect of one covariate on `values` depend on another? F test of the cells of
+// (a, b) against the additive model a + b (dummy regression; up to four quantile bins of each
+// covariate). Empty result (n = 0) when the cells leave no degrees of freedom.
+CovariateTest interaction_anova(const std::string& name, const std::vector<double>& a, const std::vector<double>& b,
+                                const std::vector<double>& values);
+
+// Least-squares F test of adding the columns `extra` to the regression of `values` on `base`
+// (an intercept is always in `base`): n = 0 when there are too few values.
+CovariateTest regression_test(const std::string& name, const std::vector<std::vector<double>>& base,
+                              const std::vector<std::vector<double>>& extra, const std::vector<double>& values);
+
 // A covariate's values as group labels: one per distinct value, or ten quantile bins when
 // there are more than twelve.
-std::vector<std::size_t> value_bins(const std::vector<double>& covariate);
+std::vector<std::size_t> value_bins(const std::vector<double>& covariate, std::size_t max_groups = 12, std::size_t bins = 10);
 
 // What selection needs to know of one fitted model.
 struct ModelFit {
@@ -129,13 +140,17 @@ Selection<Fit> forward_select(const std::vector<std::string>& library, Fit basel
       s.rounds.push_back(std::move(round));
       break;
     }
-    // Candidates that pass the significance test and change the fit as the best does are
-    // indistinguishable from it on these data: a tie, named with it.
+    // Candidates that change the fit as the best does are indistinguishable from it on these
+    // data: a tie, named together, represented by the one listed first in the library (the
+    // plainer form comes first).
+    std::vector<std::size_t> tie{best};
     for (std::size_t i = 0; i < round.size(); ++i)
       if (i != best && models[i].problem.empty() && std::isfinite(round[i].cv_rmse) &&
-          change_correlation(current.fitted, models[best].fitted, models[i].fitted) > rules.tie_correlation &&
-          round[i].cv_rmse <= current.cv_rmse)
-        round[best].tied_with.push_back(round[i].effect);
+          change_correlation(current.fitted, models[best].fitted, models[i].fitted) > rules.tie_correlation)
+        tie.push_back(i);
+    best = *std::min_element(tie.begin(), tie.end());  // rounds list candidates in library order
+    for (std::size_t i : tie)
+      if (i != best) round[best].tied_with.push_back(round[i].effect);
     round[best].accepted = true;
     s.accepted.push_back(round[best].effect);
     s.current = std::move(fits[best]);

@@ -279,32 +279,48 @@ FrictionFitResult fit_friction(const FrictionLog& log, const FrictionFitOptions&
   std::vector<std::size_t> run_of(log.size());
   for (std::size_t i = 0; i < log.size(); ++i) run_of[i] = log.run[i];
   if (options.run_offsets == RunOffsets::fixed) data.run_shrink.assign(runs, 1.0);
-  // Random offsets: start without them (λ = 0), then alternate the constants (warm-started)
+  // Random offsets: start from the given λ (0: without them), then alternate the constants (warm-started)
   // and λ (maximum likelihood given the constants) until the whitening settles.
-  if (options.run_offsets == RunOffsets::random) data.run_shrink.assign(runs, 0.0);
+  if (options.run_offsets == RunOffsets::random) {
+    std::vector<double> count(runs, 0.0);
+    for (std::size_t i = 0; i < log.size(); ++i) count[log.run[i]] += 1;
+    const double lambda = std::max(options.run_offset_ratio_start, 0.0);
+    for (std::size_t r = 0; r < runs; ++r) data.run_shrink.push_back(1 - 1 / std::sqrt(1 + count[r] * lambda));
+  }
   const FrictionModel model(data, slots);
   detail::FinalState final_state;
   const bool random = options.run_offsets == RunOffsets::random && runs >= 2;
   auto run_specs = specs;
-  FitOptions fit_options = options.fit;
-  RunOffsetVariance variance;
-  for (int pass = 1;; ++pass) {
-    out.fit = detail::solve_least_squares(model, run_specs, fit_options, &final_state);
-    out.variance_passes = pass;
-    if (!random || !out.fit.solver.usable) break;
-    const std::vector<double> raw = unwhitened(final_state.residuals, run_of, data.run_shrink);
-    variance = run_offset_variance(raw, run_of, runs);
-    double change = 0;
-    for (std::size_t r = 0; r < runs; ++r) {
-      const double c = 1 - 1 / std::sqrt(1 + variance.count[r] * variance.ratio);
-      change = std::max(change, std::abs(c - data.run_shrink[r]));
-      data.run_shrink[r] = c;
-    }
-    if (change < 0.005 || pass >= options.max_variance_passes) break;
+  auto warm_start = [&] {
     for (std::size_t j = 0; j < run_specs.size(); ++j)
       if (run_specs[j].free && !out.fit.parameters[j].held_unidentifiable)
         run_specs[j].start = std::clamp(out.fit.parameters[j].value, run_specs[j].lower, run_specs[j].upper);
-    fit_options.starts = 0;
+  };
+  // The passes that settle the offsets' variance skip what only the final fit needs.
+  FitOptions pass_options = options.fit;
+  if (random) pass_options.bootstrap = 0, pass_options.profile = ProfileMode::none;
+  RunOffsetVariance variance;
+  for (int pass = 1;; ++pass) {
+    out.fit = detail::solve_least_squares(model, run_specs, pass_options, &final_state);
+    out.variance_passes = pass;
+    if (!random || !out.fit.solver.usable) break;
+    variance = run_offset_variance(unwhitened(final_state.residuals, run_of, data.run_shrink), run_of, runs);
+    std::vector<double> shrink(runs);
+    double change = 0;
+    for (std::size_t r = 0; r < runs; ++r) {
+      shrink[r] = 1 - 1 / std::sqrt(1 + variance.count[r] * variance.ratio);
+      change = std::max(change, std::abs(shrink[r] - data.run_shrink[r]));
+    }
+    if (change < 0.005 || pass >= options.max_variance_passes) break;
+    data.run_shrink = std::move(shrink);
+    warm_start();
+    pass_options.starts = 0;
+  }
+  if (random && out.fit.solver.usable && (options.fit.bootstrap > 0 || options.fit.profile != ProfileMode::none)) {
+    warm_start();
+    FitOptions final_options = options.fit;
+    final_options.starts = 0;
+    out.fit = detail::solve_least_squares(model, run_specs, final_options, &final_state);
   }
   {
     const std::vector<double> raw = unwhitened(final_state.residuals, run_of, data.run_shrink);

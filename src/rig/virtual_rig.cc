@@ -184,7 +184,19 @@ FrictionRigOutput generate_friction_log(const FrictionRigConfig& config, const R
   FrictionLog& log = out.log;
   nlohmann::json runs = nlohmann::json::array();
   std::size_t out_of_range = 0;
-  for (int r = 0; r < config.runs; ++r) {
+  // The setups, in sweep order; a run covers all of them or one.
+  struct Setup {
+    std::string model;
+    double pc, P, T;
+  };
+  std::vector<Setup> setups;
+  for (const auto& model : config.guides)
+    for (double pc : config.preload_um)
+      for (double P : config.load_N)
+        for (double T : config.temperature_C) setups.push_back({model, pc, P, T});
+  const std::size_t per_run = config.one_setup_per_run ? 1 : setups.size();
+  const int run_count = config.runs * static_cast<int>(setups.size() / per_run);
+  for (int r = 0; r < run_count; ++r) {
     Rng rng(derive_seed(config.seed, static_cast<std::uint64_t>(r)));
     const double offset_N = config.run_offset_N * rng.normal();
     Ar1Noise load_cell(config.noise_N, config.noise_ar1);
@@ -192,34 +204,33 @@ FrictionRigOutput generate_friction_log(const FrictionRigConfig& config, const R
     runs.push_back({{"run", run_name}, {"zero_offset_N", offset_N}});
     const std::uint32_t run_index = index_of(log.run_names, run_name);
     double time_s = 0;
-    for (const auto& model : config.guides) {
-      const GuideSpec& spec = builtin_catalog().find(model);
+    const std::size_t first = config.one_setup_per_run ? static_cast<std::size_t>(r) % setups.size() : 0;
+    for (std::size_t k = first; k < first + per_run; ++k) {
+      const Setup& setup = setups[k];
+      const GuideSpec& spec = builtin_catalog().find(setup.model);
       const double Lb = require(spec, &GuideSpec::block_length_mm, "block_length_mm");
       const std::uint32_t guide_index = index_of(log.guide_names, spec.model);
-      for (double pc : config.preload_um)
-        for (double P : config.load_N)
-          for (double T : config.temperature_C)
-            for (double V : config.velocity_m_s)
-              for (int direction : config.directions) {
-                const FrictionConditions<double> c{.load_N = P, .preload_um = pc, .block_length_mm = Lb,
-                                                   .velocity_m_s = V, .temperature_C = T,
-                                                   .direction = double(direction)};
-                validate(c);
-                const double F = friction_force_with_effects_N(config.constants, effects.friction, c);
-                // Draw the noise even for skipped conditions, so the sequence does not depend on them;
-                // the load cell's noise series runs over the logged samples only.
-                const double z = rng.normal();
-                const double temperature_noise = config.temperature_noise_K * rng.normal();
-                if (F > 0.95 * config.load_cell_range_N) {
-                  if (r == 0) ++out_of_range;
-                  continue;
-                }
-                FrictionConditions<double> logged = c;
-                logged.temperature_C = round_to(T + temperature_noise, 2);
-                log.append(run_index, guide_index, time_s, logged, round_to(F + offset_N + load_cell.next(z), 3),
-                           config.constants.nu_ref_mm2_s);
-                time_s += config.seconds_per_sample;
-              }
+      for (double V : config.velocity_m_s)
+        for (int direction : config.directions) {
+          const FrictionConditions<double> c{.load_N = setup.P, .preload_um = setup.pc, .block_length_mm = Lb,
+                                             .velocity_m_s = V, .temperature_C = setup.T,
+                                             .direction = double(direction)};
+          validate(c);
+          const double F = friction_force_with_effects_N(config.constants, effects.friction, c);
+          // Draw the noise even for skipped conditions, so the sequence does not depend on them;
+          // the load cell's noise series runs over the logged samples only.
+          const double z = rng.normal();
+          const double temperature_noise = config.temperature_noise_K * rng.normal();
+          if (F > 0.95 * config.load_cell_range_N) {
+            if (r < static_cast<int>(setups.size() / per_run)) ++out_of_range;
+            continue;
+          }
+          FrictionConditions<double> logged = c;
+          logged.temperature_C = round_to(setup.T + temperature_noise, 2);
+          log.append(run_index, guide_index, time_s, logged, round_to(F + offset_N + load_cell.next(z), 3),
+                     config.constants.nu_ref_mm2_s);
+          time_s += config.seconds_per_sample;
+        }
     }
   }
   nlohmann::json truth = {
@@ -230,6 +241,7 @@ FrictionRigOutput generate_friction_log(const FrictionRigConfig& config, const R
       {"effects", effects_json(effects)},
       {"noise_N", config.noise_N},
       {"run_offset_sigma_N", config.run_offset_N},
+      {"one_setup_per_run", config.one_setup_per_run},
       {"temperature_noise_K", config.temperature_noise_K},
       {"load_cell_range_N", config.load_cell_range_N},
       {"conditions_beyond_load_cell_skipped", out_of_range},

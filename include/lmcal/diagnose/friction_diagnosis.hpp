@@ -40,7 +40,13 @@ struct ResidualDiagnostics {
 };
 
 struct FrictionDiagnosisOptions {
-  FrictionFitOptions fit;             // the baseline fit
+  // The baseline fit: what it holds, starts from and bounds; the zero offsets random by
+  // default (fixed ones would hide all that changes only between runs).
+  FrictionFitOptions fit = [] {
+    FrictionFitOptions f;
+    f.run_offsets = RunOffsets::random;
+    return f;
+  }();
   double lrt_p = 1e-3;
   double min_cv_gain_percent = 2.0;
   double structure_p = 1e-3;
@@ -58,6 +64,9 @@ struct FrictionDiagnosis {
   double cv_rmse_before_N = 0, cv_rmse_after_N = 0, cv_gain_percent = 0;
   std::vector<ParameterShift> shifts;
   std::string unexplained_covariate;  // when the verdict is "unexplained"
+  // What the design confounds and what it costs: covariates seen only between runs, or at
+  // one value only; no repeated conditions (no lack-of-fit test).
+  std::vector<std::string> design_notes;
   FrictionFitResult baseline_fit, final_fit;  // the law, and the law with the accepted causes
 };
 

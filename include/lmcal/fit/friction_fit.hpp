@@ -65,6 +65,7 @@ struct FrictionFitOptions {
   //           squares, so what changes between runs stays informative, weighed against τ².
   RunOffsets run_offsets = RunOffsets::none;
   int max_variance_passes = 4;
+  double run_offset_ratio_start = 0;  // random offsets: λ of the first fit (a related model's, to save passes)
 };
 
 struct ConditionResidual {

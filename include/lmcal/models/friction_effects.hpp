@@ -22,6 +22,8 @@
 #include "lmcal/models/friction_effects/coulomb_temperature.hpp"
 #include "lmcal/models/friction_effects/direction_asymmetry.hpp"
 #include "lmcal/models/friction_effects/seal_drag.hpp"
+#include "lmcal/models/friction_effects/seal_drag_block.hpp"
+#include "lmcal/models/friction_effects/signed_zero_offset.hpp"
 #include "lmcal/models/friction_effects/stribeck_exponent.hpp"
 #include "lmcal/models/friction_effects/viscous_load.hpp"
 
@@ -54,7 +56,9 @@ using FrictionEffectLibrary = FrictionEffectList<
     ViscousLoad,
     DirectionAsymmetry,
     SealDrag,
-    CoulombTemperature>;
+    CoulombTemperature,
+    SealDragBlock,
+    SignedZeroOffset>;
 
 inline constexpr std::size_t kFrictionEffectCount = FrictionEffectLibrary::size;
 

@@ -90,6 +90,9 @@ struct FrictionRigConfig {
   std::vector<double> temperature_C{22, 26, 32, 40};
   std::vector<int> directions{+1, -1};
   int runs = 10;                        // repeats of the whole sweep
+  // true: each setup (guide, preload, load, temperature) is a run of its own, swept over speed
+  // and direction — what most rigs log; `runs` repeats the set of runs. false: a run sweeps all.
+  bool one_setup_per_run = false;
   double noise_N = 0.15;                // load-cell noise per sample, σ
   double noise_ar1 = 0;                 // lag-1 autocorrelation of that noise within a run, [0, 1)
   double run_offset_N = 0.2;            // zero offset per run, σ

@@ -1,5 +1,5 @@
 // Quadratic seal drag: + c_s · V², N with c_s in N per (m/s)². The end seals' lip drag grows
-// faster than the lubricant's linear viscous term; shows at the highest speeds.
+// faster than the lubricant's linear viscous term; shows at the highest speeds. A drag: c_s >= 0.
 #pragma once
 
 #include "lmcal/models/friction.hpp"
@@ -8,7 +8,7 @@
 namespace lmcal {
 
 struct SealDrag {
-  static constexpr FrictionEffectInfo info{"seal_drag", "N s2/m2", "quadratic seal drag c V²", 0.0, -5000.0, 5000.0, 100.0};
+  static constexpr FrictionEffectInfo info{"seal_drag", "N s2/m2", "quadratic seal drag c V²", 0.0, 0.0, 5000.0, 100.0};
   static constexpr FrictionEffectStage stage = FrictionEffectStage::on_law;
 
   template <typename P, typename C, typename B, typename Total, typename E>
