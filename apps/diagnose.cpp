@@ -41,10 +41,19 @@ void print_rounds(const std::vector<std::vector<CandidateScore>>& rounds, const 
   }
 }
 
+void print_lack_of_fit(const LackOfFit& l, const char* unit) {
+  if (!l.tested) std::cout << "lack of fit: not tested (" << l.basis << ")\n";
+  else
+    std::cout << fmt::format("lack of fit against {}: F {:.3g} on ({:.0f}, {:.0f}) dof, p {:.2g}, {:.3g} {} beyond a noise of {:.3g} {}{}\n",
+                             l.basis, l.statistic, l.df1, l.df2, l.p_value, l.lack_rms, unit, l.pure_error_rms, unit,
+                             l.fits ? "" : "  <- the model misses");
+}
+
 void print(const FrictionDiagnosis& d) {
   std::cout << fmt::format("baseline: residual RMSE {:.3f} N, Durbin-Watson {:.2f}; residuals against covariates:\n",
                            d.baseline.rmse_N, d.baseline.durbin_watson);
   print_covariates(d.baseline.covariates, "N");
+  print_lack_of_fit(d.baseline.lack_of_fit, "N");
   print_rounds(d.rounds, "N");
   for (const auto& note : d.design_notes) std::cout << "design: " << note << "\n";
   std::cout << "verdict: " << d.verdict << "\n  " << d.summary << "\n";
@@ -64,6 +73,7 @@ void print(const ThermalDiagnosis& d) {
                            d.baseline_fit.joint.parameter("alpha").value, d.baseline.rmse_K, d.baseline.lag1_autocorrelation,
                            d.baseline.n_eff);
   print_covariates(d.baseline.covariates, "K");
+  print_lack_of_fit(d.baseline.lack_of_fit, "K");
   for (const auto& s : d.skipped) std::cout << "not tried: " << s << "\n";
   print_rounds(d.rounds, "K");
   std::cout << "verdict: " << d.verdict << "\n  " << d.summary << "\n";

@@ -85,6 +85,28 @@ void BM_FrictionDiagnosis100k(benchmark::State& state) {
 
 BENCHMARK(BM_FrictionDiagnosis100k)->Unit(benchmark::kMillisecond)->Iterations(2);
 
+// A log from one setup per run (one load, one temperature each), 76 k samples: random run
+// offsets, between-run tests and interactions must not make it take minutes (issue 13).
+void BM_FrictionDiagnosisOneSetupPerRun76k(benchmark::State& state) {
+  static const lmcal::FrictionLog log = [] {
+    lmcal::FrictionRigConfig rig;
+    rig.one_setup_per_run = true;
+    rig.velocity_m_s = {0.002, 0.003, 0.005, 0.007, 0.01, 0.014, 0.02, 0.03, 0.04, 0.05, 0.066, 0.083, 0.1, 0.11, 0.13, 0.15};
+    rig.runs = 22;  // 108 setups x 22 repeats x 16 speeds x 2 directions, less what is beyond the load cell
+    lmcal::RigEffects effects;
+    lmcal::set_rig_effect(effects, "coulomb_temperature", 0.05);
+    return lmcal::generate_friction_log(rig, effects).log;
+  }();
+  for (auto _ : state) {
+    const auto d = lmcal::diagnose_friction(log, {});
+    benchmark::DoNotOptimize(d.accepted.data());
+  }
+  state.counters["samples"] = static_cast<double>(log.size());
+  state.counters["runs"] = static_cast<double>(log.run_names.size());
+}
+
+BENCHMARK(BM_FrictionDiagnosisOneSetupPerRun76k)->Unit(benchmark::kMillisecond)->Iterations(1);
+
 }  // namespace
 
 namespace {

@@ -326,6 +326,7 @@ FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagno
   const detail::SelectionRules rules{.lrt_p = o.lrt_p,
                                      .min_cv_gain_percent = o.min_cv_gain_percent,
                                      .max_effects = o.max_effects,
+                                     .parallel = true,
                                      .progress = o.progress};
   auto selection = detail::forward_select(friction_effect_names(), baseline, fit_candidate, summarise, rules);
   const FrictionFitResult& current = selection.current;

@@ -6,6 +6,8 @@
 #include <cmath>
 #include <limits>
 #include <cstddef>
+#include <exception>
+#include <tuple>
 #include <string>
 #include <utility>
 #include <vector>
@@ -74,7 +76,8 @@ struct SelectionRules {
   double min_excess_removed = 0.1;
   double tie_correlation = 0.99;  // candidates whose fitted changes correlate above this are a tie
   std::size_t max_effects = 3;
-  Progress progress;  // told of every candidate fit
+  bool parallel = false;  // fit a round's candidates in parallel (fit_with and summarise thread-safe)
+  Progress progress;  // told of every candidate fit (of every round when parallel)
 };
 
 // AICc and BIC of a Gaussian least-squares fit with k parameters over n (effective) residuals.
@@ -112,24 +115,35 @@ Selection<Fit> forward_select(const std::vector<std::string>& library, Fit basel
   Selection<Fit> s{{}, {}, std::move(baseline)};
   ModelFit current = summarise(s.current, std::string()).first;
   while (s.accepted.size() < rules.max_effects) {
-    std::vector<CandidateScore> round;
-    std::vector<Fit> fits;
-    std::vector<ModelFit> models;
-    const std::size_t candidates = library.size() - s.accepted.size();
-    for (const auto& effect : library) {
-      if (std::find(s.accepted.begin(), s.accepted.end(), effect) != s.accepted.end()) continue;
-      if (rules.progress)
-        rules.progress("round " + std::to_string(s.rounds.size() + 1) + ", " + effect, round.size(), candidates);
-      std::vector<std::string> effects = s.accepted;
-      effects.push_back(effect);
-      Fit fit = fit_with(effects, s.current);
-      auto [model, score] = summarise(fit, effect);
-      score.effect = effect;
-      score_candidate(current, model, rules, score);
-      round.push_back(score);
-      fits.push_back(std::move(fit));
-      models.push_back(model);
+    std::vector<std::string> effects_left;
+    for (const auto& effect : library)
+      if (std::find(s.accepted.begin(), s.accepted.end(), effect) == s.accepted.end()) effects_left.push_back(effect);
+    const std::size_t candidates = effects_left.size();
+    const std::string step = "round " + std::to_string(s.rounds.size() + 1);
+    // The candidate fits are independent: in parallel when asked (each fit alone is
+    // deterministic, and the results are kept in library order, so any thread count gives
+    // the same selection). Progress is told from the calling thread only.
+    std::vector<Fit> fits(candidates);
+    std::vector<ModelFit> models(candidates);
+    std::vector<CandidateScore> round(candidates);
+    std::exception_ptr failure;
+    if (rules.parallel && rules.progress) rules.progress(step + ": " + std::to_string(candidates) + " candidates", 0, 1);
+#pragma omp parallel for schedule(dynamic) if (rules.parallel)
+    for (std::size_t i = 0; i < candidates; ++i) {
+      try {
+        if (!rules.parallel && rules.progress) rules.progress(step + ", " + effects_left[i], i, candidates);
+        std::vector<std::string> effects = s.accepted;
+        effects.push_back(effects_left[i]);
+        fits[i] = fit_with(effects, s.current);
+        std::tie(models[i], round[i]) = summarise(fits[i], effects_left[i]);
+        round[i].effect = effects_left[i];
+      } catch (...) {
+#pragma omp critical(lmcal_forward_select)
+        if (!failure) failure = std::current_exception();
+      }
     }
+    if (failure) std::rethrow_exception(failure);
+    for (std::size_t i = 0; i < candidates; ++i) score_candidate(current, models[i], rules, round[i]);
     std::size_t best = round.size();
     for (std::size_t i = 0; i < round.size(); ++i)
       if (round[i].accepted &&

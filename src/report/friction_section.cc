@@ -183,6 +183,7 @@ void diagnosis_section(Page& page, const Calibration& c) {
                       escape_xml(d.summary));
   page.paragraph(fmt::format("Held-out (leave-one-run-out) RMSE: {} N before, {} N after: a gain of {:.1f} %.",
                              num(d.cv_rmse_before_N), num(d.cv_rmse_after_N), d.cv_gain_percent));
+  lack_of_fit_paragraph(page, d.baseline.lack_of_fit, d.final.lack_of_fit, "N", d.design_notes);
   candidate_tables(page, d.rounds, "N");
   if (!d.accepted.empty()) shift_table(page, d.shifts, "the law alone");
   // Before/after against velocity and against the covariate the baseline residuals follow most.
@@ -247,6 +248,21 @@ void candidate_tables(Page& page, const std::vector<std::vector<CandidateScore>>
     page.paragraph(fmt::format("Candidates, step {} (held-out RMSE in {}, gain against the model so far):", r + 1, unit));
     page.table({"cause", "estimate", "95 % interval", "LRT p", "held-out RMSE", "gain", "decision"}, rows);
   }
+}
+
+void lack_of_fit_paragraph(Page& page, const LackOfFit& baseline, const LackOfFit& final, const std::string& unit,
+                           const std::vector<std::string>& design_notes) {
+  auto words = [&](const LackOfFit& l) {
+    return fmt::format("F = {} on ({:.0f}, {:.0f}) dof, p = {}: {}", num(l.statistic, 3), l.df1, l.df2, num(l.p_value, 2),
+                       l.fits ? "within the noise" : fmt::format("{} {} beyond it", num(l.lack_rms, 3), unit));
+  };
+  if (baseline.tested)
+    page.paragraph(fmt::format("Lack of fit against {} (noise {} {}): the published model {}; with the causes {}.",
+                               baseline.basis, num(baseline.pure_error_rms, 3), unit, words(baseline),
+                               final.tested ? words(final) : "not tested"));
+  else
+    page.paragraph("Lack of fit not tested: " + baseline.basis + ".");
+  for (const auto& note : design_notes) page.paragraph("Design: " + note + ".");
 }
 
 void shift_table(Page& page, const std::vector<ParameterShift>& shifts, const std::string& published) {

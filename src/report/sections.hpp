@@ -57,6 +57,10 @@ void parameter_tables(Page& page, const FitResult& fit, const Show& show) {
 // The candidates of every forward step, and the accepted causes.
 void candidate_tables(Page& page, const std::vector<std::vector<CandidateScore>>& rounds, const char* unit);
 
+// The lack-of-fit test of the baseline and of the final model, and what the design hides.
+void lack_of_fit_paragraph(Page& page, const LackOfFit& baseline, const LackOfFit& final, const std::string& unit,
+                           const std::vector<std::string>& design_notes = {});
+
 // The parameters that move once the causes are modelled, both values with their 95 % intervals.
 void shift_table(Page& page, const std::vector<ParameterShift>& shifts, const std::string& published);
 

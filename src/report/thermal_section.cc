@@ -167,6 +167,7 @@ void diagnosis_section(Page& page, const Calibration& c) {
                              num(d.cv_rmse_before_K), num(d.cv_rmse_after_K), d.cv_gain_percent, num(d.noise_K, 3)));
   candidate_tables(page, d.rounds, "K");
   for (const auto& skipped : d.skipped) page.paragraph("Not tried: " + skipped);
+  lack_of_fit_paragraph(page, d.baseline.lack_of_fit, d.final.lack_of_fit, "K");
   if (!d.accepted.empty()) shift_table(page, d.shifts, "published model");
   // Before and after on one scale.
   double lo = 0, hi = 0;
