@@ -612,6 +612,9 @@ std::string friction_fit_summary(const FrictionFitResult& r) {
                    f.solver.covariance_ok ? "ok" : "FAILED");
   s += fmt::format("goodness: RMSE {:.3f} N, max relative error {:.1f} % (sample {}), residual sigma {:.3g}\n", r.rmse_N,
                    100 * r.max_relative_error, r.max_relative_error_sample, std::sqrt(f.residual_variance));
+  if (r.variance_passes > 0 && r.run_offset_ratio > 0)
+    s += fmt::format("run offsets: random, tau = {:.3g} N (variance {:.3g} x the noise's, {} alternating fits)\n",
+                     r.run_offset_sd_N, r.run_offset_ratio, r.variance_passes);
   if (!r.spread.empty()) {
     s += fmt::format("spread across {} runs (Eq. 1 sigma; ratio = sigma / (pooled SE * sqrt(runs)), ~1 if only noise):\n",
                      r.runs.size());
