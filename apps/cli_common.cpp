@@ -241,7 +241,7 @@ std::vector<double> or_catalog(const std::vector<double>& given, const GuideSpec
 
 void ThermalModelOptions::add_to(CLI::App& app, ThermalFitOptions& fit) {
   app.add_option("--friction", friction_fit, "Friction fit JSON (lmcal fit friction) for the heat rate");
-  app.add_option("--heat", heat, "Heat rate: auto, friction (law) or measured (mean friction force)")->capture_default_str();
+  app.add_option("--heat", heat, "Heat rate: auto, friction (law) or measured (start_friction_N x V, else the run mean mean_friction_N x V)")->capture_default_str();
   app.add_option("--source", source, "Heat source model: paper, averaged or moving")->capture_default_str();
   app.add_option("--scheme", scheme, "Time scheme: backward-euler (be) or crank-nicolson (cn)")->capture_default_str();
   app.add_option("--segments", fit.half_rail_segments, "Segments on the half rail")->capture_default_str();

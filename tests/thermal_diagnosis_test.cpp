@@ -1,7 +1,9 @@
 // The thermal diagnosis finds effects hidden in virtual-rig data: each mechanism of the
 // extension library at two seeds and magnitudes down to a few times the noise, no false
 // alarm on clean data, "unexplained" for a disturbance outside the library, and a gain
-// close to what the truth allows.
+// close to what the truth allows; a base loss and a larger h named as the tie they are, a
+// smaller h named alone, and coupling found with the true α when the heat is a run-mean
+// friction.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -38,6 +40,24 @@ struct HiddenEffect {
   std::uint64_t seed;
 };
 
+// The accepted cause and the candidates it ties with, in alphabetical order.
+std::vector<std::string> tie_of(const CandidateScore& c) {
+  std::vector<std::string> names{c.effect};
+  names.insert(names.end(), c.tied_with.begin(), c.tied_with.end());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+// The base loss a cause stands for: its own, or that of its tie, a larger h (b = Δh·p with
+// the rig's h = 5.3 W/m²K and p = 0.14 m).
+CandidateScore as_base_loss(CandidateScore c) {
+  if (c.effect == "convection_scale") {
+    c.value *= 5.3 * 0.14;
+    c.se *= 5.3 * 0.14;
+  }
+  return c;
+}
+
 class ThermalDiagnosisNames : public testing::TestWithParam<HiddenEffect> {};
 
 TEST_P(ThermalDiagnosisNames, TheHiddenMechanismAndItsMagnitude) {
@@ -47,9 +67,18 @@ TEST_P(ThermalDiagnosisNames, TheHiddenMechanismAndItsMagnitude) {
   const ThermalDiagnosis d = diagnose(campaign(seed, effects));
   ASSERT_EQ(d.verdict, "explained") << d.summary;
   ASSERT_EQ(d.accepted.size(), 1u) << d.summary;
-  EXPECT_EQ(d.accepted[0].effect, effect);
+  // A base loss is named with its tie, a larger h, and either may represent the two.
+  const bool base_loss = std::string(effect) == "base_loss";
+  if (base_loss) {
+    const auto tie = tie_of(d.accepted[0]);
+    for (const char* name : {"base_loss", "convection_scale"})
+      EXPECT_TRUE(std::find(tie.begin(), tie.end(), name) != tie.end()) << name << ": " << d.summary;
+  } else {
+    EXPECT_EQ(d.accepted[0].effect, effect) << d.summary;
+  }
+  const CandidateScore found = base_loss ? as_base_loss(d.accepted[0]) : d.accepted[0];
   // The rig's `coupling` switches the law's full temperature dependence on: κ = 1.
-  EXPECT_NEAR(d.accepted[0].value, value, std::max(3 * d.accepted[0].se, 0.05 * std::abs(value))) << d.summary;
+  EXPECT_NEAR(found.value, value, std::max(3 * found.se, 0.05 * std::abs(value))) << d.summary;
   EXPECT_GT(d.cv_gain_percent, 0.1);
   EXPECT_FALSE(d.final.structured) << d.summary;
   // α moves back to the truth (0.6) once the cause is modelled.
@@ -111,18 +140,10 @@ ThermalDataSet one_speed(std::uint64_t seed, const RigEffects& effects, double h
   return generate_thermal_dataset(rig, effects, "test").set;
 }
 
-// The accepted cause and the candidates it ties with.
-std::vector<std::string> tie_of(const CandidateScore& c) {
-  std::vector<std::string> names{c.effect};
-  names.insert(names.end(), c.tied_with.begin(), c.tied_with.end());
-  std::sort(names.begin(), names.end());
-  return names;
-}
-
 // A base loss b is a larger h on the rail's sides (b = Δh·p): a tie, named as one, with
 // either as its representative, and the same loss either way.
 TEST(ThermalDiagnosis, BaseLossAndALargerHAreATie) {
-  for (std::uint64_t seed : {1, 2}) {
+  for (std::uint64_t seed : {1, 2, 3}) {
     RigEffects effects;
     set_rig_effect(effects, "base_loss", 0.2);
     const ThermalDiagnosis d = diagnose(one_speed(seed, effects));
@@ -132,8 +153,7 @@ TEST(ThermalDiagnosis, BaseLossAndALargerHAreATie) {
     const std::string named = c.effect == "base_loss" ? "base_loss or convection_scale" : "convection_scale or base_loss";
     EXPECT_NE(d.summary.find(named + ": these data cannot tell them apart"), std::string::npos) << d.summary;
     EXPECT_NE(d.summary.find("To separate them, log " + c.measure), std::string::npos) << d.summary;
-    const double loss_W_mK = c.effect == "base_loss" ? c.value : c.value * 5.3 * 0.14;  // b = Δh·p
-    EXPECT_NEAR(loss_W_mK, 0.2, 0.02) << d.summary;
+    EXPECT_NEAR(as_base_loss(c).value, 0.2, 0.01) << d.summary;
     EXPECT_NEAR(d.shifts.front().extended, 0.6, 0.02) << d.summary;
   }
 }
@@ -141,7 +161,7 @@ TEST(ThermalDiagnosis, BaseLossAndALargerHAreATie) {
 // A rail convecting less than assumed (h = 4 instead of 5.3 W/m²K): a base loss cannot lower
 // the loss (b >= 0), so "h differs" is named, alone, with its size.
 TEST(ThermalDiagnosis, ASmallerHIsNamedAsHDiffers) {
-  for (std::uint64_t seed : {1, 2}) {
+  for (std::uint64_t seed : {1, 2, 3}) {
     const ThermalDiagnosis d = diagnose(one_speed(seed, {}, 4.0));
     ASSERT_EQ(d.accepted.size(), 1u) << d.summary;
     EXPECT_EQ(d.accepted[0].effect, "convection_scale") << d.summary;
@@ -185,6 +205,13 @@ TEST(ThermalDiagnosis, ReportedGainIsCloseToTheTruthsGain) {
   const double truth_gain = 100 * (1 - truth_rmse / d.cv_rmse_before_K);
   EXPECT_NEAR(d.cv_gain_percent, truth_gain, 2.0);
   EXPECT_NEAR(d.cv_rmse_after_K, truth_rmse, 0.05 * truth_rmse);
+  // Against the thermocouples' noise: the published model's residuals far above it, the
+  // modelled ones at it (F near 1 on thousands of records).
+  ASSERT_TRUE(d.baseline.lack_of_fit.tested);
+  EXPECT_FALSE(d.baseline.lack_of_fit.fits);
+  EXPECT_GT(d.baseline.lack_of_fit.lack_rms, d.noise_K);
+  EXPECT_TRUE(d.final.lack_of_fit.fits) << d.summary;
+  EXPECT_NEAR(d.final.lack_of_fit.statistic, 1.0, 0.05) << d.summary;
 }
 
 }  // namespace

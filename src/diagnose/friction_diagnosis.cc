@@ -20,6 +20,7 @@ namespace lmcal {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr int kCandidateIterations = 15;
 
 // A fit of the law plus `effects`, started at `start` (one start: the diagnosis refits many times).
 FrictionFitResult fit_with(const FrictionLog& log, const FrictionDiagnosisOptions& o, const std::vector<std::string>& effects,
@@ -37,6 +38,9 @@ FrictionFitResult fit_with(const FrictionLog& log, const FrictionDiagnosisOption
   f.fit.starts = 0;  // warm-started from the previous model's estimate: no multi-start
   f.fit.profile = ProfileMode::none;
   f.fit.bootstrap = 0;  // the diagnosis quotes no bootstrap intervals
+  // Warm-started, a candidate converges in a few iterations; one that crawls along a bound
+  // (a drag pinned at 0 beside its twin) adds nothing and is reported as not converged.
+  f.fit.max_iterations = kCandidateIterations;
   return fit_friction(log, f);
 }
 
@@ -301,8 +305,16 @@ FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagno
   auto fit_candidate = [&](const std::vector<std::string>& effects, const FrictionFitResult& current) {
     std::vector<double> effect_start;
     for (std::size_t j = 7; j < current.fit.parameters.size(); ++j) effect_start.push_back(current.fit.parameters[j].value);
-    // From the given start (not the current estimate: a misspecified fit may sit on a bound).
-    return fit_with(log, o, effects, o.fit.start, effect_start, current.run_offset_ratio);
+    // From the current estimate where it is inside its bounds (fewer iterations), else from
+    // the given start (a misspecified fit may sit on a bound).
+    FrictionConstants<double> start = o.fit.start;
+    for (std::size_t j = 0; j < 7; ++j) {
+      const ParameterEstimate& p = current.fit.parameters[j];
+      if (p.free && !p.held_unidentifiable && p.value > o.fit.bounds[j].first && p.value < o.fit.bounds[j].second &&
+          !p.at_bound)
+        fittable_constant(start, j) = p.value;
+    }
+    return fit_with(log, o, effects, start, effect_start, current.run_offset_ratio);
   };
   auto summarise = [&](const FrictionFitResult& fit, const std::string& effect) {
     // The likelihood of the random run offsets' fit (their variance included), and the
@@ -321,6 +333,9 @@ FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagno
       detail::set_estimate(c, p);
       if (p.held_unidentifiable) m.problem = "not identifiable from these data";
     }
+    if (!fit.fit.solver.converged)
+      m.problem = fmt::format("the fit did not converge ({}, {} iterations)", fit.fit.solver.termination,
+                              fit.fit.solver.iterations);
     return std::make_pair(m, c);
   };
   const detail::SelectionRules rules{.lrt_p = o.lrt_p,

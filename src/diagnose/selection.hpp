@@ -154,13 +154,14 @@ Selection<Fit> forward_select(const std::vector<std::string>& library, Fit basel
       s.rounds.push_back(std::move(round));
       break;
     }
-    // Candidates that change the fit as the best does are indistinguishable from it on these
-    // data: a tie, named together, represented by the one listed first in the library (the
-    // plainer form comes first).
+    // Candidates that change the fit as the best does, and fit about as well (BIC within
+    // switch_bic), are indistinguishable from it on these data: a tie, named together,
+    // represented by the one listed first in the library (the plainer form comes first).
     std::vector<std::size_t> tie{best};
     for (std::size_t i = 0; i < round.size(); ++i)
       if (i != best && models[i].problem.empty() && std::isfinite(round[i].cv_rmse) &&
-          change_correlation(current.fitted, models[best].fitted, models[i].fitted) > rules.tie_correlation)
+          change_correlation(current.fitted, models[best].fitted, models[i].fitted) > rules.tie_correlation &&
+          round[i].bic < round[best].bic + rules.switch_bic)  // and fit as well: a clearly worse form is no tie
         tie.push_back(i);
     best = *std::min_element(tie.begin(), tie.end());  // rounds list candidates in library order
     for (std::size_t i : tie)

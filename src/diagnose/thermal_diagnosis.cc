@@ -64,20 +64,19 @@ double effective_sample_size(double n, double rho) {
   return std::max(n * (1 - rho) / (1 + rho), 2.0);
 }
 
-// The thermocouples' noise over all runs (RMS of each run's second-difference estimate) and
-// the degrees of freedom of that estimate: for white noise, the mean square of m second
-// differences is as good as 18/35 m independent squares (they overlap).
+// The thermocouples' noise over all runs (RMS of each run's second-difference estimate, over
+// noise_spacing_s) and the degrees of freedom of that estimate: for white noise, the mean
+// square of m second differences is as good as 18/35 m independent squares (they overlap).
 struct NoiseFloor {
   double sigma_K = 0, dof = 0;
 };
 
-NoiseFloor noise_floor(const ThermalDataSet& data) {
+NoiseFloor noise_floor(const ThermalDataSet& data, const ThermalDiagnosisOptions& o) {
   double ss = 0, differences = 0;
   for (const auto& run : data.runs) {
-    ss += std::pow(thermocouple_noise_K(run.trace), 2);
-    for (const auto& channel : run.trace.rail)
-      for (std::size_t i = 1; i + 1 < channel.values.size(); ++i)
-        differences += std::isnan(channel.values[i - 1] + channel.values[i] + channel.values[i + 1]) ? 0 : 1;
+    std::size_t m = 0;
+    ss += std::pow(thermocouple_noise_K(run.trace, o.noise_spacing_s, &m), 2);
+    differences += static_cast<double>(m);
   }
   return {std::sqrt(ss / static_cast<double>(data.runs.size())), differences * 18.0 / 35.0};
 }
@@ -89,8 +88,8 @@ NoiseFloor noise_floor(const ThermalDataSet& data) {
 // structure_p, but called a lack of fit only when the excess sqrt(s² − σ²) is at least
 // min_structure_fraction of σ: on thousands of records millikelvin are significant without
 // mattering.
-LackOfFit lack_of_fit(double ss, double n, double n_eff, std::size_t k, const NoiseFloor& noise,
-                      const ThermalDiagnosisOptions& o) {
+LackOfFit lack_of_fit_against_noise(double ss, double n, double n_eff, std::size_t k, const NoiseFloor& noise,
+                                    const ThermalDiagnosisOptions& o) {
   LackOfFit l;
   const auto K = static_cast<double>(k);
   if (!(noise.sigma_K > 0) || !(noise.dof > 0) || !(n > K + 1)) {
@@ -98,7 +97,7 @@ LackOfFit lack_of_fit(double ss, double n, double n_eff, std::size_t k, const No
     return l;
   }
   l.tested = true;
-  l.basis = "the thermocouples' noise (second differences of the traces)";
+  l.basis = fmt::format("the thermocouples' noise (second differences of the traces over {:g} s)", o.noise_spacing_s);
   const double variance = ss / (n - K);
   l.pure_error_rms = noise.sigma_K;
   l.lack_rms = std::sqrt(std::max(variance - noise.sigma_K * noise.sigma_K, 0.0));
@@ -120,7 +119,7 @@ ThermalResidualDiagnostics diagnose_residuals(const ThermalFitResult& fit, const
   d.rmse_K = std::sqrt(ss / std::max(n, 1.0));
   d.lag1_autocorrelation = lag1_autocorrelation(fit);
   d.n_eff = effective_sample_size(n, d.lag1_autocorrelation);
-  d.lack_of_fit = lack_of_fit(ss, n, d.n_eff, fit.joint.free_parameters, noise, o);
+  d.lack_of_fit = lack_of_fit_against_noise(ss, n, d.n_eff, fit.joint.free_parameters, noise, o);
 
   // Per sensor series, and cell means (time bins of the run's duration).
   const int bins = std::max(o.time_bins, 2);
@@ -237,7 +236,7 @@ ThermalDiagnosis diagnose_thermal(const ThermalDataSet& data, const ThermalDiagn
   o.fit.every = diagnosis_fit_options(data, options).every;
   ThermalDiagnosis d;
   // The noise floor of the residuals and of the held-out RMSE: the thermocouples' own noise.
-  const NoiseFloor noise = noise_floor(data);
+  const NoiseFloor noise = noise_floor(data, o);
   d.noise_K = noise.sigma_K;
 
   // 1. The baseline.

@@ -303,7 +303,7 @@ FrictionFitResult fit_friction(const FrictionLog& log, const FrictionFitOptions&
   for (int pass = 1;; ++pass) {
     out.fit = detail::solve_least_squares(model, run_specs, pass_options, &final_state);
     out.variance_passes = pass;
-    if (!random || !out.fit.solver.usable) break;
+    if (!random || !out.fit.solver.converged) break;  // refining τ² of a fit that did not converge buys nothing
     variance = run_offset_variance(unwhitened(final_state.residuals, run_of, data.run_shrink), run_of, runs);
     std::vector<double> shrink(runs);
     double change = 0;

@@ -70,7 +70,7 @@ struct Polish {
 };
 
 Polish solve(const ceres::CostFunction& cost, const std::vector<ParameterSpec>& specs, const std::vector<bool>& held,
-             std::vector<double> theta, bool bounded) {
+             std::vector<double> theta, bool bounded, int max_iterations) {
   Polish out;
   ceres::Problem problem(problem_options());
   build_problem(problem, cost, specs, held, theta.data(), bounded);
@@ -80,7 +80,7 @@ Polish solve(const ceres::CostFunction& cost, const std::vector<ParameterSpec>& 
   // Tall problems (10⁵ rows, a handful of parameters): JᵀJ once per iteration is far cheaper
   // than a QR of J, and identifiability is settled before the covariance is trusted.
   solver.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
-  solver.max_num_iterations = 200;
+  solver.max_num_iterations = max_iterations;
   solver.function_tolerance = 1e-10;
   solver.gradient_tolerance = 1e-10;
   solver.parameter_tolerance = 1e-9;
@@ -100,15 +100,15 @@ bool inside_bounds(const std::vector<ParameterSpec>& specs, const std::vector<bo
 // Bounds make Ceres project its steps (about twice the Jacobian evaluations), so the polish
 // first runs without them and repeats with them only when the minimum lies outside.
 Polish polish(const ceres::CostFunction& cost, const std::vector<ParameterSpec>& specs, const std::vector<bool>& held,
-              const std::vector<double>& theta) {
+              const std::vector<double>& theta, int max_iterations = 200) {
   if (inside_bounds(specs, held, theta)) {
-    Polish free = solve(cost, specs, held, theta, false);
+    Polish free = solve(cost, specs, held, theta, false, max_iterations);
     if (free.summary.IsSolutionUsable() && inside_bounds(specs, held, free.theta)) return free;
   }
   std::vector<double> start = theta;
   for (std::size_t j = 0; j < specs.size(); ++j)
     if (!held[j]) start[j] = std::clamp(start[j], specs[j].lower, specs[j].upper);
-  return solve(cost, specs, held, start, true);
+  return solve(cost, specs, held, start, true, max_iterations);
 }
 
 }  // namespace
@@ -443,7 +443,7 @@ Estimate estimate(const LeastSquaresModel& model, const std::vector<ParameterSpe
   if (n > 20000 && !linear) {
     std::vector<std::size_t> rows;
     for (std::size_t k = 0; k < n / 10; ++k) rows.push_back(k * 10);
-    theta = polish(*model.cost_function(rows, loss), specs, held, theta).theta;
+    theta = polish(*model.cost_function(rows, loss), specs, held, theta, options.max_iterations).theta;
   }
   std::optional<double> condition_number;
   FinalState& state = e.state;
@@ -452,7 +452,7 @@ Estimate estimate(const LeastSquaresModel& model, const std::vector<ParameterSpe
       e.fit = linear_solve(model, *cost, specs, held, theta, loss, state.jacobian);
       state.residuals = e.fit.residuals;
     } else {
-      e.fit = polish(*cost, specs, held, theta);
+      e.fit = polish(*cost, specs, held, theta, options.max_iterations);
       state.residuals = evaluate_residuals(model, e.fit.theta, loss, &state.jacobian);
     }
     theta = state.theta = e.fit.theta;

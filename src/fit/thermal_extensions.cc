@@ -15,10 +15,12 @@
 namespace lmcal::detail {
 
 const std::vector<ThermalExtension>& thermal_extensions() {
+  // A tie is represented by the candidate listed first: the plainer form comes first (a
+  // constant h that differs from the assumed one before a base loss or an h(V)).
   static const std::vector<ThermalExtension> library = {
+      ThermalExtension::of<ConvectionScale>(),
       ThermalExtension::of<ConvectionVelocity>(),
       ThermalExtension::of<BaseLoss>(),
-      ThermalExtension::of<ConvectionScale>(),
       ThermalExtension::of<Coupling>(),
       ThermalExtension::of<ThermocoupleLag>(),
       ThermalExtension::of<AlphaVelocity>(),

@@ -298,8 +298,10 @@ double leave_one_run_out_rmse(const ThermalModel& model, const FitResult& joint,
   const std::size_t runs = model.runs().size();
   std::vector<std::size_t> group(model.num_residuals(), runs);  // priors: never left out
   for (std::size_t k = 0; k < rows.size(); ++k) group[k] = rows[k].run;
+  // A parameter on its bound stays there: the step is unconstrained, and would take a base
+  // loss that the data push below 0 to a negative value, scoring a physics the fit refused.
   std::vector<bool> held;
-  for (const auto& p : joint.parameters) held.push_back(!p.free || p.held_unidentifiable);
+  for (const auto& p : joint.parameters) held.push_back(!p.free || p.held_unidentifiable || p.at_bound);
   double ss = 0;
   for (std::size_t r = 0; r < runs; ++r) {
     std::vector<int> own;
@@ -469,17 +471,23 @@ const char* to_string(ThermalOffsets offsets) {
   return "?";
 }
 
-double thermocouple_noise_K(const ThermalTrace& trace) {
+double thermocouple_noise_K(const ThermalTrace& trace, double spacing_s, std::size_t* differences) {
+  std::size_t k = 1;
+  if (trace.size() >= 2 && spacing_s > 0) {
+    const double step = (trace.time_s.back() - trace.time_s.front()) / static_cast<double>(trace.size() - 1);
+    k = std::max<std::size_t>(1, static_cast<std::size_t>(spacing_s / step + 1e-9));
+  }
   double ss = 0;
   std::size_t n = 0;
   for (const auto& channel : trace.rail)
-    for (std::size_t i = 1; i + 1 < channel.values.size(); ++i) {
-      const double d2 = channel.values[i + 1] - 2 * channel.values[i] + channel.values[i - 1];
+    for (std::size_t i = k; i + k < channel.values.size(); ++i) {
+      const double d2 = channel.values[i + k] - 2 * channel.values[i] + channel.values[i - k];
       if (!std::isnan(d2)) {
         ss += d2 * d2;
         ++n;
       }
     }
+  if (differences) *differences = n;
   return n ? std::sqrt(ss / (6.0 * static_cast<double>(n))) : std::numeric_limits<double>::quiet_NaN();
 }
 

@@ -81,6 +81,11 @@ struct ThermalDiagnosisOptions {
   // discrepancy: with thousands of records, millikelvin (the start temperature read from a
   // noisy ambient, a logger's rounding) is significant without mattering.
   double min_structure_fraction = 0.2;
+  // The thermocouples' noise (the lack of fit's pure error, and the floor of the held-out
+  // RMSE) from second differences over records this far apart: a logger's or sensor's noise
+  // with memory of seconds counts in full (consecutive records would see only its fast part,
+  // and call the rest a lack of fit), while the rail's warm-up stays smooth on this scale.
+  double noise_spacing_s = 120;
   std::size_t max_effects = 3;
   int time_bins = 12;     // cells per sensor series for the covariate tests
   Progress progress;      // the candidate fits, round by round

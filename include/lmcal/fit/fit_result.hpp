@@ -41,6 +41,7 @@ struct FitOptions {
   double loss_scale = 1.345;     // in units of the residual σ (whitened residuals)
   int starts = 8;                // multi-start local searches (NLopt) before the Ceres polish
   std::size_t subsample = 300;   // residuals the multi-start stage uses (evenly spread)
+  int max_iterations = 200;      // of the Ceres polish (a diagnosis caps its many warm-started fits)
   ProfileMode profile = ProfileMode::automatic;
   double confidence = 0.95;
   // A direction in (relatively scaled) parameter space whose standard error exceeds this

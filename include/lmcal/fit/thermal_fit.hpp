@@ -188,9 +188,12 @@ RailSolution<double> simulate_rail_with_mechanisms(const RailGeometry& geometry,
                                                    const std::vector<std::string>& mechanisms,
                                                    const std::vector<std::pair<std::string, double>>& values);
 
-// The thermocouples' noise σ (K), from the second differences of the rail channels:
-// insensitive to the slow warm-up, exact for white noise.
-double thermocouple_noise_K(const ThermalTrace& trace);
+// The thermocouples' noise σ (K), from the second differences of the rail channels,
+// x(t + k) − 2 x(t) + x(t − k) over k records, the most that fit in `spacing_s` (at least
+// one): insensitive to the slow warm-up, exact for white noise; noise with memory shorter
+// than the spacing counts in full, longer memory only in part. `differences`, when given,
+// receives how many second differences went in.
+double thermocouple_noise_K(const ThermalTrace& trace, double spacing_s = 0, std::size_t* differences = nullptr);
 
 // Reads constants and effects from a friction fit JSON (`lmcal fit friction` output).
 void read_friction_fit(const std::string& json_file, ThermalFitOptions& options);

@@ -15,8 +15,8 @@ struct ConvectionScale {
   static constexpr const char* name = "convection_scale";
   static constexpr const char* description = "convection coefficient differing from the assumed one, h = h_assumed (1 + s)";
   static constexpr const char* measure =
-      "a heat-flux sensor on the rail's side, or a cool-down of the rail lifted off the bed (its time constant then "
-      "gives h alone)";
+      "a heat-flux sensor on the rail's side and a thermocouple on the bed under the rail, or a cool-down of the rail "
+      "lifted off the bed (its time constant then gives h alone)";
   static constexpr bool linear = false;
   static std::vector<ExtensionParameter> parameters() { return {{"convection_scale", "1", 0.0, -0.9, 9.0, 0.1}}; }
   static std::optional<SourceModel> source() { return std::nullopt; }
