@@ -37,9 +37,10 @@ void friction_model(Page& page, const Calibration& c) {
   const CalibratedModel& m = c.calibrated;
   const FrictionFitResult& f = *m.friction;
   page.heading(3, "Friction: " + with_causes("the published law (Eqs. 3-7)", m.friction_causes, c.friction_diagnosis.has_value()));
-  page.paragraph(fmt::format("Fitted to {} samples of {} runs, each run with its own load-cell zero (profiled out). Held-out "
-                             "(leave-one-run-out) RMSE {} N; residual RMSE {} N.",
-                             c.friction_log->size(), f.runs.size(), num(f.cv_rmse_N), num(f.rmse_N)));
+  page.paragraph(fmt::format("Fitted to {} samples of {} runs, each run's load-cell zero a random run intercept (τ = {} N, "
+                             "estimated with the constants). Held-out (leave-one-run-out, each run a new setup) RMSE {} N; "
+                             "residual RMSE {} N.",
+                             c.friction_log->size(), f.runs.size(), num(f.run_offset_sd_N, 3), num(f.cv_rmse_N), num(f.rmse_N)));
   parameter_table(page, f.fit);
   caveats(page, f.fit);
 }
