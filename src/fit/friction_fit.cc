@@ -332,7 +332,8 @@ FrictionFitResult fit_friction(const FrictionLog& log, const FrictionFitOptions&
   }
   if (options.cross_validate && runs >= 2 && options.fit.loss == RobustLoss::none && final_state.jacobian.rows() > 0) {
     std::vector<bool> held;
-    for (const auto& p : out.fit.parameters) held.push_back(!p.free || p.held_unidentifiable);
+    // A parameter on its bound stays there: a held-out step must not carry it across (a drag below 0).
+    for (const auto& p : out.fit.parameters) held.push_back(!p.free || p.held_unidentifiable || p.at_bound);
     const Eigen::VectorXd held_out = detail::leave_group_out_residuals(final_state, run_of, held);
     // A held-out run under random offsets is a new setup with an unknown zero: predicted
     // with the offsets' mean, 0 (its own mean is not taken out). Fixed offsets stay profiled.
