@@ -92,6 +92,7 @@ TEST(FrictionEffects, EveryRegisteredEffectVanishesAtItsNeutralValueAndIsFindabl
     EXPECT_LT(info.lower, info.upper) << info.name;
     EXPECT_GT(info.upper, info.neutral) << info.name;
     EXPECT_GT(info.scale, 0) << info.name;
+    EXPECT_FALSE(std::string_view(info.measure).empty()) << info.name << ": what to log to see it (a tie quotes it)";
     bool acts = false;
     for (double v : {0.0, 0.004, 0.05, 0.11})
       for (double temperature_C : {22.0, 40.0})

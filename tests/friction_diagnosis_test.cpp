@@ -240,6 +240,7 @@ TEST(FrictionDiagnosis, CausesTheDataCannotTellApartAreReportedAsATie) {
   EXPECT_EQ(d.accepted.front().effect, "seal_drag") << d.summary;
   EXPECT_EQ(d.accepted.front().tied_with, std::vector<std::string>{"seal_drag_block"}) << d.summary;
   EXPECT_NE(d.summary.find("seal_drag or seal_drag_block: these data cannot tell them apart"), std::string::npos) << d.summary;
+  EXPECT_NE(d.summary.find("To separate them, log guides with different block lengths"), std::string::npos) << d.summary;
   // Two block lengths separate them: no tie.
   const auto two = diagnose(generate_friction_log(campaign(91), effects).log);
   ASSERT_FALSE(two.accepted.empty()) << two.summary;

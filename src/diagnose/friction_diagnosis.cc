@@ -331,6 +331,7 @@ FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagno
     if (!effect.empty()) {
       const auto& p = fit.fit.parameter(effect);
       detail::set_estimate(c, p);
+      c.measure = FrictionEffectLibrary::infos[friction_effect_slot(effect)].measure;
       if (p.held_unidentifiable) m.problem = "not identifiable from these data";
     }
     if (!fit.fit.solver.converged)

@@ -31,6 +31,7 @@ struct FrictionEffectInfo {
   double neutral;           // the published law
   double lower, upper;      // bounds of a fit
   double scale;             // a typical size (the neutral value is often zero), for fit scaling
+  const char* measure = ""; // what to log to see it directly, or to tell it from a look-alike
 };
 
 enum class FrictionEffectStage { on_law, on_total };

@@ -11,7 +11,8 @@ namespace lmcal {
 
 struct CoulombTemperature {
   static constexpr FrictionEffectInfo info{"coulomb_temperature", "1/K", "Coulomb term (1 + c (T - T_i))", 0.0, -0.1, 0.1,
-                                           0.01};
+                                           0.01,
+                                           "the same load at two oil temperatures within one run (or repeated setups)"};
   static constexpr FrictionEffectStage stage = FrictionEffectStage::on_law;
 
   template <typename P, typename C, typename B, typename Total, typename E>

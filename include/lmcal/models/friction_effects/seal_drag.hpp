@@ -8,7 +8,8 @@
 namespace lmcal {
 
 struct SealDrag {
-  static constexpr FrictionEffectInfo info{"seal_drag", "N s2/m2", "quadratic seal drag c V²", 0.0, 0.0, 5000.0, 100.0};
+  static constexpr FrictionEffectInfo info{"seal_drag", "N s2/m2", "quadratic seal drag c V²", 0.0, 0.0, 5000.0, 100.0,
+                                           "guides with different block lengths (a drag growing with the block is seal_drag_block), and speeds above 0.1 m/s"};
   static constexpr FrictionEffectStage stage = FrictionEffectStage::on_law;
 
   template <typename P, typename C, typename B, typename Total, typename E>

@@ -11,7 +11,8 @@ namespace lmcal {
 
 struct SealDragBlock {
   static constexpr FrictionEffectInfo info{"seal_drag_block", "N s2/m2 per 100 mm", "quadratic seal drag c (L_b/100 mm) V²",
-                                           0.0, 0.0, 5000.0, 100.0};
+                                           0.0, 0.0, 5000.0, 100.0,
+                                           "guides with different block lengths, and speeds above 0.1 m/s"};
   static constexpr FrictionEffectStage stage = FrictionEffectStage::on_law;
 
   template <typename P, typename C, typename B, typename Total, typename E>

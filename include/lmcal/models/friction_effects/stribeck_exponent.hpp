@@ -13,7 +13,8 @@ namespace lmcal {
 
 struct StribeckExponent {
   static constexpr FrictionEffectInfo info{"stribeck_exponent", "1", "exponent δ of the Stribeck decay exp(-(V/V_St)^δ)",
-                                           1.0, 0.2, 5.0, 1.0};
+                                           1.0, 0.2, 5.0, 1.0,
+                                           "several speeds between 0.002 and 0.03 m/s"};
   static constexpr FrictionEffectStage stage = FrictionEffectStage::on_law;
 
   template <typename P, typename C, typename B, typename Total, typename E>
