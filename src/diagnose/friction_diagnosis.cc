@@ -123,7 +123,8 @@ std::pair<std::vector<std::vector<double>>, std::vector<double>> group_means(con
 // (backfitting), against run alone. What the conditions add beyond the runs' levels is the
 // model's lack of fit; the run × condition remainder is the pure error — the spread of a
 // condition repeated in other runs. Needs conditions repeated across runs.
-LackOfFit lack_of_fit(const FrictionLog& log, const std::vector<double>& centred, std::size_t parameters, double structure_p) {
+LackOfFit lack_of_fit(const FrictionLog& log, const std::vector<double>& centred, std::size_t parameters, double structure_p,
+                      double min_fraction) {
   LackOfFit l;
   using Condition = std::tuple<std::uint32_t, double, double, double, double, double>;
   std::map<Condition, std::size_t> condition_index;
@@ -187,7 +188,9 @@ LackOfFit lack_of_fit(const FrictionLog& log, const std::vector<double>& centred
   l.p_value = fisher_f_upper_p(std::max(l.statistic, 0.0), l.df1, l.df2);
   l.pure_error_rms = std::sqrt(ss_pure / df_pure);
   l.lack_rms = std::sqrt(std::max((ss_runs - ss_pure) / df_lack - ss_pure / df_pure, 0.0));
-  l.fits = l.p_value >= structure_p;
+  // Rejected when significant and material (a lack of a tenth of the noise over thousands of
+  // conditions is significant without mattering).
+  l.fits = l.p_value >= structure_p || l.lack_rms < min_fraction * l.pure_error_rms;
   return l;
 }
 
@@ -195,7 +198,8 @@ LackOfFit lack_of_fit(const FrictionLog& log, const std::vector<double>& centred
 // means of the run-centred residuals; what changes only between runs on the run means,
 // judged against their spread (the offsets' variance is the error term); interactions of
 // every pair; lack of fit against pure error. Holm over all tests.
-ResidualDiagnostics diagnose_residuals(const FrictionLog& log, const FrictionFitResult& fit, double structure_p) {
+ResidualDiagnostics diagnose_residuals(const FrictionLog& log, const FrictionFitResult& fit, const FrictionDiagnosisOptions& o) {
+  const double structure_p = o.structure_p;
   ResidualDiagnostics d;
   d.sigma = std::sqrt(fit.fit.residual_variance);
   const std::size_t n = log.size();
@@ -254,10 +258,14 @@ ResidualDiagnostics diagnose_residuals(const FrictionLog& log, const FrictionFit
     }
   std::erase_if(d.covariates, [](const CovariateTest& t) { return t.n == 0; });
   detail::holm_adjust(d.covariates);
-  std::sort(d.covariates.begin(), d.covariates.end(), [](auto& a, auto& b) { return a.p_value < b.p_value; });
-  for (auto& c : d.covariates) c.structured = c.p_adjusted < structure_p;
+  // Strongest first: the ones that count by size, then the rest by p.
+  for (auto& c : d.covariates) c.structured = c.p_adjusted < structure_p && c.size >= o.min_structure_fraction * d.rmse_N;
+  std::sort(d.covariates.begin(), d.covariates.end(), [](auto& a, auto& b) {
+    if (a.structured != b.structured) return a.structured;
+    return a.structured ? a.size > b.size : a.p_value < b.p_value;
+  });
   d.structured = !d.covariates.empty() && d.covariates.front().structured;
-  d.lack_of_fit = lack_of_fit(log, law.centred, fit.fit.free_parameters, structure_p);
+  d.lack_of_fit = lack_of_fit(log, law.centred, fit.fit.free_parameters, structure_p, o.min_structure_fraction);
   return d;
 }
 
@@ -299,7 +307,7 @@ FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagno
   base_options.fit.profile = ProfileMode::none;
   base_options.fit.bootstrap = 0;
   const FrictionFitResult baseline = fit_friction(log, base_options);
-  d.baseline = diagnose_residuals(log, baseline, o.structure_p);
+  d.baseline = diagnose_residuals(log, baseline, o);
 
   // 2-3. Candidates, forward.
   auto fit_candidate = [&](const std::vector<std::string>& effects, const FrictionFitResult& current) {
@@ -349,7 +357,7 @@ FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagno
   d.rounds = std::move(selection.rounds);
 
   // 4. Verdict.
-  d.final = diagnose_residuals(log, current, o.structure_p);
+  d.final = diagnose_residuals(log, current, o);
   d.cv_rmse_before_N = baseline.cv_rmse_N;
   d.cv_rmse_after_N = current.cv_rmse_N;
   d.accepted = detail::accepted_scores(d.rounds, selection.accepted,
