@@ -248,6 +248,12 @@ void ThermalModelOptions::add_to(CLI::App& app, ThermalFitOptions& fit) {
   app.add_option("--dt", fit.time_step_s, "Time step, s")->capture_default_str();
   app.add_option("--every", fit.every, "Fit every n-th record (the paper kept every 120th)")->capture_default_str();
   app.add_option("--ambient", fit.ambient, "Ambient: mean of the ambient sensors, or a column name")->capture_default_str();
+  // What is held, freed and where it starts: the same for a fit and a diagnosis.
+  app.add_option("--alpha-start", fit.alpha_start, "Start value of alpha")->capture_default_str();
+  app.add_flag("--fit-h", fit.fit_h, "Also fit the convection coefficient h (one for all runs)");
+  app.add_option("--h", fit.h_W_m2K, "Convection coefficient (held there; the start value with --fit-h), W/m2K")
+      ->capture_default_str();
+  app.add_flag("--fit-initial", fit.fit_initial_temperature, "Also fit the initial rail temperature of each run");
 }
 
 void ThermalModelOptions::apply(ThermalFitOptions& fit, std::vector<std::pair<std::string, std::string>>& inputs) const {

@@ -102,6 +102,9 @@ struct FrictionOptions {
 
 // How a thermal model is set up: heat input, source model, numerics, ambient (lmcal fit
 // thermal, diagnose thermal, calibrate).
+// The rail model's options shared by `fit thermal` and `diagnose thermal`:
+// heat input, source, numerics, and what is held or freed (--alpha-start,
+// --fit-h, --h, --fit-initial).
 struct ThermalModelOptions {
   std::string friction_fit;  // friction fit JSON for the heat rate
   std::string heat = "auto";

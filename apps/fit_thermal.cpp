@@ -53,16 +53,12 @@ void setup_fit_thermal(CLI::App& fit, const std::vector<std::string>& argv) {
   app->add_option("--name", o->name, "Name of the fit (output file names)")->capture_default_str();
   app->add_option("-o,--output-dir", o->output_dir, "Output folder")->capture_default_str();
   o->model.add_to(*app, o->fit);
-  app->add_option("--alpha-start", o->fit.alpha_start, "Start value of alpha")->capture_default_str();
-  app->add_flag("--fit-h", o->fit.fit_h, "Also fit the convection coefficient h (one for all runs)");
-  app->add_option("--h", o->fit.h_W_m2K, "Convection coefficient (start value with --fit-h), W/m2K")->capture_default_str();
   app->add_option("--offsets", o->fit.offsets,
                   "Thermocouple offsets: auto (fitted for a run that starts isothermal, at the ambient), fit or hold")
       ->transform(CLI::CheckedTransformer(std::map<std::string, ThermalOffsets>{{"auto", ThermalOffsets::automatic},
                                                                                {"fit", ThermalOffsets::fitted},
                                                                                {"hold", ThermalOffsets::held}},
                                           CLI::ignore_case));
-  app->add_flag("--fit-initial", o->fit.fit_initial_temperature, "Also fit the initial rail temperature of each run");
   std::string known;
   for (const auto& e : thermal_extension_library()) known += fmt::format("\n    {}: {}", e.name, e.description);
   app->add_option("--extension", o->fit.extensions, "Add a mechanism of the extension library (repeatable):" + known);

@@ -101,6 +101,13 @@ check "bad loss refused" refused "unknown loss 'l1'" fit friction fitdata/fricti
 check "diagnosis names the hidden seal drag" grep -q 'The published law misses: seal_drag' diag.txt
 check "diagnosis writes its json" grep -q '"verdict": "explained"' fitout/d.json
 check "diagnosis needs three runs" refused "at least 3 runs" diagnose friction onepc/friction.csv --name x -o out
+"$LMCAL" diagnose friction drag/friction.csv -o fitout --name dfix --fix f0=0.029 --run-offsets random >diagfix.txt
+check "a diagnosis holds what it is told to, and never reports it as moving" awk '
+  /"estimated_in_both"/ { both = $2 } /"parameter": "f0"/ { found = 1; ok = (both == "false,") }
+  END { exit !(found && ok) }' fitout/dfix.json
+check "the held f0 is not among the parameters that move" bash -c "! grep -q 'move: .*f0 ' diagfix.txt"
+check "diagnosis prints its lack-of-fit test" grep -q '^lack of fit' diagfix.txt
+check "diagnosis refuses an unknown run-offset model" refused "unknown model 'sometimes'" diagnose friction drag/friction.csv -o out --run-offsets sometimes
 
 # --- thermal fit -------------------------------------------------------------------------------
 "$LMCAL" generate thermal -o thermaldata --velocity 0.083,0.11 --duration 7200 --record-every 30 >/dev/null
@@ -109,6 +116,11 @@ check "thermal fit writes json, samples and the alpha curve" test -s fitout/t.js
 check "thermal fit reports alpha across runs" grep -q '^alpha across runs: ' thermal.txt
 check "thermal fit compares source models" grep -q 'alpha(paper) / alpha(averaged)' thermal.txt
 check "alpha curve has the runs' rows" test "$(grep -c '^v110,' fitout/t_alpha_curve.csv)" -eq 46
+"$LMCAL" generate thermal -o thermal3 --velocity 0.066,0.083,0.11 --duration 5400 --record-every 60 >/dev/null
+"$LMCAL" diagnose thermal thermal3/thermal.toml -o fitout --name td --fit-h --h 6 --alpha-start 0.5 >tdiag.txt
+check "diagnose thermal takes what fit thermal holds and frees (h fitted: its shift is reported)" \
+  grep -q '"parameter": "h_W_m2K"' fitout/td.json
+check "diagnose thermal prints its lack-of-fit test" grep -q '^lack of fit' tdiag.txt
 check "not a friction fit refused" refused "expected a friction fit" fit thermal thermaldata/thermal.toml --friction thermaldata/thermal_truth.json -o out
 check "unknown ambient column refused" refused "no ambient column 'ambient9_C'" fit thermal thermaldata/thermal.toml --ambient ambient9_C -o out
 
