@@ -66,21 +66,31 @@ BENCHMARK(BM_ThermalAlpha4Runs)->Unit(benchmark::kMillisecond)->MinTime(2.0);
 
 namespace {
 
+// A friction diagnosis with default options, timed; the log made once per benchmark.
+void diagnose_friction_log(benchmark::State& state, const lmcal::FrictionLog& log) {
+  for (auto _ : state) {
+    const auto d = lmcal::diagnose_friction(log, {});
+    benchmark::DoNotOptimize(d.accepted.data());
+  }
+  state.counters["samples"] = static_cast<double>(log.size());
+  state.counters["runs"] = static_cast<double>(log.run_names.size());
+}
+
+lmcal::FrictionLog rig_log(const lmcal::FrictionRigConfig& rig, const char* effect, double value) {
+  lmcal::RigEffects effects;
+  lmcal::set_rig_effect(effects, effect, value);
+  return lmcal::generate_friction_log(rig, effects).log;
+}
+
 // Friction diagnosis speed target (issue 6): 100 k samples, every candidate, held-out scoring,
 // under 5 s.
 void BM_FrictionDiagnosis100k(benchmark::State& state) {
   static const lmcal::FrictionLog log = [] {
     lmcal::FrictionRigConfig rig;
     rig.runs = 47;
-    lmcal::RigEffects effects;
-    lmcal::set_rig_effect(effects, "seal_drag", 60);
-    return lmcal::generate_friction_log(rig, effects).log;
+    return rig_log(rig, "seal_drag", 60);
   }();
-  for (auto _ : state) {
-    const auto d = lmcal::diagnose_friction(log, {});
-    benchmark::DoNotOptimize(d.accepted.data());
-  }
-  state.counters["samples"] = static_cast<double>(log.size());
+  diagnose_friction_log(state, log);
 }
 
 BENCHMARK(BM_FrictionDiagnosis100k)->Unit(benchmark::kMillisecond)->Iterations(2);
@@ -93,16 +103,9 @@ void BM_FrictionDiagnosisOneSetupPerRun76k(benchmark::State& state) {
     rig.one_setup_per_run = true;
     rig.velocity_m_s = {0.002, 0.003, 0.005, 0.007, 0.01, 0.014, 0.02, 0.03, 0.04, 0.05, 0.066, 0.083, 0.1, 0.11, 0.13, 0.15};
     rig.runs = 22;  // 108 setups x 22 repeats x 16 speeds x 2 directions, less what is beyond the load cell
-    lmcal::RigEffects effects;
-    lmcal::set_rig_effect(effects, "coulomb_temperature", 0.05);
-    return lmcal::generate_friction_log(rig, effects).log;
+    return rig_log(rig, "coulomb_temperature", 0.05);
   }();
-  for (auto _ : state) {
-    const auto d = lmcal::diagnose_friction(log, {});
-    benchmark::DoNotOptimize(d.accepted.data());
-  }
-  state.counters["samples"] = static_cast<double>(log.size());
-  state.counters["runs"] = static_cast<double>(log.run_names.size());
+  diagnose_friction_log(state, log);
 }
 
 BENCHMARK(BM_FrictionDiagnosisOneSetupPerRun76k)->Unit(benchmark::kMillisecond)->Iterations(1);

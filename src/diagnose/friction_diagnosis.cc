@@ -13,6 +13,7 @@
 #include "lmcal/error.hpp"
 #include "lmcal/fit/statistics.hpp"
 #include "fit/fit_json.hpp"
+#include "fit/friction_condition.hpp"
 #include "selection.hpp"
 
 namespace lmcal {
@@ -126,13 +127,10 @@ std::pair<std::vector<std::vector<double>>, std::vector<double>> group_means(con
 LackOfFit lack_of_fit(const FrictionLog& log, const std::vector<double>& centred, std::size_t parameters, double structure_p,
                       double min_fraction) {
   LackOfFit l;
-  using Condition = std::tuple<std::uint32_t, double, double, double, double, double>;
-  std::map<Condition, std::size_t> condition_index;
+  std::map<detail::ConditionKey, std::size_t> condition_index;
   std::map<std::pair<std::size_t, std::size_t>, std::pair<double, double>> cells;  // (run, condition) -> sum, count
   for (std::size_t i = 0; i < log.size(); ++i) {
-    const Condition c{log.guide[i], log.preload_um[i], log.load_N[i], std::round(log.temperature_C[i]), log.velocity_m_s[i],
-                      double(log.direction[i])};
-    const std::size_t ci = condition_index.try_emplace(c, condition_index.size()).first->second;
+    const std::size_t ci = condition_index.try_emplace(detail::condition_key(log, i), condition_index.size()).first->second;
     auto& cell = cells[{log.run[i], ci}];
     cell.first += centred[i];
     cell.second += 1;
@@ -218,10 +216,8 @@ ResidualDiagnostics diagnose_residuals(const FrictionLog& log, const FrictionFit
   const std::vector<Covariate> covariates = covariates_of(log);
   const std::size_t k = covariates.size();
   // Condition means of the centred residuals (within runs).
-  std::vector<std::tuple<std::uint32_t, double, double, double, double, double>> condition(n);
-  for (std::size_t i = 0; i < n; ++i)
-    condition[i] = {log.guide[i], log.preload_um[i], log.load_N[i], std::round(log.temperature_C[i]), log.velocity_m_s[i],
-                    double(log.direction[i])};
+  std::vector<detail::ConditionKey> condition(n);
+  for (std::size_t i = 0; i < n; ++i) condition[i] = detail::condition_key(log, i);
   const auto [within_x, within_e] = group_means(condition, covariates, law.centred);
   // Run means of the raw residuals (between runs).
   std::vector<std::uint32_t> run_key(log.run.begin(), log.run.end());

@@ -22,6 +22,8 @@ namespace lmcal {
 using detail::fit_json;
 using detail::number;
 
+using detail::ConditionKey;
+using detail::condition_key;
 using detail::FrictionData;
 using detail::FrictionModel;
 using detail::kConstantUnits;
@@ -29,13 +31,6 @@ using detail::kConstantUnits;
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-using ConditionKey = std::tuple<std::uint32_t, double, double, double, double, double>;
-
-ConditionKey condition_key(const FrictionLog& log, std::size_t i) {
-  return {log.guide[i], log.preload_um[i], log.load_N[i], std::round(log.temperature_C[i]), log.velocity_m_s[i],
-          static_cast<double>(log.direction[i])};
-}
 
 struct ConditionKeyHash {
   std::size_t operator()(const ConditionKey& k) const {

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "friction_condition.hpp"
 #include "least_squares.hpp"
 #include "lmcal/io/friction_log.hpp"
 #include "lmcal/models/friction_effects.hpp"
