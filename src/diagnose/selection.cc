@@ -228,6 +228,35 @@ std::string lack_of_fit_words(const LackOfFit& l, const std::string& unit) {
                      l.basis, l.statistic, l.df1, l.df2, l.p_value, l.lack_rms, unit, l.pure_error_rms, unit);
 }
 
+// "c1 = 0.12 (95 % [0.1, 0.14]), l1 = 1.3e3 m (95 % [...])"
+std::string estimate_words(const ParameterEstimate& p) {
+  return fmt::format("{} = {:.4g}{} (95 % [{:.4g}, {:.4g}])", p.name, p.value, p.unit.empty() ? "" : " " + p.unit, p.ci_low,
+                     p.ci_high);
+}
+
+// What the empirical term adds to a verdict: found (formula, coefficients, covariates, gain,
+// resemblance), or searched in vain.
+std::string empirical_words(const EmpiricalFinding& e, const std::string& unit) {
+  if (!e.searched) return "";
+  if (!e.found)
+    return fmt::format(" Beyond the library, an empirical term was searched for ({} candidate terms of the covariates): {}.",
+                       e.dictionary_size, e.reason);
+  std::string parts, covariates;
+  for (const auto& c : e.components) {
+    parts += fmt::format("{}{}: {} — {}", parts.empty() ? "" : "; ", c.symbol, c.words, estimate_words(c.coefficient));
+    if (c.has_scale) parts += ", " + estimate_words(c.scale);
+    for (const auto& name : c.covariates)
+      if (covariates.find(name) == std::string::npos) covariates += (covariates.empty() ? "" : ", ") + name;
+  }
+  return fmt::format(
+      " Beyond the library, an empirical term (learned from the residuals, not a named cause; {} candidate terms "
+      "searched) is added to {}: {}. It uses {}. Held-out RMSE {:.4g} {} -> {:.4g} {} ({:.1f} % better; LRT p = "
+      "{:.2g}). {}",
+      e.dictionary_size, e.where, e.formula.empty() ? parts : e.formula + ", with " + parts, covariates,
+      e.cv_rmse_before, unit, e.cv_rmse_after, unit, e.cv_gain_percent, e.lrt_p,
+      e.resembles.empty() ? "It resembles no mechanism we know of." : "It resembles " + e.resembles + ".");
+}
+
 }  // namespace
 
 Verdict make_verdict(const VerdictInput& in) {
@@ -298,6 +327,11 @@ Verdict make_verdict(const VerdictInput& in) {
         in.baseline_lack_of_fit.tested ? lack_of_fit_words(in.baseline_lack_of_fit, in.unit)
                                        : "lack of fit not tested: " + in.baseline_lack_of_fit.basis);
   }
+  if (in.empirical) {
+    if (in.empirical->found && (v.verdict == "unexplained" || v.verdict == "partly explained"))
+      v.verdict += " — empirical term found";
+    v.summary += empirical_words(*in.empirical, in.unit);
+  }
   return v;
 }
 
@@ -348,6 +382,37 @@ nlohmann::json verdict_json(const std::string& verdict, const std::string& summa
           {"parameter_shifts", moves},
           {"unexplained_covariate", unexplained_covariate},
           {"rounds", steps}};
+}
+
+nlohmann::json empirical_json(const EmpiricalFinding& e, const std::string& unit) {
+  auto estimate = [](const ParameterEstimate& p) {
+    return nlohmann::json{{"name", p.name}, {"unit", p.unit}, {"value", number(p.value)}, {"se", number(p.se)},
+                          {"ci95", {number(p.ci_low), number(p.ci_high)}}, {"at_bound", p.at_bound}};
+  };
+  nlohmann::json components = nlohmann::json::array();
+  for (const auto& c : e.components) {
+    nlohmann::json j{{"symbol", c.symbol}, {"words", c.words}, {"covariates", c.covariates},
+                     {"coefficient", estimate(c.coefficient)}};
+    if (c.has_scale) j["scale"] = estimate(c.scale);
+    components.push_back(j);
+  }
+  nlohmann::json ranges = nlohmann::json::object();
+  for (const auto& r : e.ranges) ranges[r.covariate] = {number(r.min), number(r.max)};
+  return {{"searched", e.searched},
+          {"found", e.found},
+          {"kind", "empirical (learned from the residuals; not a named cause)"},
+          {"added_to", e.where},
+          {"formula", e.formula},
+          {"components", components},
+          {"dictionary_size", e.dictionary_size},
+          {"cv_rmse_before_" + unit, number(e.cv_rmse_before)},
+          {"cv_rmse_after_" + unit, number(e.cv_rmse_after)},
+          {"cv_gain_percent", number(e.cv_gain_percent)},
+          {"lrt_p", number(e.lrt_p)},
+          {"delta_bic", number(e.delta_bic)},
+          {"resembles", e.resembles},
+          {"reason", e.reason},
+          {"covariate_ranges", ranges}};
 }
 
 nlohmann::json lack_of_fit_json(const LackOfFit& l) {

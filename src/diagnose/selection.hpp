@@ -205,10 +205,12 @@ struct VerdictInput {
   bool baseline_structured = false, final_structured = false;
   std::vector<CovariateTest> baseline_covariates, final_covariates;  // strongest first
   LackOfFit baseline_lack_of_fit, final_lack_of_fit;
+  const EmpiricalFinding* empirical = nullptr;  // the term learned beyond the library, if searched
 };
 struct Verdict {
   // "explained", "partly explained" (causes found, but the residuals still exceed the noise),
-  // "unexplained", "no significant discrepancy"
+  // "unexplained", "no significant discrepancy"; "unexplained — empirical term found" and
+  // "partly explained — empirical term found" when a term beyond the library gains on held-out runs
   std::string verdict;
   std::string summary;
   std::string unexplained_covariate;
@@ -232,7 +234,8 @@ void conclude(Diagnosis& d, std::string model, std::string unit, double cv_befor
                                   .baseline_covariates = d.baseline.covariates,
                                   .final_covariates = d.final.covariates,
                                   .baseline_lack_of_fit = d.baseline.lack_of_fit,
-                                  .final_lack_of_fit = d.final.lack_of_fit});
+                                  .final_lack_of_fit = d.final.lack_of_fit,
+                                  .empirical = &d.empirical});
   d.verdict = v.verdict;
   d.summary = v.summary;
   d.unexplained_covariate = v.unexplained_covariate;
@@ -251,10 +254,14 @@ nlohmann::json verdict_json(const std::string& verdict, const std::string& summa
                             const std::vector<CandidateScore>& accepted, const std::vector<ParameterShift>& shifts,
                             const std::vector<std::vector<CandidateScore>>& rounds, double cv_before, double cv_after,
                             double cv_gain_percent, const std::string& unexplained_covariate, const std::string& unit);
+// The empirical term (searched or not, found or not) as JSON; values in the residuals' unit.
+nlohmann::json empirical_json(const EmpiricalFinding& e, const std::string& unit);
 template <class Diagnosis>
 nlohmann::json verdict_json(const Diagnosis& d, double cv_before, double cv_after, const std::string& unit) {
-  return verdict_json(d.verdict, d.summary, d.accepted, d.shifts, d.rounds, cv_before, cv_after, d.cv_gain_percent,
+  nlohmann::json j = verdict_json(d.verdict, d.summary, d.accepted, d.shifts, d.rounds, cv_before, cv_after, d.cv_gain_percent,
                       d.unexplained_covariate, unit);
+  j["empirical_term"] = empirical_json(d.empirical, unit);
+  return j;
 }
 
 }  // namespace lmcal::detail

@@ -70,4 +70,49 @@ struct ParameterShift {
 };
 ParameterShift parameter_shift(const ParameterEstimate& baseline, const ParameterEstimate& extended);
 
+// An empirical discrepancy term: what the model still misses after the named causes, learned
+// from the residuals when they stay structured (a sparse regression over a dictionary of
+// transforms of the covariates, selected by leave-one-run-out error) and then fitted jointly
+// with the model. It is never a named cause: it says what the residuals follow and what
+// modelling that buys on held-out runs, and which mechanisms it resembles.
+struct EmpiricalComponent {
+  std::string symbol;                   // "c1 * exp(-s/l1) * F_law"
+  std::string words;                    // "decays with the sliding distance s, in proportion to the law's force"
+  std::vector<std::string> covariates;  // what it uses: "sliding_distance_m", "friction_law_N"
+  ParameterEstimate coefficient;        // c, with the joint fit's interval
+  bool has_scale = false;
+  ParameterEstimate scale;              // ℓ, τ or the period, with its interval, when the term has one
+};
+
+// The term over its main covariate, for the report: means over bins of the covariate.
+struct EmpiricalCurve {
+  std::string covariate, unit;
+  std::vector<double> x;                       // bin centres
+  std::vector<double> value, low, high;        // the term's mean contribution and its 95 % band (delta method)
+  std::vector<double> residual_before, residual_after;  // the residuals' means in the same bins
+};
+
+struct CovariateRange {
+  std::string covariate;
+  double min = 0, max = 0;  // seen in the data: the term is an extrapolation beyond
+};
+
+struct EmpiricalFinding {
+  bool searched = false;  // the residuals stayed structured after the named causes
+  bool found = false;     // a term passed: significant, and better on held-out runs
+  std::string where;      // what it is added to: "the friction force", "every thermocouple reading"
+  std::string formula;    // the whole term in symbols
+  std::vector<EmpiricalComponent> components;
+  std::size_t dictionary_size = 0;  // candidate terms searched
+  double cv_rmse_before = std::numeric_limits<double>::quiet_NaN();  // held-out, the residuals' unit
+  double cv_rmse_after = std::numeric_limits<double>::quiet_NaN();
+  double cv_gain_percent = std::numeric_limits<double>::quiet_NaN();
+  double lrt_p = std::numeric_limits<double>::quiet_NaN();
+  double delta_bic = std::numeric_limits<double>::quiet_NaN();
+  std::string resembles;  // mechanisms it resembles, in words ("" when none)
+  std::string reason;     // when searched: why it was kept, or why nothing was
+  std::vector<CovariateRange> ranges;
+  EmpiricalCurve curve;
+};
+
 }  // namespace lmcal

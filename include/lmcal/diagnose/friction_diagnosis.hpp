@@ -72,6 +72,10 @@ struct FrictionDiagnosis {
   // one value only; no repeated conditions (no lack-of-fit test).
   std::vector<std::string> design_notes;
   FrictionFitResult baseline_fit, final_fit;  // the law, and the law with the accepted causes
+  // When the residuals stay structured after the causes: the empirical term learned, and the
+  // fit of the law with the causes and that term (empty unless found).
+  EmpiricalFinding empirical;
+  FrictionFitResult empirical_fit;
 };
 
 FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagnosisOptions& options);

@@ -103,6 +103,10 @@ struct ThermalDiagnosis {
   std::vector<ParameterShift> shifts;
   std::string unexplained_covariate;
   ThermalFitResult baseline_fit, final_fit;  // for before/after plots
+  // When the residuals stay structured after the causes: the empirical term learned, and the
+  // fit with the causes and that term (empty unless found).
+  EmpiricalFinding empirical;
+  ThermalFitResult empirical_fit;
 };
 
 ThermalDiagnosis diagnose_thermal(const ThermalDataSet& data, const ThermalDiagnosisOptions& options);
