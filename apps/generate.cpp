@@ -126,6 +126,8 @@ void setup_generate(CLI::App& app, const std::vector<std::string>& argv) {
   friction->add_option("--runs", f.runs, "Repeats of the whole sweep")->capture_default_str();
   friction->add_flag("--one-setup-per-run", f.one_setup_per_run,
                      "Each setup (guide, preload, load, temperature) a run of its own, swept over speed and direction");
+  friction->add_flag("--temperature-outermost", f.temperature_outermost,
+                     "The temperature changes slowest: every other setup at one temperature before the next");
 
   friction->add_option("--noise", f.noise_N, "Load-cell noise per sample (sigma), N")->capture_default_str();
   friction->add_option("--run-offset", f.run_offset_N, "Zero offset per run (sigma), N")->capture_default_str();

@@ -1,1 +1,153 @@
-// placeholder (issue 14 in progress)
+// The friction diagnosis beyond its library: effects the library does not have are hidden in
+// the virtual rig's data, and the diagnosis must learn an empirical term in the right
+// covariates, gain on held-out runs about what the true model gains, and get its shape.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <string>
+
+#include "lmcal/diagnose/friction_diagnosis.hpp"
+#include "lmcal/rig/virtual_rig.hpp"
+
+namespace lmcal {
+namespace {
+
+// A small rig: one guide, the paper's preloads, loads, speeds and temperatures, six runs.
+FrictionRigConfig small_rig(std::uint64_t seed) {
+  FrictionRigConfig c;
+  c.guides = {"SRN 35C"};
+  c.runs = 6;
+  c.seed = seed;
+  return c;
+}
+
+struct Outcome {
+  FrictionDiagnosis with, without;  // the data with the hidden effect, and the same seed without
+  double learned_gain = 0, true_gain = 0;  // held-out RMSE gain over the published law, %
+};
+
+// Held-out RMSE of a fit as the diagnosis counts a gain: the better of a new run's level and
+// the runs' shape.
+double gain_percent(const FrictionFitResult& before, const FrictionFitResult& after) {
+  return 100 * std::max(1 - after.cv_rmse_N / before.cv_rmse_N, 1 - after.cv_shape_rmse_N / before.cv_shape_rmse_N);
+}
+
+Outcome diagnose_hidden(const FrictionRigConfig& config, const std::function<void(RigEffects&)>& hide) {
+  RigEffects effects;
+  hide(effects);
+  Outcome o;
+  o.with = diagnose_friction(generate_friction_log(config, effects).log, {});
+  o.without = diagnose_friction(generate_friction_log(config, {}).log, {});
+  const FrictionFitResult& learned = o.with.empirical.found ? o.with.empirical_fit : o.with.final_fit;
+  o.learned_gain = gain_percent(o.with.baseline_fit, learned);
+  // The true model's held-out RMSE: the law on the same noise without the hidden effect.
+  o.true_gain = 100 * std::max(1 - o.without.baseline_fit.cv_rmse_N / o.with.baseline_fit.cv_rmse_N,
+                               1 - o.without.baseline_fit.cv_shape_rmse_N / o.with.baseline_fit.cv_shape_rmse_N);
+  return o;
+}
+
+bool uses(const EmpiricalFinding& f, const std::string& covariate) {
+  for (const auto& c : f.components)
+    if (std::find(c.covariates.begin(), c.covariates.end(), covariate) != c.covariates.end()) return true;
+  return false;
+}
+
+void expect_found(const Outcome& o, const std::string& what) {
+  const EmpiricalFinding& f = o.with.empirical;
+  ASSERT_TRUE(f.found) << what << ": " << o.with.summary;
+  EXPECT_NE(o.with.verdict.find("empirical term found"), std::string::npos) << o.with.verdict;
+  EXPECT_NEAR(o.learned_gain, o.true_gain, 0.25 * o.true_gain) << what << ": " << o.with.summary;
+  std::printf("%s: learned gain %.1f %%, true %.1f %%; %s\n", what.c_str(), o.learned_gain, o.true_gain, f.formula.c_str());
+  for (const auto& c : f.components) {  // every coefficient with a finite interval around it
+    EXPECT_LE(c.coefficient.ci_low, c.coefficient.value);
+    EXPECT_GE(c.coefficient.ci_high, c.coefficient.value);
+  }
+}
+
+TEST(EmpiricalFriction, LearnsRunningInOverSlidingDistance) {
+  for (std::uint64_t seed : {1u, 2u, 3u}) {
+    const Outcome o = diagnose_hidden(small_rig(seed), [](RigEffects& e) {
+      e.hidden.running_in = 0.1;
+      e.hidden.running_in_scale_m = 150;
+    });
+    expect_found(o, "running-in");
+    const EmpiricalFinding& f = o.with.empirical;
+    ASSERT_TRUE(uses(f, "sliding_distance_m")) << f.formula;
+    for (const auto& c : f.components)
+      if (c.has_scale) EXPECT_NEAR(c.scale.value, 150, 0.3 * 150) << f.formula;
+    EXPECT_NE(f.resembles.find("running-in"), std::string::npos) << f.resembles;
+    EXPECT_FALSE(f.curve.x.empty());
+  }
+}
+
+TEST(EmpiricalFriction, LearnsALaggedLubricantTemperature) {
+  for (std::uint64_t seed : {1u, 2u}) {
+    FrictionRigConfig config = small_rig(seed);
+    config.temperature_outermost = true;  // a heated bath: the temperature steps slowly
+    const Outcome o = diagnose_hidden(config, [](RigEffects& e) { e.hidden.lubricant_lag_s = 120; });
+    expect_found(o, "lubricant lag");
+    const EmpiricalFinding& f = o.with.empirical;
+    ASSERT_FALSE(f.components.empty());
+    bool lag = false;
+    for (const auto& c : f.components)
+      if (c.symbol.find("lag(T") != std::string::npos) {
+        lag = true;
+        EXPECT_NEAR(c.scale.value, 120, 0.3 * 120) << f.formula;
+        EXPECT_NEAR(c.coefficient.value, 1.0, 0.3) << f.formula;
+      }
+    EXPECT_TRUE(lag) << f.formula;
+  }
+}
+
+TEST(EmpiricalFriction, LearnsATemperatureSpeedProduct) {
+  for (std::uint64_t seed : {1u, 2u}) {
+    const Outcome o = diagnose_hidden(small_rig(seed), [](RigEffects& e) { e.hidden.temperature_speed = -1.5; });
+    expect_found(o, "temperature x speed");
+    const EmpiricalFinding& f = o.with.empirical;
+    EXPECT_TRUE(uses(f, "temperature_C") && uses(f, "velocity_m_s")) << f.formula;
+  }
+}
+
+// Clean data — the law, noise with memory, zero offsets, one setup per run or all setups in
+// every run — must not grow a term: at most one in twenty.
+TEST(EmpiricalFriction, CleanDataGrowsNoTerm) {
+  int grown = 0;
+  std::string which;
+  for (std::uint64_t seed = 1; seed <= 20; ++seed) {
+    FrictionRigConfig config = small_rig(100 + seed);
+    if (seed % 2 == 0) {
+      config.one_setup_per_run = true;
+      config.runs = 1;
+      config.noise_ar1 = 0.5;
+    }
+    const FrictionDiagnosis d = diagnose_friction(generate_friction_log(config, {}).log, {});
+    if (d.empirical.found) {
+      ++grown;
+      which += " seed " + std::to_string(seed) + ": " + d.empirical.formula;
+    }
+    EXPECT_EQ(d.verdict.find("empirical"), std::string::npos) << d.summary;
+  }
+  EXPECT_LE(grown, 1) << which;
+}
+
+// What the library has is named as itself, and no term is learned beside it.
+TEST(EmpiricalFriction, InLibraryEffectsAreNamedNotLearned) {
+  const std::vector<std::pair<std::string, double>> effects{
+      {"seal_drag", 150}, {"coulomb_temperature", 0.05}, {"viscous_load", 0.3}};
+  for (const auto& [name, value] : effects) {
+    RigEffects e;
+    set_rig_effect(e, name, value);
+    const FrictionDiagnosis d = diagnose_friction(generate_friction_log(small_rig(7), e).log, {});
+    ASSERT_FALSE(d.accepted.empty()) << name << ": " << d.summary;
+    std::vector<std::string> named{d.accepted.front().effect};
+    named.insert(named.end(), d.accepted.front().tied_with.begin(), d.accepted.front().tied_with.end());
+    EXPECT_NE(std::find(named.begin(), named.end(), name), named.end()) << name << ": " << d.summary;
+    EXPECT_FALSE(d.empirical.found) << name << ": " << d.summary;
+  }
+}
+
+}  // namespace
+}  // namespace lmcal

@@ -1,1 +1,441 @@
-// placeholder (issue 14 in progress)
+#include "empirical_friction.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <set>
+
+#include "lmcal/fit/statistics.hpp"
+#include "sparse_regression.hpp"
+
+namespace lmcal::detail {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr std::size_t kMaxFitParameters = 16;  // the batched cost's largest Jet
+
+// The law with the fit's named effects at row i, for the parameter values `values` (the seven
+// constants, then the effects, as in `params`).
+double law_at(const FrictionLog& log, std::size_t i, const std::vector<ParameterEstimate>& params,
+              const std::vector<double>& values, double reference_C, double warmer_K = 0) {
+  FrictionConstants<double> k;
+  for (std::size_t j = 0; j < 7; ++j) fittable_constant(k, j) = values[j];
+  k.nu_ref_mm2_s = log.viscosity40_mm2_s[i];
+  k.T_ref_C = reference_C;
+  FrictionEffects<double> e;
+  for (std::size_t j = 7; j < params.size(); ++j)
+    if (const auto slot = find_friction_effect(params[j].name)) e[*slot] = values[j];
+  FrictionConditions<double> c = log.conditions(i);
+  c.temperature_C += warmer_K;
+  return friction_force_with_effects_N(k, e, c);
+}
+
+// A dictionary entry: the term it stands for (coefficient to be fitted) and its column.
+struct Candidate {
+  FrictionTerm term;
+  std::vector<double> column;
+  std::size_t family = 0;
+};
+
+struct Columns {
+  const FrictionLog& log;
+  const TermSeries& series;
+  const std::vector<double>& law;  // F_law per row (the current fit's)
+  std::vector<double> factor(const TermFactor& f, double scale) const {
+    std::vector<double> v(log.size());
+    for (std::size_t i = 0; i < log.size(); ++i) {
+      if (f.covariate == TermCovariate::law_force_N) {
+        v[i] = law[i];
+        continue;
+      }
+      const double x = term_covariate_value(log, series, i, f.covariate);
+      v[i] = f.transform == TermTransform::decay  ? std::exp(-x / scale)
+             : f.transform == TermTransform::square ? (x - f.centre) * (x - f.centre)
+                                                    : x - f.centre;
+    }
+    return v;
+  }
+  std::vector<double> column(const FrictionTerm& t) const {
+    std::vector<double> v(log.size(), 1.0);
+    for (const auto& f : t.factors) {
+      const std::vector<double> x = factor(f, t.scale);
+      for (std::size_t i = 0; i < v.size(); ++i) v[i] *= x[i];
+    }
+    return v;
+  }
+};
+
+bool varies(const FrictionLog& log, const TermSeries& series, TermCovariate c) {
+  std::set<double> values;
+  for (std::size_t i = 0; i < log.size() && values.size() < 2; ++i) values.insert(term_covariate_value(log, series, i, c));
+  return values.size() >= 2;
+}
+
+// Does the logged temperature change within a run (by more than its noise)?
+bool temperature_changes_within_runs(const FrictionLog& log, const TermSeries& series) {
+  for (const auto& rows : series.run_rows) {
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (std::size_t i : rows) lo = std::min(lo, log.temperature_C[i]), hi = std::max(hi, log.temperature_C[i]);
+    if (hi - lo > 1.0) return true;
+  }
+  return false;
+}
+
+// `law_warmer(i, ΔT)`: the current law at row i with the temperature ΔT higher.
+std::vector<Candidate> dictionary(const FrictionLog& log, const TermSeries& series, const std::vector<double>& law,
+                                  const std::function<double(std::size_t, double)>& law_warmer, double reference_C) {
+  const Columns columns{log, series, law};
+  std::vector<Candidate> out;
+  std::size_t family = 0;
+  auto add = [&](FrictionTerm term) {
+    std::vector<double> column = columns.column(term);
+    out.push_back({std::move(term), std::move(column), family++});
+  };
+  auto linear = [&](TermCovariate c) {
+    return TermFactor{c, TermTransform::linear, c == TermCovariate::temperature_C ? reference_C : 0.0};
+  };
+  std::vector<TermCovariate> base;
+  for (TermCovariate c : {TermCovariate::velocity_m_s, TermCovariate::load_N, TermCovariate::preload_um,
+                          TermCovariate::block_length_mm, TermCovariate::temperature_C, TermCovariate::direction})
+    if (varies(log, series, c)) base.push_back(c);
+  for (TermCovariate c : base) add({.factors = {linear(c)}});
+  for (TermCovariate c : base)
+    if (c == TermCovariate::velocity_m_s || c == TermCovariate::load_N || c == TermCovariate::temperature_C)
+      add({.factors = {TermFactor{c, TermTransform::square, linear(c).centre}}});
+  for (std::size_t a = 0; a < base.size(); ++a)
+    for (std::size_t b = a + 1; b < base.size(); ++b) add({.factors = {linear(base[a]), linear(base[b])}});
+  const TermFactor law_factor{TermCovariate::law_force_N};
+  for (TermCovariate c : base)
+    if (c == TermCovariate::velocity_m_s || c == TermCovariate::temperature_C) add({.factors = {law_factor, linear(c)}});
+  if (!series.timed) return out;
+
+  // Families with a scale: one column per grid value.
+  const std::vector<double> shares{0.01, 0.02, 0.05, 0.1, 0.2, 0.5, 1.0};
+  auto decay_family = [&](TermCovariate c, std::vector<TermFactor> with) {
+    double span = 0;
+    for (std::size_t i = 0; i < log.size(); ++i) span = std::max(span, term_covariate_value(log, series, i, c));
+    if (!(span > 0)) return;
+    for (double share : shares) {
+      FrictionTerm t{.factors = {TermFactor{c, TermTransform::decay}}, .scale = share * span,
+                     .scale_lower = 1e-3 * span, .scale_upper = 10 * span};
+      t.factors.insert(t.factors.end(), with.begin(), with.end());
+      std::vector<double> column = columns.column(t);
+      out.push_back({std::move(t), std::move(column), family});
+    }
+    ++family;
+  };
+  decay_family(TermCovariate::sliding_distance_m, {});
+  decay_family(TermCovariate::sliding_distance_m, {law_factor});
+  if (varies(log, series, TermCovariate::load_N)) decay_family(TermCovariate::sliding_distance_m, {linear(TermCovariate::load_N)});
+  decay_family(TermCovariate::time_in_run_s, {});
+  decay_family(TermCovariate::time_in_run_s, {law_factor});
+  if (temperature_changes_within_runs(log, series)) {
+    for (double tau : {15.0, 30.0, 60.0, 120.0, 240.0, 480.0, 960.0, 1920.0}) {
+      FrictionTerm t{.factors = {TermFactor{TermCovariate::temperature_C, TermTransform::lagged_temperature}},
+                     .scale = tau, .scale_lower = 1.0, .scale_upper = 1e5};
+      const std::vector<double> change = lagged_temperature_change(log, series, tau);
+      std::vector<double> column(log.size());
+      for (std::size_t i = 0; i < log.size(); ++i) column[i] = law_warmer(i, change[i]) - law[i];
+      out.push_back({std::move(t), std::move(column), family});
+    }
+    ++family;
+  }
+  return out;
+}
+
+// What a term does, in words.
+std::string term_words(const FrictionTerm& t) {
+  if (t.lagged_temperature())
+    return "the law evaluated at a temperature that trails the logged one through a first-order lag of time constant tau";
+  std::string words;
+  bool relative = false;
+  for (const auto& f : t.factors) {
+    if (f.covariate == TermCovariate::law_force_N) {
+      relative = true;
+      continue;
+    }
+    const std::string x = term_covariate_name(f.covariate);
+    words += words.empty() ? "" : " and ";
+    switch (f.transform) {
+      case TermTransform::linear: words += f.centre == 0 ? "in proportion to " + x : fmt::format("in proportion to {} - {:g}", x, f.centre); break;
+      case TermTransform::square: words += "with the square of " + x; break;
+      case TermTransform::decay: words += "decaying exponentially with " + x; break;
+      case TermTransform::lagged_temperature: break;
+    }
+  }
+  return (relative ? "a share of the law's force, " : "a force ") + words;
+}
+
+bool has(const FrictionTerm& t, TermCovariate c, TermTransform how) {
+  return std::any_of(t.factors.begin(), t.factors.end(), [&](const TermFactor& f) { return f.covariate == c && f.transform == how; });
+}
+
+// The mechanisms a term resembles, in words ("" when none comes to mind).
+std::string resemblance(const FrictionTerm& t) {
+  using C = TermCovariate;
+  using X = TermTransform;
+  if (t.lagged_temperature())
+    return fmt::format("the lubricant's temperature trailing the logged one by tau = {:.3g} s (a thermocouple away "
+                       "from the contacts, or oil that warms slower than what is logged)",
+                       t.scale);
+  if (has(t, C::sliding_distance_m, X::decay))
+    return fmt::format("running-in: friction falling as the contacts and seals wear in, over about {:.3g} m of sliding",
+                       t.scale);
+  if (has(t, C::time_in_run_s, X::decay))
+    return fmt::format("a settling within each run over about {:.3g} s (lubricant redistributing after a stop, a "
+                       "warm-up the logged temperature does not show)",
+                       t.scale);
+  if (has(t, C::velocity_m_s, X::linear) && has(t, C::temperature_C, X::linear))
+    return "a speed-proportional (viscous) force whose temperature dependence differs from the law's "
+           "nu(T) = nu_i exp(-beta (T - T_i))";
+  if (has(t, C::velocity_m_s, X::square)) return "a speed dependence beyond the linear viscous term (churning of the lubricant)";
+  if (has(t, C::load_N, X::square)) return "a Coulomb force not proportional to the load";
+  if (t.factors.size() == 1 && has(t, C::temperature_C, X::linear))
+    return "a Coulomb or seal force that changes with temperature";
+  if (has(t, C::direction, X::linear)) return "a force that depends on the direction of travel";
+  return "";
+}
+
+// The covariate a term is drawn over in the report.
+TermCovariate main_covariate(const FrictionTerm& t) {
+  if (t.lagged_temperature()) return TermCovariate::time_in_run_s;
+  for (const auto& f : t.factors)
+    if (f.transform == TermTransform::decay) return f.covariate;
+  for (const auto& f : t.factors)
+    if (f.covariate != TermCovariate::law_force_N) return f.covariate;
+  return TermCovariate::law_force_N;
+}
+
+// Up to `bins` groups of the values (one per distinct value when there are few), as labels
+// and the centre of each group.
+std::pair<std::vector<std::size_t>, std::vector<double>> binned(const std::vector<double>& x, std::size_t bins) {
+  std::vector<double> sorted = x;
+  std::sort(sorted.begin(), sorted.end());
+  std::vector<double> edges;
+  std::set<double> distinct(sorted.begin(), sorted.end());
+  if (distinct.size() <= bins) {
+    edges.assign(distinct.begin(), distinct.end());
+  } else {
+    for (std::size_t b = 0; b < bins; ++b) edges.push_back(sorted[b * sorted.size() / bins]);
+    edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+  }
+  std::vector<std::size_t> label(x.size());
+  std::vector<double> sum(edges.size(), 0.0), count(edges.size(), 0.0);
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    label[i] = static_cast<std::size_t>(std::upper_bound(edges.begin(), edges.end(), x[i]) - edges.begin()) - 1;
+    sum[label[i]] += x[i];
+    count[label[i]] += 1;
+  }
+  std::vector<double> centre(edges.size());
+  for (std::size_t b = 0; b < edges.size(); ++b) centre[b] = count[b] > 0 ? sum[b] / count[b] : kNaN;
+  return {label, centre};
+}
+
+// The term's contribution per row (the model with the terms minus without), at the fit's
+// law and effects and the term parameters `theta`.
+std::vector<double> contribution(const FrictionLog& log, const TermSeries& series, const FrictionFitResult& fit,
+                                 const std::vector<double>& theta, double reference_C) {
+  const FrictionConstants<double> k0 = fit.constants();
+  const FrictionEffects<double> e = fit.effects();
+  std::vector<double> lag;
+  for (std::size_t t = 0, at = 0; t < fit.terms.size(); at += fit.terms[t].has_scale() ? 2 : 1, ++t)
+    if (fit.terms[t].lagged_temperature()) lag = lagged_temperature_change(log, series, theta[at + 1]);
+  std::vector<double> out(log.size());
+  for (std::size_t i = 0; i < log.size(); ++i) {
+    FrictionConstants<double> k = k0;
+    k.nu_ref_mm2_s = log.viscosity40_mm2_s[i];
+    k.T_ref_C = reference_C;
+    out[i] = friction_with_terms_N(k, e, log, series, i, fit.terms, theta.data(), lag.empty() ? nullptr : &lag) -
+             friction_force_with_effects_N(k, e, log.conditions(i));
+  }
+  return out;
+}
+
+EmpiricalCurve curve_of(const FrictionLog& log, const TermSeries& series, const FrictionFitResult& before,
+                        const FrictionFitResult& after, double reference_C) {
+  EmpiricalCurve c;
+  const TermCovariate main = main_covariate(after.terms.front());
+  c.covariate = term_covariate_name(main);
+  c.unit = term_covariate_unit(main);
+  std::vector<double> x(log.size());
+  for (std::size_t i = 0; i < log.size(); ++i)
+    x[i] = main == TermCovariate::law_force_N ? before.predicted_N[i] : term_covariate_value(log, series, i, main);
+  const auto [label, centre] = binned(x, 20);
+  const std::size_t bins = centre.size();
+  // The term's parameters: after the constants and the effects.
+  const std::size_t first = after.fit.parameters.size() - term_parameter_count(after.terms);
+  std::vector<double> theta;
+  for (std::size_t j = first; j < after.fit.parameters.size(); ++j) theta.push_back(after.fit.parameters[j].value);
+  auto bin_means = [&](const std::vector<double>& v) {
+    std::vector<double> sum(bins, 0.0), count(bins, 0.0);
+    for (std::size_t i = 0; i < v.size(); ++i) sum[label[i]] += v[i], count[label[i]] += 1;
+    for (std::size_t b = 0; b < bins; ++b) sum[b] = count[b] > 0 ? sum[b] / count[b] : kNaN;
+    return sum;
+  };
+  const std::vector<double> value = bin_means(contribution(log, series, after, theta, reference_C));
+  // Delta method over the term's parameters (central differences of the bin means).
+  std::vector<std::vector<double>> gradient;
+  for (std::size_t a = 0; a < theta.size(); ++a) {
+    const double h = 1e-4 * std::max(std::abs(theta[a]), 1e-9);
+    std::vector<double> up = theta, down = theta;
+    up[a] += h;
+    down[a] -= h;
+    const std::vector<double> mu = bin_means(contribution(log, series, after, up, reference_C));
+    const std::vector<double> md = bin_means(contribution(log, series, after, down, reference_C));
+    std::vector<double> g(bins);
+    for (std::size_t b = 0; b < bins; ++b) g[b] = (mu[b] - md[b]) / (2 * h);
+    gradient.push_back(g);
+  }
+  const double t95 = student_t_quantile(0.975, std::max(after.fit.dof, 1.0));
+  std::vector<double> before_residual(log.size()), after_residual(log.size());
+  for (std::size_t i = 0; i < log.size(); ++i) {
+    before_residual[i] = log.friction_N[i] - before.predicted_N[i];
+    after_residual[i] = log.friction_N[i] - after.predicted_N[i];
+  }
+  c.residual_before = bin_means(before_residual);
+  c.residual_after = bin_means(after_residual);
+  for (std::size_t b = 0; b < bins; ++b) {
+    double variance = 0;
+    for (std::size_t p = 0; p < theta.size(); ++p)
+      for (std::size_t q = 0; q < theta.size(); ++q)
+        variance += gradient[p][b] * after.fit.covariance(static_cast<Eigen::Index>(first + p), static_cast<Eigen::Index>(first + q)) *
+                    gradient[q][b];
+    const double half = t95 * std::sqrt(std::max(variance, 0.0));
+    c.x.push_back(centre[b]);
+    c.value.push_back(value[b]);
+    c.low.push_back(value[b] - half);
+    c.high.push_back(value[b] + half);
+  }
+  return c;
+}
+
+}  // namespace
+
+FrictionTermSearch learn_friction_term(const FrictionLog& log, const FrictionFitResult& current,
+                                       const std::function<FrictionFitResult(const std::vector<FrictionTerm>&)>& refit,
+                                       const std::function<ModelFit(const FrictionFitResult&)>& summarise,
+                                       const SelectionRules& rules, double reference_C) {
+  FrictionTermSearch out;
+  EmpiricalFinding& f = out.finding;
+  f.searched = true;
+  f.where = "the friction force";
+  const std::size_t n = log.size();
+  const TermSeries series = term_series(log);
+
+  // The residuals of the law (the run levels are the sparse regression's levels), the law, its
+  // temperature slope, and its Jacobian in the parameters the fit moves.
+  const auto& params = current.fit.parameters;
+  std::vector<double> values;
+  for (const auto& p : params) values.push_back(p.value);
+  std::vector<double> law(n), y(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    law[i] = current.predicted_N[i] - current.run_offset_N[log.run[i]];
+    y[i] = log.friction_N[i] - law[i];
+  }
+  const auto law_warmer = [&](std::size_t i, double dT) { return law_at(log, i, params, values, reference_C, dT); };
+  SparseProblem problem;
+  problem.y = y;
+  problem.group.assign(log.run.begin(), log.run.end());
+  problem.level = problem.group;
+  for (std::size_t j = 0; j < params.size(); ++j) {
+    const ParameterEstimate& p = params[j];
+    if (!p.free || p.held_unidentifiable || p.at_bound) continue;
+    const double h = 1e-6 * std::max(std::abs(p.value), 1e-3);
+    std::vector<double> up = values, down = values, column(n);
+    up[j] += h;
+    down[j] -= h;
+    for (std::size_t i = 0; i < n; ++i)
+      column[i] = (law_at(log, i, params, up, reference_C) - law_at(log, i, params, down, reference_C)) / (2 * h);
+    problem.fixed.push_back(std::move(column));
+  }
+  std::vector<Candidate> candidates = dictionary(log, series, law, law_warmer, reference_C);
+  f.dictionary_size = candidates.size();
+  for (auto& c : candidates) {
+    problem.candidates.push_back(std::move(c.column));
+    problem.family.push_back(c.family);
+  }
+  SparseOptions sparse;
+  sparse.min_gain_percent = rules.min_cv_gain_percent;
+  const SparseSelection chosen = select_sparse(problem, sparse);
+  if (chosen.selected.empty()) {
+    f.reason = fmt::format(
+        "no set of them predicts held-out runs at least {:.3g} % better than the model alone (linearised "
+        "leave-one-run-out RMSE of the runs' shape {:.4g} N)",
+        rules.min_cv_gain_percent, chosen.cv_rmse_fixed);
+    return out;
+  }
+
+  // The joint fit: the law, its causes and the chosen terms, within the fit's parameter limit.
+  std::vector<FrictionTerm> terms;
+  std::size_t count = params.size();
+  for (std::size_t a = 0; a < chosen.selected.size(); ++a) {
+    FrictionTerm t = candidates[chosen.selected[a]].term;
+    t.coefficient = chosen.coefficient[a];
+    const std::size_t adds = t.has_scale() ? 2 : 1;
+    if (count + adds > kMaxFitParameters) continue;
+    count += adds;
+    terms.push_back(std::move(t));
+  }
+  // The lag is exact in the joint fit: the law at T + c (lag − T); the linearised coefficient
+  // is its start.
+  FrictionFitResult joint = refit(terms);
+  const ModelFit before = summarise(current), after = summarise(joint);
+  CandidateScore score;
+  score.effect = "empirical term";
+  const bool passes = score_candidate(before, after, rules, score);
+  f.cv_rmse_before = current.cv_rmse_N;
+  f.cv_rmse_after = joint.cv_rmse_N;
+  f.cv_gain_percent = counted_gain(score);
+  f.lrt_p = score.lrt_p;
+  f.delta_bic = score.bic - information_criteria(before.ss, before.n, std::min(before.n_eff, after.n_eff), before.k).second;
+  std::string formula, resembles;
+  std::set<std::string> used;
+  const std::size_t first = joint.fit.parameters.size() - term_parameter_count(joint.terms);
+  for (std::size_t t = 0, at = first; t < joint.terms.size(); ++t) {
+    const FrictionTerm& term = joint.terms[t];
+    EmpiricalComponent c;
+    c.symbol = term.symbol(t + 1);
+    c.words = term_words(term);
+    c.covariates = term.covariates();
+    c.coefficient = joint.fit.parameters[at++];
+    if (term.has_scale()) {
+      c.has_scale = true;
+      c.scale = joint.fit.parameters[at++];
+    }
+    formula += (formula.empty() ? "" : " + ") + c.symbol;
+    const std::string r = resemblance(term);
+    if (!r.empty()) resembles += (resembles.empty() ? "" : "; or ") + r;
+    used.insert(c.covariates.begin(), c.covariates.end());
+    f.components.push_back(std::move(c));
+  }
+  f.formula = formula;
+  f.resembles = resembles;
+  for (const auto& name : used) {
+    CovariateRange r{name, std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity()};
+    for (std::size_t i = 0; i < n; ++i) {
+      double x = law[i];
+      for (TermCovariate c : {TermCovariate::velocity_m_s, TermCovariate::load_N, TermCovariate::preload_um,
+                              TermCovariate::block_length_mm, TermCovariate::temperature_C, TermCovariate::direction,
+                              TermCovariate::time_in_run_s, TermCovariate::sliding_distance_m})
+        if (name == term_covariate_name(c)) x = term_covariate_value(log, series, i, c);
+      r.min = std::min(r.min, x);
+      r.max = std::max(r.max, x);
+    }
+    f.ranges.push_back(r);
+  }
+  if (!passes) {
+    f.reason = "the term the sparse regression chose (" + formula + "), fitted jointly with the law, was not kept: " + score.reason;
+    return out;
+  }
+  f.found = true;
+  f.reason = score.reason;
+  f.curve = curve_of(log, series, current, joint, reference_C);
+  out.fit = std::move(joint);
+  return out;
+}
+
+}  // namespace lmcal::detail

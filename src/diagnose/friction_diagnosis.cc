@@ -14,6 +14,7 @@
 #include "lmcal/fit/statistics.hpp"
 #include "fit/fit_json.hpp"
 #include "fit/friction_condition.hpp"
+#include "empirical_friction.hpp"
 #include "selection.hpp"
 
 namespace lmcal {
@@ -26,8 +27,9 @@ constexpr int kCandidateIterations = 15;
 // A fit of the law plus `effects`, started at `start` (one start: the diagnosis refits many times).
 FrictionFitResult fit_with(const FrictionLog& log, const FrictionDiagnosisOptions& o, const std::vector<std::string>& effects,
                            const FrictionConstants<double>& start, const std::vector<double>& effect_start,
-                           double run_offset_ratio) {
+                           double run_offset_ratio, const std::vector<FrictionTerm>& terms = {}) {
   FrictionFitOptions f = o.fit;
+  f.terms = terms;
   f.run_offset_ratio_start = run_offset_ratio;  // the current model's: its variance settles in fewer fits
   f.effects = effects;
   f.effect_start = effect_start;
@@ -41,7 +43,8 @@ FrictionFitResult fit_with(const FrictionLog& log, const FrictionDiagnosisOption
   f.fit.bootstrap = 0;  // the diagnosis quotes no bootstrap intervals
   // Warm-started, a candidate converges in a few iterations; one that crawls along a bound
   // (a drag pinned at 0 beside its twin) adds nothing and is reported as not converged.
-  f.fit.max_iterations = kCandidateIterations;
+  // A term starts from a linearised estimate, further away: it gets the iterations a fit needs.
+  f.fit.max_iterations = terms.empty() ? kCandidateIterations : o.fit.fit.max_iterations;
   return fit_friction(log, f);
 }
 
@@ -306,7 +309,8 @@ FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagno
   d.baseline = diagnose_residuals(log, baseline, o);
 
   // 2-3. Candidates, forward.
-  auto fit_candidate = [&](const std::vector<std::string>& effects, const FrictionFitResult& current) {
+  auto fit_candidate = [&](const std::vector<std::string>& effects, const FrictionFitResult& current,
+                           const std::vector<FrictionTerm>& terms = {}) {
     std::vector<double> effect_start;
     for (std::size_t j = 7; j < current.fit.parameters.size(); ++j) effect_start.push_back(current.fit.parameters[j].value);
     // From the current estimate where it is inside its bounds (fewer iterations), else from
@@ -318,7 +322,7 @@ FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagno
           !p.at_bound)
         fittable_constant(start, j) = p.value;
     }
-    return fit_with(log, o, effects, start, effect_start, current.run_offset_ratio);
+    return fit_with(log, o, effects, start, effect_start, current.run_offset_ratio, terms);
   };
   auto summarise = [&](const FrictionFitResult& fit, const std::string& effect) {
     // The likelihood of the random run offsets' fit (their variance included), and the
@@ -352,8 +356,23 @@ FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagno
   const FrictionFitResult& current = selection.current;
   d.rounds = std::move(selection.rounds);
 
-  // 4. Verdict.
+  // 4. What remains; beyond the library, an empirical term when structure remains.
   d.final = diagnose_residuals(log, current, o);
+  // Searched unless named causes were found and nothing is left: structure the residual tests
+  // miss (running-in, shared between the runs' levels and their pure error) shows only as a
+  // term that predicts held-out runs, and the term must pass the rules a cause passes.
+  const bool left = d.final.structured || (d.final.lack_of_fit.tested && !d.final.lack_of_fit.fits);
+  if (o.learn_term && (left || selection.accepted.empty())) {
+    if (o.progress) o.progress("empirical term", 0, 1);
+    auto search = detail::learn_friction_term(
+        log, current,
+        [&](const std::vector<FrictionTerm>& terms) { return fit_candidate(selection.accepted, current, terms); },
+        [&](const FrictionFitResult& fit) { return summarise(fit, std::string()).first; }, rules, o.fit.start.T_ref_C);
+    d.empirical = std::move(search.finding);
+    if (search.fit) d.empirical_fit = std::move(*search.fit);
+  }
+
+  // 5. Verdict.
   d.cv_rmse_before_N = baseline.cv_rmse_N;
   d.cv_rmse_after_N = current.cv_rmse_N;
   d.accepted = detail::accepted_scores(d.rounds, selection.accepted,

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <cctype>
 #include <cmath>
 #include <map>
 
@@ -228,6 +229,12 @@ std::string lack_of_fit_words(const LackOfFit& l, const std::string& unit) {
                      l.basis, l.statistic, l.df1, l.df2, l.p_value, l.lack_rms, unit, l.pure_error_rms, unit);
 }
 
+// "The published law" in the middle of a sentence.
+std::string lower_first(std::string s) {
+  if (!s.empty()) s[0] = static_cast<char>(std::tolower(static_cast<unsigned char>(s[0])));
+  return s;
+}
+
 // "c1 = 0.12 (95 % [0.1, 0.14]), l1 = 1.3e3 m (95 % [...])"
 std::string estimate_words(const ParameterEstimate& p) {
   return fmt::format("{} = {:.4g}{} (95 % [{:.4g}, {:.4g}])", p.name, p.value, p.unit.empty() ? "" : " " + p.unit, p.ci_low,
@@ -243,7 +250,7 @@ std::string empirical_words(const EmpiricalFinding& e, const std::string& unit) 
                        e.dictionary_size, e.reason);
   std::string parts, covariates;
   for (const auto& c : e.components) {
-    parts += fmt::format("{}{}: {} — {}", parts.empty() ? "" : "; ", c.symbol, c.words, estimate_words(c.coefficient));
+    parts += fmt::format("{}{} is {}, {}", parts.empty() ? "" : "; ", c.symbol, c.words, estimate_words(c.coefficient));
     if (c.has_scale) parts += ", " + estimate_words(c.scale);
     for (const auto& name : c.covariates)
       if (covariates.find(name) == std::string::npos) covariates += (covariates.empty() ? "" : ", ") + name;
@@ -252,7 +259,7 @@ std::string empirical_words(const EmpiricalFinding& e, const std::string& unit) 
       " Beyond the library, an empirical term (learned from the residuals, not a named cause; {} candidate terms "
       "searched) is added to {}: {}. It uses {}. Held-out RMSE {:.4g} {} -> {:.4g} {} ({:.1f} % better; LRT p = "
       "{:.2g}). {}",
-      e.dictionary_size, e.where, e.formula.empty() ? parts : e.formula + ", with " + parts, covariates,
+      e.dictionary_size, e.where, e.components.size() > 1 ? e.formula + ", where " + parts : parts, covariates,
       e.cv_rmse_before, unit, e.cv_rmse_after, unit, e.cv_gain_percent, e.lrt_p,
       e.resembles.empty() ? "It resembles no mechanism we know of." : "It resembles " + e.resembles + ".");
 }
@@ -328,6 +335,14 @@ Verdict make_verdict(const VerdictInput& in) {
                                        : "lack of fit not tested: " + in.baseline_lack_of_fit.basis);
   }
   if (in.empirical) {
+    if (in.empirical->found && v.verdict == "no significant discrepancy") {
+      // The residual tests saw nothing, but a term predicts held-out runs: that is structure.
+      v.verdict = "unexplained";
+      v.summary = fmt::format(
+          "Unexplained: no covariate or lack of fit stands out in the residual tests, but a term beyond the library "
+          "predicts held-out runs better: {} misses something no mechanism of the library explains.",
+          lower_first(in.model));
+    }
     if (in.empirical->found && (v.verdict == "unexplained" || v.verdict == "partly explained"))
       v.verdict += " — empirical term found";
     v.summary += empirical_words(*in.empirical, in.unit);

@@ -227,6 +227,27 @@ SparseSelection select_sparse(const SparseProblem& p, const SparseOptions& o) {
     s.path.push_back(step);
     if (step.cv_rmse < best_cv) best_cv = step.cv_rmse;
   }
+  // Forward steps beside the thresholds: on a dictionary of correlated transforms, the full
+  // least-squares fit STLSQ starts from can spread a term over its look-alikes and drop it;
+  // adding, one at a time, the term that best predicts held-out groups cannot.
+  std::vector<std::size_t> forward;
+  while (forward.size() < o.max_terms) {
+    std::size_t best = m;
+    double best_step_cv = std::numeric_limits<double>::infinity();
+    for (std::size_t j : pool) {
+      if (std::find(forward.begin(), forward.end(), j) != forward.end()) continue;
+      std::vector<std::size_t> trial = forward;
+      trial.push_back(j);
+      std::sort(trial.begin(), trial.end());
+      const double cv = scorer.cv_rmse(trial);
+      if (cv < best_step_cv) best_step_cv = cv, best = j;
+    }
+    if (best == m) break;
+    forward.push_back(best);
+    std::sort(forward.begin(), forward.end());
+    s.path.push_back({std::numeric_limits<double>::quiet_NaN(), forward, best_step_cv});
+    best_cv = std::min(best_cv, best_step_cv);
+  }
   // The sparsest support within the tolerance of the best; kept only if it gains enough.
   const double tolerance = 1 + o.min_gain_percent / 100;
   const SparseStep* chosen = nullptr;

@@ -17,7 +17,10 @@
 // member enters, the one that alone predicts held-out groups best. Then, for a path of
 // thresholds λ on the standardised coefficients (each column scaled to unit RMS after F and
 // the levels are projected out, so |γ| is the term's RMS contribution in the residuals' unit),
-// STLSQ: fit all, drop |γ| < λ, refit, until the support is stable. Every support on the path
+// STLSQ: fit all, drop |γ| < λ, refit, until the support is stable; and forward steps (add the
+// candidate that best predicts held-out groups, up to max_terms), because on a dictionary of
+// correlated transforms the full fit STLSQ starts from can spread one term over its
+// look-alikes and lose it. Every support on the path
 // is scored by leave-one-group-out RMSE (the held-out group's levels refitted on it: its
 // shape, not its zero); the sparsest support within `min_gain_percent` of the best is kept, and
 // it is kept only if it gains at least `min_gain_percent` over F alone.
@@ -48,7 +51,7 @@ struct SparseOptions {
 };
 
 struct SparseStep {
-  double threshold = 0;                 // λ, in the residuals' unit
+  double threshold = 0;                 // λ, in the residuals' unit; NaN for a forward step
   std::vector<std::size_t> support;     // candidate indices
   double cv_rmse = 0;
 };

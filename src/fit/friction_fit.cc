@@ -140,6 +140,21 @@ std::vector<detail::ParameterSpec> parameter_specs(const FrictionFitOptions& o, 
     const double start = m < o.effect_start.size() ? std::clamp(o.effect_start[m], e.lower, e.upper) : e.neutral;
     specs.push_back({e.name, e.unit, start, e.lower, e.upper, true, e.scale});
   }
+  for (std::size_t t = 0; t < o.terms.size(); ++t) {
+    const FrictionTerm& term = o.terms[t];
+    // A coefficient has no natural bound; the lag's share of the temperature change is kept
+    // within what a lag can mean.
+    const bool lag = term.lagged_temperature();
+    const double size = std::max(std::abs(term.coefficient), 1e-9), bound = 1e4 * size;
+    specs.push_back({fmt::format("term{}", t + 1), term.coefficient_unit(), term.coefficient, lag ? -1.0 : -bound, lag ? 3.0 : bound, true, size});
+    if (term.has_scale()) {
+      if (!(term.scale_lower > 0 && term.scale_upper > term.scale_lower))
+        throw InvalidParameter("terms", fmt::format("term {}: its scale needs bounds 0 < lower < upper", t + 1));
+      specs.push_back({fmt::format("term{}_scale", t + 1), term.scale_unit(),
+                       std::clamp(term.scale, term.scale_lower, term.scale_upper), term.scale_lower, term.scale_upper, true,
+                       term.scale});
+    }
+  }
   return specs;
 }
 
@@ -251,7 +266,7 @@ FrictionConstants<double> FrictionFitResult::constants() const {
 FrictionEffects<double> FrictionFitResult::effects() const {
   FrictionEffects<double> e;
   for (std::size_t j = 7; j < fit.parameters.size(); ++j)
-    e[friction_effect_slot(fit.parameters[j].name)] = fit.parameters[j].value;
+    if (const auto slot = find_friction_effect(fit.parameters[j].name)) e[*slot] = fit.parameters[j].value;  // not the terms
   return e;
 }
 
@@ -266,7 +281,15 @@ FrictionFitResult fit_friction(const FrictionLog& log, const FrictionFitOptions&
   if (options.run_offsets != RunOffsets::none && options.fit.loss != RobustLoss::none)
     throw InvalidParameter("run_offsets", "per-run offsets and a robust loss cannot be combined");
   const std::size_t runs = log.run_names.size();
+  const TermSeries series = term_series(log);
+  for (const auto& term : options.terms)
+    for (const auto& f : term.factors)
+      if (!series.timed && (f.covariate == TermCovariate::time_in_run_s || f.covariate == TermCovariate::sliding_distance_m ||
+                            f.transform == TermTransform::lagged_temperature))
+        throw InvalidParameter("terms", "a term in time, sliding distance or a lagged temperature needs a time_s column");
   FrictionData data{&log, {}, {}, options.start.T_ref_C, {}};
+  data.terms = &options.terms;
+  data.series = &series;
   for (std::size_t i = 0; i < log.size(); ++i) {
     data.samples.push_back(i);
     data.inv_sigma.push_back(1.0 / out.sigma_N[i]);
@@ -348,12 +371,27 @@ FrictionFitResult fit_friction(const FrictionLog& log, const FrictionFitOptions&
   // Predictions and goodness of fit, in newtons.
   const FrictionConstants<double> k = out.constants();
   const FrictionEffects<double> e = out.effects();
+  out.terms = options.terms;
+  std::vector<double> term_values;
+  {
+    std::size_t j = 7 + slots.size();
+    for (auto& term : out.terms) {
+      term_values.push_back(term.coefficient = out.fit.parameters[j++].value);
+      if (term.has_scale()) term_values.push_back(term.scale = out.fit.parameters[j++].value);
+    }
+  }
+  std::vector<double> lag_change;
+  for (std::size_t t = 0, at = 0; t < out.terms.size(); at += out.terms[t].has_scale() ? 2 : 1, ++t)
+    if (out.terms[t].lagged_temperature()) lag_change = lagged_temperature_change(log, series, term_values[at + 1]);
   for (std::size_t i = 0; i < log.size(); ++i) {
     FrictionConstants<double> ki = k;
     ki.nu_ref_mm2_s = log.viscosity40_mm2_s[i];
     ki.T_ref_C = options.start.T_ref_C;
-    out.predicted_N.push_back(slots.empty() ? friction_force_N(ki, log.conditions(i))
-                                            : friction_force_with_effects_N(ki, e, log.conditions(i)));
+    out.predicted_N.push_back(
+        !out.terms.empty()
+            ? friction_with_terms_N(ki, e, log, series, i, out.terms, term_values.data(), lag_change.empty() ? nullptr : &lag_change)
+        : slots.empty() ? friction_force_N(ki, log.conditions(i))
+                        : friction_force_with_effects_N(ki, e, log.conditions(i)));
   }
   // Per run: the mean residual of the law, and the zero offset the predictions carry.
   std::vector<double> run_sum(runs, 0.0), run_count(runs, 0.0);
@@ -424,6 +462,8 @@ FrictionFitResult fit_friction(const FrictionLog& log, const FrictionFitOptions&
     std::vector<std::vector<double>> values(specs.size(), std::vector<double>(log.run_names.size(), kNaN));
     for (std::uint32_t r = 0; r < log.run_names.size(); ++r) {
       FrictionData run_data{&log, {}, {}, options.start.T_ref_C, data.run_shrink};
+      run_data.terms = &options.terms;
+      run_data.series = &series;
       for (std::size_t i = 0; i < log.size(); ++i)
         if (log.run[i] == r) {
           run_data.samples.push_back(i);
@@ -528,6 +568,17 @@ std::string friction_fit_json(const FrictionFitResult& r, const FrictionFitOptio
         {"conditions", r.conditions.size()}}},
       {"spread_across_runs", spread}};
   j.update(fit_json(r.fit));
+  if (!r.terms.empty()) {
+    nlohmann::json terms = nlohmann::json::array();
+    for (std::size_t t = 0; t < r.terms.size(); ++t)
+      terms.push_back({{"symbol", r.terms[t].symbol(t + 1)},
+                       {"covariates", r.terms[t].covariates()},
+                       {"coefficient", r.terms[t].coefficient},
+                       {"coefficient_unit", r.terms[t].coefficient_unit()},
+                       {"scale", r.terms[t].has_scale() ? nlohmann::json(r.terms[t].scale) : nlohmann::json()},
+                       {"scale_unit", r.terms[t].scale_unit()}});
+    j["empirical_terms"] = terms;
+  }
   return j.dump(2) + "\n";
 }
 

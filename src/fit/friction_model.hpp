@@ -11,6 +11,7 @@
 #include "least_squares.hpp"
 #include "lmcal/io/friction_log.hpp"
 #include "lmcal/models/friction_effects.hpp"
+#include "lmcal/models/friction_terms.hpp"
 
 namespace lmcal::detail {
 
@@ -26,6 +27,10 @@ struct FrictionData {
   // run, profiled; below 1: a random one, GLS-whitened; see BatchedAutoDiffCostFunction).
   // Empty: no run offsets.
   std::vector<double> run_shrink;
+  // Empirical terms on top of the law and its effects (friction_terms.hpp; empty: none), and
+  // what they need of the log.
+  const std::vector<FrictionTerm>* terms = nullptr;
+  const TermSeries* series = nullptr;
 };
 
 // Design facts that decide what the data can determine.

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <optional>
@@ -45,6 +46,8 @@ std::uint64_t derive_seed(std::uint64_t seed, std::uint64_t stream) {
 // generator of their own, so the per-run streams above, and every data set made without
 // these options, stay as they were.
 constexpr std::uint64_t kLaterStreamKey = 0x6A09E667F3BCC909ull;
+// The phase of the daily ambient swing of each run (its start in the day): a stream of its own.
+constexpr std::uint64_t kDailyStreamKey = 0xBB67AE8584CAA73Bull;
 
 // Sensor noise with memory: an AR(1) series of marginal σ and lag-1 autocorrelation φ,
 // e_0 = σ z_0, e_t = φ e_{t-1} + sqrt(1 − φ²) σ z_t. The caller draws the white z_t, so the
@@ -88,9 +91,12 @@ struct EffectEntry {
   RigEffectInfo info;
   std::optional<std::size_t> friction_slot;
   double ThermalRigEffects::*thermal = nullptr;
+  double HiddenFrictionEffects::*hidden = nullptr;
 
-  double& ref(RigEffects& e) const { return friction_slot ? e.friction[*friction_slot] : e.thermal.*thermal; }
-  double value(const RigEffects& e) const { return friction_slot ? e.friction[*friction_slot] : e.thermal.*thermal; }
+  double& ref(RigEffects& e) const {
+    return friction_slot ? e.friction[*friction_slot] : hidden ? e.hidden.*hidden : e.thermal.*thermal;
+  }
+  double value(const RigEffects& e) const { return const_cast<EffectEntry*>(this)->ref(const_cast<RigEffects&>(e)); }
 };
 
 const std::vector<EffectEntry>& effect_table() {
@@ -100,9 +106,20 @@ const std::vector<EffectEntry>& effect_table() {
       const FrictionEffectInfo& f = FrictionEffectLibrary::infos[slot];
       t.push_back({{f.name, f.unit, f.neutral, f.description}, slot});
     }
-    auto thermal = [&](const char* name, const char* unit, const char* description, double ThermalRigEffects::*member) {
-      t.push_back({{name, unit, 0.0, description}, std::nullopt, member});
+    auto hidden = [&](const char* name, const char* unit, double neutral, const char* description,
+                      double HiddenFrictionEffects::*member) {
+      t.push_back({{name, unit, neutral, description}, std::nullopt, nullptr, member});
     };
+    hidden("running_in", "1", 0.0, "not in the library: F (1 + a exp(-s/l)), s the sliding distance since the log's start",
+           &HiddenFrictionEffects::running_in);
+    hidden("running_in_scale_m", "m", HiddenFrictionEffects{}.running_in_scale_m, "the running-in's distance scale l",
+           &HiddenFrictionEffects::running_in_scale_m);
+    hidden("lubricant_lag_s", "s", 0.0,
+           "not in the library: the law at the lubricant's temperature, lagging the logged one with time constant tau",
+           &HiddenFrictionEffects::lubricant_lag_s);
+    hidden("temperature_speed", "N/(K m/s)", 0.0, "not in the library: F + c (T - T_i) V", &HiddenFrictionEffects::temperature_speed);
+    auto thermal = [&](const char* name, const char* unit, const char* description, double ThermalRigEffects::*member,
+                       double neutral = 0.0) { t.push_back({{name, unit, neutral, description}, std::nullopt, member}); };
     thermal("convection_velocity", "W/m2K/sqrt(m/s)", "forced convection h = h0 + c sqrt(V)",
             &ThermalRigEffects::convection_velocity);
     thermal("base_loss", "W/mK", "heat loss through the rail base to the bed (at ambient)", &ThermalRigEffects::base_loss);
@@ -112,6 +129,13 @@ const std::vector<EffectEntry>& effect_table() {
     thermal("alpha_velocity", "1/(m/s)", "α = α0 + s (V - 0.1 m/s)", &ThermalRigEffects::alpha_velocity);
     thermal("moving_source", "0/1", "the block moves (truth simulated with the moving source)",
             &ThermalRigEffects::moving_source);
+    thermal("ambient_daily_K", "K",
+            "not in the library: the air swings daily, A sin(2 pi t/86400 s + phase of the run); the rail sees all of it",
+            &ThermalRigEffects::ambient_daily_K);
+    thermal("ambient_daily_seen", "1", "the share of that daily swing the logged ambient sensors see",
+            &ThermalRigEffects::ambient_daily_seen, 1.0);
+    thermal("tc_drift_K_per_h", "K/h", "not in the library: every rail thermocouple drifts linearly from the run's start",
+            &ThermalRigEffects::tc_drift_K_per_h);
     return t;
   }();
   return table;
@@ -179,6 +203,8 @@ FrictionRigOutput generate_friction_log(const FrictionRigConfig& config, const R
   require_non_negative("run_offset_N", config.run_offset_N);
   require_non_negative("temperature_noise_K", config.temperature_noise_K);
   require_positive("load_cell_range_N", config.load_cell_range_N);
+  require_positive("running_in_scale_m", effects.hidden.running_in_scale_m);
+  require_non_negative("lubricant_lag_s", effects.hidden.lubricant_lag_s);
 
   FrictionRigOutput out;
   FrictionLog& log = out.log;
@@ -194,8 +220,14 @@ FrictionRigOutput generate_friction_log(const FrictionRigConfig& config, const R
     for (double pc : config.preload_um)
       for (double P : config.load_N)
         for (double T : config.temperature_C) setups.push_back({model, pc, P, T});
+  if (config.temperature_outermost)
+    std::stable_sort(setups.begin(), setups.end(), [&](const Setup& a, const Setup& b) {
+      auto rank = [&](double T) { return std::find(config.temperature_C.begin(), config.temperature_C.end(), T); };
+      return rank(a.T) < rank(b.T);
+    });
   const std::size_t per_run = config.one_setup_per_run ? 1 : setups.size();
   const int run_count = config.runs * static_cast<int>(setups.size() / per_run);
+  double distance_m = 0;  // slid since the log's start (the hidden running-in)
   for (int r = 0; r < run_count; ++r) {
     Rng rng(derive_seed(config.seed, static_cast<std::uint64_t>(r)));
     const double offset_N = config.run_offset_N * rng.normal();
@@ -204,6 +236,9 @@ FrictionRigOutput generate_friction_log(const FrictionRigConfig& config, const R
     runs.push_back({{"run", run_name}, {"zero_offset_N", offset_N}});
     const std::uint32_t run_index = index_of(log.run_names, run_name);
     double time_s = 0;
+    // The lubricant's temperature (hidden lag): its state at the last logged sample, and the
+    // temperature it was relaxing towards since.
+    double lubricant_C = std::numeric_limits<double>::quiet_NaN(), lubricant_target_C = 0, lubricant_time_s = 0;
     const std::size_t first = config.one_setup_per_run ? static_cast<std::size_t>(r) % setups.size() : 0;
     for (std::size_t k = first; k < first + per_run; ++k) {
       const Setup& setup = setups[k];
@@ -216,7 +251,18 @@ FrictionRigOutput generate_friction_log(const FrictionRigConfig& config, const R
                                              .velocity_m_s = V, .temperature_C = setup.T,
                                              .direction = double(direction)};
           validate(c);
-          const double F = friction_force_with_effects_N(config.constants, effects.friction, c);
+          // The hidden effects (not in the library): the law at the lubricant's temperature,
+          // running-in over the sliding distance, a temperature × speed term.
+          const HiddenFrictionEffects& hidden = effects.hidden;
+          FrictionConditions<double> at_lubricant = c;
+          double lubricant_now_C = setup.T;
+          if (hidden.lubricant_lag_s > 0 && !std::isnan(lubricant_C))
+            lubricant_now_C = lubricant_target_C + (lubricant_C - lubricant_target_C) *
+                                                       std::exp(-(time_s - lubricant_time_s) / hidden.lubricant_lag_s);
+          if (hidden.lubricant_lag_s > 0) at_lubricant.temperature_C = lubricant_now_C;
+          double F = friction_force_with_effects_N(config.constants, effects.friction, at_lubricant);
+          if (hidden.running_in != 0) F *= 1 + hidden.running_in * std::exp(-distance_m / hidden.running_in_scale_m);
+          F += hidden.temperature_speed * (setup.T - config.constants.T_ref_C) * V;
           // Draw the noise even for skipped conditions, so the sequence does not depend on them;
           // the load cell's noise series runs over the logged samples only.
           const double z = rng.normal();
@@ -229,7 +275,11 @@ FrictionRigOutput generate_friction_log(const FrictionRigConfig& config, const R
           logged.temperature_C = round_to(setup.T + temperature_noise, 2);
           log.append(run_index, guide_index, time_s, logged, round_to(F + offset_N + load_cell.next(z), 3),
                      config.constants.nu_ref_mm2_s);
+          lubricant_C = lubricant_now_C;
+          lubricant_target_C = setup.T;
+          lubricant_time_s = time_s;
           time_s += config.seconds_per_sample;
+          distance_m += V * config.seconds_per_sample;
         }
     }
   }
@@ -249,6 +299,7 @@ FrictionRigOutput generate_friction_log(const FrictionRigConfig& config, const R
       {"note", "friction_N = law with effects at the true temperature + zero_offset_N (per run) + noise; "
                "temperature_C is the true temperature plus noise"}};
   if (config.noise_ar1 != 0) truth["noise_ar1"] = config.noise_ar1;
+  if (config.temperature_outermost) truth["temperature_outermost"] = true;
   out.truth_json = truth.dump(2) + "\n";
   return out;
 }
@@ -306,13 +357,19 @@ ThermalRigOutput generate_thermal_dataset(const ThermalRigConfig& config, const 
                                                  : fmt::format("v{:03.0f}_r{}", V * 1000, r + 1);
       const double heat_factor =
           positive_factor("heat_variation", config.heat_variation, later.normal(), "the heat factor of run " + id);
-      // The true ambient: drift plus a slow wave with a random phase.
+      // The true ambient: drift plus a slow wave with a random phase; with the hidden daily
+      // swing, the rail's air has all of it and the ambient sensors log the share `seen`.
       const double phase = rng.uniform(0, 2 * std::numbers::pi);
+      const double daily_phase = Rng(derive_seed(config.seed ^ kDailyStreamKey, stream)).uniform(0, 2 * std::numbers::pi);
       AmbientTrace ambient;
+      std::vector<double> ambient_logged;  // what the ambient sensors see (before bias and noise)
       for (double t : times) {
+        const double air = config.ambient_C + config.ambient_drift_K_per_h * t / 3600 +
+                           config.ambient_wave_K * std::sin(2 * std::numbers::pi * t / 7200 + phase);
+        const double daily = effects.thermal.ambient_daily_K * std::sin(2 * std::numbers::pi * t / 86400 + daily_phase);
         ambient.time_s.push_back(t);
-        ambient.temperature_C.push_back(config.ambient_C + config.ambient_drift_K_per_h * t / 3600 +
-                                        config.ambient_wave_K * std::sin(2 * std::numbers::pi * t / 7200 + phase));
+        ambient.temperature_C.push_back(air + daily);
+        ambient_logged.push_back(air + effects.thermal.ambient_daily_seen * daily);
       }
       const double T0 = ambient.temperature_C.front();
       auto heat_at = [&](double T) {
@@ -356,14 +413,15 @@ ThermalRigOutput generate_thermal_dataset(const ThermalRigConfig& config, const 
       for (int a = 0; a < config.ambient_sensors; ++a) {
         const double bias = rng.uniform(-config.ambient_bias_K, config.ambient_bias_K);
         TemperatureChannel channel =
-            logged_channel(fmt::format("ambient{}_C", a + 1), ambient.temperature_C, bias, rng);
+            logged_channel(fmt::format("ambient{}_C", a + 1), ambient_logged, bias, rng);
         ambient_truth.push_back({{"column", channel.name}, {"bias_K", bias}});
         run.trace.ambient.push_back(std::move(channel));
       }
       for (std::size_t s = 0; s < config.sensor_position_m.size(); ++s) {
         std::vector<double> truth(times.size());
         for (std::size_t t = 0; t < times.size(); ++t) truth[t] = sol.temperature_C(t, s);
-        const auto lagged = first_order_lag(times, truth, effects.thermal.tc_lag);
+        auto lagged = first_order_lag(times, truth, effects.thermal.tc_lag);
+        for (std::size_t t = 0; t < times.size(); ++t) lagged[t] += effects.thermal.tc_drift_K_per_h * times[t] / 3600;
         const double bias = rng.uniform(-config.tc_bias_K, config.tc_bias_K);
         TemperatureChannel channel = logged_channel(fmt::format("tc{}_C", s + 1), lagged, bias, rng);
         run.sensor_position_m[channel.name] = config.sensor_position_m[s];
@@ -400,6 +458,12 @@ ThermalRigOutput generate_thermal_dataset(const ThermalRigConfig& config, const 
                                          {"sensors", ambient_truth}}},
                             {"thermocouples", tc_truth}});
       if (config.heat_variation != 0) runs_truth.back()["heat_factor"] = heat_factor;
+      if (effects.thermal.ambient_daily_K != 0) {
+        runs_truth.back()["ambient"]["daily_K"] = effects.thermal.ambient_daily_K;
+        runs_truth.back()["ambient"]["daily_period_s"] = 86400;
+        runs_truth.back()["ambient"]["daily_phase_rad"] = daily_phase;
+        runs_truth.back()["ambient"]["daily_seen_by_sensors"] = effects.thermal.ambient_daily_seen;
+      }
       out.set.runs.push_back(std::move(run));
     }
   }

@@ -55,6 +55,9 @@ struct FrictionDiagnosisOptions {
   // without mattering.
   double min_structure_fraction = 0.2;
   std::size_t max_effects = 3;
+  // When the residuals stay structured after the named causes: learn an empirical term
+  // (friction_terms.hpp) and keep it if it passes the rules a cause must pass.
+  bool learn_term = true;
   Progress progress;  // the candidate fits, round by round
 };
 

@@ -29,6 +29,7 @@
 #include "lmcal/fit/statistics.hpp"
 #include "lmcal/io/friction_log.hpp"
 #include "lmcal/models/friction_effects.hpp"
+#include "lmcal/models/friction_terms.hpp"
 
 namespace lmcal {
 
@@ -52,6 +53,10 @@ struct FrictionFitOptions {
   std::array<std::pair<double, double>, 7> bounds{{{0, 5}, {-1, 1}, {0, 50}, {1e-4, 0.5}, {0, 0.1}, {0, 0.2}, {-1, 1}}};
   std::vector<std::string> effects;  // effects to fit on top of the law (names from friction_effect_names())
   std::vector<double> effect_start;  // their start values (default: neutral), in the order of `effects`
+  // Empirical terms on top of the law and the effects (friction_terms.hpp): their coefficients
+  // (and scales) are fitted, starting from the values in each term. Parameters "term1",
+  // "term1_scale", "term2", … after the effects'.
+  std::vector<FrictionTerm> terms;
   FrictionWeighting weighting = FrictionWeighting::none;
   bool per_run_fits = true;
   bool cross_validate = false;  // leave-one-run-out prediction RMSE (one-step, no refits)
@@ -115,6 +120,8 @@ struct FrictionFitResult {
   std::vector<ConditionResidual> conditions;
   std::vector<std::string> runs;
   std::vector<RunSpread> spread;  // empty unless per-run fits ran (>= 2 runs)
+
+  std::vector<FrictionTerm> terms;  // the fitted empirical terms (coefficient and scale at their estimates)
 
   FrictionConstants<double> constants() const;
   FrictionEffects<double> effects() const;

@@ -1,0 +1,168 @@
+#include "lmcal/models/friction_terms.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <limits>
+
+namespace lmcal {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// The symbol of a covariate in formulas.
+const char* symbol_of(TermCovariate c) {
+  switch (c) {
+    case TermCovariate::velocity_m_s: return "V";
+    case TermCovariate::load_N: return "P";
+    case TermCovariate::preload_um: return "pc";
+    case TermCovariate::block_length_mm: return "Lb";
+    case TermCovariate::temperature_C: return "T";
+    case TermCovariate::direction: return "dir";
+    case TermCovariate::time_in_run_s: return "t";
+    case TermCovariate::sliding_distance_m: return "s";
+    case TermCovariate::law_force_N: return "F_law";
+  }
+  return "?";
+}
+
+}  // namespace
+
+const char* term_covariate_name(TermCovariate c) {
+  switch (c) {
+    case TermCovariate::velocity_m_s: return "velocity_m_s";
+    case TermCovariate::load_N: return "load_N";
+    case TermCovariate::preload_um: return "preload_um";
+    case TermCovariate::block_length_mm: return "block_length_mm";
+    case TermCovariate::temperature_C: return "temperature_C";
+    case TermCovariate::direction: return "direction";
+    case TermCovariate::time_in_run_s: return "time_in_run_s";
+    case TermCovariate::sliding_distance_m: return "sliding_distance_m";
+    case TermCovariate::law_force_N: return "friction_law_N";
+  }
+  return "?";
+}
+
+const char* term_covariate_unit(TermCovariate c) {
+  switch (c) {
+    case TermCovariate::velocity_m_s: return "m/s";
+    case TermCovariate::load_N: return "N";
+    case TermCovariate::preload_um: return "um";
+    case TermCovariate::block_length_mm: return "mm";
+    case TermCovariate::temperature_C: return "K";
+    case TermCovariate::direction: return "1";
+    case TermCovariate::time_in_run_s: return "s";
+    case TermCovariate::sliding_distance_m: return "m";
+    case TermCovariate::law_force_N: return "N";
+  }
+  return "?";
+}
+
+bool FrictionTerm::has_scale() const {
+  return std::any_of(factors.begin(), factors.end(), [](const TermFactor& f) {
+    return f.transform == TermTransform::decay || f.transform == TermTransform::lagged_temperature;
+  });
+}
+
+bool FrictionTerm::lagged_temperature() const {
+  return std::any_of(factors.begin(), factors.end(),
+                     [](const TermFactor& f) { return f.transform == TermTransform::lagged_temperature; });
+}
+
+std::string FrictionTerm::symbol(std::size_t k) const {
+  if (lagged_temperature()) return fmt::format("F_law(T + c{0}·(lag(T; tau{0}) - T)) - F_law(T)", k);
+  std::string s = fmt::format("c{}", k);
+  for (const auto& f : factors) {
+    const char* x = symbol_of(f.covariate);
+    const std::string centred = f.centre == 0 ? std::string(x) : fmt::format("({} - {:g})", x, f.centre);
+    switch (f.transform) {
+      case TermTransform::linear: s += "·" + centred; break;
+      case TermTransform::square: s += "·" + centred + "²"; break;
+      case TermTransform::decay: s += fmt::format("·exp(-{}/l{})", x, k); break;
+      case TermTransform::lagged_temperature: break;
+    }
+  }
+  return s;
+}
+
+std::string FrictionTerm::coefficient_unit() const {
+  if (lagged_temperature()) return "1";
+  std::string per;
+  bool relative = false;
+  for (const auto& f : factors) {
+    if (f.covariate == TermCovariate::law_force_N) relative = true;
+    if (f.transform == TermTransform::decay || f.covariate == TermCovariate::law_force_N) continue;
+    const std::string u = term_covariate_unit(f.covariate);
+    if (u == "1") continue;
+    per += (per.empty() ? "" : "·") + u + (f.transform == TermTransform::square ? "²" : "");
+  }
+  const std::string numerator = relative ? "1" : "N";
+  return per.empty() ? numerator : numerator + "/(" + per + ")";
+}
+
+std::string FrictionTerm::scale_unit() const {
+  for (const auto& f : factors)
+    if (f.transform == TermTransform::decay || f.transform == TermTransform::lagged_temperature)
+      return f.transform == TermTransform::lagged_temperature ? "s" : term_covariate_unit(f.covariate);
+  return "";
+}
+
+std::vector<std::string> FrictionTerm::covariates() const {
+  std::vector<std::string> out;
+  for (const auto& f : factors) {
+    out.push_back(term_covariate_name(f.covariate));
+    if (f.transform == TermTransform::lagged_temperature) out.push_back("time_in_run_s");
+  }
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
+
+TermSeries term_series(const FrictionLog& log) {
+  TermSeries s;
+  const std::size_t n = log.size();
+  s.run_rows.resize(log.run_names.size());
+  for (std::size_t i = 0; i < n; ++i) s.run_rows[log.run[i]].push_back(i);
+  s.timed = n > 0 && std::none_of(log.time_s.begin(), log.time_s.end(), [](double t) { return std::isnan(t); });
+  s.time_in_run_s.assign(n, kNaN);
+  s.sliding_distance_m.assign(n, kNaN);
+  if (!s.timed) return s;
+  // The typical step, for the boundary between runs.
+  std::vector<double> steps;
+  for (const auto& rows : s.run_rows)
+    for (std::size_t k = 1; k < rows.size(); ++k) steps.push_back(log.time_s[rows[k]] - log.time_s[rows[k - 1]]);
+  double median_step = 0;
+  if (!steps.empty()) {
+    std::nth_element(steps.begin(), steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2), steps.end());
+    median_step = std::max(steps[steps.size() / 2], 0.0);
+  }
+  for (const auto& rows : s.run_rows)
+    for (std::size_t i : rows) s.time_in_run_s[i] = log.time_s[i] - log.time_s[rows.front()];
+  // Distance in row order: runs in the order they are written.
+  double distance = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    s.sliding_distance_m[i] = distance;
+    const bool same_run_next = i + 1 < n && log.run[i + 1] == log.run[i];
+    const double dt = same_run_next ? std::max(log.time_s[i + 1] - log.time_s[i], 0.0) : median_step;
+    distance += log.velocity_m_s[i] * dt;
+  }
+  return s;
+}
+
+double term_covariate_value(const FrictionLog& log, const TermSeries& series, std::size_t i, TermCovariate c) {
+  switch (c) {
+    case TermCovariate::velocity_m_s: return log.velocity_m_s[i];
+    case TermCovariate::load_N: return log.load_N[i];
+    case TermCovariate::preload_um: return log.preload_um[i];
+    case TermCovariate::block_length_mm: return log.block_length_mm[i];
+    case TermCovariate::temperature_C: return log.temperature_C[i];
+    case TermCovariate::direction: return log.direction[i];
+    case TermCovariate::time_in_run_s: return series.time_in_run_s[i];
+    case TermCovariate::sliding_distance_m: return series.sliding_distance_m[i];
+    case TermCovariate::law_force_N: return kNaN;  // the law's, at the parameters: not a column
+  }
+  return kNaN;
+}
+
+}  // namespace lmcal
