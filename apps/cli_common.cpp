@@ -140,7 +140,10 @@ void FrictionOptions::add_to(CLI::App& app) {
 FrictionLaw FrictionOptions::law(const LoadedModel* model) const {
   if (!model || !model->model.has_friction) return {.constants = constants};
   model->refuse(given(options_), "the friction law's constants (and its viscosity at the reference temperature)");
-  return {.constants = model->model.constants, .effects = model->model.effects, .effect_names = model->model.friction_causes};
+  return {.constants = model->model.constants,
+          .effects = model->model.effects,
+          .effect_names = model->model.friction_causes,
+          .terms = model->model.friction_terms};
 }
 
 void FrictionLaw::record_into(nlohmann::json& record) const {

@@ -83,6 +83,7 @@ struct FrictionLaw {
   FrictionConstants<double> constants = paper_friction_constants();
   FrictionEffects<double> effects;        // neutral: the published law
   std::vector<std::string> effect_names;  // the effects in use (a model's causes)
+  std::vector<FrictionTerm> terms;        // a model's empirical terms (not named causes)
   // "friction_constants" and "friction_effects" of a run's record.
   void record_into(nlohmann::json& record) const;
   std::string effects_text() const;  // "direction_asymmetry, seal_drag", or "none"

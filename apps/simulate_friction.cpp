@@ -34,8 +34,14 @@ void run_simulate_friction(const FrictionSweepOptions& o, const std::vector<std:
   for (double d : o.direction)
     if (d != 1 && d != -1) throw InvalidParameter("--direction", d, "+1 or -1");
   // The published law's three terms; effects_N is what the effects add to them.
-  CsvText csv({"guide", "velocity_m_s", "load_N", "preload_um", "block_length_mm", "temperature_C", "direction",
-               "viscosity_mm2_s", "coulomb_N", "stribeck_N", "viscous_N", "effects_N", "friction_N", "heat_W"});
+  // With a model's empirical terms: what they add (at steady state: decays and lags settled)
+  // and whether a condition lies beyond the data they were learned on.
+  std::vector<std::string> columns{"guide", "velocity_m_s", "load_N", "preload_um", "block_length_mm", "temperature_C",
+                                   "direction", "viscosity_mm2_s", "coulomb_N", "stribeck_N", "viscous_N", "effects_N"};
+  if (!law.terms.empty()) columns.insert(columns.end(), {"empirical_N", "extrapolated"});
+  columns.insert(columns.end(), {"friction_N", "heat_W"});
+  CsvText csv(columns);
+  std::size_t extrapolated = 0;
   std::size_t rows = 0;
   for (const auto& guide : o.guide.guides) {
     const GuideSpec spec = o.guide.resolve(guide);
@@ -49,10 +55,16 @@ void run_simulate_friction(const FrictionSweepOptions& o, const std::vector<std:
                                                    .velocity_m_s = V, .temperature_C = T, .direction = direction};
                 validate(c);
                 const auto f = friction_breakdown(law.constants, c);
-                const double friction_N = friction_force_with_effects_N(law.constants, law.effects, c);
+                const double with_effects_N = friction_force_with_effects_N(law.constants, law.effects, c);
+                double empirical_N = 0;
+                bool outside = false;
+                for (const auto& term : law.terms) empirical_N += steady_term_N(term, c, with_effects_N, &outside);
+                const double friction_N = with_effects_N + empirical_N;
                 csv.cell(spec.model).cell(V).cell(P).cell(pc).cell(Lb).cell(T).cell(direction).cell(f.viscosity_mm2_s);
-                csv.cell(f.coulomb_N).cell(f.stribeck_N).cell(f.viscous_N).cell(friction_N - f.total_N()).cell(friction_N);
-                csv.cell(heat_rate_with_effects_W(law.constants, law.effects, c));
+                csv.cell(f.coulomb_N).cell(f.stribeck_N).cell(f.viscous_N).cell(with_effects_N - f.total_N());
+                if (!law.terms.empty()) csv.cell(empirical_N).cell(outside ? 1 : 0);
+                extrapolated += outside ? 1 : 0;
+                csv.cell(friction_N).cell(friction_N * V);
                 csv.end_row();
                 ++rows;
               }
@@ -61,6 +73,16 @@ void run_simulate_friction(const FrictionSweepOptions& o, const std::vector<std:
   record["guide"] = o.guide.record();
   law.record_into(record);
   if (model) model->record_into(record);
+  if (!law.terms.empty()) {
+    std::vector<std::string> symbols;
+    for (std::size_t t = 0; t < law.terms.size(); ++t) symbols.push_back(law.terms[t].symbol(t + 1));
+    record["empirical_terms"] = {
+        {"symbols", symbols},
+        {"note", "learned from the residuals, not named causes; at steady state (terms in time, sliding distance "
+                 "or a lagged temperature have settled to 0); rows with extrapolated = 1 lie beyond the data they "
+                 "were learned on"},
+        {"extrapolated_rows", extrapolated}};
+  }
   OutputSet out;
   out.add(o.output, csv.str());
   out.add(o.output + ".json", record.dump(2) + "\n");
@@ -68,6 +90,10 @@ void run_simulate_friction(const FrictionSweepOptions& o, const std::vector<std:
   if (model)
     std::cout << fmt::format("the calibrated friction law of {} (set {}, lmcal {}); effects: {}\n", model->file,
                              model->model.set, model->model.lmcal_version, law.effects_text());
+  if (!law.terms.empty())
+    std::cout << fmt::format("with {} empirical term(s) (not named causes, at steady state); {} of {} conditions lie beyond "
+                             "the data they were learned on (extrapolated = 1)\n",
+                             law.terms.size(), extrapolated, rows);
   std::cout << fmt::format("wrote {} conditions to {} (inputs in {}.json)\n", rows, o.output, o.output);
 }
 

@@ -110,6 +110,30 @@ void BM_FrictionDiagnosisOneSetupPerRun76k(benchmark::State& state) {
 
 BENCHMARK(BM_FrictionDiagnosisOneSetupPerRun76k)->Unit(benchmark::kMillisecond)->Iterations(1);
 
+// 100 k samples with an effect the library lacks (running-in over the sliding distance): every
+// candidate, then the search beyond the library — the dictionary, the sparse regression and the
+// joint fit of the term — under 5 s (issue 14).
+void BM_FrictionDiagnosisEmpiricalTerm100k(benchmark::State& state) {
+  static const lmcal::FrictionLog log = [] {
+    lmcal::FrictionRigConfig rig;
+    rig.runs = 47;
+    lmcal::RigEffects effects;
+    effects.hidden.running_in = 0.1;
+    effects.hidden.running_in_scale_m = 2000;
+    return lmcal::generate_friction_log(rig, effects).log;
+  }();
+  bool found = false;
+  for (auto _ : state) {
+    const auto d = lmcal::diagnose_friction(log, {});
+    found = d.empirical.found;
+    benchmark::DoNotOptimize(d.accepted.data());
+  }
+  state.counters["samples"] = static_cast<double>(log.size());
+  state.counters["term_found"] = found ? 1 : 0;
+}
+
+BENCHMARK(BM_FrictionDiagnosisEmpiricalTerm100k)->Unit(benchmark::kMillisecond)->Iterations(2);
+
 }  // namespace
 
 namespace {

@@ -330,3 +330,69 @@ TEST(ModelFile, AMechanismWithoutItsValueIsRefused) {
 
 }  // namespace
 }  // namespace lmcal
+
+namespace lmcal {
+namespace {
+
+// Empirical terms (not named causes) travel with the model: factors, values, the ranges they
+// were learned on; in a steady sweep a decay has settled and a product term is its value.
+TEST(ModelFile, EmpiricalTermsRoundTripAndSettleInASteadySweep) {
+  ModelFile m = awkward_model();
+  FrictionTerm running_in{.factors = {{TermCovariate::sliding_distance_m, TermTransform::decay},
+                                      {TermCovariate::law_force_N, TermTransform::linear}},
+                          .coefficient = 0.0966,
+                          .scale = 154.3,
+                          .seen = {{TermCovariate::sliding_distance_m, 0, 454.2}, {TermCovariate::law_force_N, 5.1, 78.4}}};
+  FrictionTerm product{.factors = {{TermCovariate::velocity_m_s, TermTransform::linear},
+                                   {TermCovariate::temperature_C, TermTransform::linear, 40}},
+                       .coefficient = -1.52,
+                       .seen = {{TermCovariate::velocity_m_s, 0.002, 0.15}, {TermCovariate::temperature_C, 21.8, 40.2}}};
+  m.friction_terms = {running_in, product};
+  m.friction_parameters.push_back({"term1", "1", running_in.coefficient, 0.002, 0.093, 0.1, false});
+  m.friction_parameters.push_back({"term1_scale", "m", running_in.scale, 6.7, 141, 167, false});
+  m.friction_parameters.push_back({"term2", "N/(m/s·K)", product.coefficient, 0.1, -1.7, -1.3, false});
+  const TempFile file(model_file_toml(m));
+  const ModelFile r = read_model_file(file.path());
+  ASSERT_EQ(r.friction_terms.size(), 2u);
+  for (std::size_t t = 0; t < 2; ++t) {
+    const FrictionTerm &a = r.friction_terms[t], &b = m.friction_terms[t];
+    ASSERT_EQ(a.factors.size(), b.factors.size());
+    for (std::size_t f = 0; f < a.factors.size(); ++f) EXPECT_EQ(factor_text(a.factors[f]), factor_text(b.factors[f]));
+    EXPECT_EQ(bits(a.coefficient), bits(b.coefficient));
+    EXPECT_EQ(a.has_scale(), b.has_scale());
+    if (a.has_scale()) EXPECT_EQ(bits(a.scale), bits(b.scale));
+    ASSERT_EQ(a.seen.size(), b.seen.size());
+    for (std::size_t k = 0; k < a.seen.size(); ++k) EXPECT_EQ(bits(a.seen[k].max), bits(b.seen[k].max));
+  }
+  EXPECT_EQ(model_file_toml(r), model_file_toml(m));
+
+  FrictionConditions<double> c{.load_N = 3000, .preload_um = 4, .block_length_mm = 120.2, .velocity_m_s = 0.1,
+                               .temperature_C = 30};
+  bool outside = false;
+  EXPECT_EQ(steady_term_N(r.friction_terms[0], c, 30.0, &outside), 0.0);  // run in
+  EXPECT_DOUBLE_EQ(steady_term_N(r.friction_terms[1], c, 30.0, &outside), -1.52 * 0.1 * (30 - 40));
+  EXPECT_FALSE(outside);
+  c.temperature_C = 60;
+  steady_term_N(r.friction_terms[1], c, 30.0, &outside);
+  EXPECT_TRUE(outside);  // beyond the 21.8-40.2 C it was learned on
+}
+
+TEST(ModelFile, ATermWithAnUnknownFactorIsRefusedWithItsPlace) {
+  ModelFile m = awkward_model();
+  m.friction_terms = {FrictionTerm{.factors = {{TermCovariate::velocity_m_s, TermTransform::square}}, .coefficient = 2}};
+  m.friction_parameters.push_back({"term1", "N/(m/s)²", 2, 0.1, 1.8, 2.2, false});
+  std::string text = model_file_toml(m);
+  text.replace(text.find("square:velocity_m_s"), 19, "cubic:velocity_m_s");
+  const TempFile file(text);
+  try {
+    read_model_file(file.path());
+    ADD_FAILURE() << "accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("factor 'cubic:velocity_m_s': expected transform:covariate"), std::string::npos)
+        << e.what();
+    EXPECT_GT(e.line(), 0);
+  }
+}
+
+}  // namespace
+}  // namespace lmcal

@@ -392,11 +392,24 @@ FrictionTermSearch learn_friction_term(const FrictionLog& log, const FrictionFit
   f.cv_gain_percent = counted_gain(score);
   f.lrt_p = score.lrt_p;
   f.delta_bic = score.bic - information_criteria(before.ss, before.n, std::min(before.n_eff, after.n_eff), before.k).second;
+  // Every covariate's range in these data: the terms are extrapolations beyond.
+  auto range_of = [&](TermCovariate c) {
+    TermRange r{c, std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity()};
+    for (std::size_t i = 0; i < n; ++i) {
+      const double x = c == TermCovariate::law_force_N ? law[i] : term_covariate_value(log, series, i, c);
+      r.min = std::min(r.min, x);
+      r.max = std::max(r.max, x);
+    }
+    return r;
+  };
   std::string formula, resembles;
-  std::set<std::string> used;
+  std::map<std::string, TermRange> used;
   const std::size_t first = joint.fit.parameters.size() - term_parameter_count(joint.terms);
   for (std::size_t t = 0, at = first; t < joint.terms.size(); ++t) {
-    const FrictionTerm& term = joint.terms[t];
+    FrictionTerm& term = joint.terms[t];
+    for (const auto& factor : term.factors) term.seen.push_back(range_of(factor.covariate));
+    if (term.lagged_temperature()) term.seen.push_back(range_of(TermCovariate::time_in_run_s));
+    for (const auto& r : term.seen) used.emplace(term_covariate_name(r.covariate), r);
     EmpiricalComponent c;
     c.symbol = term.symbol(t + 1);
     c.words = term_words(term);
@@ -409,24 +422,11 @@ FrictionTermSearch learn_friction_term(const FrictionLog& log, const FrictionFit
     formula += (formula.empty() ? "" : " + ") + c.symbol;
     const std::string r = resemblance(term);
     if (!r.empty()) resembles += (resembles.empty() ? "" : "; or ") + r;
-    used.insert(c.covariates.begin(), c.covariates.end());
     f.components.push_back(std::move(c));
   }
   f.formula = formula;
   f.resembles = resembles;
-  for (const auto& name : used) {
-    CovariateRange r{name, std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity()};
-    for (std::size_t i = 0; i < n; ++i) {
-      double x = law[i];
-      for (TermCovariate c : {TermCovariate::velocity_m_s, TermCovariate::load_N, TermCovariate::preload_um,
-                              TermCovariate::block_length_mm, TermCovariate::temperature_C, TermCovariate::direction,
-                              TermCovariate::time_in_run_s, TermCovariate::sliding_distance_m})
-        if (name == term_covariate_name(c)) x = term_covariate_value(log, series, i, c);
-      r.min = std::min(r.min, x);
-      r.max = std::max(r.max, x);
-    }
-    f.ranges.push_back(r);
-  }
+  for (const auto& [name, r] : used) f.ranges.push_back({name, r.min, r.max});
   if (!passes) {
     f.reason = "the term the sparse regression chose (" + formula + "), fitted jointly with the law, was not kept: " + score.reason;
     return out;

@@ -179,9 +179,66 @@ const ReadParameter* find_read(const std::vector<ReadParameter>& list, std::stri
   return nullptr;
 }
 
+// [[friction.term]]: the empirical terms, in order (term k's parameters are "termk" and,
+// with a scale, "termk_scale"); returns those parameter names.
+std::vector<std::string> read_terms(const std::string& file, const toml::table& f, ModelFile& m) {
+  std::vector<std::string> names;
+  const toml::node* n = f.get("term");
+  if (!n) return names;
+  const auto* list = n->as_array();
+  if (!list) fail(file, n->source(), "expected [[friction.term]] tables");
+  for (const auto& item : *list) {
+    const auto* t = item.as_table();
+    if (!t) fail(file, item.source(), "expected a [[friction.term]] table");
+    only_keys(file, *t, "[[friction.term]]", {"symbol", "factors", "coefficient", "scale", "seen"});
+    FrictionTerm term;
+    for (const auto& [text, where] : strings_at(file, *t, "factors", false)) {
+      const auto factor = parse_factor(text);
+      if (!factor)
+        fail(file, where, fmt::format("factor '{}': expected transform:covariate[:centre], e.g. \"decay:sliding_distance_m\"", text));
+      term.factors.push_back(*factor);
+    }
+    const std::size_t k = m.friction_terms.size() + 1;
+    const bool lag = term.lagged_temperature();
+    if (term.factors.empty() || term.factors.size() > 2 || (lag && term.factors.size() != 1))
+      fail(file, t->source(), "a term has one or two factors (a lagged temperature alone)");
+    const std::string coefficient = fmt::format("term{}", k), scale = fmt::format("term{}_scale", k);
+    if (string_at(file, *t, "coefficient") != coefficient)
+      fail(file, t->get("coefficient")->source(), fmt::format("expected coefficient = \"{}\" (terms in order)", coefficient));
+    names.push_back(coefficient);
+    if (term.has_scale()) {
+      if (!t->get("scale") || string_at(file, *t, "scale") != scale)
+        fail(file, t->get("scale") ? t->get("scale")->source() : t->source(), fmt::format("expected scale = \"{}\"", scale));
+      names.push_back(scale);
+    }
+    if (const toml::node* seen = t->get("seen")) {
+      const auto* ranges = seen->as_array();
+      if (!ranges) fail(file, seen->source(), "expected seen = [{ covariate, min, max }, ...]");
+      for (const auto& r : *ranges) {
+        const auto* range = r.as_table();
+        if (!range) fail(file, r.source(), "expected { covariate = \"...\", min = ..., max = ... }");
+        only_keys(file, *range, "a range", {"covariate", "min", "max"});
+        const auto covariate = find_term_covariate(string_at(file, *range, "covariate"));
+        if (!covariate) fail(file, range->get("covariate")->source(), "unknown covariate");
+        term.seen.push_back({*covariate, number_at(file, *range, "min"), number_at(file, *range, "max")});
+      }
+    }
+    m.friction_terms.push_back(std::move(term));
+  }
+  return names;
+}
+
+void set_term_parameter(std::vector<FrictionTerm>& terms, const std::string& name, double value) {
+  for (std::size_t t = 0; t < terms.size(); ++t) {
+    if (name == fmt::format("term{}", t + 1)) terms[t].coefficient = value;
+    if (name == fmt::format("term{}_scale", t + 1)) terms[t].scale = value;
+  }
+}
+
 // [friction]: the seven constants, the viscosity's reference point and the effects of the causes.
 void read_friction(const std::string& file, const toml::table& f, ModelFile& m) {
-  only_keys(file, f, "[friction]", {"causes", "covariance", "reference_temperature_C", "viscosity40_mm2_s", "parameter"});
+  only_keys(file, f, "[friction]",
+            {"causes", "covariance", "reference_temperature_C", "viscosity40_mm2_s", "parameter", "term"});
   m.has_friction = true;
   const auto causes = strings_at(file, f, "causes");
   std::vector<std::string> effects;
@@ -194,19 +251,23 @@ void read_friction(const std::string& file, const toml::table& f, ModelFile& m) 
   if (f.get("reference_temperature_C")) m.constants.T_ref_C = finite_at(file, f, "reference_temperature_C");
   if (f.get("viscosity40_mm2_s")) m.constants.nu_ref_mm2_s = finite_at(file, f, "viscosity40_mm2_s");
   const auto parameters = read_parameters(file, f, "friction");
+  const std::vector<std::string> term_parameters = read_terms(file, f, m);
   const std::vector<std::string> constants(kFrictionConstantNames.begin(), kFrictionConstantNames.end());
   for (const auto& r : parameters) {
     const auto c = std::find(constants.begin(), constants.end(), r.p.name);
     const auto cause = std::find(m.friction_causes.begin(), m.friction_causes.end(), r.p.name);
+    const auto term = std::find(term_parameters.begin(), term_parameters.end(), r.p.name);
     if (c != constants.end()) fittable_constant(m.constants, static_cast<std::size_t>(c - constants.begin())) = r.p.value;
     else if (cause != m.friction_causes.end()) m.effects[*find_friction_effect(r.p.name)] = r.p.value;
+    else if (term != term_parameters.end()) set_term_parameter(m.friction_terms, r.p.name, r.p.value);
     else
       fail(file, r.name_at,
-           fmt::format("unknown friction parameter '{}'; expected {} or an effect among causes ({})", r.p.name,
-                       known_list(constants), known_list(m.friction_causes)));
+           fmt::format("unknown friction parameter '{}'; expected {}, an effect among causes ({}) or a term's ({})", r.p.name,
+                       known_list(constants), known_list(m.friction_causes), known_list(term_parameters)));
   }
   std::vector<std::string> needed = constants;
   needed.insert(needed.end(), m.friction_causes.begin(), m.friction_causes.end());
+  needed.insert(needed.end(), term_parameters.begin(), term_parameters.end());
   for (const auto& name : needed)
     if (!find_read(parameters, name)) fail(file, f.source(), fmt::format("expected a parameter '{}' in [friction]", name));
   try {
@@ -280,6 +341,7 @@ ModelFile model_file_of(const FrictionFitResult* friction, const FrictionFitOpti
     m.constants.nu_ref_mm2_s = fo.start.nu_ref_mm2_s;
     m.effects = friction->effects();
     m.friction_causes = fo.effects;
+    m.friction_terms = friction->terms;
     m.friction_parameters = parameters_of(friction->fit);
     m.friction_covariance = friction->fit.uncertainty.method;
   }
@@ -319,6 +381,20 @@ std::string model_file_toml(const ModelFile& m) {
         "reference_temperature_C = {}\nviscosity40_mm2_s = {}\n\n",
         string_list(m.friction_causes), quoted(m.friction_covariance), number(m.constants.T_ref_C), number(m.constants.nu_ref_mm2_s));
     write_parameters(out, "friction", m.friction_parameters);
+    for (std::size_t t = 0; t < m.friction_terms.size(); ++t) {
+      const FrictionTerm& term = m.friction_terms[t];
+      std::vector<std::string> factors, seen;
+      for (const auto& f : term.factors) factors.push_back(factor_text(f));
+      for (const auto& r : term.seen)
+        seen.push_back(fmt::format("{{ covariate = {}, min = {}, max = {} }}", quoted(term_covariate_name(r.covariate)),
+                                   number(r.min), number(r.max)));
+      out += fmt::format(
+          "[[friction.term]]\n# empirical: learned from the residuals, not a named cause; beyond `seen` an "
+          "extrapolation\nsymbol = {}\nfactors = {}\ncoefficient = {}\n",
+          quoted(term.symbol(t + 1)), string_list(factors), quoted(fmt::format("term{}", t + 1)));
+      if (term.has_scale()) out += fmt::format("scale = {}\n", quoted(fmt::format("term{}_scale", t + 1)));
+      out += fmt::format("seen = [{}]\n\n", fmt::join(seen, ", "));
+    }
   }
   if (m.has_thermal) {
     out += fmt::format("[thermal]\n# the rail model (Eqs. 11-15) with these mechanisms added; alpha belongs to this source model\n"

@@ -3,7 +3,9 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cstdlib>
 #include <limits>
+#include <utility>
 
 namespace lmcal {
 
@@ -117,6 +119,78 @@ std::vector<std::string> FrictionTerm::covariates() const {
   std::sort(out.begin(), out.end());
   out.erase(std::unique(out.begin(), out.end()), out.end());
   return out;
+}
+
+std::optional<TermCovariate> find_term_covariate(std::string_view name) {
+  for (TermCovariate c : {TermCovariate::velocity_m_s, TermCovariate::load_N, TermCovariate::preload_um,
+                          TermCovariate::block_length_mm, TermCovariate::temperature_C, TermCovariate::direction,
+                          TermCovariate::time_in_run_s, TermCovariate::sliding_distance_m, TermCovariate::law_force_N})
+    if (name == term_covariate_name(c)) return c;
+  return std::nullopt;
+}
+
+namespace {
+constexpr std::pair<TermTransform, const char*> kTransforms[] = {{TermTransform::linear, "linear"},
+                                                                 {TermTransform::square, "square"},
+                                                                 {TermTransform::decay, "decay"},
+                                                                 {TermTransform::lagged_temperature, "lagged_temperature"}};
+}  // namespace
+
+std::string factor_text(const TermFactor& f) {
+  std::string transform;
+  for (const auto& [t, name] : kTransforms)
+    if (t == f.transform) transform = name;
+  std::string text = transform + ":" + term_covariate_name(f.covariate);
+  if (f.centre != 0) text += fmt::format(":{}", f.centre);
+  return text;
+}
+
+std::optional<TermFactor> parse_factor(std::string_view text) {
+  const auto first = text.find(':');
+  if (first == std::string_view::npos) return std::nullopt;
+  const auto second = text.find(':', first + 1);
+  TermFactor f;
+  bool known = false;
+  for (const auto& [t, name] : kTransforms)
+    if (text.substr(0, first) == name) f.transform = t, known = true;
+  const auto covariate = find_term_covariate(text.substr(first + 1, second == std::string_view::npos ? second : second - first - 1));
+  if (!known || !covariate) return std::nullopt;
+  f.covariate = *covariate;
+  if (second != std::string_view::npos) {
+    const std::string centre(text.substr(second + 1));
+    char* end = nullptr;
+    f.centre = std::strtod(centre.c_str(), &end);
+    if (centre.empty() || end != centre.c_str() + centre.size() || !std::isfinite(f.centre)) return std::nullopt;
+  }
+  return f;
+}
+
+double steady_term_N(const FrictionTerm& term, const FrictionConditions<double>& c, double law_N, bool* outside) {
+  auto value_of = [&](TermCovariate covariate) {
+    switch (covariate) {
+      case TermCovariate::velocity_m_s: return c.velocity_m_s;
+      case TermCovariate::load_N: return c.load_N;
+      case TermCovariate::preload_um: return c.preload_um;
+      case TermCovariate::block_length_mm: return c.block_length_mm;
+      case TermCovariate::temperature_C: return c.temperature_C;
+      case TermCovariate::direction: return c.direction;
+      case TermCovariate::law_force_N: return law_N;
+      default: return kNaN;  // time and distance: no steady value
+    }
+  };
+  if (outside)
+    for (const auto& r : term.seen) {
+      const double x = value_of(r.covariate);
+      if (!std::isnan(x) && (x < r.min || x > r.max)) *outside = true;
+    }
+  if (term.lagged_temperature()) return 0;  // the lagged temperature has caught up
+  double value = term.coefficient;
+  for (const auto& f : term.factors) {
+    if (f.transform == TermTransform::decay) return 0;  // settled
+    const double x = value_of(f.covariate) - f.centre;
+    value *= f.transform == TermTransform::square ? x * x : x;
+  }
+  return value;
 }
 
 TermSeries term_series(const FrictionLog& log) {

@@ -41,8 +41,9 @@ CalibrationSet find_calibration_set(const fs::path& dir) {
 
 namespace {
 
-// The calibrated friction model: the law with the causes the diagnosis accepted, each run's
-// load-cell zero a nuisance offset (as the diagnosis fits it), refitted in full.
+// The calibrated friction model: the law with the causes the diagnosis accepted (and the
+// empirical term it learned, if any), each run's load-cell zero a nuisance offset (as the
+// diagnosis fits it), refitted in full.
 void calibrate_friction_model(Calibration& c) {
   CalibratedModel& m = c.calibrated;
   if (c.friction_diagnosis)
@@ -51,6 +52,20 @@ void calibrate_friction_model(Calibration& c) {
   m.friction_options.effects = m.friction_causes;
   m.friction_options.effect_start.clear();
   for (const auto& name : m.friction_causes) m.friction_options.effect_start.push_back(c.friction_diagnosis->final_fit.fit.parameter(name).value);
+  // An empirical term the diagnosis kept is part of the model, marked as such (its fitted
+  // values are the start).
+  m.friction_options.terms.clear();
+  if (c.friction_diagnosis && c.friction_diagnosis->empirical.found) {
+    const FrictionFitResult& learned = c.friction_diagnosis->empirical_fit;
+    m.friction_options.terms = learned.terms;
+    // A term's coefficient has no natural bounds for a multi-start to sample within: start
+    // from the diagnosis's joint fit instead.
+    const FrictionConstants<double> k = learned.constants();
+    for (std::size_t j = 0; j < 7; ++j)
+      fittable_constant(m.friction_options.start, j) =
+          std::clamp(fittable_constant(k, j), m.friction_options.bounds[j].first, m.friction_options.bounds[j].second);
+    m.friction_options.fit.starts = 0;
+  }
   m.friction_options.run_offsets = RunOffsets::random;
   m.friction_options.cross_validate = c.friction_log->run_names.size() >= 2;
   m.friction = fit_friction(*c.friction_log, m.friction_options);

@@ -8,6 +8,9 @@
 //   kind = "lmcal calibrated model"
 //   [friction]   causes = [...], covariance = "...", reference_temperature_C, viscosity40_mm2_s
 //   [[friction.parameter]]  name, unit, value, se, ci95 = [low, high], held
+//   [[friction.term]]       an empirical term (not a named cause): symbol, factors =
+//                           ["decay:sliding_distance_m", "linear:friction_law_N"], coefficient =
+//                           "term1", scale = "term1_scale", seen = [{covariate, min, max}, …]
 //   [thermal]    source = "averaged", mechanisms = [...], covariance = "...", heat_uncertainty
 //   [[thermal.parameter]]   name, unit, value, se, ci95, held      (alpha, h_W_m2K, mechanisms')
 //
@@ -41,6 +44,9 @@ struct ModelFile {
   FrictionConstants<double> constants = paper_friction_constants();
   FrictionEffects<double> effects;
   std::vector<std::string> friction_causes;
+  // Empirical terms the diagnosis learned beyond the library (not named causes); their
+  // parameters are "term1", "term1_scale", … among friction_parameters.
+  std::vector<FrictionTerm> friction_terms;
   std::vector<ModelParameter> friction_parameters;
   std::string friction_covariance;
 

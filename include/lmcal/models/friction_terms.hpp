@@ -30,6 +30,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <optional>
+#include <string_view>
 #include <string>
 #include <vector>
 
@@ -57,11 +59,18 @@ struct TermFactor {
   double centre = 0;  // x0 of linear and square
 };
 
+struct TermRange {
+  TermCovariate covariate;
+  double min = 0, max = 0;
+};
+
 struct FrictionTerm {
   std::vector<TermFactor> factors;  // one or two; at most one decay, and a lagged temperature alone
   double coefficient = 0;           // c (a fit's start value)
   double scale = 0;                 // ℓ or τ of a decay or lag (a fit's start value)
   double scale_lower = 0, scale_upper = 0;  // bounds of a fit
+  // The covariates' ranges in the data it was learned from: beyond them it is an extrapolation.
+  std::vector<TermRange> seen;
 
   bool has_scale() const;
   bool lagged_temperature() const;
@@ -82,6 +91,17 @@ inline std::size_t term_parameter_count(const std::vector<FrictionTerm>& terms) 
 
 const char* term_covariate_name(TermCovariate c);
 const char* term_covariate_unit(TermCovariate c);
+std::optional<TermCovariate> find_term_covariate(std::string_view name);
+
+// A factor as text and back: "linear:temperature_C:40", "decay:sliding_distance_m",
+// "linear:friction_law_N", "lagged_temperature:temperature_C" (the model file's form).
+std::string factor_text(const TermFactor& f);
+std::optional<TermFactor> parse_factor(std::string_view text);
+
+// A term's value at steady conditions (a sweep without a time course, long after the start):
+// decays and lags have settled to 0; `law_N` is the law's force there. `outside` is set when a
+// covariate lies beyond the range the term was learned on (an extrapolation).
+double steady_term_N(const FrictionTerm& term, const FrictionConditions<double>& c, double law_N, bool* outside = nullptr);
 
 // What a log gives the terms beyond each row: time in the run and sliding distance (NaN
 // without a time column), and each run's rows in order.
