@@ -111,6 +111,42 @@ TEST(EmpiricalFriction, LearnsATemperatureSpeedProduct) {
   }
 }
 
+// A bump in the friction over speed (a resonance of the rig at 0.05 m/s): no power, product or
+// decay has that shape, a smooth term in speed does.
+TEST(EmpiricalFriction, ABumpNoSimpleFormFitsIsLearnedAsASmoothTerm) {
+  for (std::uint64_t seed : {1u, 2u}) {
+    const FrictionLog clean = generate_friction_log(small_rig(seed), {}).log;
+    FrictionLog bumped = clean;
+    for (std::size_t i = 0; i < bumped.size(); ++i)
+      bumped.friction_N[i] += 1.0 * std::exp(-std::pow((bumped.velocity_m_s[i] - 0.05) / 0.02, 2));
+    Outcome o;
+    o.with = diagnose_friction(bumped, {});
+    o.without = diagnose_friction(clean, {});
+    const FrictionFitResult& learned = o.with.empirical.found ? o.with.empirical_fit : o.with.final_fit;
+    o.learned_gain = gain_percent(o.with.baseline_fit, learned);
+    o.true_gain = 100 * std::max(1 - o.without.baseline_fit.cv_rmse_N / o.with.baseline_fit.cv_rmse_N,
+                                 1 - o.without.baseline_fit.cv_shape_rmse_N / o.with.baseline_fit.cv_shape_rmse_N);
+    expect_found(o, "speed bump");
+    EXPECT_TRUE(uses(o.with.empirical, "velocity_m_s")) << o.with.empirical.formula;
+    EXPECT_EQ(o.with.empirical.form, "smooth") << o.with.empirical.formula;
+  }
+}
+
+TEST(FrictionTerms, CubicBSplinesAreNonNegativeAndSumToOne) {
+  const std::vector<double> knots{0, 0, 0, 0, 0.3, 0.7, 1, 1, 1, 1};
+  for (double x : {0.0, 0.1, 0.3, 0.5, 0.99, 1.0}) {
+    double sum = 0;
+    for (int k = 0; k < 6; ++k) {
+      const double b = bspline(knots, k, x);
+      EXPECT_GE(b, 0.0);
+      sum += b;
+    }
+    EXPECT_NEAR(sum, 1.0, 1e-12) << x;
+  }
+  EXPECT_NEAR(bspline(knots, 0, 0.0), 1.0, 1e-12);  // clamped ends: the end basis is 1 there
+  EXPECT_NEAR(bspline(knots, 5, 1.0), 1.0, 1e-12);
+}
+
 // Clean data — the law, noise with memory, zero offsets, one setup per run or all setups in
 // every run — must not grow a term: at most one in twenty.
 TEST(EmpiricalFriction, CleanDataGrowsNoTerm) {

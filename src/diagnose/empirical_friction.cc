@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <optional>
 #include <set>
 
 #include "lmcal/fit/statistics.hpp"
@@ -164,6 +165,7 @@ std::string term_words(const FrictionTerm& t) {
       case TermTransform::linear: words += f.centre == 0 ? "in proportion to " + x : fmt::format("in proportion to {} - {:g}", x, f.centre); break;
       case TermTransform::square: words += "with the square of " + x; break;
       case TermTransform::decay: words += "decaying exponentially with " + x; break;
+      case TermTransform::spline: words += "a smooth function (cubic B-spline) of " + x; break;
       case TermTransform::lagged_temperature: break;
     }
   }
@@ -178,6 +180,9 @@ bool has(const FrictionTerm& t, TermCovariate c, TermTransform how) {
 std::string resemblance(const FrictionTerm& t) {
   using C = TermCovariate;
   using X = TermTransform;
+  if (t.factors.front().transform == X::spline)
+    return fmt::format("a dependence on {} of a shape none of the law's terms or the dictionary's simple forms has",
+                       term_covariate_name(t.factors.front().covariate));
   if (t.lagged_temperature())
     return fmt::format("the lubricant's temperature trailing the logged one by tau = {:.3g} s (a thermocouple away "
                        "from the contacts, or oil that warms slower than what is logged)",
@@ -313,6 +318,95 @@ EmpiricalCurve curve_of(const FrictionLog& log, const TermSeries& series, const 
   return c;
 }
 
+// The smooth alternative: cubic B-splines in one covariate that varies within runs (speed,
+// load, temperature), 1 to 4 interior knots at quantiles of its values (fewer for a covariate
+// of few values; none in temperature), the first basis function left out (the run levels carry
+// a constant); the covariate and the knots chosen by leave-one-run-out error, fewer basis
+// functions preferred within the tolerance.
+struct SmoothChoice {
+  std::vector<FrictionTerm> terms;
+  double cv_rmse = 0;     // linearised leave-one-run-out RMSE of the runs' shape with it
+  std::size_t tried = 0;  // basis functions tried, over all covariates
+  std::string why_not;
+};
+
+SmoothChoice smooth_term(const FrictionLog& log, const TermSeries& series, const SparseProblem& linear, double min_gain_percent) {
+  SmoothChoice out;
+  SparseProblem p;
+  p.y = linear.y;
+  p.group = linear.group;
+  p.level = linear.level;
+  p.fixed = linear.fixed;
+  std::vector<std::vector<std::size_t>> blocks;
+  std::vector<std::vector<FrictionTerm>> block_terms;
+  for (TermCovariate c : {TermCovariate::velocity_m_s, TermCovariate::load_N, TermCovariate::temperature_C}) {
+    // Only a covariate that varies within runs: what changes only between runs is the random
+    // run offsets' to explain, and a spline over a handful of run levels would fit them.
+    bool within = false;
+    for (const auto& rows : series.run_rows)
+      for (std::size_t k = 1; k < rows.size() && !within; ++k)
+        within = std::abs(term_covariate_value(log, series, rows[k], c) - term_covariate_value(log, series, rows[0], c)) >
+                 (c == TermCovariate::temperature_C ? 1.0 : 0.0);  // a logged temperature's noise is no change
+    if (!within) continue;
+    std::vector<double> x(log.size());
+    for (std::size_t i = 0; i < log.size(); ++i) x[i] = term_covariate_value(log, series, i, c);
+    std::vector<double> sorted = x;
+    std::sort(sorted.begin(), sorted.end());
+    std::vector<double> distinct;
+    for (double v : sorted)
+      if (distinct.empty() || v > distinct.back() + 1e-9 * std::max(1.0, std::abs(v))) distinct.push_back(v);
+    if (distinct.size() < 4) continue;
+    // A logged temperature scatters around its setting: knots inside that scatter would fit
+    // the thermocouple's noise through the law's temperature slope (errors in variables), so
+    // in temperature the smooth term is one cubic over the whole range.
+    const std::size_t most = c == TermCovariate::temperature_C ? 0 : std::min<std::size_t>(4, distinct.size() - 4);
+    for (std::size_t interior = c == TermCovariate::temperature_C ? 0 : 1; interior <= most; ++interior) {
+      std::vector<double> knots(4, sorted.front());
+      for (std::size_t k = 1; k <= interior; ++k) {
+        const double q = sorted[k * sorted.size() / (interior + 1)];
+        if (q > knots.back() && q < sorted.back()) knots.push_back(q);
+      }
+      knots.insert(knots.end(), 4, sorted.back());
+      const int bases = static_cast<int>(knots.size()) - 4;
+      std::vector<std::size_t> block;
+      std::vector<FrictionTerm> terms;
+      for (int b = 1; b < bases; ++b) {
+        FrictionTerm t{.factors = {TermFactor{.covariate = c, .transform = TermTransform::spline, .basis = b, .knots = knots}}};
+        std::vector<double> column(log.size());
+        for (std::size_t i = 0; i < log.size(); ++i) column[i] = bspline(knots, b, x[i]);
+        block.push_back(p.candidates.size());
+        p.candidates.push_back(std::move(column));
+        terms.push_back(std::move(t));
+      }
+      out.tried += terms.size();
+      blocks.push_back(std::move(block));
+      block_terms.push_back(std::move(terms));
+    }
+  }
+  if (blocks.empty()) {
+    out.why_not = "no covariate varies enough for a smooth term";
+    return out;
+  }
+  const std::vector<SupportScore> scores = score_supports(p, blocks);
+  const double fixed = score_supports(p, {{}}).front().cv_rmse;
+  // The best, and among those within the tolerance of it the one with the fewest basis functions.
+  std::size_t best = 0;
+  for (std::size_t b = 1; b < scores.size(); ++b)
+    if (scores[b].cv_rmse < scores[best].cv_rmse) best = b;
+  for (std::size_t b = 0; b < scores.size(); ++b)
+    if (scores[b].cv_rmse <= scores[best].cv_rmse * (1 + min_gain_percent / 100) && blocks[b].size() < blocks[best].size())
+      best = b;
+  if (100 * (1 - scores[best].cv_rmse / fixed) < min_gain_percent) {
+    out.why_not = fmt::format("nor does a smooth term (cubic B-splines) in speed, load or temperature (best {:.2f} %)",
+                              100 * (1 - scores[best].cv_rmse / fixed));
+    return out;
+  }
+  out.cv_rmse = scores[best].cv_rmse;
+  out.terms = std::move(block_terms[best]);
+  for (std::size_t k = 0; k < out.terms.size(); ++k) out.terms[k].coefficient = scores[best].coefficient[k];
+  return out;
+}
+
 }  // namespace
 
 FrictionTermSearch learn_friction_term(const FrictionLog& log, const FrictionFitResult& current,
@@ -361,37 +455,96 @@ FrictionTermSearch learn_friction_term(const FrictionLog& log, const FrictionFit
   SparseOptions sparse;
   sparse.min_gain_percent = rules.min_cv_gain_percent;
   const SparseSelection chosen = select_sparse(problem, sparse);
+
+  // A candidate set of terms, fitted jointly with the law, its causes and the run offsets,
+  // and judged as a cause is.
+  struct Trial {
+    std::vector<FrictionTerm> terms;
+    FrictionFitResult fit;
+    CandidateScore score;
+    bool passes = false;
+  };
+  const ModelFit before = summarise(current);
+  auto trial = [&](std::vector<FrictionTerm> terms) {
+    Trial t;
+    std::size_t count = params.size();
+    for (auto& term : terms) {
+      const std::size_t adds = term.has_scale() ? 2 : 1;
+      if (count + adds > kMaxFitParameters) continue;  // within the fit's parameter limit
+      count += adds;
+      t.terms.push_back(std::move(term));
+    }
+    // A term the data cannot determine beside the law and the others (a spline's basis
+    // function that the Stribeck term already draws) is dropped, and the rest refitted once.
+    auto undetermined = [&](const FrictionFitResult& fit) {
+      std::vector<std::size_t> out;
+      const std::size_t first = fit.fit.parameters.size() - term_parameter_count(t.terms);
+      for (std::size_t k = 0, at = first; k < t.terms.size(); at += t.terms[k].has_scale() ? 2 : 1, ++k)
+        for (std::size_t j = at; j < at + (t.terms[k].has_scale() ? 2 : 1); ++j)
+          if (fit.fit.parameters[j].held_unidentifiable || !std::isfinite(fit.fit.parameters[j].se)) {
+            out.push_back(k);
+            break;
+          }
+      return out;
+    };
+    t.fit = refit(t.terms);
+    if (const auto drop = undetermined(t.fit); !drop.empty() && drop.size() < t.terms.size()) {
+      for (auto k = drop.rbegin(); k != drop.rend(); ++k) t.terms.erase(t.terms.begin() + static_cast<std::ptrdiff_t>(*k));
+      t.fit = refit(t.terms);
+    }
+    ModelFit after = summarise(t.fit);
+    if (!undetermined(t.fit).empty()) after.problem = "a term the data cannot determine beside the law";
+    t.score.effect = "empirical term";
+    t.passes = score_candidate(before, after, rules, t.score);
+    return t;
+  };
+  std::optional<Trial> kept;
+  std::string why_not;
   if (chosen.selected.empty()) {
-    f.reason = fmt::format(
-        "no set of them predicts held-out runs at least {:.3g} % better than the model alone (linearised "
-        "leave-one-run-out RMSE of the runs' shape {:.4g} N)",
-        rules.min_cv_gain_percent, chosen.cv_rmse_fixed);
+    why_not = fmt::format("no sparse set predicts held-out runs at least {:.3g} % better than the model alone (linearised "
+                          "leave-one-run-out RMSE of the runs' shape {:.4g} N)",
+                          rules.min_cv_gain_percent, chosen.cv_rmse_fixed);
+  } else {
+    std::vector<FrictionTerm> terms;
+    for (std::size_t a = 0; a < chosen.selected.size(); ++a) {
+      terms.push_back(candidates[chosen.selected[a]].term);
+      terms.back().coefficient = chosen.coefficient[a];  // a lag's is its start: the joint fit is exact
+    }
+    Trial t = trial(std::move(terms));
+    if (t.passes) kept = std::move(t);
+    else why_not = "the sparse form fitted jointly with the law was not kept: " + t.score.reason;
+  }
+  // Where no sparse form wins: a smooth term in the one covariate whose spline predicts
+  // held-out runs best — tried when the sparse form failed, or when its linearised held-out
+  // RMSE beats the sparse form's by the gain a term must bring; kept if it does so fitted.
+  const SmoothChoice smooth = smooth_term(log, series, problem, rules.min_cv_gain_percent);
+  f.dictionary_size += smooth.tried;
+  const bool smooth_better = !smooth.terms.empty() && kept &&
+                             smooth.cv_rmse < chosen.cv_rmse * (1 - rules.min_cv_gain_percent / 100);
+  if (smooth.terms.empty()) {
+    if (!kept) why_not += "; " + smooth.why_not;
+  } else if (!kept || smooth_better) {
+    Trial t = trial(smooth.terms);
+    const bool wins = t.passes && (!kept || counted_gain(t.score) >= counted_gain(kept->score) + rules.min_cv_gain_percent);
+    if (wins) {
+      if (kept) why_not = "a smooth term predicts held-out runs better than the sparse form (" +
+                          kept->terms.front().symbol(1) + (kept->terms.size() > 1 ? " + …" : "") + ")";
+      kept = std::move(t);
+    } else if (!kept) {
+      why_not += "; the smooth term fitted jointly was not kept: " + t.score.reason;
+    }
+  }
+  if (!kept) {
+    f.reason = why_not;
     return out;
   }
-
-  // The joint fit: the law, its causes and the chosen terms, within the fit's parameter limit.
-  std::vector<FrictionTerm> terms;
-  std::size_t count = params.size();
-  for (std::size_t a = 0; a < chosen.selected.size(); ++a) {
-    FrictionTerm t = candidates[chosen.selected[a]].term;
-    t.coefficient = chosen.coefficient[a];
-    const std::size_t adds = t.has_scale() ? 2 : 1;
-    if (count + adds > kMaxFitParameters) continue;
-    count += adds;
-    terms.push_back(std::move(t));
-  }
-  // The lag is exact in the joint fit: the law at T + c (lag − T); the linearised coefficient
-  // is its start.
-  FrictionFitResult joint = refit(terms);
-  const ModelFit before = summarise(current), after = summarise(joint);
-  CandidateScore score;
-  score.effect = "empirical term";
-  const bool passes = score_candidate(before, after, rules, score);
+  FrictionFitResult& joint = kept->fit;
+  const CandidateScore& score = kept->score;
   f.cv_rmse_before = current.cv_rmse_N;
   f.cv_rmse_after = joint.cv_rmse_N;
   f.cv_gain_percent = counted_gain(score);
   f.lrt_p = score.lrt_p;
-  f.delta_bic = score.bic - information_criteria(before.ss, before.n, std::min(before.n_eff, after.n_eff), before.k).second;
+  f.delta_bic = score.bic - information_criteria(before.ss, before.n, std::min(before.n_eff, summarise(joint).n_eff), before.k).second;
   // Every covariate's range in these data: the terms are extrapolations beyond.
   auto range_of = [&](TermCovariate c) {
     TermRange r{c, std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity()};
@@ -421,18 +574,15 @@ FrictionTermSearch learn_friction_term(const FrictionLog& log, const FrictionFit
     }
     formula += (formula.empty() ? "" : " + ") + c.symbol;
     const std::string r = resemblance(term);
-    if (!r.empty()) resembles += (resembles.empty() ? "" : "; or ") + r;
+    if (!r.empty() && resembles.find(r) == std::string::npos) resembles += (resembles.empty() ? "" : "; or ") + r;
     f.components.push_back(std::move(c));
   }
+  f.form = joint.terms.front().factors.front().transform == TermTransform::spline ? "smooth" : "sparse";
   f.formula = formula;
   f.resembles = resembles;
   for (const auto& [name, r] : used) f.ranges.push_back({name, r.min, r.max});
-  if (!passes) {
-    f.reason = "the term the sparse regression chose (" + formula + "), fitted jointly with the law, was not kept: " + score.reason;
-    return out;
-  }
   f.found = true;
-  f.reason = score.reason;
+  f.reason = score.reason + (f.form == "smooth" ? " (no sparse form did as well: " + why_not + ")" : "");
   f.curve = curve_of(log, series, current, joint, reference_C);
   out.fit = std::move(joint);
   return out;

@@ -416,6 +416,7 @@ nlohmann::json empirical_json(const EmpiricalFinding& e, const std::string& unit
   return {{"searched", e.searched},
           {"found", e.found},
           {"kind", "empirical (learned from the residuals; not a named cause)"},
+          {"form", e.form},
           {"added_to", e.where},
           {"formula", e.formula},
           {"components", components},

@@ -264,4 +264,15 @@ SparseSelection select_sparse(const SparseProblem& p, const SparseOptions& o) {
   return s;
 }
 
+std::vector<SupportScore> score_supports(const SparseProblem& p, const std::vector<std::vector<std::size_t>>& supports) {
+  const GroupGrams grams = group_grams(p);
+  const Scorer scorer(grams, p.fixed.size());
+  std::vector<SupportScore> out;
+  for (auto support : supports) {
+    std::sort(support.begin(), support.end());
+    out.push_back({scorer.cv_rmse(support), scorer.coefficients(support)});
+  }
+  return out;
+}
+
 }  // namespace lmcal::detail

@@ -67,4 +67,13 @@ struct SparseSelection {
 
 SparseSelection select_sparse(const SparseProblem& problem, const SparseOptions& options);
 
+// F (and the levels) plus each given support of candidates: its leave-one-group-out RMSE and
+// its coefficients on all data (per candidate of the support, in order). For blocks that
+// enter together, e.g. the basis functions of a smooth term.
+struct SupportScore {
+  double cv_rmse = 0;
+  std::vector<double> coefficient;
+};
+std::vector<SupportScore> score_supports(const SparseProblem& problem, const std::vector<std::vector<std::size_t>>& supports);
+
 }  // namespace lmcal::detail

@@ -82,6 +82,7 @@ std::string FrictionTerm::symbol(std::size_t k) const {
       case TermTransform::linear: s += "·" + centred; break;
       case TermTransform::square: s += "·" + centred + "²"; break;
       case TermTransform::decay: s += fmt::format("·exp(-{}/l{})", x, k); break;
+      case TermTransform::spline: s += fmt::format("·B{}({})", f.basis, x); break;
       case TermTransform::lagged_temperature: break;
     }
   }
@@ -94,7 +95,9 @@ std::string FrictionTerm::coefficient_unit() const {
   bool relative = false;
   for (const auto& f : factors) {
     if (f.covariate == TermCovariate::law_force_N) relative = true;
-    if (f.transform == TermTransform::decay || f.covariate == TermCovariate::law_force_N) continue;
+    if (f.transform == TermTransform::decay || f.transform == TermTransform::spline ||
+        f.covariate == TermCovariate::law_force_N)
+      continue;
     const std::string u = term_covariate_unit(f.covariate);
     if (u == "1") continue;
     per += (per.empty() ? "" : "·") + u + (f.transform == TermTransform::square ? "²" : "");
@@ -133,14 +136,44 @@ namespace {
 constexpr std::pair<TermTransform, const char*> kTransforms[] = {{TermTransform::linear, "linear"},
                                                                  {TermTransform::square, "square"},
                                                                  {TermTransform::decay, "decay"},
-                                                                 {TermTransform::lagged_temperature, "lagged_temperature"}};
+                                                                 {TermTransform::lagged_temperature, "lagged_temperature"},
+                                                                 {TermTransform::spline, "spline"}};
 }  // namespace
+
+double bspline(const std::vector<double>& knots, int k, double x) {
+  constexpr int degree = 3;
+  const std::size_t m = knots.size();
+  if (m < 2 * (degree + 1) || k < 0 || static_cast<std::size_t>(k) + degree + 1 >= m) return 0;
+  x = std::clamp(x, knots.front(), knots.back());
+  // Degree 0 on [t_j, t_j+1), the last non-empty interval closed at the right end.
+  std::vector<double> b(degree + 1);
+  const auto K = static_cast<std::size_t>(k);
+  std::size_t last = m - 1;
+  while (last > 0 && knots[last - 1] == knots.back()) --last;  // the last interval with t_j < t_end
+  for (int j = 0; j <= degree; ++j) {
+    const std::size_t i = K + static_cast<std::size_t>(j);
+    const bool inside = x >= knots[i] && (x < knots[i + 1] || (x == knots.back() && i + 1 == last));
+    b[static_cast<std::size_t>(j)] = inside ? 1.0 : 0.0;
+  }
+  for (int d = 1; d <= degree; ++d)
+    for (int j = 0; j + d <= degree; ++j) {
+      const std::size_t i = K + static_cast<std::size_t>(j);
+      const double left = knots[i + static_cast<std::size_t>(d)] - knots[i];
+      const double right = knots[i + static_cast<std::size_t>(d) + 1] - knots[i + 1];
+      double v = 0;
+      if (left > 0) v += (x - knots[i]) / left * b[static_cast<std::size_t>(j)];
+      if (right > 0) v += (knots[i + static_cast<std::size_t>(d) + 1] - x) / right * b[static_cast<std::size_t>(j) + 1];
+      b[static_cast<std::size_t>(j)] = v;
+    }
+  return b[0];
+}
 
 std::string factor_text(const TermFactor& f) {
   std::string transform;
   for (const auto& [t, name] : kTransforms)
     if (t == f.transform) transform = name;
   std::string text = transform + ":" + term_covariate_name(f.covariate);
+  if (f.transform == TermTransform::spline) return text + fmt::format(":{}:{}", f.basis, fmt::join(f.knots, ";"));
   if (f.centre != 0) text += fmt::format(":{}", f.centre);
   return text;
 }
@@ -156,6 +189,31 @@ std::optional<TermFactor> parse_factor(std::string_view text) {
   const auto covariate = find_term_covariate(text.substr(first + 1, second == std::string_view::npos ? second : second - first - 1));
   if (!known || !covariate) return std::nullopt;
   f.covariate = *covariate;
+  auto number = [](std::string_view t, double& out) {
+    const std::string copy(t);
+    char* end = nullptr;
+    out = std::strtod(copy.c_str(), &end);
+    return !copy.empty() && end == copy.c_str() + copy.size() && std::isfinite(out);
+  };
+  if (f.transform == TermTransform::spline) {  // spline:covariate:basis:k1;k2;…
+    if (second == std::string_view::npos) return std::nullopt;
+    const auto third = text.find(':', second + 1);
+    double basis = 0;
+    if (third == std::string_view::npos || !number(text.substr(second + 1, third - second - 1), basis)) return std::nullopt;
+    f.basis = static_cast<int>(basis);
+    std::string_view rest = text.substr(third + 1);
+    while (!rest.empty()) {
+      const auto semi = rest.find(';');
+      double knot = 0;
+      if (!number(rest.substr(0, semi), knot)) return std::nullopt;
+      f.knots.push_back(knot);
+      rest = semi == std::string_view::npos ? std::string_view{} : rest.substr(semi + 1);
+    }
+    if (f.knots.size() < 8 || f.basis < 0 || static_cast<std::size_t>(f.basis) + 4 >= f.knots.size() ||
+        !std::is_sorted(f.knots.begin(), f.knots.end()))
+      return std::nullopt;
+    return f;
+  }
   if (second != std::string_view::npos) {
     const std::string centre(text.substr(second + 1));
     char* end = nullptr;
@@ -187,6 +245,10 @@ double steady_term_N(const FrictionTerm& term, const FrictionConditions<double>&
   double value = term.coefficient;
   for (const auto& f : term.factors) {
     if (f.transform == TermTransform::decay) return 0;  // settled
+    if (f.transform == TermTransform::spline) {
+      value *= bspline(f.knots, f.basis, value_of(f.covariate));
+      continue;
+    }
     const double x = value_of(f.covariate) - f.centre;
     value *= f.transform == TermTransform::square ? x * x : x;
   }

@@ -100,6 +100,7 @@ struct CovariateRange {
 struct EmpiricalFinding {
   bool searched = false;  // the residuals stayed structured after the named causes
   bool found = false;     // a term passed: significant, and better on held-out runs
+  std::string form;       // "sparse" (a few dictionary terms) or "smooth" (B-splines in one covariate)
   std::string where;      // what it is added to: "the friction force", "every thermocouple reading"
   std::string formula;    // the whole term in symbols
   std::vector<EmpiricalComponent> components;

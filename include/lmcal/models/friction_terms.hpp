@@ -10,6 +10,9 @@
 //   square   (x − x0)²
 //   decay    exp(−x / ℓ)            x the sliding distance since the log's start (m) or the
 //                                   time since the run's start (s); ℓ fitted
+//   spline   B_k(x)                 a cubic B-spline basis function of V, P or T: a smooth
+//                                   term is several, one coefficient each (where no sparse
+//                                   form fits)
 // and the law's own force F_law (with its named effects) as a covariate, for terms in
 // proportion to the friction (c · exp(−s/ℓ) · F_law: running-in).
 //
@@ -51,13 +54,20 @@ enum class TermCovariate {
   sliding_distance_m,
   law_force_N,
 };
-enum class TermTransform { linear, square, decay, lagged_temperature };
+enum class TermTransform { linear, square, decay, lagged_temperature, spline };
 
 struct TermFactor {
   TermCovariate covariate = TermCovariate::velocity_m_s;
   TermTransform transform = TermTransform::linear;
   double centre = 0;  // x0 of linear and square
+  // spline: the cubic B-spline `basis` over the knot vector `knots` (boundary knots repeated
+  // four times); beyond the end knots it stays at its end value.
+  int basis = 0;
+  std::vector<double> knots;
 };
+
+// The cubic B-spline basis function k over `knots` at x (Cox-de Boor), x clamped to the knots' span.
+double bspline(const std::vector<double>& knots, int k, double x);
 
 struct TermRange {
   TermCovariate covariate;
@@ -168,6 +178,7 @@ T friction_with_terms_N(const FrictionConstants<P>& k, const FrictionEffects<E>&
       for (const auto& f : term.factors) {
         if (f.covariate == TermCovariate::law_force_N) value = value * law;
         else if (f.transform == TermTransform::decay) value = value * exp(-term_covariate_value(log, series, i, f.covariate) / theta[at + 1]);
+        else if (f.transform == TermTransform::spline) value = value * bspline(f.knots, f.basis, term_covariate_value(log, series, i, f.covariate));
         else {
           const double x = term_covariate_value(log, series, i, f.covariate) - f.centre;
           value = value * (f.transform == TermTransform::square ? x * x : x);
