@@ -49,6 +49,28 @@ void print_lack_of_fit(const LackOfFit& l, const char* unit) {
                              l.fits ? "" : "  <- the model misses");
 }
 
+// The term learned beyond the library, one line per component.
+void print_empirical(const EmpiricalFinding& e, const char* unit) {
+  if (!e.searched) return;
+  if (!e.found) {
+    std::cout << "beyond the library: no empirical term (" << e.reason << ")\n";
+    return;
+  }
+  std::cout << fmt::format("beyond the library: an empirical term ({} form; learned from the residuals, not a named cause), "
+                           "added to {}:\n",
+                           e.form, e.where);
+  for (const auto& c : e.components) {
+    std::cout << fmt::format("  {:<30} {} = {:.4g} [{:.4g}, {:.4g}] {}", c.symbol, c.coefficient.name, c.coefficient.value,
+                             c.coefficient.ci_low, c.coefficient.ci_high, c.coefficient.unit);
+    if (c.has_scale)
+      std::cout << fmt::format(", {} = {:.4g} [{:.4g}, {:.4g}] {}", c.scale.name, c.scale.value, c.scale.ci_low, c.scale.ci_high,
+                               c.scale.unit);
+    std::cout << "\n";
+  }
+  std::cout << fmt::format("  held-out RMSE {:.4g} -> {:.4g} {} ({:.1f} % better){}\n", e.cv_rmse_before, e.cv_rmse_after, unit,
+                           e.cv_gain_percent, e.resembles.empty() ? "" : "; resembles " + e.resembles);
+}
+
 void print(const FrictionDiagnosis& d) {
   std::cout << fmt::format("baseline: residual RMSE {:.3f} N, Durbin-Watson {:.2f}; residuals against covariates:\n",
                            d.baseline.rmse_N, d.baseline.durbin_watson);
@@ -56,6 +78,7 @@ void print(const FrictionDiagnosis& d) {
   print_lack_of_fit(d.baseline.lack_of_fit, "N");
   print_rounds(d.rounds, "N");
   for (const auto& note : d.design_notes) std::cout << "design: " << note << "\n";
+  print_empirical(d.empirical, "N");
   std::cout << "verdict: " << d.verdict << "\n  " << d.summary << "\n";
 }
 
@@ -76,6 +99,7 @@ void print(const ThermalDiagnosis& d) {
   print_lack_of_fit(d.baseline.lack_of_fit, "K");
   for (const auto& s : d.skipped) std::cout << "not tried: " << s << "\n";
   print_rounds(d.rounds, "K");
+  print_empirical(d.empirical, "K");
   std::cout << "verdict: " << d.verdict << "\n  " << d.summary << "\n";
 }
 

@@ -108,6 +108,17 @@ check "a diagnosis holds what it is told to, and never reports it as moving" awk
 check "the held f0 is not among the parameters that move" bash -c "! grep -q 'move: .*f0 ' diagfix.txt"
 check "diagnosis prints its lack-of-fit test" grep -q '^lack of fit' diagfix.txt
 check "diagnosis refuses an unknown run-offset model" refused "unknown model 'sometimes'" diagnose friction drag/friction.csv -o out --run-offsets sometimes
+# Beyond the library: running-in (not a library effect) learned as an empirical term, carried by
+# the calibrated model and applied (settled) by simulate friction.
+"$LMCAL" generate friction -o runin --runs 4 --guides "SRN 35C" --effect running_in=0.1 --effect running_in_scale_m=100 >/dev/null
+"$LMCAL" diagnose friction runin/friction.csv -o fitout --name din > diagin.txt
+check "an effect outside the library is learned as an empirical term" grep -q '^verdict: unexplained — empirical term found' diagin.txt
+check "the term is printed with its scale" grep -q 'exp(-s/l1)·F_law .*term1_scale = ' diagin.txt
+check "the diagnosis json holds the term" grep -q '"form": "sparse"' fitout/din.json
+"$LMCAL" calibrate runin -o calin >/dev/null 2>&1
+check "the calibrated model carries the term, marked" grep -q 'empirical: learned from the residuals, not a named cause' calin/model.toml
+"$LMCAL" simulate friction --model calin/model.toml --temperature 26,60 -o simin.csv > simin.txt
+check "simulate friction adds the term's columns" grep -q 'empirical_N,extrapolated,friction_N' simin.csv
 
 # --- thermal fit -------------------------------------------------------------------------------
 "$LMCAL" generate thermal -o thermaldata --velocity 0.083,0.11 --duration 7200 --record-every 30 >/dev/null

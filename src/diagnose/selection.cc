@@ -237,7 +237,7 @@ std::string lower_first(std::string s) {
 
 // "c1 = 0.12 (95 % [0.1, 0.14]), l1 = 1.3e3 m (95 % [...])"
 std::string estimate_words(const ParameterEstimate& p) {
-  return fmt::format("{} = {:.4g}{} (95 % [{:.4g}, {:.4g}])", p.name, p.value, p.unit.empty() ? "" : " " + p.unit, p.ci_low,
+  return fmt::format("{} = {:.4g}{} (95 % [{:.4g}, {:.4g}])", p.name, p.value, p.unit.empty() || p.unit == "1" ? "" : " " + p.unit, p.ci_low,
                      p.ci_high);
 }
 
