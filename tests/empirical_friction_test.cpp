@@ -111,6 +111,31 @@ TEST(EmpiricalFriction, LearnsATemperatureSpeedProduct) {
   }
 }
 
+// The term's intervals cover the truth about as often as they say: running-in's share a and
+// its scale l over twenty seeds (the load cell's noise with memory, as real cells have).
+TEST(EmpiricalFriction, TheTermsIntervalsCoverTheTruth) {
+  int covered_share = 0, covered_scale = 0, found = 0;
+  for (std::uint64_t seed = 31; seed <= 50; ++seed) {
+    FrictionRigConfig config = small_rig(seed);
+    config.noise_ar1 = 0.3;
+    RigEffects e;
+    e.hidden.running_in = 0.1;
+    e.hidden.running_in_scale_m = 150;
+    const FrictionDiagnosis d = diagnose_friction(generate_friction_log(config, e).log, {});
+    if (!d.empirical.found || d.empirical.components.size() != 1) continue;
+    const EmpiricalComponent& c = d.empirical.components.front();
+    if (c.symbol != "c1·exp(-s/l1)·F_law") continue;
+    ++found;
+    covered_share += c.coefficient.ci_low <= 0.1 && 0.1 <= c.coefficient.ci_high;
+    covered_scale += c.scale.ci_low <= 150 && 150 <= c.scale.ci_high;
+  }
+  std::printf("running-in over 20 seeds: the exact form %d times; a covered %d, l covered %d\n", found, covered_share,
+              covered_scale);
+  EXPECT_GE(found, 18);
+  EXPECT_GE(covered_share, found - 3);  // 95 % intervals: P(3 or more misses of 20) = 7.5 %
+  EXPECT_GE(covered_scale, found - 3);
+}
+
 // A bump in the friction over speed (a resonance of the rig at 0.05 m/s): no power, product or
 // decay has that shape, a smooth term in speed does.
 TEST(EmpiricalFriction, ABumpNoSimpleFormFitsIsLearnedAsASmoothTerm) {
