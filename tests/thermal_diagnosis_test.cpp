@@ -126,6 +126,11 @@ TEST(ThermalDiagnosis, ADisturbanceOutsideTheLibraryIsUnexplainedWithItsCovariat
   EXPECT_EQ(d.verdict, "unexplained") << d.summary;
   EXPECT_EQ(d.unexplained_covariate, "time_s") << d.summary;
   EXPECT_TRUE(d.accepted.empty()) << d.summary;
+  // An empirical term was searched for, and none of the dictionary's forms (no 3 h cycle
+  // among them) predicts held-out runs: said so.
+  EXPECT_TRUE(d.empirical.searched);
+  EXPECT_FALSE(d.empirical.found) << d.empirical.formula;
+  EXPECT_FALSE(d.empirical.reason.empty());
 }
 
 // Three repeats at one speed (the diagnosis holds one run out at a time), 4 h each.

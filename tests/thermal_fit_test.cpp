@@ -126,6 +126,28 @@ TEST(ThermalFit, ResidualDerivativesEqualFiniteDifferences) {
   EXPECT_FALSE(model.linear({false, false, false, false, false}));
 }
 
+// The empirical sensor terms enter the residuals directly (not through the solver): their
+// coefficients' and scales' derivatives — a period shared by a_P and b_P, a lag's τ, and the
+// rise·t term that carries the simulation's — equal central finite differences.
+TEST(ThermalFit, SensorTermDerivativesEqualFiniteDifferences) {
+  const auto runs = prepared_runs();
+  using K = ThermalTermKind;
+  // α, T0 of the second run, then c_t, c_a, P, c_b, c_lag, τ, c_rise, c_V.
+  detail::ThermalLayout layout{.alpha = 0, .offsets = {{-1, -1}, {-1, -1}}, .initial = {-1, 1}};
+  layout.terms = {{.kind = K::time},           {.kind = K::ambient_in_phase},   {.kind = K::ambient_quadrature},
+                  {.kind = K::ambient_lag},    {.kind = K::rise_time},          {.kind = K::velocity_time}};
+  layout.term_coefficient = {2, 3, 5, 6, 8, 9};
+  layout.term_scale = {-1, 4, 4, 7, -1, -1};
+  layout.size = 10;
+  const detail::ThermalModel model(runs, layout, {.half_rail_segments = 40, .time_step_s = 60});
+  test::expect_jacobian_matches_central_differences(
+      *model.cost_function({}, {}), {0.55, 24.3, 0.03, 0.8, 2 * 3600.0, -0.3, 0.5, 1800.0, 0.01, 0.2}, 1e-5, 1e-6);
+  std::vector<bool> held(10, false);
+  EXPECT_FALSE(model.linear(held));  // the scales and c·rise(α)
+  held[4] = held[7] = held[8] = true;
+  EXPECT_TRUE(model.linear(held));   // the coefficients alone are linear
+}
+
 // With the heat a measured run mean, the coupled heat is scaled to keep that mean: a fixed
 // point solved by repeated simulation, whose derivatives must still be the model's.
 TEST(ThermalFit, RunMeanCoupledHeatHasTheModelsDerivatives) {

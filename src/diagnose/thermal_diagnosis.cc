@@ -10,12 +10,15 @@
 
 #include "lmcal/error.hpp"
 #include "lmcal/fit/statistics.hpp"
+#include "empirical_thermal.hpp"
 #include "fit/fit_json.hpp"
 #include "selection.hpp"
 
 namespace lmcal {
 
 namespace {
+
+constexpr int kCandidateIterations = 30;
 
 // Every model of the diagnosis is fitted like this: offsets per thermocouple, one start
 // (warm-started from the model before), no profiles, leave-one-run-out scores.
@@ -29,6 +32,7 @@ ThermalFitOptions model_options(const ThermalDiagnosisOptions& o) {
   f.cross_validate = true;
   f.fit.starts = 0;
   f.fit.profile = ProfileMode::none;
+  f.sensitivities = true;  // the empirical term's search linearises the model in its global parameters
   return f;
 }
 
@@ -199,9 +203,14 @@ ThermalResidualDiagnostics diagnose_residuals(const ThermalFitResult& fit, const
 }
 
 ThermalFitResult fit_model(const ThermalDataSet& data, const ThermalDiagnosisOptions& o, const std::vector<std::string>& extensions,
-                           const ThermalFitResult* from) {
+                           const ThermalFitResult* from, const std::vector<ThermalSensorTerm>& terms = {}) {
   ThermalFitOptions f = model_options(o);
   f.extensions = extensions;
+  f.sensor_terms = terms;
+  // Warm-started, a mechanism converges in a few iterations; one that crawls (a lag or an h(V)
+  // the data push to a bound) gains nothing by crawling on. Terms start from a linearised
+  // estimate, further away: they get the iterations a fit needs.
+  if (terms.empty()) f.fit.max_iterations = std::min(f.fit.max_iterations, kCandidateIterations);
   if (from) {
     f.alpha_start = std::clamp(from->joint.parameter("alpha").value, f.alpha_lower, f.alpha_upper);
     for (const auto& p : from->joint.parameters) f.extension_start.emplace_back(p.name, p.value);
@@ -297,21 +306,59 @@ ThermalDiagnosis diagnose_thermal(const ThermalDataSet& data, const ThermalDiagn
                                      .max_effects = o.max_effects,
                                      .progress = o.progress};
   auto selection = detail::forward_select(library, d.baseline_fit, fit_candidate, summarise, rules);
-  d.final_fit = std::move(selection.current);
   d.rounds = std::move(selection.rounds);
 
-  // 4. Verdict.
-  d.final = diagnose_residuals(d.final_fit, o, noise);
-  d.cv_rmse_before_K = d.baseline_fit.cv_rmse_K;
-  d.cv_rmse_after_K = d.final_fit.cv_rmse_K;
-  d.accepted = detail::accepted_scores(d.rounds, selection.accepted, [&](const std::string& name) {
-    const auto& e = info(name);
-    return e.parameters.empty() ? nullptr : &d.final_fit.joint.parameter(e.parameters.front());
-  });
-  for (const auto& p : d.baseline_fit.joint.parameters)
-    if (p.name == "alpha" || p.name == "h_W_m2K") d.shifts.push_back(parameter_shift(p, d.final_fit.joint.parameter(p.name)));
+  // 4. What the accepted causes leave, and how α (and h) move.
+  auto settle = [&](const std::vector<std::string>& accepted, ThermalFitResult fit) {
+    d.final_fit = std::move(fit);
+    d.final = diagnose_residuals(d.final_fit, o, noise);
+    d.cv_rmse_before_K = d.baseline_fit.cv_rmse_K;
+    d.cv_rmse_after_K = d.final_fit.cv_rmse_K;
+    d.accepted = detail::accepted_scores(d.rounds, accepted, [&](const std::string& name) {
+      const auto& e = info(name);
+      return e.parameters.empty() ? nullptr : &d.final_fit.joint.parameter(e.parameters.front());
+    });
+    d.shifts.clear();
+    for (const auto& p : d.baseline_fit.joint.parameters)
+      if (p.name == "alpha" || p.name == "h_W_m2K") d.shifts.push_back(parameter_shift(p, d.final_fit.joint.parameter(p.name)));
+  };
+  std::vector<std::string> accepted = selection.accepted;
+  settle(accepted, std::move(selection.current));
+
+  // 5. Beyond the library: when structure remains, an empirical sensor term, fitted jointly.
+  if (d.final.structured || !d.final.lack_of_fit.fits) {
+    auto model_fit = [&](const ThermalFitResult& fit) { return summarise(fit, std::string()).first; };
+    auto search_with = [&](const std::vector<std::string>& causes, const ThermalFitResult& named) {
+      ThermalFitOptions current = model_options(o);
+      current.extensions = causes;
+      auto refit = [&](const std::vector<ThermalSensorTerm>& terms) { return fit_model(data, o, causes, &named, terms); };
+      return detail::learn_thermal_term(data, current, named, refit, model_fit, rules);
+    };
+    detail::ThermalTermSearch search = search_with(accepted, d.final_fit);
+    // A cause accepted before the term may only have stood in for what the term models: each
+    // must still pass, as a candidate, on top of the others and the term (learned anew without
+    // it), or it is dropped.
+    for (std::size_t i = accepted.size(); search.fit && i-- > 0;) {
+      std::vector<std::string> others = accepted;
+      others.erase(others.begin() + static_cast<std::ptrdiff_t>(i));
+      ThermalFitResult named = fit_model(data, o, others, &d.final_fit);
+      if (named.samples.empty()) continue;
+      detail::ThermalTermSearch without = search_with(others, named);
+      if (!without.fit) continue;
+      CandidateScore c;
+      if (detail::score_candidate(model_fit(*without.fit), model_fit(*search.fit), rules, c)) continue;
+      d.dropped.push_back(fmt::format("{} (accepted in round {}, it adds nothing once the empirical term is in: {})",
+                                    accepted[i], i + 1, c.reason));
+      accepted = others;
+      settle(accepted, std::move(named));
+      search = std::move(without);
+    }
+    d.empirical = std::move(search.finding);
+    if (search.fit) d.empirical_fit = std::move(*search.fit);
+  }
 
   detail::conclude(d, "The published rail model", "K", d.cv_rmse_before_K, d.cv_rmse_after_K, d.baseline.rmse_K);
+  for (const auto& why : d.dropped) d.summary += " Dropped: " + why + ".";
   return d;
 }
 
@@ -335,6 +382,7 @@ std::string thermal_diagnosis_json(const ThermalDiagnosis& d) {
   j["lmcal_version"] = LMCAL_VERSION;
   j["thermocouple_noise_K"] = number(d.noise_K);
   j["not_tried"] = d.skipped;
+  j["dropped_for_the_empirical_term"] = d.dropped;
   j["baseline_residuals"] = diagnostics(d.baseline);
   j["final_residuals"] = diagnostics(d.final);
   return j.dump(2) +

@@ -15,6 +15,7 @@
 #include "friction_model.hpp"
 #include "lmcal/fit/friction_fit.hpp"
 #include "thermal_model.hpp"
+#include "thermal_terms.hpp"
 
 namespace lmcal {
 
@@ -234,6 +235,46 @@ std::pair<ThermalLayout, std::vector<ParameterSpec>> layout_for(const std::vecto
         if (given == p.name) start = std::clamp(value, p.lower, p.upper);
       specs.push_back({p.name, p.unit, start, p.lower, p.upper, true, p.scale});
     }
+  }
+  // The sensor terms: a coefficient each, sized so that 1 typical unit moves the readings by
+  // 0.1 K; one period for the ambient-periodic terms, one τ per lag.
+  std::vector<std::pair<double, int>> periods;  // start period -> its parameter
+  for (std::size_t j = 0; j < o.sensor_terms.size(); ++j) {
+    const ThermalSensorTerm& term = o.sensor_terms[j];
+    double ss = 0, count = 0;
+    for (const auto& run : runs)
+      for (double phi : detail::sensor_term_regressor<double>(term.kind, term.scale_s, run.times_s, run.ambient,
+                                                              run.geometry.velocity_m_s)) {
+        const double rise = term.kind == ThermalTermKind::rise_time ? 10.0 : 1.0;  // a typical rise, K
+        ss += phi * phi * rise * rise;
+        count += 1;
+      }
+    const double rms = count > 0 ? std::sqrt(ss / count) : 0.0;
+    const double typical = rms > 0 ? 0.1 / rms : 1.0;
+    layout.terms.push_back(term);
+    layout.term_coefficient.push_back(static_cast<int>(specs.size()));
+    specs.push_back({fmt::format("c{} {}", j + 1, to_string(term.kind)), term_coefficient_unit(term.kind),
+                     term.coefficient, -1e4 * typical, 1e4 * typical, true, typical});
+    int scale = -1;
+    if (term_has_scale(term.kind) && term.fit_scale) {
+      const bool periodic = term.kind == ThermalTermKind::ambient_in_phase || term.kind == ThermalTermKind::ambient_quadrature;
+      const auto shared = std::find_if(periods.begin(), periods.end(), [&](auto& p) { return p.first == term.scale_s; });
+      if (periodic && shared != periods.end()) {
+        scale = shared->second;
+      } else {
+        if (!(term.scale_s > 0) || !(term.scale_lower_s > 0) || !(term.scale_upper_s > term.scale_lower_s))
+          throw InvalidParameter("sensor_terms", fmt::format("term {} ({}) needs a scale inside 0 < lower < upper", j + 1,
+                                                             to_string(term.kind)));
+        scale = static_cast<int>(specs.size());
+        const std::string name = !periodic       ? fmt::format("tau{}_s", j + 1)
+                                 : periods.empty() ? std::string("P_s")
+                                                   : fmt::format("P{}_s", periods.size() + 1);
+        specs.push_back({name, "s", std::clamp(term.scale_s, term.scale_lower_s, term.scale_upper_s), term.scale_lower_s,
+                         term.scale_upper_s, true});
+        if (periodic) periods.emplace_back(term.scale_s, scale);
+      }
+    }
+    layout.term_scale.push_back(scale);
   }
   for (const auto& run : runs) {
     std::vector<int> offsets(run.sensor_names.size(), -1);
@@ -491,6 +532,35 @@ double thermocouple_noise_K(const ThermalTrace& trace, double spacing_s, std::si
   return n ? std::sqrt(ss / (6.0 * static_cast<double>(n))) : std::numeric_limits<double>::quiet_NaN();
 }
 
+const char* to_string(ThermalTermKind kind) {
+  switch (kind) {
+    case ThermalTermKind::time: return "t";
+    case ThermalTermKind::time_squared: return "t^2";
+    case ThermalTermKind::ambient_in_phase: return "a_P";
+    case ThermalTermKind::ambient_quadrature: return "b_P";
+    case ThermalTermKind::ambient_lag: return "lag_tau(Tamb)-Tamb";
+    case ThermalTermKind::ambient_change: return "Tamb-Tamb0";
+    case ThermalTermKind::rise_time: return "rise*t";
+    case ThermalTermKind::velocity_time: return "V*t";
+  }
+  return "?";
+}
+
+bool term_has_scale(ThermalTermKind kind) {
+  return kind == ThermalTermKind::ambient_in_phase || kind == ThermalTermKind::ambient_quadrature ||
+         kind == ThermalTermKind::ambient_lag;
+}
+
+const char* term_coefficient_unit(ThermalTermKind kind) {
+  switch (kind) {
+    case ThermalTermKind::time: return "K/h";
+    case ThermalTermKind::time_squared: return "K/h2";
+    case ThermalTermKind::rise_time: return "1/h";
+    case ThermalTermKind::velocity_time: return "K/(h m/s)";
+    default: return "1";  // K per K of the ambient
+  }
+}
+
 std::vector<ThermalExtensionInfo> thermal_extension_library() {
   std::vector<ThermalExtensionInfo> library;
   for (const auto& e : detail::thermal_extensions()) {
@@ -499,6 +569,75 @@ std::vector<ThermalExtensionInfo> thermal_extension_library() {
     library.push_back(std::move(info));
   }
   return library;
+}
+
+namespace {
+
+std::vector<PreparedRun> prepared_runs(const ThermalDataSet& data, const ThermalFitOptions& o) {
+  std::vector<PreparedRun> runs;
+  for (const auto& run : data.runs) runs.push_back(prepare_run(run, o).run);
+  return runs;
+}
+
+// The terms' regressors (or, with `sum`, their fitted sum) at every sample of `fit`.
+std::vector<std::vector<double>> term_values_at_samples(const ThermalDataSet& data, const ThermalFitOptions& o,
+                                                        const ThermalFitResult& fit, const std::vector<double>& theta_given,
+                                                        const std::vector<ThermalSensorTerm>* terms) {
+  const std::vector<PreparedRun> runs = prepared_runs(data, o);
+  auto [layout, specs] = layout_for(runs, o);
+  std::vector<double> theta = theta_given.empty() ? fit.joint.values() : theta_given;
+  if (theta.size() != specs.size())
+    throw InvalidParameter("fit", "the fit's parameters do not match the options it is said to be made with");
+  const ThermalModel model(runs, layout, numerics_of(o));
+  const auto simulated = model.simulate(theta);
+  auto T0 = [&](std::size_t r) {
+    return layout.initial[r] >= 0 ? theta[static_cast<std::size_t>(layout.initial[r])] : runs[r].params.initial_temperature_C;
+  };
+  // The time index of every sample (samples keep the fitted records' times).
+  auto time_index = [&](const ThermalFitResult::Sample& sample) {
+    const auto& times = runs[sample.run].times_s;
+    return static_cast<std::size_t>(std::lower_bound(times.begin(), times.end(), sample.time_s - 1e-9) - times.begin());
+  };
+  std::vector<std::vector<double>> out;
+  if (!terms) {
+    const auto sums = model.term_sums(theta, simulated);
+    std::vector<double> column;
+    for (const auto& sample : fit.samples) column.push_back(sums[sample.run][time_index(sample)][sample.sensor]);
+    out.push_back(std::move(column));
+    return out;
+  }
+  for (const ThermalSensorTerm& term : *terms) {
+    std::vector<std::vector<double>> phi;
+    for (const auto& run : runs)
+      phi.push_back(detail::sensor_term_regressor<double>(term.kind, term.scale_s, run.times_s, run.ambient, run.geometry.velocity_m_s));
+    std::vector<double> column;
+    for (const auto& sample : fit.samples) {
+      const std::size_t t = time_index(sample);
+      const double by = term.kind == ThermalTermKind::rise_time ? simulated[sample.run][t][sample.sensor] - T0(sample.run) : 1.0;
+      column.push_back(phi[sample.run][t] * by);
+    }
+    out.push_back(std::move(column));
+  }
+  return out;
+}
+
+}  // namespace
+
+std::vector<AmbientTrace> thermal_fit_ambients(const ThermalDataSet& data, const ThermalFitOptions& options) {
+  std::vector<AmbientTrace> out;
+  for (const auto& run : prepared_runs(data, options)) out.push_back(run.ambient);
+  return out;
+}
+
+std::vector<std::vector<double>> thermal_sensor_term_values(const ThermalDataSet& data, const ThermalFitOptions& options,
+                                                            const ThermalFitResult& fit,
+                                                            const std::vector<ThermalSensorTerm>& terms) {
+  return term_values_at_samples(data, options, fit, {}, &terms);
+}
+
+std::vector<double> thermal_sensor_term_sum(const ThermalDataSet& data, const ThermalFitOptions& options,
+                                            const ThermalFitResult& fit, const std::vector<double>& theta) {
+  return term_values_at_samples(data, options, fit, theta, nullptr).front();
 }
 
 ThermalFitResult fit_thermal(const ThermalDataSet& data, const ThermalFitOptions& o) {
@@ -574,14 +713,16 @@ ThermalFitResult fit_thermal(const ThermalDataSet& data, const ThermalFitOptions
     at_zero[static_cast<std::size_t>(layout.alpha)] = 0.0;
     at_one[static_cast<std::size_t>(layout.alpha)] = 1.0;
     const auto fitted = model.simulate(theta), zero = model.simulate(at_zero), one = model.simulate(at_one);
+    const auto terms = model.term_sums(theta, fitted);
     for (std::size_t k = 0; k < rows.size(); ++k) {
       const auto& w = rows[k];
       const int offset = layout.offsets[w.run][w.sensor];
       error[k] = runs[w.run].measured[w.time][w.sensor] - fitted[w.run][w.time][w.sensor] -
-                 (offset >= 0 ? theta[static_cast<std::size_t>(offset)] : 0.0);
+                 (offset >= 0 ? theta[static_cast<std::size_t>(offset)] : 0.0) - terms[w.run][w.time][w.sensor];
       d_alpha[k] = -(one[w.run][w.time][w.sensor] - zero[w.run][w.time][w.sensor]);
     }
   }
+  std::vector<std::size_t> sample_rows;  // the data row of every sample
   for (std::size_t r = 0; r < runs.size(); ++r) {
     const auto& pr = runs[r];
     for (std::size_t s = 0; s < pr.sensor_names.size(); ++s) {
@@ -594,6 +735,7 @@ ThermalFitResult fit_thermal(const ThermalDataSet& data, const ThermalFitOptions
         g.max_error_K = std::max(g.max_error_K, std::abs(error[k]));
         ++g.n;
         result.samples.push_back({r, s, pr.times_s[rows[k].time], measured, measured - error[k]});
+        sample_rows.push_back(k);
       }
       g.rmse_K = g.n ? std::sqrt(ss / static_cast<double>(g.n)) : kNaN;
       g.max_error_percent = 100 * g.max_error_K / std::max(std::abs(rises[r][s]), 1e-9);
@@ -601,13 +743,41 @@ ThermalFitResult fit_thermal(const ThermalDataSet& data, const ThermalFitOptions
       result.goodness.push_back(g);
     }
   }
+  // ∂ reading / ∂ θ of the global parameters: −∂r/∂θ (r = measured − reading).
+  if (o.sensitivities && o.fit.loss == RobustLoss::none) {
+    std::vector<int> global{layout.alpha};
+    if (layout.h >= 0) global.push_back(layout.h);
+    for (std::size_t e = 0; e < layout.extensions.size(); ++e)
+      for (std::size_t j = 0; j < layout.extensions[e]->parameters.size(); ++j)
+        global.push_back(layout.extension_first[e] + static_cast<int>(j));
+    for (std::size_t j = 0; j < layout.terms.size(); ++j) {
+      global.push_back(layout.term_coefficient[j]);
+      if (layout.term_scale[j] >= 0 && std::find(global.begin(), global.end(), layout.term_scale[j]) == global.end())
+        global.push_back(layout.term_scale[j]);
+    }
+    for (int scale : layout.heat_scale)
+      if (scale >= 0) global.push_back(scale);  // per run: the search takes them out run by run
+    for (int g : global) {
+      std::vector<double> column;
+      for (std::size_t k : sample_rows) column.push_back(-final_state.jacobian(static_cast<Eigen::Index>(k), g));
+      result.sensitivities.emplace_back(specs[static_cast<std::size_t>(g)].name, std::move(column));
+    }
+  }
+  for (std::size_t j = 0; j < layout.terms.size(); ++j) {
+    std::vector<std::size_t> indices{static_cast<std::size_t>(layout.term_coefficient[j])};
+    if (layout.term_scale[j] >= 0) indices.push_back(static_cast<std::size_t>(layout.term_scale[j]));
+    result.sensor_term_parameters.push_back(indices);
+  }
+  // The rail's temperature at the sensors' last records: the readings less their offsets and terms.
   const auto profiles = model.end_profiles(theta);
+  const auto term_sums = layout.terms.empty() ? decltype(model.simulate(theta)){} : model.term_sums(theta, model.simulate(theta));
   for (std::size_t r = 0; r < runs.size(); ++r) {
     const auto& pr = runs[r];
     ThermalFitResult::EndState end{profiles[r], pr.sensor_positions_m, {}};
     for (std::size_t s = 0; s < pr.sensor_names.size(); ++s) {
       const int offset = layout.offsets[r][s];
-      end.measured_C.push_back(pr.measured.back()[s] - (offset >= 0 ? theta[static_cast<std::size_t>(offset)] : 0.0));
+      end.measured_C.push_back(pr.measured.back()[s] - (offset >= 0 ? theta[static_cast<std::size_t>(offset)] : 0.0) -
+                               (term_sums.empty() ? 0.0 : term_sums[r].back()[s]));
     }
     result.end_states.push_back(std::move(end));
   }
@@ -757,6 +927,14 @@ std::string thermal_fit_json(const ThermalFitResult& r, const ThermalFitOptions&
                       {"runs", runs},
                       {"goodness", goodness},
                       {"max_error_percent", number(r.max_error_percent)}};
+  if (!o.sensor_terms.empty()) {  // empirical terms (a diagnosis's); absent otherwise, so plain fits keep their bytes
+    nlohmann::json terms = nlohmann::json::array();
+    for (const auto& t : o.sensor_terms) {
+      terms.push_back({{"kind", to_string(t.kind)}, {"coefficient_unit", term_coefficient_unit(t.kind)}});
+      if (term_has_scale(t.kind)) terms.back()["scale_s"] = t.scale_s;
+    }
+    j["options"]["sensor_terms"] = terms;
+  }
   return j.dump(2) + "\n";
 }
 

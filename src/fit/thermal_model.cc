@@ -4,12 +4,14 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <limits>
 #include <set>
 
 #include "lmcal/error.hpp"
 #include "lmcal/models/thermal_effects.hpp"
+#include "thermal_terms.hpp"
 
 namespace lmcal::detail {
 
@@ -126,6 +128,34 @@ std::vector<std::vector<T>> simulate_run(const PreparedRun& run, const RailNumer
   return out;
 }
 
+// The sensor terms of a run at its records: φ_j(t), and ∂φ_j/∂scale where the scale is fitted
+// (and derivatives are asked for). They enter the residuals only, not the solver.
+struct RunTerms {
+  std::vector<std::vector<double>> phi, dphi;  // [term][time]; dphi empty without a fitted scale
+};
+
+RunTerms run_terms(const PreparedRun& run, const ThermalLayout& layout, const double* theta, bool derivatives) {
+  RunTerms out;
+  for (std::size_t j = 0; j < layout.terms.size(); ++j) {
+    const ThermalSensorTerm& term = layout.terms[j];
+    const int scale = layout.term_scale[j];
+    const double s = scale >= 0 ? theta[scale] : term.scale_s;
+    std::vector<double> phi, dphi;
+    if (derivatives && scale >= 0) {
+      using Jet1 = ceres::Jet<double, 1>;
+      for (const Jet1& x : sensor_term_regressor<Jet1>(term.kind, Jet1(s, 0), run.times_s, run.ambient, run.geometry.velocity_m_s)) {
+        phi.push_back(x.a);
+        dphi.push_back(x.v[0]);
+      }
+    } else {
+      phi = sensor_term_regressor<double>(term.kind, s, run.times_s, run.ambient, run.geometry.velocity_m_s);
+    }
+    out.phi.push_back(std::move(phi));
+    out.dphi.push_back(std::move(dphi));
+  }
+  return out;
+}
+
 class ThermalCost final : public ceres::CostFunction {
  public:
   ThermalCost(const ThermalModel& model, std::vector<std::size_t> rows, RowLoss loss)
@@ -209,12 +239,21 @@ class ThermalCost final : public ceres::CostFunction {
     };
     const PreparedRun& pr = model_.runs()[run];
     const auto simulated = simulate_run<T>(pr, model_.numerics(), layout, run, param);
+    const RunTerms terms = run_terms(pr, layout, theta, J != nullptr);
+    const T T0 = layout.initial[run] >= 0 ? param(layout.initial[run]) : T(pr.params.initial_temperature_C);
     const auto& rows = model_.rows();
     for (; row < rows.size() && rows[row].run == run; ++row) {
       const auto& w = rows[row];
       const int offset_index = layout.offsets[run][w.sensor];
       T raw = pr.measured[w.time][w.sensor] - simulated[w.time][w.sensor];
       if (offset_index >= 0) raw -= theta[offset_index];
+      // The sensor terms (a rise_time term carries the simulation's derivatives with it).
+      const T rise = simulated[w.time][w.sensor] - T0;
+      for (std::size_t j = 0; j < layout.terms.size(); ++j) {
+        const double c = theta[layout.term_coefficient[j]], phi = terms.phi[j][w.time];
+        if (layout.terms[j].kind == ThermalTermKind::rise_time) raw -= c * phi * rise;
+        else raw -= c * phi;
+      }
       const T residual = robust_residual(raw, loss_);
       if constexpr (std::is_same_v<T, double>) {
         r[row] = residual;
@@ -223,9 +262,15 @@ class ThermalCost final : public ceres::CostFunction {
         r[row] = residual.a;
         if (!std::isfinite(r[row])) return false;
         for (std::size_t k = 0; k < local.size(); ++k) J[row * P + static_cast<std::size_t>(local[k])] = residual.v[k];
-        if (offset_index >= 0)
-          J[row * P + static_cast<std::size_t>(offset_index)] =
-              -robust_residual(ceres::Jet<double, 1>(raw.a, 0), loss_).v[0];
+        const double slope = robust_residual(ceres::Jet<double, 1>(raw.a, 0), loss_).v[0];  // ∂residual/∂raw
+        if (offset_index >= 0) J[row * P + static_cast<std::size_t>(offset_index)] = -slope;
+        for (std::size_t j = 0; j < layout.terms.size(); ++j) {
+          const double by = layout.terms[j].kind == ThermalTermKind::rise_time ? rise.a : 1.0;
+          J[row * P + static_cast<std::size_t>(layout.term_coefficient[j])] = -slope * terms.phi[j][w.time] * by;
+          if (const int scale = layout.term_scale[j]; scale >= 0)  // shared by the periodic terms: summed
+            J[row * P + static_cast<std::size_t>(scale)] -=
+                slope * theta[layout.term_coefficient[j]] * terms.dphi[j][w.time] * by;
+        }
       }
     }
     return true;
@@ -288,6 +333,12 @@ bool ThermalModel::linear(const std::vector<bool>& held) const {
   }
   for (int scale : layout_.heat_scale)
     if (scale >= 0 && !held[static_cast<std::size_t>(scale)]) return false;  // α · scale
+  // A sensor term is linear in its coefficient; not in its scale, and c · rise(α) not in both.
+  for (std::size_t j = 0; j < layout_.terms.size(); ++j) {
+    if (layout_.term_scale[j] >= 0 && !held[static_cast<std::size_t>(layout_.term_scale[j])]) return false;
+    if (layout_.terms[j].kind == ThermalTermKind::rise_time && !held[static_cast<std::size_t>(layout_.term_coefficient[j])])
+      return false;
+  }
   return layout_.h < 0 || held[static_cast<std::size_t>(layout_.h)];
 }
 
@@ -299,8 +350,11 @@ std::size_t ThermalModel::max_local_parameters() const {
 
 void ThermalModel::explain(IdentifiabilityIssue& issue) const {
   std::set<std::string> names;
-  for (const auto& [name, weight] : issue.combination)
+  std::string combo;
+  for (const auto& [name, weight] : issue.combination) {
     if (std::abs(weight) >= 0.3) names.insert(name);
+    combo += fmt::format(" {:+.2f}·{}", weight, name);
+  }
   const bool alpha = names.count("alpha") > 0, h = names.count("h_W_m2K") > 0;
   bool offsets = false, initial = false;
   for (const auto& n : names) {
@@ -311,9 +365,15 @@ void ThermalModel::explain(IdentifiabilityIssue& issue) const {
   for (const auto* e : layout_.extensions)
     for (const auto& p : e->parameters)
       if (names.count(p.name)) extension = e;
-  if (extension) {
-    std::string combo;
-    for (const auto& [name, weight] : issue.combination) combo += fmt::format(" {:+.2f}·{}", weight, name);
+  // A sensor term's parameters: "c<j> <symbol>", "P_s" ("P2_s", …), "tau<j>_s" (thermal_fit.cc).
+  const bool term = !layout_.terms.empty() && std::any_of(names.begin(), names.end(), [](const std::string& n) {
+    return (n.size() > 1 && n[0] == 'c' && std::isdigit(static_cast<unsigned char>(n[1]))) ||
+           (n[0] == 'P' && n.ends_with("_s")) || n.rfind("tau", 0) == 0;
+  });
+  if (term) {
+    issue.why = "the records do not separate the empirical sensor terms from the rest: they determine only" + combo;
+    issue.measure = "longer runs, or runs that start at other times of day or with other ambient courses";
+  } else if (extension) {
     issue.why = fmt::format("the records do not separate {} ({}) from the rest: they determine only{}", extension->name,
                             extension->description, combo);
     issue.measure = extension->measure;
@@ -327,8 +387,6 @@ void ThermalModel::explain(IdentifiabilityIssue& issue) const {
     issue.why = "the offsets absorb the heating: the records do not show the warm-up clearly enough";
     issue.measure = "start logging before the block moves and run until the rail is close to steady state";
   } else {
-    std::string combo;
-    for (const auto& [name, weight] : issue.combination) combo += fmt::format(" {:+.2f}·{}", weight, name);
     issue.why = "the records determine only the combination" + combo;
     issue.measure = "longer runs, more sensors along the rail, or runs at other speeds";
   }
@@ -338,6 +396,24 @@ std::vector<std::vector<std::vector<double>>> ThermalModel::simulate(const std::
   std::vector<std::vector<std::vector<double>>> out;
   for (std::size_t r = 0; r < runs_.size(); ++r)
     out.push_back(simulate_run<double>(runs_[r], numerics_, layout_, r, [&](int g) { return theta[g]; }));
+  return out;
+}
+
+std::vector<std::vector<std::vector<double>>> ThermalModel::term_sums(
+    const std::vector<double>& theta, const std::vector<std::vector<std::vector<double>>>& simulated) const {
+  std::vector<std::vector<std::vector<double>>> out;
+  for (std::size_t r = 0; r < runs_.size(); ++r) {
+    const PreparedRun& run = runs_[r];
+    const RunTerms terms = run_terms(run, layout_, theta.data(), false);
+    const double T0 = layout_.initial[r] >= 0 ? theta[static_cast<std::size_t>(layout_.initial[r])] : run.params.initial_temperature_C;
+    std::vector<std::vector<double>> sums(run.times_s.size(), std::vector<double>(run.sensor_positions_m.size(), 0.0));
+    for (std::size_t t = 0; t < run.times_s.size(); ++t)
+      for (std::size_t s = 0; s < run.sensor_positions_m.size(); ++s)
+        for (std::size_t j = 0; j < layout_.terms.size(); ++j)
+          sums[t][s] += theta[static_cast<std::size_t>(layout_.term_coefficient[j])] * terms.phi[j][t] *
+                        (layout_.terms[j].kind == ThermalTermKind::rise_time ? simulated[r][t][s] - T0 : 1.0);
+    out.push_back(std::move(sums));
+  }
   return out;
 }
 

@@ -45,6 +45,10 @@ struct ThermalLayout {
   std::vector<std::vector<int>> offsets;  // [run][sensor]
   std::vector<int> initial;               // [run]
   std::vector<int> heat_scale;            // [run], -1: Q_f as prepared
+  // Empirical sensor terms (thermal_terms.hpp): each one's coefficient, and its scale (-1:
+  // none, or held at the term's scale_s; the ambient-periodic terms share one).
+  std::vector<ThermalSensorTerm> terms;
+  std::vector<int> term_coefficient, term_scale;
   int size = 1;
 };
 
@@ -63,6 +67,10 @@ class ThermalModel : public LeastSquaresModel {
 
   // Simulated temperature at every (run, record, sensor) of the data for parameters θ.
   std::vector<std::vector<std::vector<double>>> simulate(const std::vector<double>& theta) const;
+  // The sensor terms' sum at every (run, record, sensor), for parameters θ and the simulated
+  // temperatures `simulated` (simulate(θ); rise_time needs them).
+  std::vector<std::vector<std::vector<double>>> term_sums(const std::vector<double>& theta,
+                                                          const std::vector<std::vector<std::vector<double>>>& simulated) const;
   // Each run's temperature along the rail at its last record, for parameters θ.
   std::vector<RailProfile> end_profiles(const std::vector<double>& theta) const;
 

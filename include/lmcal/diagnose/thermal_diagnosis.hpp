@@ -35,7 +35,16 @@
 //      moves, what remains; "explained" only when the final residuals follow no covariate and
 //      pass the lack-of-fit test, else "partly explained"; "unexplained" with the covariate
 //      the residuals follow (or their lack of fit) when no candidate passes, or "no
-//      significant discrepancy".
+//      significant discrepancy";
+//   5. beyond the library, when the final residuals stay structured or fail the lack-of-fit
+//      test: an empirical sensor-side term c_1 φ_1 + … added to every thermocouple reading,
+//      chosen by sparse regression over a dictionary (time since the start t and t², the
+//      ambient's swing at its dominant period in phase and in quadrature, the ambient's change
+//      and its lags, rise·t, V·t) against leave-one-run-out error, then fitted jointly with
+//      the model (its period or lag free) and kept only if it passes the candidates' rules:
+//      "unexplained — empirical term found" (or "partly explained — …"), never a named cause.
+//      Each cause accepted before it must then pass again on top of the others and the term
+//      (learned anew without it), or it is dropped (`dropped`): it stood in for the term.
 //
 //   Trap: with the heat from a measured run-mean friction (mean_friction_N), the coupling
 //   candidate keeps the run mean of its heat at that value; give start_friction_N when the
@@ -98,13 +107,17 @@ struct ThermalDiagnosis {
   std::vector<std::vector<CandidateScore>> rounds;
   std::vector<CandidateScore> accepted;
   std::vector<std::string> skipped;  // mechanisms not tried, and why
+  // Causes accepted before the empirical term that no longer pass on top of it (they stood in
+  // for what it models), and why: left out of `accepted` and the final fit.
+  std::vector<std::string> dropped;
   double cv_rmse_before_K = 0, cv_rmse_after_K = 0, cv_gain_percent = 0;
   double noise_K = 0;  // the thermocouples' noise (second differences): the floor of the held-out RMSE
   std::vector<ParameterShift> shifts;
   std::string unexplained_covariate;
   ThermalFitResult baseline_fit, final_fit;  // for before/after plots
-  // When the residuals stay structured after the causes: the empirical term learned, and the
-  // fit with the causes and that term (empty unless found).
+  // When the residuals stay structured after the causes: the empirical term learned (its
+  // curve over the time since the run's start, h), and the fit with the causes and that term
+  // (empty unless found; its samples' simulated_C include the term).
   EmpiricalFinding empirical;
   ThermalFitResult empirical_fit;
 };

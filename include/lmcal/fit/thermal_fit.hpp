@@ -47,6 +47,33 @@ enum class HeatInput {
                     // mean_friction_N · V (the run's mean: a coupled heat keeps that mean)
 };
 
+// An empirical sensor-side term (what the thermal diagnosis learns when no named mechanism
+// explains the residuals; src/fit/thermal_terms.hpp has the regressors φ): c · φ(run, s, t)
+// added to every thermocouple reading, c free, and the term's scale (the ambient's period P,
+// a lag's τ) free too where it has one. Not a physical mechanism: it says what the readings
+// follow, not why.
+enum class ThermalTermKind {
+  time,                // t / 1 h, t since the run's first record
+  time_squared,        // (t / 1 h)²
+  ambient_in_phase,    // a_P(t): the run's ambient's own swing at period P
+  ambient_quadrature,  // b_P(t): the same a quarter period earlier (shares P with a_P)
+  ambient_lag,         // lag_τ(T∞) − T∞
+  ambient_change,      // T∞(t) − T∞(0)
+  rise_time,           // (simulated rise) · t / 1 h
+  velocity_time        // V · t / 1 h
+};
+const char* to_string(ThermalTermKind kind);         // "t", "t^2", "a_P", "b_P", "lag_tau(Tamb)-Tamb", …
+bool term_has_scale(ThermalTermKind kind);           // period or τ
+const char* term_coefficient_unit(ThermalTermKind kind);  // of c: "K/h", "K/h2", "1", "1/h", "K/(h m/s)"
+
+struct ThermalSensorTerm {
+  ThermalTermKind kind = ThermalTermKind::time;
+  double coefficient = 0;                 // start value (K per unit of φ)
+  double scale_s = 0;                     // P or τ (s), start value, for the kinds with a scale
+  double scale_lower_s = 0, scale_upper_s = 0;
+  bool fit_scale = true;
+};
+
 struct ThermalFitOptions {
   FitOptions fit{.starts = 0};  // α is bounded and (without h) linear: no multi-start needed
   SourceModel source = SourceModel::averaged;
@@ -86,6 +113,13 @@ struct ThermalFitOptions {
   // values may be given in `extension_start` (name -> value).
   std::vector<std::string> extensions;
   std::vector<std::pair<std::string, double>> extension_start;
+  // Empirical sensor terms added to every reading (parameters "c<j> <symbol>"; one period
+  // "P_s" ("P2_s", …) shared by the ambient-periodic terms of the same start period; "tau<j>_s"
+  // per lag). Their parameters enter the
+  // residuals directly, not the solver: they cost no Jet slot.
+  std::vector<ThermalSensorTerm> sensor_terms;
+  // Keep ∂ reading / ∂ θ at every sample for the global parameters (ThermalFitResult::sensitivities).
+  bool sensitivities = false;
   // Leave-one-run-out prediction error (cv_rmse_K): each run predicted by the global
   // parameters (α, h, extensions) fitted to the others, one Gauss-Newton step from the
   // joint fit; its own offsets, T0 and heat scale (within its prior) re-estimated from its
@@ -158,10 +192,29 @@ struct ThermalFitResult {
   double sum_of_squares_K2 = 0;  // the fit's objective: data rows and the heat-scale priors
   std::string heat_uncertainty;  // how the heat's uncertainty entered α's interval, in words
   std::vector<std::vector<std::string>> sensor_names;  // [run][sensor]
+  // When asked (ThermalFitOptions::sensitivities, no robust loss): ∂ simulated_C / ∂ θ at every
+  // sample (in `samples` order) for each global parameter (α, h, the extensions', the sensor
+  // terms') and each run's heat scale, by name.
+  std::vector<std::pair<std::string, std::vector<double>>> sensitivities;
+  // The sensor terms' parameters (coefficients, then the scale) per term, as fitted: indices into joint.parameters.
+  std::vector<std::vector<std::size_t>> sensor_term_parameters;
 };
 
 ThermalFitResult fit_thermal(const ThermalDataSet& data, const ThermalFitOptions& options);
 const char* to_string(ThermalOffsets offsets);  // "auto", "fit", "hold"
+
+// The ambient each run's model is driven with (the mean of its ambient sensors, or the one
+// named), from its first record (t = 0), as `fit_thermal` prepares it.
+std::vector<AmbientTrace> thermal_fit_ambients(const ThermalDataSet& data, const ThermalFitOptions& options);
+// The regressor φ of every term at every sample of `fit` (made from `data` with `options`),
+// [term][sample]; rise_time from the fit's own simulation at its parameters.
+std::vector<std::vector<double>> thermal_sensor_term_values(const ThermalDataSet& data, const ThermalFitOptions& options,
+                                                            const ThermalFitResult& fit,
+                                                            const std::vector<ThermalSensorTerm>& terms);
+// The fitted sensor terms' sum at every sample of `fit` (options.sensor_terms), for the
+// parameter values `theta` (all of fit.joint's, in order; the fit's own when empty).
+std::vector<double> thermal_sensor_term_sum(const ThermalDataSet& data, const ThermalFitOptions& options,
+                                            const ThermalFitResult& fit, const std::vector<double>& theta = {});
 
 // The thermal extension library, in a fixed order (src/fit/thermal_extensions/).
 struct ThermalExtensionInfo {
