@@ -365,6 +365,11 @@ TEST(ModelFile, EmpiricalTermsRoundTripAndSettleInASteadySweep) {
     for (std::size_t k = 0; k < a.seen.size(); ++k) EXPECT_EQ(bits(a.seen[k].max), bits(b.seen[k].max));
   }
   EXPECT_EQ(model_file_toml(r), model_file_toml(m));
+  // The readings' terms of a thermal model travel as symbols, apart from the rail's parameters.
+  ModelFile with_reading_terms = awkward_model();
+  with_reading_terms.reading_terms = {"t", "a_P"};
+  const TempFile thermal_file(model_file_toml(with_reading_terms));
+  EXPECT_EQ(read_model_file(thermal_file.path()).reading_terms, with_reading_terms.reading_terms);
 
   FrictionConditions<double> c{.load_N = 3000, .preload_um = 4, .block_length_mm = 120.2, .velocity_m_s = 0.1,
                                .temperature_C = 30};

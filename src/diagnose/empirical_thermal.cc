@@ -380,6 +380,13 @@ ThermalTermSearch learn_thermal_term(const ThermalDataSet& data, const ThermalFi
   ThermalFitOptions joint_options = options;
   joint_options.sensor_terms = chosen_terms;
   f.curve = time_curve(data, joint_options, current, joint);
+  // The parts at their fitted values: a coefficient, then the scale where the term has one.
+  out.terms = chosen_terms;
+  for (std::size_t j = 0; j < out.terms.size() && j < joint.sensor_term_parameters.size(); ++j) {
+    const auto& at = joint.sensor_term_parameters[j];
+    if (!at.empty()) out.terms[j].coefficient = joint.joint.parameters[at[0]].value;
+    if (at.size() > 1) out.terms[j].scale_s = joint.joint.parameters[at[1]].value;
+  }
   out.fit = std::move(joint);
   return out;
 }

@@ -34,6 +34,7 @@ namespace lmcal::detail {
 struct ThermalTermSearch {
   EmpiricalFinding finding;
   std::optional<ThermalFitResult> fit;  // the model, its causes and the term, when found
+  std::vector<ThermalSensorTerm> terms;  // the term's parts at the joint fit's values, when found
 };
 
 // The period (s) whose sine, on top of a line, explains most of the ambients' variation

@@ -317,13 +317,13 @@ Verdict make_verdict(const VerdictInput& in) {
       v.summary = fmt::format(
           "Unexplained: the residuals of {} follow {} (p = {:.2g}), but no mechanism of the library explains them on "
           "held-out runs. Held-out RMSE {:.4g} {}.",
-          in.model, v.unexplained_covariate, baseline_top.p_value, in.cv_before, in.unit);
+          lower_first(in.model), v.unexplained_covariate, baseline_top.p_value, in.cv_before, in.unit);
     } else {
       v.unexplained_covariate = "none identified";
       v.summary = fmt::format(
           "Unexplained: the residuals of {} exceed the noise ({}) without following any one covariate or pair, and no "
           "mechanism of the library explains them on held-out runs. Held-out RMSE {:.4g} {}.",
-          in.model, lack_of_fit_words(in.baseline_lack_of_fit, in.unit), in.cv_before, in.unit);
+          lower_first(in.model), lack_of_fit_words(in.baseline_lack_of_fit, in.unit), in.cv_before, in.unit);
     }
   } else {
     v.verdict = "no significant discrepancy";

@@ -354,6 +354,7 @@ ThermalDiagnosis diagnose_thermal(const ThermalDataSet& data, const ThermalDiagn
       search = std::move(without);
     }
     d.empirical = std::move(search.finding);
+    d.empirical_terms = std::move(search.terms);
     if (search.fit) d.empirical_fit = std::move(*search.fit);
   }
 

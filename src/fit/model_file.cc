@@ -282,7 +282,8 @@ void read_friction(const std::string& file, const toml::table& f, ModelFile& m) 
 
 // [thermal]: α, h (optional), the source model and the mechanisms with their parameters.
 void read_thermal(const std::string& file, const toml::table& t, ModelFile& m) {
-  only_keys(file, t, "[thermal]", {"source", "mechanisms", "covariance", "heat_uncertainty", "parameter"});
+  only_keys(file, t, "[thermal]", {"source", "mechanisms", "covariance", "heat_uncertainty", "reading_terms", "parameter"});
+  m.reading_terms = names_of(strings_at(file, t, "reading_terms", false));
   m.has_thermal = true;
   try {
     m.source = parse_source_model(string_at(file, t, "source"));
@@ -355,6 +356,15 @@ ModelFile model_file_of(const FrictionFitResult* friction, const FrictionFitOpti
     }
     m.mechanisms = to.extensions;
     m.thermal_parameters = parameters_of(thermal->joint);
+    // The readings' empirical terms are not the rail's: their parameters stay in the fit's
+    // files, their symbols here.
+    std::vector<std::string> term_parameters;
+    for (const auto& indices : thermal->sensor_term_parameters)
+      for (std::size_t k : indices) term_parameters.push_back(thermal->joint.parameters[k].name);
+    std::erase_if(m.thermal_parameters, [&](const ModelParameter& p) {
+      return std::find(term_parameters.begin(), term_parameters.end(), p.name) != term_parameters.end();
+    });
+    for (const auto& term : to.sensor_terms) m.reading_terms.emplace_back(to_string(term.kind));
     // h held at the fit's value is part of the model too (simulate with the h α was fitted with).
     if (std::none_of(m.thermal_parameters.begin(), m.thermal_parameters.end(), [](auto& p) { return p.name == "h_W_m2K"; }))
       m.thermal_parameters.push_back({"h_W_m2K", "W/m2K", to.h_W_m2K, 0, to.h_W_m2K, to.h_W_m2K, true});
@@ -398,9 +408,14 @@ std::string model_file_toml(const ModelFile& m) {
   }
   if (m.has_thermal) {
     out += fmt::format("[thermal]\n# the rail model (Eqs. 11-15) with these mechanisms added; alpha belongs to this source model\n"
-                       "source = {}\nmechanisms = {}\ncovariance = {}\nheat_uncertainty = {}\n\n",
+                       "source = {}\nmechanisms = {}\ncovariance = {}\nheat_uncertainty = {}\n",
                        quoted(std::string(to_string(m.source))), string_list(m.mechanisms), quoted(m.thermal_covariance),
                        quoted(m.heat_uncertainty));
+    if (!m.reading_terms.empty())
+      out += "# fitted with an empirical term on the thermocouple readings (learned from the residuals, not a named\n"
+             "# cause): it describes the readings, not the rail, and is not applied when the rail is simulated\n"
+             "reading_terms = " + string_list(m.reading_terms) + "\n";
+    out += "\n";
     write_parameters(out, "thermal", m.thermal_parameters);
   }
   return out;

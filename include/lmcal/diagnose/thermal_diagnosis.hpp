@@ -120,6 +120,7 @@ struct ThermalDiagnosis {
   // (empty unless found; its samples' simulated_C include the term).
   EmpiricalFinding empirical;
   ThermalFitResult empirical_fit;
+  std::vector<ThermalSensorTerm> empirical_terms;  // its parts at their fitted values (for the calibrated model)
 };
 
 ThermalDiagnosis diagnose_thermal(const ThermalDataSet& data, const ThermalDiagnosisOptions& options);

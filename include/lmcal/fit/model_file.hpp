@@ -13,6 +13,7 @@
 //                           "term1", scale = "term1_scale", seen = [{covariate, min, max}, …]
 //   [thermal]    source = "averaged", mechanisms = [...], covariance = "...", heat_uncertainty
 //   [[thermal.parameter]]   name, unit, value, se, ci95, held      (alpha, h_W_m2K, mechanisms')
+//   reading_terms = [...]   in [thermal]: empirical terms fitted on the readings (not the rail's)
 //
 // Trap: α belongs to the source model it was fitted with (the file records it, and the reader
 // returns it: simulate with that source).
@@ -57,6 +58,10 @@ struct ModelFile {
   std::vector<std::string> mechanisms;                       // thermal extension names
   std::vector<std::pair<std::string, double>> mechanism_parameters;  // their parameters, name -> value
   std::vector<ModelParameter> thermal_parameters;
+  // Empirical terms the model was fitted with on the thermocouple readings (a drift, a swing
+  // the ambient sensors miss): they describe the readings, not the rail, and are not applied
+  // when the rail is simulated. Their symbols only.
+  std::vector<std::string> reading_terms;
   std::string thermal_covariance, heat_uncertainty;
 
   const ModelParameter* find(const std::string& name) const;
