@@ -15,6 +15,7 @@
 #include "lmcal/error.hpp"
 #include "lmcal/io/atomic_file.hpp"
 #include "lmcal/report/html_report.hpp"
+#include "lmcal/report/svg_plot.hpp"
 #include "lmcal/rig/virtual_rig.hpp"
 #include "support/temp_folder.hpp"
 
@@ -69,6 +70,7 @@ std::vector<std::string> expected_plots(const Calibration& c) {
     for (const char* p : {"k1", "k2", "mu-st", "v-st-m-s", "mu-v", "beta-per-k", "f0"}) ids.push_back(std::string("friction-spread-") + p);
   }
   if (c.friction_diagnosis) ids.push_back("friction-diagnosis-velocity-m-s");
+  if (c.friction_diagnosis && c.friction_diagnosis->empirical.found) ids.push_back("friction-empirical-term");
   if (c.thermal) {
     ids.push_back("thermal-alpha-curve");
     for (const auto& run : c.thermal_data->runs) {
@@ -79,6 +81,8 @@ std::vector<std::string> expected_plots(const Calibration& c) {
       ids.push_back(p);
   }
   if (c.thermal_diagnosis) ids.insert(ids.end(), {"thermal-diagnosis-before", "thermal-diagnosis-after"});
+  if (c.thermal_diagnosis && c.thermal_diagnosis->empirical.found && !c.thermal_diagnosis->empirical.curve.x.empty())
+    ids.push_back("thermal-empirical-term");
   if (c.calibrated.friction && !c.calibrated.friction->spread.empty()) ids.push_back("calibrated-friction-runs-k1");
   if (c.calibrated.thermal) ids.push_back("calibrated-thermal-runs-alpha");
   return ids;
@@ -289,6 +293,17 @@ TEST(BundledCalibration, AFreshRunReproducesTheCommittedResults) {
       expect_same_json(nlohmann::json::parse(text), nlohmann::json::parse(stored), name);
     else
       expect_same_text(text, stored, committed.extension() == ".html" ? 0.011 : 1e-9, name);  // SVG: 0.01 px
+  }
+  // Its effects are all in the library: no empirical term, and the report says so in one sentence.
+  ASSERT_TRUE(c.friction_diagnosis && c.thermal_diagnosis);
+  const std::string html = calibration_report_html(c);
+  EXPECT_EQ(html.find("Beyond the library: an empirical term"), std::string::npos);
+  EXPECT_EQ(html.find("class=\"empirical\""), std::string::npos);
+  EXPECT_EQ(html.find("not a named cause"), std::string::npos);
+  EXPECT_EQ(html.find("class=\"band\""), std::string::npos);
+  for (const auto* e : {&c.friction_diagnosis->empirical, &c.thermal_diagnosis->empirical}) {
+    EXPECT_FALSE(e->found) << e->formula;
+    if (e->searched) EXPECT_NE(html.find(report::escape_xml(e->reason)), std::string::npos) << e->reason;
   }
   // The answer holds the truth the set was made with (measurements/cheng2017/*_truth.json):
   // α inside its 95 % interval; the nine friction parameters each within 3 of their quoted SEs

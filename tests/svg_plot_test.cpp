@@ -176,6 +176,66 @@ TEST(SvgPlot, ErrorBarsSpanYPlusMinusError) {
   EXPECT_NEAR(std::stod(m[3]), frame.y + 0.25 * frame.height, 0.011);  // y + 0.5
 }
 
+// The outline of a band: every "M" or "L" vertex, in order, and the number of closed pieces.
+std::vector<Point> band_vertices(const std::string& svg, std::size_t* pieces = nullptr) {
+  std::smatch m;
+  if (!std::regex_search(svg, m, std::regex(R"re(<path class="band"[^>]* d="([^"]*)")re"))) return {};
+  const std::string d = m[1];
+  if (pieces) *pieces = count_of(d, "Z");
+  static const std::regex vertex(R"re([ML]([-0-9.]+) ([-0-9.]+))re");
+  std::vector<Point> points;
+  for (std::sregex_iterator it(d.begin(), d.end(), vertex), end; it != end; ++it)
+    points.push_back({std::stod((*it)[1]), std::stod((*it)[2])});
+  return points;
+}
+
+TEST(SvgPlot, ABandIsShadedFromItsLowToItsHighEndsUnderTheSeries) {
+  Plot plot = points_on_fixed_limits({}, {});
+  plot.series[0] = {.label = "term", .x = {0, 5, 10}, .y = {0, 0, 0}, .band_low = {-1, -0.5, 0}, .band_high = {1, 0.5, 0}};
+  const std::string svg = render_svg(plot);
+  const Rect frame = frame_of(svg);
+  const double bottom = frame.y + frame.height, middle = frame.y + frame.height / 2, tol = 0.011;
+  std::size_t pieces = 0;
+  const std::vector<Point> p = band_vertices(svg, &pieces);
+  ASSERT_EQ(p.size(), 6u) << svg;  // along the highs left to right, back along the lows
+  EXPECT_EQ(pieces, 1u);
+  const double expected[6][2] = {{frame.x, frame.y},
+                                 {frame.x + frame.width / 2, frame.y + frame.height / 4},
+                                 {frame.x + frame.width, middle},
+                                 {frame.x + frame.width, middle},
+                                 {frame.x + frame.width / 2, frame.y + 0.75 * frame.height},
+                                 {frame.x, bottom}};
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    EXPECT_NEAR(p[i].x, expected[i][0], tol) << i;
+    EXPECT_NEAR(p[i].y, expected[i][1], tol) << i;
+  }
+  EXPECT_LT(svg.find("class=\"band\""), svg.find("<g class=\"series\"")) << "the band covers the series";
+  EXPECT_NE(svg.find("fill=\"#0072B2\" fill-opacity=\"0.2\""), std::string::npos) << "not in the series' colour";
+  const std::string legend = svg.substr(svg.find("<g class=\"legend\">"));
+  EXPECT_NE(legend.find("<rect"), std::string::npos) << "the legend does not show the band";
+  EXPECT_EQ(tag_balance_error(svg), "");
+}
+
+TEST(SvgPlot, ABandWidensTheFreeLimitsAndBreaksWhereAnEndCannotBeDrawn) {
+  Plot plot{.id = "band"};
+  plot.series.push_back({.x = {0, 1, 2, 3, 4, 5, 6}, .y = {0, 0, 0, 0, 0, 0, 0},
+                         .band_low = {-1, -1, kNaN, -1, -1, -1, -1}, .band_high = {1, 1, 1, 1, 1, kInf, 1}});
+  const std::string svg = render_svg(plot);
+  std::size_t pieces = 0;
+  EXPECT_EQ(band_vertices(svg, &pieces).size(), 8u);  // {0, 1} and {3, 4}; 6 alone draws nothing
+  EXPECT_EQ(pieces, 2u);
+  const std::vector<std::string> y = tick_labels(svg, false);
+  ASSERT_GE(y.size(), 2u);
+  EXPECT_LE(std::stod(y.front()), -1);  // the band, not only the line at 0, sets the range
+  EXPECT_GE(std::stod(y.back()), 1);
+  EXPECT_FALSE(has_non_finite_text(svg));
+  EXPECT_EQ(svg.find("class=\"legend\""), std::string::npos);
+
+  Plot none{.id = "no-band"};
+  none.series.push_back({.x = {0, 1}, .y = {0, 1}, .band_low = {0}, .band_high = {1}});  // one point: no band
+  EXPECT_EQ(render_svg(none).find("class=\"band\""), std::string::npos);
+}
+
 TEST(SvgPlot, NonFiniteValuesAreSkippedAndBreakTheLine) {
   Plot plot{.id = "gaps"};
   plot.series.push_back({.x = {0, 1, 2, kNaN, 4, 5, 6}, .y = {0, 1, kInf, 3, 4, -kInf, 6}, .mark = Mark::line_points});

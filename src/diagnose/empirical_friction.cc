@@ -281,7 +281,8 @@ EmpiricalCurve curve_of(const FrictionLog& log, const TermSeries& series, const 
     for (std::size_t b = 0; b < bins; ++b) sum[b] = count[b] > 0 ? sum[b] / count[b] : kNaN;
     return sum;
   };
-  const std::vector<double> value = bin_means(contribution(log, series, after, theta, reference_C));
+  const std::vector<double> contribution_N = contribution(log, series, after, theta, reference_C);
+  const std::vector<double> value = bin_means(contribution_N);
   // Delta method over the term's parameters (central differences of the bin means).
   std::vector<std::vector<double>> gradient;
   for (std::size_t a = 0; a < theta.size(); ++a) {
@@ -297,9 +298,12 @@ EmpiricalCurve curve_of(const FrictionLog& log, const TermSeries& series, const 
   }
   const double t95 = student_t_quantile(0.975, std::max(after.fit.dof, 1.0));
   std::vector<double> before_residual(log.size()), after_residual(log.size());
+  // Before: the partial residuals — the joint fit's residuals with the term added back, what
+  // the term has to explain (the model without it absorbs part of it in its run offsets and
+  // constants, in sample; the held-out gain is what it cannot absorb).
   for (std::size_t i = 0; i < log.size(); ++i) {
-    before_residual[i] = log.friction_N[i] - before.predicted_N[i];
     after_residual[i] = log.friction_N[i] - after.predicted_N[i];
+    before_residual[i] = after_residual[i] + contribution_N[i];
   }
   c.residual_before = bin_means(before_residual);
   c.residual_after = bin_means(after_residual);

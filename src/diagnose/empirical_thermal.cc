@@ -133,9 +133,8 @@ std::vector<double> bin_means(const std::vector<double>& v, const std::vector<st
 
 // The term over the time since the run's start: its mean contribution per bin with a 95 %
 // delta-method band (the joint covariance of its parameters, central differences), and the
-// residual means before and after.
-EmpiricalCurve time_curve(const ThermalDataSet& data, const ThermalFitOptions& joint_options, const ThermalFitResult& before,
-                          const ThermalFitResult& after) {
+// residual means without the term (partial residuals) and with it.
+EmpiricalCurve time_curve(const ThermalDataSet& data, const ThermalFitOptions& joint_options, const ThermalFitResult& after) {
   EmpiricalCurve c;
   c.covariate = "time_since_start_h";
   c.unit = "h";
@@ -145,7 +144,8 @@ EmpiricalCurve time_curve(const ThermalDataSet& data, const ThermalFitOptions& j
   std::vector<std::size_t> label;
   for (const auto& s : after.samples) label.push_back(std::min(static_cast<std::size_t>(s.time_s / width), kCurveBins - 1));
   const std::vector<double> theta = after.joint.values();
-  const std::vector<double> value = bin_means(thermal_sensor_term_sum(data, joint_options, after, theta), label, kCurveBins);
+  const std::vector<double> term_K = thermal_sensor_term_sum(data, joint_options, after, theta);
+  const std::vector<double> value = bin_means(term_K, label, kCurveBins);
   std::set<std::size_t> indices;
   for (const auto& term : after.sensor_term_parameters) indices.insert(term.begin(), term.end());
   std::vector<std::size_t> params(indices.begin(), indices.end());
@@ -161,10 +161,16 @@ EmpiricalCurve time_curve(const ThermalDataSet& data, const ThermalFitOptions& j
     for (std::size_t b = 0; b < kCurveBins; ++b) g[b] = (mu[b] - md[b]) / (2 * h);
     gradient.push_back(std::move(g));
   }
+  // Before: the partial residuals — the joint fit's residuals with the term added back, what
+  // the term has to explain (the model without it bends α, offsets and heat scales to absorb
+  // part of it in sample).
   std::vector<double> e_before, e_after;
-  for (const auto& s : before.samples) e_before.push_back(s.measured_C - s.simulated_C);
-  for (const auto& s : after.samples) e_after.push_back(s.measured_C - s.simulated_C);
-  c.residual_before = bin_means(e_before, label, kCurveBins);  // the same samples, in the same order
+  for (std::size_t i = 0; i < after.samples.size(); ++i) {
+    const auto& s = after.samples[i];
+    e_after.push_back(s.measured_C - s.simulated_C);
+    e_before.push_back(e_after.back() + term_K[i]);
+  }
+  c.residual_before = bin_means(e_before, label, kCurveBins);
   c.residual_after = bin_means(e_after, label, kCurveBins);
   const double t95 = student_t_quantile(0.975, std::max(after.joint.dof, 1.0));
   const Eigen::MatrixXd& V = after.joint.covariance;
@@ -379,7 +385,7 @@ ThermalTermSearch learn_thermal_term(const ThermalDataSet& data, const ThermalFi
   f.reason = score.reason;
   ThermalFitOptions joint_options = options;
   joint_options.sensor_terms = chosen_terms;
-  f.curve = time_curve(data, joint_options, current, joint);
+  f.curve = time_curve(data, joint_options, joint);
   // The parts at their fitted values: a coefficient, then the scale where the term has one.
   out.terms = chosen_terms;
   for (std::size_t j = 0; j < out.terms.size() && j < joint.sensor_term_parameters.size(); ++j) {

@@ -3,6 +3,8 @@
 // error, its quoted 95 % interval and the covariance that interval comes from.
 #include <fmt/ranges.h>
 
+#include <set>
+
 #include "sections.hpp"
 
 namespace lmcal::report {
@@ -33,14 +35,37 @@ void caveats(Page& page, const FitResult& fit) {
   fit_caveats(page, fit);
 }
 
+// The empirical terms of a calibrated friction model, labelled as such, and where they were learned.
+void empirical_terms(Page& page, const std::vector<FrictionTerm>& terms) {
+  if (terms.empty()) return;
+  std::string symbols, ranges;
+  std::set<TermCovariate> listed;
+  for (std::size_t k = 0; k < terms.size(); ++k) {
+    symbols += fmt::format("{}{}", k ? " + " : "", terms[k].symbol(k + 1));
+    for (const auto& r : terms[k].seen) {
+      if (!listed.insert(r.covariate).second) continue;
+      const std::string unit = term_covariate_unit(r.covariate);
+      ranges += fmt::format("{}{} {} to {}{}", ranges.empty() ? "" : "; ", term_covariate_name(r.covariate), num(r.min),
+                            num(r.max), unit == "1" ? "" : " " + unit);
+    }
+  }
+  page.paragraph(fmt::format("Includes an empirical term (not a named cause): {}; its predictions outside the covariate ranges "
+                             "of the data{} are extrapolation.",
+                             symbols, ranges.empty() ? "" : " (" + ranges + ")"),
+                 "warning");
+}
+
 void friction_model(Page& page, const Calibration& c) {
   const CalibratedModel& m = c.calibrated;
   const FrictionFitResult& f = *m.friction;
-  page.heading(3, "Friction: " + with_causes("the published law (Eqs. 3-7)", m.friction_causes, c.friction_diagnosis.has_value()));
+  std::vector<std::string> parts = m.friction_causes;
+  if (!f.terms.empty()) parts.push_back("an empirical term");
+  page.heading(3, "Friction: " + with_causes("the published law (Eqs. 3-7)", parts, c.friction_diagnosis.has_value()));
   page.paragraph(fmt::format("Fitted to {} samples of {} runs, each run's load-cell zero a random run intercept (τ = {} N, "
                              "estimated with the constants). Held-out (leave-one-run-out, each run a new setup) RMSE {} N; "
                              "residual RMSE {} N.",
                              c.friction_log->size(), f.runs.size(), num(f.run_offset_sd_N, 3), num(f.cv_rmse_N), num(f.rmse_N)));
+  empirical_terms(page, f.terms);
   parameter_table(page, f.fit);
   caveats(page, f.fit);
 }

@@ -179,8 +179,7 @@ void spread_section(Page& page, const FrictionFitResult& f) {
 void diagnosis_section(Page& page, const Calibration& c) {
   const FrictionDiagnosis& d = *c.friction_diagnosis;
   page.heading(3, "What the published law gets wrong");
-  page << fmt::format("<p class=\"verdict {}\"><b>{}</b>: {}</p>\n", plot_id(d.verdict), escape_xml(d.verdict),
-                      escape_xml(d.summary));
+  verdict_paragraph(page, d.verdict, d.summary);
   page.paragraph(fmt::format("Held-out (leave-one-run-out) RMSE: {} N before, {} N after: a gain of {:.1f} %.",
                              num(d.cv_rmse_before_N), num(d.cv_rmse_after_N), d.cv_gain_percent));
   lack_of_fit_paragraph(page, d.baseline.lack_of_fit, d.final.lack_of_fit, "N", d.design_notes);
@@ -199,6 +198,29 @@ void diagnosis_section(Page& page, const Calibration& c) {
                                             {{"the law", &d.baseline_fit.conditions}, {"law + causes", &d.final_fit.conditions}},
                                             cov.member));
   page.figures(plots);
+  empirical_section(page, d.empirical, "friction", "N");
+}
+
+// "c1 = 0.1012 N/(m/s)" and its quoted interval.
+std::pair<std::string, std::string> estimate_cells(const ParameterEstimate& p) {
+  const bool unit = !p.unit.empty() && p.unit != "1";
+  return {fmt::format("{} = {}{}", p.name, num(p.value), unit ? " " + p.unit : ""), interval(p)};
+}
+
+// The residual bin means before and after the term, and the term's mean contribution with its band.
+Plot empirical_plot(const EmpiricalCurve& curve, const std::string& id, const std::string& unit) {
+  const std::string x_label = curve.unit.empty() || curve.unit == "1" ? curve.covariate
+                                                                      : fmt::format("{} ({})", curve.covariate, curve.unit);
+  Plot plot{.id = id,
+            .title = "The empirical term against " + curve.covariate,
+            .x_label = x_label,
+            .y_label = fmt::format("mean residual, term ({})", unit)};
+  plot.references.push_back({});
+  plot.series.push_back({.label = "residual without the term", .x = curve.x, .y = curve.residual_before, .mark = Mark::points, .color = colour(0)});
+  plot.series.push_back({.label = "residual with it", .x = curve.x, .y = curve.residual_after, .mark = Mark::points, .color = colour(1)});
+  plot.series.push_back({.label = "term (95 % band)", .x = curve.x, .y = curve.value, .color = colour(2),
+                         .band_low = curve.low, .band_high = curve.high});
+  return plot;
 }
 
 }  // namespace
@@ -282,6 +304,54 @@ void shift_table(Page& page, const std::vector<ParameterShift>& shifts, const st
                  (held_note.empty() ? std::string(":")
                                     : "; held in one of the two models, so not compared: " + held_note + ":"));
   page.table({"parameter", published, "95 % interval", "with the causes", "95 % interval"}, rows);
+}
+
+void empirical_section(Page& page, const EmpiricalFinding& e, const std::string& id_prefix, const std::string& unit) {
+  if (!e.searched) return;
+  if (!e.found) {
+    page.paragraph(fmt::format("Beyond the library: no empirical term was kept ({} candidate terms of the covariates "
+                               "searched): {}.",
+                               e.dictionary_size, e.reason));
+    return;
+  }
+  page << "<div class=\"empirical\">\n";
+  page.heading(4, "Beyond the library: an empirical term", plot_id(id_prefix + "-empirical"));
+  page.paragraph(fmt::format("Learned from the residuals; not a named cause. The residuals stay structured after the "
+                             "library's named causes, so a sparse regression over {} candidate terms of the covariates "
+                             "chose a term, fitted jointly with the model and added to {}:",
+                             e.dictionary_size, e.where));
+  page << "<p class=\"formula\"><code>" << escape_xml(e.formula) << "</code></p>\n";
+  std::vector<std::vector<std::string>> rows;
+  for (const auto& component : e.components) {
+    std::string covariates;
+    for (const auto& name : component.covariates) covariates += (covariates.empty() ? "" : ", ") + name;
+    const auto [coefficient, coefficient_interval] = estimate_cells(component.coefficient);
+    const auto [scale, scale_interval] =
+        component.has_scale ? estimate_cells(component.scale) : std::pair<std::string, std::string>{"–", "–"};
+    rows.push_back({component.symbol, component.words, covariates, coefficient, coefficient_interval, scale, scale_interval});
+  }
+  page.table({"term", "what it does", "covariates", "coefficient", "95 % interval", "scale", "95 % interval"}, rows);
+  page.paragraph(fmt::format("Held-out (leave-one-run-out) RMSE {} {} before the term, {} {} with it: a gain of {:.1f} % "
+                             "(LRT p = {}, ΔBIC = {}). Kept: {}.",
+                             num(e.cv_rmse_before), unit, num(e.cv_rmse_after), unit, e.cv_gain_percent, num(e.lrt_p, 2),
+                             num(e.delta_bic, 3), e.reason));
+  page.paragraph(e.resembles.empty() ? "It resembles no mechanism we know of."
+                                     : "It resembles " + e.resembles + ". A resemblance, not a diagnosis: to name the "
+                                       "cause, log what it would change.");
+  std::string ranges;
+  for (const auto& r : e.ranges)
+    ranges += fmt::format("{}{} from {} to {}", ranges.empty() ? "" : "; ", r.covariate, num(r.min), num(r.max));
+  if (!ranges.empty())
+    page.paragraph("Learned on " + ranges + ". Beyond these ranges the term is an extrapolation.", "warning");
+  if (!e.curve.x.empty()) {
+    page.paragraph(fmt::format("Means over bins of {}: the residuals without the term (the jointly fitted model's "
+                               "residuals with the term added back: the structure it learned) and with it, and the term's "
+                               "mean contribution with its 95 % band (delta method, from the joint fit's covariance of its "
+                               "parameters).",
+                               e.curve.covariate));
+    page.figures({empirical_plot(e.curve, plot_id(id_prefix + "-empirical-term"), unit)});
+  }
+  page << "</div>\n";
 }
 
 void friction_run_figures(Page& page, const FrictionFitResult& f, const std::string& id_prefix) {

@@ -23,6 +23,8 @@ table{border-collapse:collapse;margin:8px 0;font-size:13px}th,td{border:1px soli
 th{background:#f2f2f2}td.num{text-align:right;font-variant-numeric:tabular-nums}
 .verdict{padding:6px 10px;border-left:4px solid #999}.verdict.explained{border-color:#D55E00}
 .verdict.unexplained,.verdict.partly-explained{border-color:#CC79A7}.verdict.no-significant-discrepancy{border-color:#009E73}
+.verdict.empirical-term-found{border-left-style:double;border-left-width:6px;background:#fbf3f8}
+.empirical{border:1px dashed #CC79A7;border-radius:6px;padding:0 16px 8px;margin-top:16px}.empirical h4{margin:12px 0 4px}
 .warning{color:#9a3b00}code{background:#f4f4f4;padding:1px 4px}
 )";
 

@@ -3,6 +3,7 @@
 
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "lmcal/report/calibration.hpp"
@@ -53,6 +54,41 @@ void parameter_tables(Page& page, const FitResult& fit, const Show& show) {
   fit_caveats(page, fit);
   correlation_table(page, fit, shown);
 }
+
+// The CSS classes of a verdict: its words as lower-case letters, digits and single '-', each
+// part of "unexplained — empirical term found" a class of its own
+// ("unexplained empirical-term-found"), so that the base verdict keeps its style.
+inline std::string verdict_class(std::string_view verdict) {
+  std::string classes;
+  bool gap = false;  // a '-' is due before the next letter or digit
+  for (std::size_t i = 0; i < verdict.size(); ++i) {
+    if (verdict.substr(i).starts_with("—")) {
+      if (!classes.empty() && classes.back() != ' ') classes += ' ';
+      gap = false;
+      i += std::string_view("—").size() - 1;
+    } else if (const char ch = verdict[i]; std::isalnum(static_cast<unsigned char>(ch))) {
+      if (gap && !classes.empty() && classes.back() != ' ') classes += '-';
+      classes += static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+      gap = false;
+    } else {
+      gap = true;
+    }
+  }
+  while (!classes.empty() && classes.back() == ' ') classes.pop_back();
+  return classes;
+}
+
+// The verdict, styled by its class, and the summary.
+inline void verdict_paragraph(Page& page, const std::string& verdict, const std::string& summary) {
+  page << fmt::format("<p class=\"verdict {}\"><b>{}</b>: {}</p>\n", verdict_class(verdict), escape_xml(verdict),
+                      escape_xml(summary));
+}
+
+// What the diagnosis learned beyond its library of named causes (nothing unless it searched):
+// the empirical term, labelled as not a named cause, its components with their intervals, the
+// held-out gain, what it resembles, the ranges it was learned on and its curve (plot ID
+// `id_prefix` + "-empirical-term"); or, when none was kept, why. `unit`: the residuals'.
+void empirical_section(Page& page, const EmpiricalFinding& e, const std::string& id_prefix, const std::string& unit);
 
 // The candidates of every forward step, and the accepted causes.
 void candidate_tables(Page& page, const std::vector<std::vector<CandidateScore>>& rounds, const char* unit);

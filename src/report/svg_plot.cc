@@ -150,6 +150,7 @@ struct Sample {
   std::optional<double> y_lo, y_hi;  // error bar ends; none: not drawable (log axis: ≤ 0)
   bool has_error = false;
   bool starts_run = true;
+  std::optional<double> band_lo, band_hi;  // band ends; none: no band here (it breaks)
 };
 
 std::vector<Sample> samples_of(const Series& series, bool log_x, bool log_y) {
@@ -166,6 +167,10 @@ std::vector<Sample> samples_of(const Series& series, bool log_x, bool log_y) {
       s.has_error = true;
       s.y_lo = to_scale(series.y[i] - series.y_error[i], log_y);
       s.y_hi = to_scale(series.y[i] + series.y_error[i], log_y);
+    }
+    if (i < series.band_low.size() && i < series.band_high.size()) {
+      s.band_lo = to_scale(series.band_low[i], log_y);
+      s.band_hi = to_scale(series.band_high[i], log_y);
     }
     samples.push_back(s);
     run = true;
@@ -213,6 +218,33 @@ void write_series(Out out, const Series& series, const std::vector<Sample>& samp
                      px(ay.to_px(samples[i].y)));
   }
   fmt::format_to(out, "</g>\n");
+}
+
+bool has_band(const Sample& s) { return s.band_lo && s.band_hi; }
+
+// The band of a series: one closed outline (along the upper ends, back along the lower ones)
+// per stretch of neighbouring samples with both ends drawable; "" when there is none.
+std::string band_path(const std::vector<Sample>& samples, const Axis& ax, const Axis& ay) {
+  std::string d;
+  std::size_t begin = 0;
+  while (begin < samples.size()) {
+    if (!has_band(samples[begin])) {
+      ++begin;
+      continue;
+    }
+    std::size_t end = begin + 1;
+    while (end < samples.size() && !samples[end].starts_run && has_band(samples[end])) ++end;
+    if (end - begin >= 2) {
+      const auto to = std::back_inserter(d);
+      for (std::size_t i = begin; i < end; ++i)
+        fmt::format_to(to, "{}{} {}", i == begin ? "M" : "L", px(ax.to_px(samples[i].x)), px(ay.to_px(*samples[i].band_hi)));
+      for (std::size_t i = end; i-- > begin;)
+        fmt::format_to(to, "L{} {}", px(ax.to_px(samples[i].x)), px(ay.to_px(*samples[i].band_lo)));
+      d += "Z";
+    }
+    begin = end;
+  }
+  return d;
 }
 
 // The series' own colour, else the palette's colour for its index.
@@ -287,7 +319,7 @@ std::string render_svg(const Plot& plot) {
     for (const Sample& s : samples.back()) {
       xs.push_back(s.x);
       ys.push_back(s.y);
-      for (const auto& end : {s.y_lo, s.y_hi})
+      for (const auto& end : {s.y_lo, s.y_hi, s.band_lo, s.band_hi})
         if (end) ys.push_back(*end);
     }
   }
@@ -336,6 +368,7 @@ std::string render_svg(const Plot& plot) {
   const std::string frame = fmt::format("x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\"", px(left), px(top),
                                         px(right - left), px(bottom - top));
 
+  std::vector<bool> banded(plot.series.size(), false);  // a band drawn: shown in the legend
   if (has_data) {
     fmt::format_to(out, "<defs><clipPath id=\"{}\"><rect {}/></clipPath></defs>\n", clip_id(plot.id), frame);
     fmt::format_to(out, "<g class=\"grid\" stroke=\"#e6e6e6\" stroke-width=\"1\">\n");
@@ -366,6 +399,14 @@ std::string render_svg(const Plot& plot) {
         if (!ref.label.empty()) write_text(std::back_inserter(labels), p + 4, top + 12, "start", ref.label);
       }
     }
+    // Every band under every series' marks.
+    for (std::size_t i = 0; i < plot.series.size(); ++i) {
+      const std::string d = band_path(samples[i], ax, ay);
+      if (d.empty()) continue;
+      banded[i] = true;
+      fmt::format_to(out, "<path class=\"band\" data-label=\"{}\" fill=\"{}\" fill-opacity=\"0.2\" stroke=\"none\" d=\"{}\"/>\n",
+                     escape_xml(plot.series[i].label), color_of(plot, i), d);
+    }
     for (std::size_t i = 0; i < plot.series.size(); ++i) {
       if (samples[i].empty()) continue;
       write_series(out, plot.series[i], samples[i], color_of(plot, i), ax, ay);
@@ -390,6 +431,9 @@ std::string render_svg(const Plot& plot) {
       const Series& series = plot.series[legend[row]];
       const std::string color = color_of(plot, legend[row]);
       const double x = right + 10, y = top + 8 + kLegendRowPx * static_cast<double>(row);
+      if (banded[legend[row]])
+        fmt::format_to(out, "<rect x=\"{}\" y=\"{}\" width=\"20\" height=\"10\" fill=\"{}\" fill-opacity=\"0.2\"/>\n", px(x),
+                       px(y - 5), color);
       if (series.mark != Mark::points)
         write_line(out, x, y, x + 20, y,
                    fmt::format(" stroke=\"{}\" stroke-width=\"1.5\"{}", color,

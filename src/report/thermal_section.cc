@@ -160,8 +160,7 @@ void spread_section(Page& page, const Calibration& c) {
 void diagnosis_section(Page& page, const Calibration& c) {
   const ThermalDiagnosis& d = *c.thermal_diagnosis;
   page.heading(3, "What the published rail model gets wrong");
-  page << fmt::format("<p class=\"verdict {}\"><b>{}</b>: {}</p>\n", plot_id(d.verdict), escape_xml(d.verdict),
-                      escape_xml(d.summary));
+  verdict_paragraph(page, d.verdict, d.summary);
   page.paragraph(fmt::format("Held-out (leave-one-run-out) RMSE: {} K before, {} K after: a gain of {:.1f} %; the "
                              "thermocouples' noise is {} K.",
                              num(d.cv_rmse_before_K), num(d.cv_rmse_after_K), d.cv_gain_percent, num(d.noise_K, 3)));
@@ -176,6 +175,7 @@ void diagnosis_section(Page& page, const Calibration& c) {
   const auto& runs = c.thermal_data->runs;
   page.figures({residual_time_plot("thermal-diagnosis-before", "Residuals, published model", d.baseline_fit, runs, {{lo, hi}}),
                 residual_time_plot("thermal-diagnosis-after", "Residuals, with the causes", d.final_fit, runs, {{lo, hi}})});
+  empirical_section(page, d.empirical, "thermal", "K");
 }
 
 }  // namespace

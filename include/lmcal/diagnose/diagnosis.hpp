@@ -89,7 +89,9 @@ struct EmpiricalCurve {
   std::string covariate, unit;
   std::vector<double> x;                       // bin centres
   std::vector<double> value, low, high;        // the term's mean contribution and its 95 % band (delta method)
-  std::vector<double> residual_before, residual_after;  // the residuals' means in the same bins
+  // The residuals' means in the same bins: after, the joint fit's; before, the same with the
+  // term added back (partial residuals: what the term has to explain).
+  std::vector<double> residual_before, residual_after;
 };
 
 struct CovariateRange {

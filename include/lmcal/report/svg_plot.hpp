@@ -2,15 +2,19 @@
 // no dependency beyond the string.
 //
 // A Plot is a frame with ticks, gridlines, axis labels, a title, data series (lines, points,
-// symmetric error bars), reference lines (y = 0 under residuals) and a legend beside the frame
-// when any series has a label. render_svg returns one <svg> element, xmlns set, ready to paste
-// into HTML or save as a .svg file. The same Plot always gives the same bytes.
+// symmetric error bars, shaded bands), reference lines (y = 0 under residuals) and a legend
+// beside the frame when any series has a label. render_svg returns one <svg> element, xmlns
+// set, ready to paste into HTML or save as a .svg file. The same Plot always gives the same bytes.
 //
 //   Plot plot{.id = "friction-fit", .title = "Friction force vs velocity",
 //             .x_label = "velocity (m/s)", .y_label = "friction force (N)"};
 //   plot.series.push_back({.label = "measured", .x = v_m_s, .y = f_N, .mark = Mark::points});
 //   plot.series.push_back({.label = "fit", .x = v_grid_m_s, .y = f_fit_N});
 //   html += render_svg(plot);
+//
+// A band (an interval around a curve) belongs to its series: band_low..band_high shaded in the
+// series' colour under every series' lines and points, its legend entry a shaded box behind the
+// line: {.label = "term (95 % band)", .x = x, .y = mean, .band_low = low, .band_high = high}.
 //
 // Pairs with a non-finite x or y (beyond ±1e300 counts as non-finite; on a log axis, so does a
 // non-positive one) are skipped and break a line there; a point left alone on a line is drawn
@@ -40,6 +44,10 @@ struct Series {
   Mark mark = Mark::line;
   std::string color;           // CSS colour; empty: the palette colour of the series' index
   bool dashed = false;
+  // Empty, or per point: a band from band_low to band_high, shaded. A point whose band ends
+  // cannot be drawn breaks the band there, as a non-finite pair breaks a line; a band needs two
+  // neighbouring points to show.
+  std::vector<double> band_low, band_high;
 };
 
 // A full-width (horizontal, y = at) or full-height (vertical, x = at) dashed line.
