@@ -77,7 +77,9 @@ TEST(EmpiricalFriction, LearnsRunningInOverSlidingDistance) {
     const EmpiricalFinding& f = o.with.empirical;
     ASSERT_TRUE(uses(f, "sliding_distance_m")) << f.formula;
     for (const auto& c : f.components)
-      if (c.has_scale) EXPECT_NEAR(c.scale.value, 150, 0.3 * 150) << f.formula;
+      if (c.has_scale) {
+        EXPECT_NEAR(c.scale.value, 150, 0.3 * 150) << f.formula;
+      }
     EXPECT_NE(f.resembles.find("running-in"), std::string::npos) << f.resembles;
     EXPECT_FALSE(f.curve.x.empty());
   }

@@ -173,7 +173,9 @@ TEST(FrictionDiagnosis, StructureInAPairOfCovariatesIsUnexplainedNamingThePair) 
         << "seed " << seed << ": " << d.summary;
     EXPECT_NE(d.unexplained_covariate.find("temperature_C"), std::string::npos) << d.summary;
     // Beyond the library, the term learned uses the pair (not a named cause).
-    if (d.empirical.found) EXPECT_NE(d.empirical.formula.find("V·(T - 40)"), std::string::npos) << d.empirical.formula;
+    if (d.empirical.found) {
+      EXPECT_NE(d.empirical.formula.find("V·(T - 40)"), std::string::npos) << d.empirical.formula;
+    }
     EXPECT_NE(d.unexplained_covariate.find("velocity_m_s"), std::string::npos) << d.summary;
   }
 }

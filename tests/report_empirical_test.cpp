@@ -62,7 +62,9 @@ TEST_F(ReportEmpiricalTest, ALearnedTermGetsItsLabelledSubsectionWithItsCurveAnd
     const std::string row = between(section, "<tr><td>" + report::escape_xml(component.symbol) + "</td>", "</tr>");
     ASSERT_FALSE(row.empty()) << component.symbol << " has no row";
     EXPECT_NE(row.find(report::interval(component.coefficient)), std::string::npos) << row;
-    if (component.has_scale) EXPECT_NE(row.find(report::interval(component.scale)), std::string::npos) << row;
+    if (component.has_scale) {
+      EXPECT_NE(row.find(report::interval(component.scale)), std::string::npos) << row;
+    }
   }
   EXPECT_NE(section.find("RMSE " + report::num(e.cv_rmse_before) + " N before the term, " + report::num(e.cv_rmse_after) +
                          " N with it"),

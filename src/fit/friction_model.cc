@@ -6,62 +6,12 @@
 #include <cmath>
 #include <limits>
 
-#include "batched_autodiff.hpp"
+#include "friction_residual.hpp"
 #include "lmcal/error.hpp"
 
 namespace lmcal::detail {
 
 namespace {
-
-// r_j = (F_measured - F_model(θ)) / σ for entry `rows[j]` of `data` (entry j when `rows` is
-// empty). θ = [k1, k2, μSt, V_St, μv, β, f0, effects..., terms...]: the one friction law, with Jets.
-struct FrictionResidual {
-  const FrictionData* data;
-  std::vector<std::size_t> rows;
-  std::vector<std::size_t> effect_slots;
-
-  template <typename T>
-  struct Prepared {
-    FrictionConstants<T> k;
-    FrictionEffects<T> e;
-    const T* terms = nullptr;    // the terms' parameters
-    std::vector<T> lag_change;   // lag_τ(T) - T per log row, when a term lags the temperature
-  };
-
-  bool has_terms() const { return data->terms && !data->terms->empty(); }
-
-  template <typename T>
-  Prepared<T> prepare(const T* th) const {
-    Prepared<T> p{{th[0], th[1], th[2], th[3], th[4], th[5], th[6], T(99.0), T(data->T_ref_C)}, {}};
-    for (std::size_t m = 0; m < effect_slots.size(); ++m) p.e[effect_slots[m]] = th[7 + m];
-    if (has_terms()) {
-      p.terms = th + 7 + effect_slots.size();
-      std::size_t at = 0;
-      for (const auto& term : *data->terms) {
-        if (term.lagged_temperature()) p.lag_change = lagged_temperature_change(*data->log, *data->series, p.terms[at + 1]);
-        at += term.has_scale() ? 2 : 1;
-      }
-    }
-    return p;
-  }
-
-  template <typename T>
-  T operator()(Prepared<T>& p, std::size_t j) const {
-    const std::size_t entry = rows.empty() ? j : rows[j];
-    const std::size_t i = data->samples[entry];
-    const FrictionLog& log = *data->log;
-    p.k.nu_ref_mm2_s = T(log.viscosity40_mm2_s[i]);
-    T predicted;
-    if (has_terms()) {
-      predicted = friction_with_terms_N(p.k, p.e, log, *data->series, i, *data->terms, p.terms,
-                                        p.lag_change.empty() ? nullptr : &p.lag_change);
-    } else {
-      const FrictionConditions<double> c = log.conditions(i);
-      predicted = effect_slots.empty() ? T(friction_force_N(p.k, c)) : T(friction_force_with_effects_N(p.k, p.e, c));
-    }
-    return (log.friction_N[i] - predicted) * data->inv_sigma[entry];
-  }
-};
 
 Design describe(const FrictionData& d) {
   Design design;
@@ -92,9 +42,11 @@ std::unique_ptr<ceres::CostFunction> FrictionModel::cost_function(const std::vec
   std::vector<std::size_t> groups;
   if (!data_.run_shrink.empty())
     for (std::size_t j = 0; j < n; ++j) groups.push_back(data_.log->run[data_.samples[rows.empty() ? j : rows[j]]]);
-  return std::make_unique<BatchedAutoDiffCostFunction<FrictionResidual>>(
-      FrictionResidual{&data_, rows, effect_slots_}, static_cast<int>(7 + effect_slots_.size() + (data_.terms ? term_parameter_count(*data_.terms) : 0)), n, loss,
-      std::move(groups), data_.run_shrink);
+  const std::size_t terms = data_.terms ? term_parameter_count(*data_.terms) : 0;
+  const int parameters = static_cast<int>(7 + effect_slots_.size() + terms);
+  if (terms > 0) return term_cost_function(data_, rows, effect_slots_, parameters, n, loss, std::move(groups));
+  return std::make_unique<BatchedAutoDiffCostFunction<FrictionResidual<false>>>(
+      FrictionResidual<false>{&data_, rows, effect_slots_}, parameters, n, loss, std::move(groups), data_.run_shrink);
 }
 
 // A run is a cluster; its samples, in the log's order (time order within a run), are its

@@ -316,10 +316,13 @@ void empirical_section(Page& page, const EmpiricalFinding& e, const std::string&
   }
   page << "<div class=\"empirical\">\n";
   page.heading(4, "Beyond the library: an empirical term", plot_id(id_prefix + "-empirical"));
-  page.paragraph(fmt::format("Learned from the residuals; not a named cause. The residuals stay structured after the "
-                             "library's named causes, so a sparse regression over {} candidate terms of the covariates "
-                             "chose a term, fitted jointly with the model and added to {}:",
-                             e.dictionary_size, e.where));
+  page.paragraph(fmt::format("Learned from the residuals; not a named cause. The library's named causes leave "
+                             "structure, so a search over {} candidate terms of the covariates ({}) chose a term, fitted "
+                             "jointly with the model and added to {}:",
+                             e.dictionary_size,
+                             e.form == "smooth" ? "no sparse form won; a smooth term, cubic B-splines in one covariate"
+                                                : "a sparse regression, SINDy-style, by leave-one-run-out error",
+                             e.where));
   page << "<p class=\"formula\"><code>" << escape_xml(e.formula) << "</code></p>\n";
   std::vector<std::vector<std::string>> rows;
   for (const auto& component : e.components) {

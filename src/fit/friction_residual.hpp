@@ -1,0 +1,73 @@
+// The friction residual functor (private to the fit layer), shared by two translation units:
+// friction_model.cc instantiates it for the law with its effects, friction_term_model.cc for
+// the law with empirical terms. Kept apart because the hot row loop of the first must be
+// compiled where the compiler still inlines the Jet arithmetic: with the terms' code in the
+// same file, GCC stopped inlining Eigen's Jet assignments and the 100 k-sample diagnosis took
+// 60 % longer.
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "batched_autodiff.hpp"
+#include "friction_model.hpp"
+
+namespace lmcal::detail {
+
+// r_j = (F_measured - F_model(θ)) / σ for entry `rows[j]` of `data` (entry j when `rows` is
+// empty). θ = [k1, k2, μSt, V_St, μv, β, f0, effects..., terms...]: the one friction law, with
+// Jets; kTerms: with the empirical terms of data.terms.
+template <bool kTerms>
+struct FrictionResidual {
+  const FrictionData* data;
+  std::vector<std::size_t> rows;
+  std::vector<std::size_t> effect_slots;
+
+  template <typename T>
+  struct Prepared {
+    FrictionConstants<T> k;
+    FrictionEffects<T> e;
+    const T* terms = nullptr;    // the terms' parameters
+    std::vector<T> lag_change;   // lag_τ(T) - T per log row, when a term lags the temperature
+  };
+
+  template <typename T>
+  Prepared<T> prepare(const T* th) const {
+    Prepared<T> p{{th[0], th[1], th[2], th[3], th[4], th[5], th[6], T(99.0), T(data->T_ref_C)}, {}};
+    for (std::size_t m = 0; m < effect_slots.size(); ++m) p.e[effect_slots[m]] = th[7 + m];
+    if constexpr (kTerms) {
+      p.terms = th + 7 + effect_slots.size();
+      std::size_t at = 0;
+      for (const auto& term : *data->terms) {
+        if (term.lagged_temperature()) p.lag_change = lagged_temperature_change(*data->log, *data->series, p.terms[at + 1]);
+        at += term.has_scale() ? 2 : 1;
+      }
+    }
+    return p;
+  }
+
+  template <typename T>
+  T operator()(Prepared<T>& p, std::size_t j) const {
+    const std::size_t entry = rows.empty() ? j : rows[j];
+    const std::size_t i = data->samples[entry];
+    const FrictionLog& log = *data->log;
+    p.k.nu_ref_mm2_s = T(log.viscosity40_mm2_s[i]);
+    if constexpr (kTerms) {
+      const T predicted = friction_with_terms_N(p.k, p.e, log, *data->series, i, *data->terms, p.terms,
+                                                p.lag_change.empty() ? nullptr : &p.lag_change);
+      return (log.friction_N[i] - predicted) * data->inv_sigma[entry];
+    } else {
+      const FrictionConditions<double> c = log.conditions(i);
+      const T predicted =
+          effect_slots.empty() ? T(friction_force_N(p.k, c)) : T(friction_force_with_effects_N(p.k, p.e, c));
+      return (log.friction_N[i] - predicted) * data->inv_sigma[entry];
+    }
+  }
+};
+
+// The cost function of the law with empirical terms (friction_term_model.cc).
+std::unique_ptr<ceres::CostFunction> term_cost_function(const FrictionData& data, const std::vector<std::size_t>& rows,
+                                                        const std::vector<std::size_t>& effect_slots, int parameters,
+                                                        std::size_t n, const RowLoss& loss, std::vector<std::size_t> groups);
+
+}  // namespace lmcal::detail
