@@ -491,6 +491,10 @@ FrictionTermSearch learn_friction_term(const FrictionLog& log, const FrictionFit
           }
       return out;
     };
+    if (t.terms.empty()) {
+      t.score.reason = "no room for the term within the fit's 16 parameters";
+      return t;
+    }
     t.fit = refit(t.terms);
     if (const auto drop = undetermined(t.fit); !drop.empty() && drop.size() < t.terms.size()) {
       for (auto k = drop.rbegin(); k != drop.rend(); ++k) t.terms.erase(t.terms.begin() + static_cast<std::ptrdiff_t>(*k));
