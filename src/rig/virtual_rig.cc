@@ -10,6 +10,7 @@
 #include <random>
 
 #include "lmcal/error.hpp"
+#include "rig/rig_common.hpp"
 #include "lmcal/io/catalog.hpp"
 #include "lmcal/models/rail_thermal.hpp"
 #include "lmcal/models/thermal_effects.hpp"
@@ -18,72 +19,10 @@ namespace lmcal {
 
 namespace {
 
-// Reproducible random numbers: mt19937_64's sequence is fixed by the standard, and the
-// transforms below are ours (std::normal_distribution differs between libraries).
-class Rng {
- public:
-  explicit Rng(std::uint64_t seed) : engine_(seed) {}
-  double uniform() { return static_cast<double>(engine_() >> 11) * 0x1.0p-53; }  // [0, 1)
-  double uniform(double lo, double hi) { return lo + (hi - lo) * uniform(); }
-  double normal() {  // Box-Muller
-    const double u1 = 1.0 - uniform(), u2 = uniform();
-    return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * std::numbers::pi * u2);
-  }
-
- private:
-  std::mt19937_64 engine_;
-};
-
-// Independent streams per run from one seed (splitmix64).
-std::uint64_t derive_seed(std::uint64_t seed, std::uint64_t stream) {
-  std::uint64_t z = seed + 0x9E3779B97F4A7C15ull * (stream + 1);
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-  return z ^ (z >> 31);
-}
-
-// The random numbers of the later options (heat_factor, the gain error) come from a
-// generator of their own, so the per-run streams above, and every data set made without
-// these options, stay as they were.
-constexpr std::uint64_t kLaterStreamKey = 0x6A09E667F3BCC909ull;
-// The phase of the daily ambient swing of each run (its start in the day): a stream of its own.
-constexpr std::uint64_t kDailyStreamKey = 0xBB67AE8584CAA73Bull;
-
-// Sensor noise with memory: an AR(1) series of marginal σ and lag-1 autocorrelation φ,
-// e_0 = σ z_0, e_t = φ e_{t-1} + sqrt(1 − φ²) σ z_t. The caller draws the white z_t, so the
-// stream is the same for any φ, and φ = 0 gives σ z_t exactly (the bytes of old data).
-class Ar1Noise {
- public:
-  Ar1Noise(double sigma, double phi) : sigma_(sigma), phi_(phi), innovation_(std::sqrt(1 - phi * phi)) {}
-  double next(double z) {
-    unit_ = started_ ? phi_ * unit_ + innovation_ * z : z;
-    started_ = true;
-    return sigma_ * unit_;
-  }
-
- private:
-  double sigma_, phi_, innovation_;
-  double unit_ = 0;  // e_t / σ
-  bool started_ = false;
-};
-
-// 1 + relative_sigma · z, refused when it is not > 0 (no negative heat or gain).
-double positive_factor(const char* parameter, double relative_sigma, double z, const std::string& what) {
-  const double factor = 1 + relative_sigma * z;
-  if (!(factor > 0)) {
-    throw InvalidParameter(parameter, relative_sigma,
-                           fmt::format("small enough that 1 + {}·z > 0 ({}; this seed drew z = {:.3f})", parameter,
-                                       what, z));
-  }
-  return factor;
-}
-
-// Rounds to `decimals` places; dividing the integer by a power of ten gives the double
-// nearest to the decimal, so the CSV shows "22.08", not "22.080000000000002".
-double round_to(double value, int decimals) {
-  const double scale = std::pow(10.0, decimals);
-  return std::round(value * scale) / scale;
-}
+using rig::Ar1Noise;
+using rig::derive_seed;
+using rig::Rng;
+using rig::round_to;
 
 // A named effect of the rig: a friction effect (a slot of FrictionEffects, from the
 // library in friction_effects.hpp) or a thermal one (a member of ThermalRigEffects).
@@ -149,6 +88,17 @@ const EffectEntry& find_effect(std::string_view name) {
   throw InvalidParameter("effect", fmt::format("unknown effect '{}'; known: {}", name, known));
 }
 
+std::uint32_t index_of(std::vector<std::string>& names, const std::string& name) {
+  for (std::size_t i = 0; i < names.size(); ++i)
+    if (names[i] == name) return static_cast<std::uint32_t>(i);
+  names.push_back(name);
+  return static_cast<std::uint32_t>(names.size() - 1);
+}
+
+}  // namespace
+
+namespace rig {
+
 nlohmann::json effects_json(const RigEffects& effects) {
   nlohmann::json j = nlohmann::json::object();
   for (const auto& e : effect_table()) {
@@ -164,14 +114,8 @@ nlohmann::json constants_json(const FrictionConstants<double>& k) {
           {"f0", k.f0},       {"nu_ref_mm2_s", k.nu_ref_mm2_s}, {"T_ref_C", k.T_ref_C}};
 }
 
-std::uint32_t index_of(std::vector<std::string>& names, const std::string& name) {
-  for (std::size_t i = 0; i < names.size(); ++i)
-    if (names[i] == name) return static_cast<std::uint32_t>(i);
-  names.push_back(name);
-  return static_cast<std::uint32_t>(names.size() - 1);
-}
+}  // namespace rig
 
-}  // namespace
 
 const std::vector<RigEffectInfo>& rig_effects() {
   static const std::vector<RigEffectInfo> infos = [] {
@@ -287,8 +231,8 @@ FrictionRigOutput generate_friction_log(const FrictionRigConfig& config, const R
       {"kind", "friction"},
       {"generator", fmt::format("lmcal {} virtual rig", LMCAL_VERSION)},
       {"seed", config.seed},
-      {"friction_constants", constants_json(config.constants)},
-      {"effects", effects_json(effects)},
+      {"friction_constants", rig::constants_json(config.constants)},
+      {"effects", rig::effects_json(effects)},
       {"noise_N", config.noise_N},
       {"run_offset_sigma_N", config.run_offset_N},
       {"one_setup_per_run", config.one_setup_per_run},
@@ -300,206 +244,6 @@ FrictionRigOutput generate_friction_log(const FrictionRigConfig& config, const R
                "temperature_C is the true temperature plus noise"}};
   if (config.noise_ar1 != 0) truth["noise_ar1"] = config.noise_ar1;
   if (config.temperature_outermost) truth["temperature_outermost"] = true;
-  out.truth_json = truth.dump(2) + "\n";
-  return out;
-}
-
-ThermalRigOutput generate_thermal_dataset(const ThermalRigConfig& config, const RigEffects& effects,
-                                          const std::string& name) {
-  validate(config.constants);
-  if (config.repeats < 1) throw InvalidParameter("repeats", config.repeats, "at least 1");
-  if (config.ambient_sensors < 1) throw InvalidParameter("ambient_sensors", config.ambient_sensors, "at least 1");
-  require_positive("record_every_s", config.record_every_s);
-  require_positive("duration_s", config.duration_s);
-  require_non_negative("tc_lag", effects.thermal.tc_lag);
-  require_autocorrelation("noise_ar1", config.noise_ar1);
-  require_non_negative("heat_variation", config.heat_variation);
-  require_non_negative("friction_gain_error", config.friction_gain_error);
-  require_non_negative("stated_friction_uncertainty", config.stated_friction_uncertainty);
-  const GuideSpec spec = with_overrides(builtin_catalog().find(config.guide), config.guide_overrides);
-  const double Lb = require(spec, &GuideSpec::block_length_mm, "block_length_mm");
-  const double Lb1 = require(spec, &GuideSpec::contact_length_mm, "contact_length_mm");
-  const double pc = require(spec, &GuideSpec::preload_um, "preload_um");
-  const bool moving = effects.thermal.moving_source != 0;
-  const bool coupled = effects.thermal.coupling != 0;
-  // Truth numerics: converged (2 mm cells; 1 s steps for the moving block, 5 s otherwise).
-  const RailNumerics numerics{.source = moving ? SourceModel::moving : SourceModel::averaged,
-                              .scheme = TimeScheme::crank_nicolson,
-                              .half_rail_segments = static_cast<int>(std::lround(config.rail_length_m / 2 / 0.002)),
-                              .time_step_s = moving ? 1.0 : 5.0};
-
-  std::vector<double> times;
-  for (long i = 0;; ++i) {
-    const double t = static_cast<double>(i) * config.record_every_s;
-    if (t > config.duration_s + 1e-9) break;
-    times.push_back(t);
-  }
-
-  ThermalRigOutput out;
-  out.set.name = name;
-  out.set.description = "Synthetic: made by the lmcal virtual rig (see the truth file); not measured.";
-  nlohmann::json runs_truth = nlohmann::json::array();
-  // The logger's temperature: truth + bias + AR(1) noise, at 0.01 K.
-  const auto logged_channel = [&](std::string column, const std::vector<double>& true_C, double bias_K, Rng& rng) {
-    TemperatureChannel channel{std::move(column), {}};
-    Ar1Noise noise(config.noise_K, config.noise_ar1);
-    for (double T : true_C) channel.values.push_back(round_to(T + bias_K + noise.next(rng.normal()), 2));
-    return channel;
-  };
-  Rng later(config.seed ^ kLaterStreamKey);
-  const double friction_gain =  // 1 + g
-      positive_factor("friction_gain_error", config.friction_gain_error, later.normal(), "the load cell's gain");
-  std::size_t stream = 0;
-  for (double V : config.velocity_m_s) {
-    for (int r = 0; r < config.repeats; ++r, ++stream) {
-      Rng rng(derive_seed(config.seed, stream));
-      const std::string id = config.repeats == 1 ? fmt::format("v{:03.0f}", V * 1000)
-                                                 : fmt::format("v{:03.0f}_r{}", V * 1000, r + 1);
-      const double heat_factor =
-          positive_factor("heat_variation", config.heat_variation, later.normal(), "the heat factor of run " + id);
-      // The true ambient: drift plus a slow wave with a random phase; with the hidden daily
-      // swing, the rail's air has all of it and the ambient sensors log the share `seen`.
-      const double phase = rng.uniform(0, 2 * std::numbers::pi);
-      const double daily_phase = Rng(derive_seed(config.seed ^ kDailyStreamKey, stream)).uniform(0, 2 * std::numbers::pi);
-      AmbientTrace ambient;
-      std::vector<double> ambient_logged;  // what the ambient sensors see (before bias and noise)
-      for (double t : times) {
-        const double air = config.ambient_C + config.ambient_drift_K_per_h * t / 3600 +
-                           config.ambient_wave_K * std::sin(2 * std::numbers::pi * t / 7200 + phase);
-        const double daily = effects.thermal.ambient_daily_K * std::sin(2 * std::numbers::pi * t / 86400 + daily_phase);
-        ambient.time_s.push_back(t);
-        ambient.temperature_C.push_back(air + daily);
-        ambient_logged.push_back(air + effects.thermal.ambient_daily_seen * daily);
-      }
-      const double T0 = ambient.temperature_C.front();
-      auto heat_at = [&](double T) {
-        const FrictionConditions<double> c{.load_N = config.load_N, .preload_um = pc, .block_length_mm = Lb,
-                                           .velocity_m_s = V, .temperature_C = T};
-        return heat_factor * heat_rate_with_effects_W(config.constants, effects.friction, c);
-      };
-      const RailGeometry geometry{.rail_length_m = config.rail_length_m,
-                                  .area_m2 = require(spec, &GuideSpec::area_m2, "area_m2"),
-                                  .perimeter_m = require(spec, &GuideSpec::perimeter_m, "perimeter_m"),
-                                  .stroke_m = config.stroke_m,
-                                  .contact_length_m = Lb1 * 1e-3,
-                                  .velocity_m_s = V};
-      const RailParams<double> params{
-          .heat_partition = alpha_with_velocity(config.alpha, effects.thermal.alpha_velocity, V),
-          .heat_rate_W = heat_at(T0),
-          .h_W_m2K = convection_with_velocity(config.h_W_m2K, effects.thermal.convection_velocity, V),
-          .conductivity_W_mK = require(spec, &GuideSpec::conductivity_W_mK, "conductivity_W_mK"),
-          .density_kg_m3 = require(spec, &GuideSpec::density_kg_m3, "density_kg_m3"),
-          .specific_heat_J_kgK = require(spec, &GuideSpec::specific_heat_J_kgK, "specific_heat_J_kgK"),
-          .initial_temperature_C = T0,
-          .base_loss_W_mK = effects.thermal.base_loss};
-      const RailOutputs outputs{
-          .duration_s = times.back(), .sensor_positions_m = config.sensor_position_m, .output_times_s = times};
-      const HeatRateModel<double> coupling = heat_at;
-      const auto sol = simulate_rail(geometry, numerics, outputs, params, ambient,
-                                     coupled ? coupling : HeatRateModel<double>{});
-
-      ThermalRun run;
-      run.id = id;
-      run.file = "thermal/" + id + ".csv";
-      run.guide = spec.model;
-      run.velocity_m_s = V;
-      run.load_N = config.load_N;
-      run.preload_um = pc;
-      run.stroke_m = config.stroke_m;
-      run.rail_length_m = config.rail_length_m;
-      run.guide_overrides = config.guide_overrides;
-      run.trace.time_s = times;
-      nlohmann::json ambient_truth = nlohmann::json::array(), tc_truth = nlohmann::json::array();
-      for (int a = 0; a < config.ambient_sensors; ++a) {
-        const double bias = rng.uniform(-config.ambient_bias_K, config.ambient_bias_K);
-        TemperatureChannel channel =
-            logged_channel(fmt::format("ambient{}_C", a + 1), ambient_logged, bias, rng);
-        ambient_truth.push_back({{"column", channel.name}, {"bias_K", bias}});
-        run.trace.ambient.push_back(std::move(channel));
-      }
-      for (std::size_t s = 0; s < config.sensor_position_m.size(); ++s) {
-        std::vector<double> truth(times.size());
-        for (std::size_t t = 0; t < times.size(); ++t) truth[t] = sol.temperature_C(t, s);
-        auto lagged = first_order_lag(times, truth, effects.thermal.tc_lag);
-        for (std::size_t t = 0; t < times.size(); ++t) lagged[t] += effects.thermal.tc_drift_K_per_h * times[t] / 3600;
-        const double bias = rng.uniform(-config.tc_bias_K, config.tc_bias_K);
-        TemperatureChannel channel = logged_channel(fmt::format("tc{}_C", s + 1), lagged, bias, rng);
-        run.sensor_position_m[channel.name] = config.sensor_position_m[s];
-        tc_truth.push_back({{"column", channel.name}, {"position_m", config.sensor_position_m[s]}, {"bias_K", bias},
-                            {"true_final_C", truth.back()}});
-        run.trace.rail.push_back(std::move(channel));
-      }
-      double mean_Q = 0;
-      for (double q : sol.heat_rate_W) mean_Q += q;
-      mean_Q /= static_cast<double>(sol.heat_rate_W.size());
-      // The load cell sees the friction, not the heat factor; it has the data set's gain error.
-      // Logged as the run's mean (its time average over the records), as a load cell's log
-      // averages to: with coupling, below the friction at the start.
-      const double mean_friction_true_N = mean_Q / heat_factor / V;
-      run.mean_friction_N =
-          round_to(mean_friction_true_N * friction_gain + config.friction_noise_N * rng.normal(), 2);
-      if (config.stated_friction_uncertainty > 0)
-        run.mean_friction_uncertainty_N = round_to(config.stated_friction_uncertainty * *run.mean_friction_N, 4);
-      runs_truth.push_back({{"id", id},
-                            {"velocity_m_s", V},
-                            {"alpha", params.heat_partition},
-                            {"h_W_m2K", params.h_W_m2K},
-                            {"base_loss_W_mK", params.base_loss_W_mK},
-                            {"initial_temperature_C", T0},
-                            {"heat_rate_start_W", sol.heat_rate_W.front()},
-                            {"heat_rate_end_W", sol.heat_rate_W.back()},
-                            {"heat_rate_mean_W", mean_Q},
-                            {"mean_friction_true_N", mean_friction_true_N},
-                            {"ambient", {{"base_C", config.ambient_C},
-                                         {"drift_K_per_h", config.ambient_drift_K_per_h},
-                                         {"wave_K", config.ambient_wave_K},
-                                         {"wave_period_s", 7200},
-                                         {"wave_phase_rad", phase},
-                                         {"sensors", ambient_truth}}},
-                            {"thermocouples", tc_truth}});
-      if (config.heat_variation != 0) runs_truth.back()["heat_factor"] = heat_factor;
-      if (effects.thermal.ambient_daily_K != 0) {
-        runs_truth.back()["ambient"]["daily_K"] = effects.thermal.ambient_daily_K;
-        runs_truth.back()["ambient"]["daily_period_s"] = 86400;
-        runs_truth.back()["ambient"]["daily_phase_rad"] = daily_phase;
-        runs_truth.back()["ambient"]["daily_seen_by_sensors"] = effects.thermal.ambient_daily_seen;
-      }
-      out.set.runs.push_back(std::move(run));
-    }
-  }
-  nlohmann::json truth = {
-      {"kind", "thermal"},
-      {"generator", fmt::format("lmcal {} virtual rig", LMCAL_VERSION)},
-      {"seed", config.seed},
-      {"guide", spec.model},
-      {"friction_constants", constants_json(config.constants)},
-      {"effects", effects_json(effects)},
-      {"alpha_reference", config.alpha},
-      {"alpha_source_model", to_string(numerics.source)},
-      {"h_reference_W_m2K", config.h_W_m2K},
-      {"load_N", config.load_N},
-      {"preload_um", pc},
-      {"stroke_m", config.stroke_m},
-      {"rail_length_m", config.rail_length_m},
-      {"noise_K", config.noise_K},
-      {"friction_noise_N", config.friction_noise_N},
-      {"truth_numerics", {{"source", to_string(numerics.source)},
-                          {"scheme", to_string(numerics.scheme)},
-                          {"half_rail_segments", numerics.half_rail_segments},
-                          {"time_step_s", numerics.time_step_s}}},
-      {"runs", runs_truth}};
-  if (config.noise_ar1 != 0) truth["noise_ar1"] = config.noise_ar1;
-  if (config.heat_variation != 0) {
-    truth["heat_variation"] = config.heat_variation;
-    truth["heat_variation_note"] = "runs[].heat_factor multiplies the heat reaching the rail (heat_rate_* include "
-                                   "it); mean_friction_true_N and the logged mean_friction_N do not see it";
-  }
-  if (config.friction_gain_error != 0) {
-    truth["friction_gain_error_sigma"] = config.friction_gain_error;
-    truth["friction_gain_error"] = friction_gain - 1;
-  }
-  if (config.stated_friction_uncertainty != 0)
-    truth["stated_friction_uncertainty"] = config.stated_friction_uncertainty;
   out.truth_json = truth.dump(2) + "\n";
   return out;
 }

@@ -19,6 +19,10 @@ struct LoadReport {
   std::map<std::string, std::string> conversions;  // column -> "kgf -> N"
   std::size_t time_gaps = 0;                       // intervals longer than 1.5x the median step
   double bytes = 0;
+  // Likely mistakes that did not stop the load (a column that looks like a known one but is
+  // not read, a magnitude where a signed value was expected, …): printed by `check`, kept in
+  // the JSON outputs and listed in the report's "data loaded" section.
+  std::vector<std::string> warnings;
 };
 
 }  // namespace lmcal
