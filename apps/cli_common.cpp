@@ -243,20 +243,47 @@ std::vector<double> or_catalog(const std::vector<double>& given, const GuideSpec
 }
 
 void ThermalModelOptions::add_to(CLI::App& app, ThermalFitOptions& fit) {
-  app.add_option("--friction", friction_fit, "Friction fit JSON (lmcal fit friction) for the heat rate");
   app.add_option("--heat", heat, "Heat rate: auto, friction (law) or measured (start_friction_N x V, else the run mean mean_friction_N x V)")->capture_default_str();
   app.add_option("--source", source, "Heat source model: paper, averaged or moving")->capture_default_str();
   app.add_option("--scheme", scheme, "Time scheme: backward-euler (be) or crank-nicolson (cn)")->capture_default_str();
-  app.add_option("--segments", fit.half_rail_segments, "Segments on the half rail")->capture_default_str();
-  app.add_option("--dt", fit.time_step_s, "Time step, s")->capture_default_str();
-  app.add_option("--every", fit.every, "Fit every n-th record (the paper kept every 120th)")->capture_default_str();
-  app.add_option("--ambient", fit.ambient, "Ambient: mean of the ambient sensors, or a column name")->capture_default_str();
+  // The numeric settings, each with how to copy it (copy_given).
+  const auto numeric = [&](CLI::Option* option, auto member) {
+    numeric_.emplace_back(option, [member](const ThermalFitOptions& from, ThermalFitOptions& to) { to.*member = from.*member; });
+  };
+  numeric(app.add_option("--segments", fit.half_rail_segments, "Segments on the half rail")->capture_default_str(),
+          &ThermalFitOptions::half_rail_segments);
+  numeric(app.add_option("--dt", fit.time_step_s, "Time step, s")->capture_default_str(), &ThermalFitOptions::time_step_s);
+  numeric(app.add_option("--every", fit.every, "Fit every n-th record (the paper kept every 120th)")->capture_default_str(),
+          &ThermalFitOptions::every);
+  numeric(app.add_option("--ambient", fit.ambient, "Ambient: mean of the ambient sensors, or a column name")->capture_default_str(),
+          &ThermalFitOptions::ambient);
   // What is held, freed and where it starts: the same for a fit and a diagnosis.
-  app.add_option("--alpha-start", fit.alpha_start, "Start value of alpha")->capture_default_str();
-  app.add_flag("--fit-h", fit.fit_h, "Also fit the convection coefficient h (one for all runs)");
-  app.add_option("--h", fit.h_W_m2K, "Convection coefficient (held there; the start value with --fit-h), W/m2K")
-      ->capture_default_str();
-  app.add_flag("--fit-initial", fit.fit_initial_temperature, "Also fit the initial rail temperature of each run");
+  numeric(app.add_option("--alpha-start", fit.alpha_start, "Start value of alpha")->capture_default_str(),
+          &ThermalFitOptions::alpha_start);
+  numeric(app.add_flag("--fit-h", fit.fit_h, "Also fit the convection coefficient h (one for all runs)"), &ThermalFitOptions::fit_h);
+  numeric(app.add_option("--h", fit.h_W_m2K, "Convection coefficient (held there; the start value with --fit-h), W/m2K")
+              ->capture_default_str(),
+          &ThermalFitOptions::h_W_m2K);
+  numeric(app.add_flag("--fit-initial", fit.fit_initial_temperature, "Also fit the initial rail temperature of each run"),
+          &ThermalFitOptions::fit_initial_temperature);
+}
+
+void ThermalModelOptions::add_offsets(CLI::App& app, ThermalFitOptions& fit) {
+  app.add_option("--offsets", fit.offsets,
+                 "Thermocouple offsets: auto (fitted for a run that starts isothermal, at the ambient), fit or hold")
+      ->transform(CLI::CheckedTransformer(std::map<std::string, ThermalOffsets>{{"auto", ThermalOffsets::automatic},
+                                                                               {"fit", ThermalOffsets::fitted},
+                                                                               {"hold", ThermalOffsets::held}},
+                                          CLI::ignore_case));
+}
+
+void ThermalModelOptions::add_friction_file(CLI::App& app) {
+  app.add_option("--friction", friction_fit, "Friction fit JSON (lmcal fit friction) for the heat rate");
+}
+
+void ThermalModelOptions::copy_given(const ThermalFitOptions& from, ThermalFitOptions& to) const {
+  for (const auto& [option, copy] : numeric_)
+    if (option->count() > 0) copy(from, to);
 }
 
 void ThermalModelOptions::apply(ThermalFitOptions& fit, std::vector<std::pair<std::string, std::string>>& inputs) const {

@@ -31,6 +31,7 @@ nlohmann::json run_record(const std::vector<std::string>& argv);
 
 }  // namespace lmcal::cli
 
+#include <functional>
 #include <map>
 #include <optional>
 
@@ -101,19 +102,27 @@ struct FrictionOptions {
   std::vector<const CLI::Option*> options_;  // as added, to tell which the user gave
 };
 
-// How a thermal model is set up: heat input, source model, numerics, ambient (lmcal fit
-// thermal, diagnose thermal, calibrate).
-// The rail model's options shared by `fit thermal` and `diagnose thermal`:
-// heat input, source, numerics, and what is held or freed (--alpha-start,
-// --fit-h, --h, --fit-initial).
+// The rail model's options shared by `fit thermal`, `diagnose thermal` and `calibrate`: heat
+// input, source, numerics, and what is held or freed (--alpha-start, --fit-h, --h,
+// --fit-initial).
 struct ThermalModelOptions {
-  std::string friction_fit;  // friction fit JSON for the heat rate
+  std::string friction_fit;  // friction fit JSON for the heat rate (add_friction_file)
   std::string heat = "auto";
   std::string source = "averaged";
   std::string scheme = "crank-nicolson";
   void add_to(CLI::App& app, ThermalFitOptions& fit);
+  // --offsets (a diagnosis always fits them).
+  static void add_offsets(CLI::App& app, ThermalFitOptions& fit);
+  // --friction FILE (not for `calibrate`, whose friction fit is its own).
+  void add_friction_file(CLI::App& app);
   // Parses the names into `fit`, reads the friction fit; its file goes to `inputs` with its hash.
   void apply(ThermalFitOptions& fit, std::vector<std::pair<std::string, std::string>>& inputs) const;
+  // Copies into `to` the numeric settings of `from` the user gave (a diagnosis keeps its own
+  // defaults, e.g. its coarser time step, for the others).
+  void copy_given(const ThermalFitOptions& from, ThermalFitOptions& to) const;
+
+ private:
+  std::vector<std::pair<const CLI::Option*, std::function<void(const ThermalFitOptions&, ThermalFitOptions&)>>> numeric_;
 };
 
 // A value the catalog may lack, or the user's list: the user's list wins.

@@ -153,6 +153,7 @@ void setup_diagnose(CLI::App& app) {
   thermal->add_option("--name", t->name, "Name of the output")->capture_default_str();
   thermal->add_option("-o,--output-dir", t->output_dir, "Output folder")->capture_default_str();
   t->model.add_to(*thermal, t->diagnosis.fit);
+  t->model.add_friction_file(*thermal);
   thermal->add_option("--min-gain", t->diagnosis.min_cv_gain_percent, "Least held-out RMSE gain to accept a cause, %")
       ->capture_default_str();
   thermal->add_option("--lrt-p", t->diagnosis.lrt_p, "Significance level of the likelihood-ratio test")->capture_default_str();

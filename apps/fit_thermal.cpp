@@ -53,12 +53,8 @@ void setup_fit_thermal(CLI::App& fit, const std::vector<std::string>& argv) {
   app->add_option("--name", o->name, "Name of the fit (output file names)")->capture_default_str();
   app->add_option("-o,--output-dir", o->output_dir, "Output folder")->capture_default_str();
   o->model.add_to(*app, o->fit);
-  app->add_option("--offsets", o->fit.offsets,
-                  "Thermocouple offsets: auto (fitted for a run that starts isothermal, at the ambient), fit or hold")
-      ->transform(CLI::CheckedTransformer(std::map<std::string, ThermalOffsets>{{"auto", ThermalOffsets::automatic},
-                                                                               {"fit", ThermalOffsets::fitted},
-                                                                               {"hold", ThermalOffsets::held}},
-                                          CLI::ignore_case));
+  o->model.add_friction_file(*app);
+  ThermalModelOptions::add_offsets(*app, o->fit);
   std::string known;
   for (const auto& e : thermal_extension_library()) known += fmt::format("\n    {}: {}", e.name, e.description);
   app->add_option("--extension", o->fit.extensions, "Add a mechanism of the extension library (repeatable):" + known);

@@ -242,6 +242,83 @@ TEST_F(CalibrationTest, RefusesAFolderWithoutMeasurementsOrWithTwoManifests) {
   }
 }
 
+TEST_F(CalibrationTest, NeverReadsItsOwnOutputsBackAsMeasurements) {
+  write_friction();
+  CalibrationOptions options;
+  options.diagnose = false;
+  options.friction.fit.starts = 3;
+  const Calibration first = calibrate(find_calibration_set(dir_), options);
+  // `lmcal calibrate -o SET`: the outputs land beside the logs (friction_samples.csv, …).
+  OutputSet out;
+  for (auto& [name, text] : calibration_outputs(first)) out.add(dir_ / name, text);
+  out.commit();
+  const CalibrationSet again = find_calibration_set(dir_);
+  ASSERT_EQ(again.friction_logs.size(), 1u);
+  EXPECT_EQ(again.friction_logs[0].filename(), "friction.csv");
+  EXPECT_EQ(again.ignored_files.size(), 2u) << "friction_samples.csv and friction_conditions.csv";
+  const Calibration second = calibrate(again, options);
+  EXPECT_EQ(second.friction_log->size(), first.friction_log->size());
+  EXPECT_NE(second.notes[0].find("not read: it is an output of lmcal calibrate"), std::string::npos) << second.notes[0];
+  // The options it ran with are recorded.
+  const auto j = nlohmann::json::parse(calibration_json(second));
+  EXPECT_EQ(j["options"]["friction"]["fit"]["starts"], 3);
+  EXPECT_EQ(j["options"]["diagnose"], false);
+  EXPECT_TRUE(j["warnings"].empty()) << j["warnings"].dump();
+}
+
+TEST_F(CalibrationTest, ARunThatDisagreesWithTheOthersIsAWarningAndCleanDataHasNone) {
+  FrictionRigConfig config;
+  config.guides = {"SRN 35C"};
+  config.runs = 5;
+  FrictionLog log = generate_friction_log(config, {}).log;
+  write("friction.csv", friction_log_csv(log));
+  CalibrationOptions options;
+  options.diagnose = false;
+  options.friction.fit.bootstrap = 0;
+  const Calibration clean = calibrate(find_calibration_set(dir_), options);
+  EXPECT_TRUE(clean.warnings.empty()) << clean.warnings.front();
+  // Run 3 logged with the load cell in another unit than stated: every force 1.5 times too large.
+  for (std::size_t i = 0; i < log.size(); ++i)
+    if (log.run_names[log.run[i]] == "run03") log.friction_N[i] *= 1.5;
+  write("friction.csv", friction_log_csv(log));
+  const Calibration mistaken = calibrate(find_calibration_set(dir_), options);
+  ASSERT_EQ(mistaken.warnings.size(), 1u);
+  EXPECT_NE(mistaken.warnings[0].find("friction run 'run03' disagrees with the others"), std::string::npos)
+      << mistaken.warnings[0];
+  EXPECT_NE(calibration_report_html(mistaken).find("friction run &#39;run03&#39; disagrees"), std::string::npos);
+  EXPECT_EQ(nlohmann::json::parse(calibration_json(mistaken))["warnings"].size(), 1u);
+}
+
+TEST_F(CalibrationTest, HeatFromThePapersConstantsIsAWarning) {
+  ThermalRigConfig config;
+  config.velocity_m_s = {0.066, 0.11};
+  config.duration_s = 2 * 3600;
+  config.record_every_s = 60;
+  ThermalDataSet set = generate_thermal_dataset(config, {}, "test").set;
+  const auto write_set = [&](bool with_friction) {
+    OutputSet out;
+    for (ThermalRun run : set.runs) {
+      if (!with_friction) run.mean_friction_N.reset();
+      out.add(dir_ / run.file, thermal_trace_csv(run.trace));
+    }
+    ThermalDataSet written = set;
+    for (ThermalRun& run : written.runs) {
+      run.file = dir_ / run.file;
+      if (!with_friction) run.mean_friction_N.reset();
+    }
+    out.add(dir_ / "thermal.toml", thermal_manifest_toml(written, dir_));
+    out.commit();
+  };
+  CalibrationOptions options;
+  options.diagnose = false;
+  write_set(true);
+  EXPECT_TRUE(calibrate(find_calibration_set(dir_), options).warnings.empty());
+  write_set(false);
+  const Calibration c = calibrate(find_calibration_set(dir_), options);
+  ASSERT_EQ(c.warnings.size(), 1u);
+  EXPECT_NE(c.warnings[0].find("the heat came from the paper's friction constants"), std::string::npos) << c.warnings[0];
+}
+
 // ---- the committed results of the bundled set -------------------------------------------
 
 // Numbers equal to a relative 1e-6 (or 1e-9 absolute, for values that are zero up to rounding),

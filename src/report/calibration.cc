@@ -11,10 +11,25 @@
 #include "lmcal/fit/model_file.hpp"
 #include "lmcal/io/hash.hpp"
 #include "lmcal/report/html_report.hpp"
+#include "report/data_checks.hpp"
 
 namespace lmcal {
 
 namespace fs = std::filesystem;
+
+const std::vector<std::string>& calibration_output_names() {
+  static const std::vector<std::string> names = {
+      "model.toml",         "calibrated_friction.json", "calibrated_thermal.json", "friction.json",
+      "friction_samples.csv", "friction_conditions.csv", "friction_diagnosis.json", "thermal.json",
+      "thermal_samples.csv",  "thermal_alpha_curve.csv", "thermal_diagnosis.json", "calibration.json",
+      "report.html"};
+  return names;
+}
+
+bool is_calibration_output(std::string_view file_name) {
+  const auto& names = calibration_output_names();
+  return std::find(names.begin(), names.end(), file_name) != names.end();
+}
 
 CalibrationSet find_calibration_set(const fs::path& dir) {
   if (!fs::is_directory(dir)) throw InputError(dir.string(), 0, 0, "expected a measurement folder (friction*.csv, thermal*.toml)");
@@ -25,7 +40,14 @@ CalibrationSet find_calibration_set(const fs::path& dir) {
   for (const auto& entry : fs::directory_iterator(dir)) {
     if (!entry.is_regular_file()) continue;
     const std::string file = entry.path().filename().string();
-    if (file.starts_with("friction") && entry.path().extension() == ".csv") set.friction_logs.push_back(entry.path());
+    if (file.starts_with("friction") && entry.path().extension() == ".csv") {
+      // `calibrate -o SET` writes friction_samples.csv beside the logs: never read it back.
+      if (is_calibration_output(file)) {
+        set.ignored_files.push_back(entry.path());
+        continue;
+      }
+      set.friction_logs.push_back(entry.path());
+    }
     if (file.starts_with("thermal") && entry.path().extension() == ".toml") manifests.push_back(entry.path());
   }
   std::sort(set.friction_logs.begin(), set.friction_logs.end());
@@ -66,7 +88,7 @@ void calibrate_friction_model(Calibration& c) {
           std::clamp(fittable_constant(k, j), m.friction_options.bounds[j].first, m.friction_options.bounds[j].second);
     m.friction_options.fit.starts = 0;
   }
-  m.friction_options.run_offsets = RunOffsets::random;
+  m.friction_options.run_offsets = c.options.friction_diagnosis.fit.run_offsets;  // random unless asked otherwise
   m.friction_options.cross_validate = c.friction_log->run_names.size() >= 2;
   m.friction = fit_friction(*c.friction_log, m.friction_options);
 }
@@ -78,7 +100,7 @@ void calibrate_thermal_model(Calibration& c, const CalibrationOptions& options) 
   CalibratedModel& m = c.calibrated;
   ThermalFitOptions& t = m.thermal_options;
   t = diagnosis_fit_options(*c.thermal_data, options.thermal_diagnosis);
-  t.offsets = ThermalOffsets::automatic;
+  t.offsets = options.thermal.offsets;
   t.per_run_fits = true;
   t.fit.profile = ProfileMode::automatic;
   t.fit.bootstrap = options.thermal.fit.bootstrap;
@@ -107,6 +129,7 @@ void calibrate_thermal_model(Calibration& c, const CalibrationOptions& options) 
 Calibration calibrate(const CalibrationSet& set, const CalibrationOptions& options, const CalibrationProgress& progress) {
   Calibration c;
   c.set = set;
+  c.options = options;
   c.command = {"lmcal", "calibrate", set.dir.string()};
   const bool friction = !set.friction_logs.empty(), thermal = set.thermal_manifest.has_value();
   std::vector<std::string> steps = {"loading the measurements"};
@@ -122,6 +145,8 @@ Calibration calibrate(const CalibrationSet& set, const CalibrationOptions& optio
   };
 
   start("loading the measurements");
+  for (const auto& file : set.ignored_files)
+    c.notes.push_back(fmt::format("{} not read: it is an output of lmcal calibrate, not a measurement", file.string()));
   for (const auto& file : set.friction_logs) c.inputs.emplace_back(file.string(), sha256_file(file));
   if (friction) c.friction_log = load_friction_logs(set.friction_logs);
   if (thermal) {
@@ -179,6 +204,7 @@ Calibration calibrate(const CalibrationSet& set, const CalibrationOptions& optio
   } else {
     c.notes.push_back("no thermal manifest (thermal*.toml): the thermal steps were skipped");
   }
+  c.warnings = detail::calibration_warnings(c);
   return c;
 }
 
@@ -215,6 +241,7 @@ std::vector<std::pair<std::string, std::string>> calibration_outputs(const Calib
   if (c.thermal_diagnosis) out.emplace_back("thermal_diagnosis.json", thermal_diagnosis_json(*c.thermal_diagnosis));
   out.emplace_back("calibration.json", calibration_json(c));
   out.emplace_back("report.html", calibration_report_html(c));
+  for (const auto& [name, text] : out) LMCAL_ASSERT(is_calibration_output(name), "every output is in calibration_output_names()");
   return out;
 }
 
@@ -272,6 +299,69 @@ nlohmann::json thermal_json(const ThermalFitResult& t, const ThermalFitOptions& 
           {"converged", t.joint.solver.converged}};
 }
 
+const char* covariance_name(CovarianceMethod m) {
+  switch (m) {
+    case CovarianceMethod::automatic: return "auto";
+    case CovarianceMethod::iid: return "iid";
+    case CovarianceMethod::hac: return "hac";
+    case CovarianceMethod::cluster: return "cluster";
+    case CovarianceMethod::bootstrap: return "bootstrap";
+  }
+  return "?";
+}
+
+const char* run_offsets_name(RunOffsets r) {
+  return r == RunOffsets::random ? "random" : r == RunOffsets::fixed ? "fixed" : "none";
+}
+
+nlohmann::json uncertainty_options_json(const FitOptions& f) {
+  return {{"covariance", covariance_name(f.covariance)}, {"bootstrap", f.bootstrap}, {"starts", f.starts}, {"seed", f.seed}};
+}
+
+nlohmann::json friction_options_json(const FrictionFitOptions& f) {
+  FrictionConstants<double> start = f.start;
+  nlohmann::json constants = nlohmann::json::object();
+  for (std::size_t j = 0; j < kFrictionConstantNames.size(); ++j) {
+    constants[std::string(kFrictionConstantNames[j])] = {{"free", f.free[j]},
+                                                         {"start", fittable_constant(start, j)},
+                                                         {"bounds", {f.bounds[j].first, f.bounds[j].second}}};
+  }
+  return {{"constants", constants}, {"run_offsets", run_offsets_name(f.run_offsets)}, {"fit", uncertainty_options_json(f.fit)}};
+}
+
+nlohmann::json thermal_options_json(const ThermalFitOptions& t) {
+  const char* heat = t.heat == HeatInput::friction_law ? "friction" : t.heat == HeatInput::measured_friction ? "measured" : "auto";
+  return {{"heat", heat},
+          {"source", to_string(t.source)},
+          {"scheme", to_string(t.scheme)},
+          {"half_rail_segments", t.half_rail_segments},
+          {"time_step_s", t.time_step_s},
+          {"every", t.every},
+          {"ambient", t.ambient},
+          {"alpha_start", t.alpha_start},
+          {"fit_h", t.fit_h},
+          {"h_W_m2K", t.h_W_m2K},
+          {"fit_initial_temperature", t.fit_initial_temperature},
+          {"offsets", to_string(t.offsets)},
+          {"fit", uncertainty_options_json(t.fit)}};
+}
+
+// Every setting the calibration ran with (`lmcal calibrate` flags or --config), so that the
+// outputs say how they were made.
+nlohmann::json options_json(const CalibrationOptions& o) {
+  return {{"diagnose", o.diagnose},
+          {"friction", friction_options_json(o.friction)},
+          {"friction_diagnosis",
+           {{"fit", friction_options_json(o.friction_diagnosis.fit)},
+            {"min_cv_gain_percent", o.friction_diagnosis.min_cv_gain_percent},
+            {"lrt_p", o.friction_diagnosis.lrt_p}}},
+          {"thermal", thermal_options_json(o.thermal)},
+          {"thermal_diagnosis",
+           {{"fit", thermal_options_json(o.thermal_diagnosis.fit)},
+            {"min_cv_gain_percent", o.thermal_diagnosis.min_cv_gain_percent},
+            {"lrt_p", o.thermal_diagnosis.lrt_p}}}};
+}
+
 // How the calibrated model differs from the published one, every value with its interval.
 nlohmann::json shifts_json(const FitResult& published, const FitResult& calibrated) {
   nlohmann::json out = nlohmann::json::array();
@@ -294,7 +384,8 @@ std::string calibration_json(const Calibration& c) {
   nlohmann::json inputs = nlohmann::json::array();
   for (const auto& [file, hash] : c.inputs) inputs.push_back({{"file", file}, {"sha256", hash}});
   nlohmann::json j{{"kind", "calibration"},  {"lmcal_version", LMCAL_VERSION}, {"set", c.set.name},
-                   {"command", c.command},   {"inputs", inputs},               {"notes", c.notes}};
+                   {"command", c.command},   {"inputs", inputs},               {"notes", c.notes},
+                   {"warnings", c.warnings},          {"options", options_json(c.options)}};
   const CalibratedModel& m = c.calibrated;
   nlohmann::json calibrated = {{"what", "the published models with the causes the diagnoses accepted, refitted: the result"},
                                {"file", "model.toml"}};
@@ -376,6 +467,7 @@ std::string calibration_summary(const Calibration& c) {
   }
   if (c.thermal_diagnosis) s += fmt::format("  diagnosis: {}\n  {}\n", c.thermal_diagnosis->verdict, c.thermal_diagnosis->summary);
   for (const auto& note : c.notes) s += "note: " + note + "\n";
+  for (const auto& warning : c.warnings) s += "warning: " + warning + "\n";
   return s;
 }
 

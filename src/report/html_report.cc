@@ -64,6 +64,9 @@ void brief(Page& page, const Calibration& c) {
     page << "</p>\n";
   }
   for (const auto& note : c.notes) page.paragraph("Note: " + note, "warning");
+  if (!c.warnings.empty())
+    page << fmt::format("<p class=\"warning\">{} warning{} about the data: see <a href=\"#data\">Data loaded</a>.</p>\n",
+                        c.warnings.size(), c.warnings.size() > 1 ? "s" : "");
   page << "</div>\n";
 }
 
@@ -99,12 +102,13 @@ Page build(const Calibration& c) {
   if (calibrated) body << "<a href=\"#how-sure\">How sure</a>";
   if (c.friction) body << "<a href=\"#friction\">Friction (published model)</a>";
   if (c.thermal) body << "<a href=\"#thermal\">Thermal (published model)</a>";
-  body << "<a href=\"#inputs\">Inputs and versions</a></nav>\n";
+  body << "<a href=\"#data\">Data loaded</a><a href=\"#inputs\">Inputs and versions</a></nav>\n";
   report::calibrated_section(body, c);
   brief(body, c);
   report::how_sure_section(body, c);
   if (c.friction) report::friction_section(body, c);
   if (c.thermal) report::thermal_section(body, c);
+  report::data_section(body, c);
   provenance(body, c);
   return body;
 }

@@ -18,6 +18,8 @@ void calibrated_section(Page& page, const Calibration& c);
 void how_sure_section(Page& page, const Calibration& c);
 void friction_section(Page& page, const Calibration& c);
 void thermal_section(Page& page, const Calibration& c);
+// What was loaded, converted, skipped and ignored; the data checks' warnings.
+void data_section(Page& page, const Calibration& c);
 
 // Did the diagnosis accept causes, i.e. reject the published model?
 template <class Diagnosis>

@@ -49,7 +49,13 @@ struct CalibrationSet {
   std::string name;                                   // the folder's name
   std::vector<std::filesystem::path> friction_logs;   // friction*.csv, sorted
   std::optional<std::filesystem::path> thermal_manifest;
+  std::vector<std::filesystem::path> ignored_files;   // lmcal's own outputs (friction_samples.csv, …): never inputs
 };
+
+// The names of every file `calibration_outputs` may write; `find_calibration_set` never takes
+// one of them for an input (calibrate -o SET writes its outputs beside the logs).
+const std::vector<std::string>& calibration_output_names();
+bool is_calibration_output(std::string_view file_name);
 
 // What `dir` holds; InputError when it is not a folder or holds neither half.
 CalibrationSet find_calibration_set(const std::filesystem::path& dir);
@@ -80,9 +86,13 @@ struct CalibratedModel {
 
 struct Calibration {
   CalibrationSet set;
+  CalibrationOptions options;                               // as given (calibration.json records them)
   std::vector<std::pair<std::string, std::string>> inputs;  // file -> sha256
   std::vector<std::string> command;                         // as recorded in the outputs
   std::vector<std::string> notes;                           // steps skipped, and why
+  // Likely mistakes in the data (the loaders' warnings, heat from the paper's constants, a run
+  // that disagrees with the others): printed, in calibration.json and in the report.
+  std::vector<std::string> warnings;
   std::optional<FrictionLog> friction_log;
   FrictionFitOptions friction_options;
   std::optional<FrictionFitResult> friction;
