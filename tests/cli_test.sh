@@ -145,6 +145,15 @@ check "calibrate is quiet on stderr when it is not a terminal" test ! -s calibra
 script -qec "'$LMCAL' calibrate calset -o ttyout --no-diagnosis" /dev/null >tty.txt 2>&1
 check "calibrate shows its steps on a terminal" grep -q '\[2/[0-9]\] friction fit' tty.txt
 check "calibrate defaults to fits/<folder name>" bash -c "cd calset && '$LMCAL' calibrate . >/dev/null && test -s fits/calset/report.html"
+cat >calopts.toml <<'TOML'
+[calibrate]
+h = 6.5
+starts = 3
+TOML
+"$LMCAL" --config calopts.toml calibrate calset -o calset --no-diagnosis --bootstrap 0 >/dev/null 2>&1
+"$LMCAL" --config calopts.toml calibrate calset -o calset --no-diagnosis --bootstrap 0 >calagain.txt 2>&1
+check "calibrate -o SET twice: its own outputs are not read as logs" grep -q 'friction_samples.csv not read: it is an output of lmcal calibrate' calagain.txt
+check "calibrate options from --config reach the fits and calibration.json" grep -q '"starts": 3' calset/calibration.json
 check "a folder without measurements refused" refused "expected friction logs (friction*.csv) or a thermal manifest" calibrate out
 check "a missing folder refused" refused "expected a measurement folder" calibrate no_such_folder -o out
 
