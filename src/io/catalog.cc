@@ -22,26 +22,32 @@ using Field = std::optional<double> GuideSpec::*;
 struct FieldDef {
   const char* name;
   Field member;
+  double low, high;  // physical range (inclusive): beyond it, a typo or a wrong unit
 };
 
 // The numeric fields of GuideSpec, in member order: the single table that ties
-// TOML keys and override names to members.
+// TOML keys and override names to members, with the range a real rail or bar lies in.
 constexpr std::array<FieldDef, 11> kFields{{
-    {"block_length_mm", &GuideSpec::block_length_mm},
-    {"contact_length_mm", &GuideSpec::contact_length_mm},
-    {"rail_width_mm", &GuideSpec::rail_width_mm},
-    {"rail_height_mm", &GuideSpec::rail_height_mm},
-    {"rail_mass_kg_m", &GuideSpec::rail_mass_kg_m},
-    {"area_m2", &GuideSpec::area_m2},
-    {"perimeter_m", &GuideSpec::perimeter_m},
-    {"preload_um", &GuideSpec::preload_um},
-    {"density_kg_m3", &GuideSpec::density_kg_m3},
-    {"specific_heat_J_kgK", &GuideSpec::specific_heat_J_kgK},
-    {"conductivity_W_mK", &GuideSpec::conductivity_W_mK},
+    {"block_length_mm", &GuideSpec::block_length_mm, 1, 2000},
+    {"contact_length_mm", &GuideSpec::contact_length_mm, 1, 5000},
+    {"rail_width_mm", &GuideSpec::rail_width_mm, 1, 1000},
+    {"rail_height_mm", &GuideSpec::rail_height_mm, 1, 1000},
+    {"rail_mass_kg_m", &GuideSpec::rail_mass_kg_m, 0.01, 1000},
+    {"area_m2", &GuideSpec::area_m2, 1e-7, 1},
+    {"perimeter_m", &GuideSpec::perimeter_m, 1e-3, 10},
+    {"preload_um", &GuideSpec::preload_um, 1e-3, 100},
+    {"density_kg_m3", &GuideSpec::density_kg_m3, 100, 30000},
+    {"specific_heat_J_kgK", &GuideSpec::specific_heat_J_kgK, 50, 5000},
+    {"conductivity_W_mK", &GuideSpec::conductivity_W_mK, 0.01, 2000},
 }};
 
+bool in_range(const FieldDef& field, double value) { return value >= field.low && value <= field.high; }
+
+std::string range_text(const FieldDef& field) { return fmt::format("{:g} to {:g}", field.low, field.high); }
+
 constexpr std::string_view kMissing = "missing";
-constexpr std::string_view kModelKey = "model";
+constexpr std::string_view kModelKey = "model";  // [[guide]]
+constexpr std::string_view kNameKey = "name";    // [[bar]]
 constexpr std::string_view kNotesKey = "notes";
 
 const FieldDef* find_field(std::string_view name) {
@@ -67,8 +73,9 @@ InputError error_at(const std::string& source_name, const toml::source_region& w
                     what);
 }
 
-// A numeric field: a finite number > 0 (TOML integer or float), or "missing".
-std::optional<double> parse_value(const toml::node& node, const char* field, const std::string& model,
+// A numeric field: a finite number in the field's physical range (TOML integer or float), or
+// "missing".
+std::optional<double> parse_value(const toml::node& node, const FieldDef& field, const std::string& model,
                                   const std::string& source_name) {
   if (const auto* s = node.as_string(); s && s->get() == kMissing) return std::nullopt;
   std::optional<double> value;
@@ -76,7 +83,12 @@ std::optional<double> parse_value(const toml::node& node, const char* field, con
   if (const auto* f = node.as_floating_point()) value = f->get();
   if (!value || !std::isfinite(*value) || *value <= 0) {
     throw error_at(source_name, node.source(),
-                   fmt::format("expected a number > 0 or \"missing\" for {} of {}", field, model));
+                   fmt::format("expected a number > 0 or \"missing\" for {} of {}", field.name, model));
+  }
+  if (!in_range(field, *value)) {
+    throw error_at(source_name, node.source(),
+                   fmt::format("{} = {:g} of {} is not physical: expected {} (a typo or another unit?)", field.name,
+                               *value, model, range_text(field)));
   }
   return value;
 }
@@ -106,27 +118,31 @@ std::map<std::string, std::string> parse_notes(const toml::node& node, const std
   return notes;
 }
 
-GuideSpec parse_guide(const toml::table& table, const std::string& source_name) {
+// One [[guide]] (named by `model`) or [[bar]] (named by `name`) table.
+GuideSpec parse_guide(const toml::table& table, std::string_view kind, const std::string& source_name) {
   GuideSpec spec;
-  const toml::node* model = table.get(kModelKey);
+  spec.kind = std::string(kind);
+  spec.source = source_name;
+  const std::string_view name_key = kind == "bar" ? kNameKey : kModelKey;
+  const toml::node* model = table.get(name_key);
   const auto* model_text = model ? model->as_string() : nullptr;
   if (!model_text || model_key(model_text->get()).empty()) {
     throw error_at(source_name, model ? model->source() : table.source(),
-                   "expected a non-empty string 'model' in each [[guide]]");
+                   fmt::format("expected a non-empty string '{}' in each [[{}]]", name_key, kind));
   }
   spec.model = model_text->get();
 
   for (const auto& [key, node] : table) {
-    if (key.str() == kModelKey) continue;
+    if (key.str() == name_key) continue;
     if (key.str() == kNotesKey) {
       spec.notes = parse_notes(node, spec.model, source_name);
     } else if (const FieldDef* field = find_field(key.str())) {
-      spec.*field->member = parse_value(node, field->name, spec.model, source_name);
+      spec.*field->member = parse_value(node, *field, spec.model, source_name);
     } else {
       // Unknown keys are errors, so that a misspelt field does not silently load as missing.
       throw error_at(source_name, key.source(),
-                     fmt::format("unknown key '{}' in guide {}; known: model, notes, {}", key.str(),
-                                 spec.model, fmt::join(guide_field_names(), ", ")));
+                     fmt::format("unknown key '{}' in {} {}; known: {}, notes, {}", key.str(), kind, spec.model,
+                                 name_key, fmt::join(guide_field_names(), ", ")));
     }
   }
   return spec;
@@ -169,30 +185,52 @@ GuideCatalog parse_catalog(std::string_view toml_text, const std::string& source
     throw error_at(source_name, e.source(), std::string(e.description()));
   }
 
-  const toml::node* guide_node = root.get("guide");
-  const toml::array* guides = guide_node ? guide_node->as_array() : nullptr;
-  if (!guides || guides->empty()) {
-    const toml::source_region where = guide_node ? guide_node->source() : toml::source_region{};
-    throw error_at(source_name, where, "expected one or more [[guide]] tables");
-  }
-
   GuideCatalog catalog;
   catalog.source = source_name;
-  for (const toml::node& element : *guides) {
-    const auto* table = element.as_table();
-    if (!table) throw error_at(source_name, element.source(), "expected each guide to be a [[guide]] table");
-    GuideSpec spec = parse_guide(*table, source_name);
-    const std::string key = model_key(spec.model);
-    const auto duplicate = std::find_if(catalog.guides.begin(), catalog.guides.end(),
-                                        [&](const GuideSpec& g) { return model_key(g.model) == key; });
-    if (duplicate != catalog.guides.end()) {
-      throw error_at(source_name, table->get(kModelKey)->source(),
-                     fmt::format("duplicate model '{}' (same as '{}', ignoring case and spaces)", spec.model,
-                                 duplicate->model));
+  for (const std::string_view kind : {"guide", "bar"}) {
+    const toml::node* node = root.get(kind);
+    if (!node) continue;
+    const toml::array* entries = node->as_array();
+    if (!entries) throw error_at(source_name, node->source(), fmt::format("expected [[{}]] tables", kind));
+    for (const toml::node& element : *entries) {
+      const auto* table = element.as_table();
+      if (!table) throw error_at(source_name, element.source(), fmt::format("expected each {0} to be a [[{0}]] table", kind));
+      GuideSpec spec = parse_guide(*table, kind, source_name);
+      const std::string key = model_key(spec.model);
+      const auto duplicate = std::find_if(catalog.guides.begin(), catalog.guides.end(),
+                                          [&](const GuideSpec& g) { return model_key(g.model) == key; });
+      if (duplicate != catalog.guides.end()) {
+        throw error_at(source_name, table->get(kind == "bar" ? kNameKey : kModelKey)->source(),
+                       fmt::format("duplicate {} '{}' (same as '{}', ignoring case and spaces)", kind == "bar" ? "name" : "model", spec.model,
+                                   duplicate->model));
+      }
+      catalog.guides.push_back(std::move(spec));
     }
-    catalog.guides.push_back(std::move(spec));
   }
+  for (const auto& [key, node] : root) {
+    if (key.str() != "guide" && key.str() != "bar")
+      throw error_at(source_name, key.source(), fmt::format("unknown key '{}'; expected [[guide]] and [[bar]] tables", key.str()));
+  }
+  if (catalog.guides.empty()) throw error_at(source_name, {}, "expected one or more [[guide]] or [[bar]] tables");
   return catalog;
+}
+
+const GuideSpec& find_guide(std::string_view model, const GuideCatalog* user) {
+  if (user) {
+    const std::string key = model_key(model);
+    for (const GuideSpec& guide : user->guides)
+      if (model_key(guide.model) == key) return guide;
+    try {
+      return builtin_catalog().find(model);
+    } catch (const InvalidParameter&) {
+      std::vector<std::string_view> known;
+      for (const GuideSpec& guide : user->guides) known.emplace_back(guide.model);
+      for (const GuideSpec& guide : builtin_catalog().guides) known.emplace_back(guide.model);
+      throw InvalidParameter("guide", fmt::format("unknown model '{}' in {} and the built-in catalog; known: {}", model,
+                                                  user->source, fmt::join(known, ", ")));
+    }
+  }
+  return builtin_catalog().find(model);
 }
 
 GuideCatalog load_catalog(const std::filesystem::path& file) {
@@ -218,6 +256,8 @@ GuideSpec with_overrides(GuideSpec spec, const std::map<std::string, double>& ov
     field_value(spec, name);  // refuses unknown names
     const FieldDef* field = find_field(name);
     require_positive(field->name, value);
+    if (!in_range(*field, value))
+      throw InvalidParameter(field->name, value, fmt::format("a physical value for {}: {}", spec.model, range_text(*field)));
     spec.*field->member = value;
     // The catalog's note described the replaced value; keep the provenance honest.
     spec.notes[field->name] = "user override";
@@ -228,8 +268,11 @@ GuideSpec with_overrides(GuideSpec spec, const std::map<std::string, double>& ov
 double require(const GuideSpec& spec, std::optional<double> GuideSpec::*field, const char* name) {
   const std::optional<double>& value = spec.*field;
   if (!value) {
-    throw InvalidParameter(name,
-                           fmt::format("the catalog has no value for guide {}; supply it explicitly", spec.model));
+    throw InvalidParameter(name, fmt::format("the catalog ({}) has no value for {} {}; add {} to its entry there, or "
+                                             "give it as an override ([run.guide_overrides] in a thermal manifest, "
+                                             "--set {}=VALUE on the command line)",
+                                             spec.source.empty() ? "<built-in>" : spec.source, spec.kind, spec.model,
+                                             name, name));
   }
   return *value;
 }

@@ -3,7 +3,15 @@
 // The catalog is a TOML file (src/data/guides.toml is built into the binary;
 // `load_catalog` reads another). One [[guide]] table per model. A value the
 // sources do not give is written as the string "missing" and loads as an empty
-// optional: the catalog never invents a number. Each value may carry a note
+// optional: the catalog never invents a number. A user's catalog may also hold [[bar]]
+// tables — a plain heated bar of a lab experiment, named by `name`, with the rail's fields
+// (area_m2, perimeter_m, conductivity_W_mK, density_kg_m3, specific_heat_J_kgK, and
+// contact_length_mm, the heated length):
+//   [[bar]]
+//   name = "steel bar 20x20"
+//   area_m2 = 4e-4
+//   perimeter_m = 0.08
+//   ... Each value may carry a note
 // (its source, or "estimate: ..."), kept in GuideSpec::notes.
 //
 // Units are in the field names. Lb (block_length_mm) is the block length the
@@ -28,7 +36,9 @@
 namespace lmcal {
 
 struct GuideSpec {
-  std::string model;                              // e.g. "SRN 35C"
+  std::string model;                              // e.g. "SRN 35C"; a bar's name
+  std::string kind = "guide";                     // "guide" ([[guide]]) or "bar" ([[bar]]: a plain heated bar)
+  std::string source;                             // the catalog it came from ("<built-in>" or the file)
   std::optional<double> block_length_mm;          // Lb (friction law)
   std::optional<double> contact_length_mm;        // Lb1 (heat input length)
   std::optional<double> rail_width_mm;
@@ -57,13 +67,20 @@ struct GuideCatalog {
   const GuideSpec& find(std::string_view model) const;
 };
 
-// Parses catalog text; errors are InputError with source name, line and column.
+// Parses catalog text; errors are InputError with source name, line and column: an unknown
+// key, a duplicate name, a value outside its physical range (density 100-30000 kg/m³,
+// conductivity 0.01-2000 W/mK, …: a typo or a wrong unit).
 GuideCatalog parse_catalog(std::string_view toml_text, const std::string& source_name);
 GuideCatalog load_catalog(const std::filesystem::path& file);
 const GuideCatalog& builtin_catalog();
 
+// `model` from the user's catalog when it has it, else from the built-in one (a user catalog
+// adds guides and bars, and may redefine a built-in guide). InvalidParameter listing both
+// catalogs' names when neither has it.
+const GuideSpec& find_guide(std::string_view model, const GuideCatalog* user = nullptr);
+
 // Returns a copy with the named fields replaced; unknown names and non-physical
-// values (<= 0, NaN) throw InvalidParameter.
+// values (<= 0, NaN, outside the field's physical range) throw InvalidParameter.
 GuideSpec with_overrides(GuideSpec spec, const std::map<std::string, double>& overrides);
 
 // The value of a field, or InvalidParameter saying that the catalog lacks it for this guide
