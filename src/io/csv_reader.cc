@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -230,7 +231,8 @@ bool Reader::next() {
     if (is_skipped(line_begin_, line_end_)) continue;
     split();
     if (cells_.size() > header_.size()) {
-      fail(header_.size(), fmt::format("expected {} cells as in the header, found {}", header_.size(), cells_.size()));
+      fail(header_.size(), fmt::format("expected {} cells as in the header, found {}{}", header_.size(), cells_.size(),
+                                       looks_like_decimal_commas() ? " (decimal commas? numbers take a point: 26.5, not 26,5)" : ""));
     }
     if (cells_.size() < header_.size()) {
       fail_at(line_, column_of(line_end_),
@@ -318,7 +320,25 @@ void Reader::fail_rule(const Column& column) const {
 }
 
 void Reader::fail_number(const Column& column, std::string_view found, const char* expected) const {
-  fail(column.cell, fmt::format("column '{}': expected {}, found '{}'", column.header, expected, found));
+  const bool comma = found.find(',') != std::string_view::npos;
+  fail(column.cell, fmt::format("column '{}': expected {}, found '{}'{}", column.header, expected, found,
+                                comma ? " (a decimal comma? numbers take a point: 26.5, not 26,5)" : ""));
+}
+
+bool Reader::looks_like_decimal_commas() const {
+  // "26,5" split into "26" and "5": no decimal point anywhere in the row, and a cell of digits
+  // right after a cell that ends in a digit for every cell too many.
+  const auto digits = [](std::string_view cell) {
+    cell = trim(cell);
+    return !cell.empty() && std::all_of(cell.begin(), cell.end(), [](char c) { return c >= '0' && c <= '9'; });
+  };
+  std::size_t pairs = 0;
+  for (std::size_t i = 0; i < cells_.size(); ++i) {
+    if (cells_[i].find('.') != std::string_view::npos) return false;
+    const std::string_view before = i == 0 ? std::string_view() : trim(cells_[i - 1]);
+    pairs += !before.empty() && before.back() >= '0' && before.back() <= '9' && digits(cells_[i]);
+  }
+  return pairs >= cells_.size() - header_.size();
 }
 
 long Reader::column_of(const char* where) const {
@@ -412,6 +432,69 @@ std::optional<Column> classify(const Reader& reader, std::size_t cell, std::span
   return std::nullopt;
 }
 
+std::string lowercase(std::string_view text) {
+  std::string out(text);
+  for (char& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return out;
+}
+
+// Edit distance with adjacent transpositions (optimal string alignment: "frcition" is one
+// from "friction"), for short header names.
+std::size_t edit_distance(std::string_view a, std::string_view b) {
+  std::vector<std::vector<std::size_t>> d(a.size() + 1, std::vector<std::size_t>(b.size() + 1));
+  for (std::size_t i = 0; i <= a.size(); ++i) d[i][0] = i;
+  for (std::size_t j = 0; j <= b.size(); ++j) d[0][j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      d[i][j] = std::min({d[i - 1][j] + 1, d[i][j - 1] + 1, d[i - 1][j - 1] + (a[i - 1] != b[j - 1])});
+      if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1]) d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);
+    }
+  }
+  return d[a.size()][b.size()];
+}
+
+// Short names rigs use for lmcal's columns.
+std::string_view alias_of(std::string_view name) {
+  static constexpr std::pair<std::string_view, std::string_view> kAliases[] = {
+      {"dir", "direction"},   {"sense", "direction"}, {"temp", "temperature"}, {"speed", "velocity"},
+      {"vel", "velocity"},    {"v", "velocity"},      {"f", "friction"},       {"force", "friction"},
+      {"t", "time"},          {"amb", "ambient"},     {"thermocouple", "tc"},  {"pos", "position"},
+      {"nu40", "viscosity40"}, {"visc", "viscosity40"}};
+  for (const auto& [alias, known] : kAliases)
+    if (name == alias) return known;
+  return {};
+}
+
+// The known column an ignored header looks like (different case, a short alias, one letter
+// off), as the name to write instead; nullopt when it resembles none. The name is compared
+// without its unit, so that "load_cell_N" (another force) does not look like "load_N".
+std::optional<std::string> resemblance(std::string_view header, std::span<const ColumnSpec> specs) {
+  for (const ColumnSpec& spec : specs) {
+    std::string name(header), unit;
+    if (spec.quantity)
+      if (auto split = split_unit(header, *spec.quantity)) {
+        name = split->name;
+        unit = split->unit;
+      }
+    const std::string lower = lowercase(name);
+    const std::string_view known = spec.name;
+    const bool member = spec.family && is_family_member(lower, known);
+    const bool alike = lower == known || member || alias_of(lower) == known ||
+                       (known.size() >= 4 && edit_distance(lower, known) <= 1);
+    if (!alike) continue;
+    if (!spec.quantity) return std::string(known);
+    const std::string base = member ? lower : spec.family ? fmt::format("{}1", known) : std::string(known);
+    return unit.empty() ? canonical_name(base, *spec.quantity) : fmt::format("{}_{}", base, unit);  // the user's unit
+  }
+  return std::nullopt;
+}
+
+bool is_timestamp_name(std::string_view header) {
+  const std::string lower = lowercase(header);
+  return lower.find("timestamp") != std::string::npos || lower == "date" || lower == "datetime" ||
+         lower == "date_time" || lower == "clock" || lower == "time_of_day";
+}
+
 }  // namespace
 
 std::vector<Column> bind_header(const Reader& reader, std::span<const ColumnSpec> specs, LoadReport& report) {
@@ -420,7 +503,17 @@ std::vector<Column> bind_header(const Reader& reader, std::span<const ColumnSpec
   for (std::size_t cell = 0; cell < reader.header().size(); ++cell) {
     std::optional<Column> column = classify(reader, cell, specs);
     if (!column) {
-      report.ignored_columns.push_back(reader.header()[cell]);
+      const std::string& header = reader.header()[cell];
+      report.ignored_columns.push_back(header);
+      if (is_timestamp_name(header)) {
+        report.warnings.push_back(fmt::format("column '{}' (a timestamp?) is ignored: lmcal reads time from a time_s column "
+                                              "(or time_ms, time_min, time_h) holding seconds since the start; convert it",
+                                              header));
+      } else if (auto known = resemblance(header, specs)) {
+        report.warnings.push_back(fmt::format("column '{}' is ignored, but looks like '{}' (names are case-sensitive and "
+                                              "carry their unit): rename it if that is what it holds",
+                                              header, *known));
+      }
       continue;
     }
     const auto [it, inserted] = seen.emplace(std::pair(column->spec, column->name), column->header);

@@ -106,6 +106,7 @@ class Reader {
   static bool satisfies(Rule rule, double value);
   [[noreturn]] void fail_rule(const Column& column) const;
   [[noreturn]] void fail_number(const Column& column, std::string_view found, const char* expected) const;
+  bool looks_like_decimal_commas() const;  // the row's cells, as split
 
   struct FileCloser {
     void operator()(std::FILE* f) const { std::fclose(f); }
@@ -149,7 +150,9 @@ std::string canonical_name(std::string_view base, Quantity quantity);
 
 // Binds the header cells to `specs` (in header order). Call it before the first next(): errors
 // point into the header line. Unknown columns are listed in
-// report.ignored_columns and unit conversions in report.conversions. Throws for a known
+// report.ignored_columns (with a warning in report.warnings when one looks like a known
+// column — another case, a short alias such as `dir` or `temp`, one letter off — or like a
+// timestamp) and unit conversions in report.conversions. Throws for a known
 // column with no or an unknown unit, for a column given twice (even in different units)
 // and for a required column that is missing.
 std::vector<Column> bind_header(const Reader& reader, std::span<const ColumnSpec> specs, LoadReport& report);
