@@ -96,14 +96,13 @@ void GuideOptions::add_to(CLI::App& app) {
   app.add_option("--guide", guides, "Guide model(s) from the catalog, e.g. \"SRN 35C\" (a list sweeps them)")
       ->delimiter(',')
       ->capture_default_str();
-  app.add_option("--catalog", catalog_file, "Guide catalog TOML file (default: the built-in catalog)");
+  app.add_option("--catalog", catalog_file, "Your guide catalog (TOML: [[guide]] and [[bar]] tables), searched before the built-in one");
   add_assignments(app, "--set", overrides, "Override a catalog value: --set conductivity_W_mK=36 (repeatable)");
 }
 
 GuideSpec GuideOptions::resolve(const std::string& model) const {
-  const GuideCatalog loaded = catalog_file.empty() ? GuideCatalog{} : load_catalog(catalog_file);
-  const GuideCatalog& catalog = catalog_file.empty() ? builtin_catalog() : loaded;
-  return with_overrides(catalog.find(model), overrides);
+  const std::optional<GuideCatalog> user = catalog_file.empty() ? std::nullopt : std::optional(load_catalog(catalog_file));
+  return with_overrides(find_guide(model, user ? &*user : nullptr), overrides);
 }
 
 nlohmann::json GuideOptions::record() const {

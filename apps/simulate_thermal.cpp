@@ -115,13 +115,15 @@ std::vector<Case> enumerate_cases(const ThermalSweepOptions& o, double initial_C
                               .initial_temperature_C = initial_C};
     // A given heat rate needs no friction conditions, unless a mechanism makes it follow the law.
     const bool law_needed = std::isnan(o.heat_rate_W) || !rail.mechanisms.empty();
-    const std::vector<double> preloads = law_needed
-                                             ? or_catalog(o.preload_um, spec, &GuideSpec::preload_um, "preload_um")
-                                             : (o.preload_um.empty() ? std::vector<double>{NAN} : o.preload_um);
+    const auto law_input = [&](const std::vector<double>& given, std::optional<double> GuideSpec::*field, const char* name) {
+      return law_needed ? or_catalog(given, spec, field, name) : (given.empty() ? std::vector<double>{NAN} : given);
+    };
+    const std::vector<double> preloads = law_input(o.preload_um, &GuideSpec::preload_um, "preload_um");
+    const std::vector<double> block_lengths = law_input(o.block_length_mm, &GuideSpec::block_length_mm, "block_length_mm");
     for (double V : o.velocity_m_s)
       for (double P : o.load_N)
         for (double pc : preloads)
-          for (double Lb : or_catalog(o.block_length_mm, spec, &GuideSpec::block_length_mm, "block_length_mm"))
+          for (double Lb : block_lengths)
             for (double Lb1 : or_catalog(o.contact_length_mm, spec, &GuideSpec::contact_length_mm, "contact_length_mm"))
               for (double L1 : o.stroke_m) {
                 Case c{spec.model, V, P, pc, Lb, Lb1, L1, o.heat_rate_W, {}, params, {}};

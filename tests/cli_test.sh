@@ -62,7 +62,7 @@ check "rail shorter than stroke + block" refused "rail_length_m = 0.25" simulate
 check "negative load" refused "load_N = -10" simulate friction -o out/f.csv --load -10
 check "not a number in a list" refused "'fast' is not a number" simulate friction -o out/f.csv --velocity 0.1,fast
 check "unknown guide" refused "unknown model 'SRN 99'" simulate friction -o out/f.csv --guide "SRN 99"
-check "material missing in the catalog" refused "conductivity_W_mK: the catalog has no value for guide SRG 25C" \
+check "material missing in the catalog" refused "conductivity_W_mK: the catalog (<built-in>) has no value for guide SRG 25C; add conductivity_W_mK" \
   simulate thermal -o out/t --guide "SRG 25C"
 check "unknown source model" refused "unknown source model 'uniform'" simulate thermal -o out/t --source uniform
 check "unknown catalog field" refused "unknown guide field" simulate thermal -o out/t --set colour_mm=3
@@ -134,6 +134,23 @@ check "diagnose thermal takes what fit thermal holds and frees (h fitted: its sh
 check "diagnose thermal prints its lack-of-fit test" grep -q '^lack of fit' tdiag.txt
 check "not a friction fit refused" refused "expected a friction fit" fit thermal thermaldata/thermal.toml --friction thermaldata/thermal_truth.json -o out
 check "unknown ambient column refused" refused "no ambient column 'ambient9_C'" fit thermal thermaldata/thermal.toml --ambient ambient9_C -o out
+
+# --- your own bar: a user catalog's [[bar]] simulated with a given heat --------------------------
+cat >bars.toml <<'TOML'
+[[bar]]
+name = "lab bar"
+area_m2 = 4e-4
+perimeter_m = 0.08
+contact_length_mm = 50
+conductivity_W_mK = 45
+density_kg_m3 = 7850
+specific_heat_J_kgK = 470
+TOML
+check "a user catalog's bar simulates with --heat-rate" "$LMCAL" simulate thermal --catalog bars.toml --guide "lab bar" -o bar --velocity 0.1 --stroke 0.2 --rail-length 0.6 --duration 3600 --heat-rate 5
+check "the bar is named in the outputs" grep -q 'lab bar' bar_time.csv
+printf '[[bar]]\nname = "b"\ndensity_kg_m3 = 7.85\n' >badbar.toml
+check "a non-physical catalog value refused at its line" refused "badbar.toml:3:17: density_kg_m3 = 7.85 of b is not physical" simulate thermal --catalog badbar.toml --guide b -o out/x --heat-rate 5
+check "a missing catalog value says where to supply it" refused "add preload_um to its entry there" simulate thermal --catalog bars.toml --guide "lab bar" -o out/x --velocity 0.1
 
 # --- calibrate: a measurement folder end to end -------------------------------------------------
 mkdir -p calset
