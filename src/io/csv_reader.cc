@@ -457,7 +457,7 @@ std::size_t edit_distance(std::string_view a, std::string_view b) {
 std::string_view alias_of(std::string_view name) {
   static constexpr std::pair<std::string_view, std::string_view> kAliases[] = {
       {"dir", "direction"},   {"sense", "direction"}, {"temp", "temperature"}, {"speed", "velocity"},
-      {"vel", "velocity"},    {"v", "velocity"},      {"f", "friction"},       {"force", "friction"},
+      {"vel", "velocity"},    {"v", "velocity"},      {"f", "friction"},
       {"t", "time"},          {"amb", "ambient"},     {"thermocouple", "tc"},  {"pos", "position"},
       {"nu40", "viscosity40"}, {"visc", "viscosity40"}};
   for (const auto& [alias, known] : kAliases)
@@ -530,22 +530,28 @@ std::vector<Column> bind_header(const Reader& reader, std::span<const ColumnSpec
   }
 
   for (std::size_t s = 0; s < specs.size(); ++s) {
-    const ColumnSpec& spec = specs[s];
-    if (!spec.required || find_column(columns, s)) continue;
-    std::string what;
-    if (!spec.quantity) {
-      what = fmt::format("missing column '{}'", spec.name);
-    } else if (spec.family) {
-      what = fmt::format("missing column '{}': expected one or more {}<n> columns (accepted units: {})",
-                         canonical_name(fmt::format("{}1", spec.name), *spec.quantity), spec.name,
-                         fmt::join(unit_names(*spec.quantity), ", "));
-    } else {
-      what = fmt::format("missing column '{}' (accepted units: {})", canonical_name(spec.name, *spec.quantity),
-                         accepted_names(spec.name, *spec.quantity));
-    }
-    reader.fail_at(reader.header_line(), 1, what);
+    if (specs[s].required && !find_column(columns, s)) reader.fail_at(reader.header_line(), 1, missing_column(specs[s]));
   }
   return columns;
+}
+
+void fail_at_cell(const fs::path& file, long line, std::size_t cell, const std::string& what) {
+  Reader reader(file);
+  reader.read_header();
+  while (reader.next())
+    if (reader.line() == line) reader.fail(cell, what);
+  throw InputError(reader.file(), line, 0, what);
+}
+
+std::string missing_column(const ColumnSpec& spec) {
+  if (!spec.quantity) return fmt::format("missing column '{}'", spec.name);
+  if (spec.family) {
+    return fmt::format("missing column '{}': expected one or more {}<n> columns (accepted units: {})",
+                       canonical_name(fmt::format("{}1", spec.name), *spec.quantity), spec.name,
+                       fmt::join(unit_names(*spec.quantity), ", "));
+  }
+  return fmt::format("missing column '{}' (accepted units: {})", canonical_name(spec.name, *spec.quantity),
+                     accepted_names(spec.name, *spec.quantity));
 }
 
 const Column* find_column(const std::vector<Column>& columns, std::size_t spec) {

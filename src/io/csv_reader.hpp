@@ -157,6 +157,13 @@ std::string canonical_name(std::string_view base, Quantity quantity);
 // and for a required column that is missing.
 std::vector<Column> bind_header(const Reader& reader, std::span<const ColumnSpec> specs, LoadReport& report);
 
+// Throws InputError at cell `cell` of data line `line` of `file`, reading the file again to
+// find the cell's character position (for errors found after the whole file was read).
+[[noreturn]] void fail_at_cell(const std::filesystem::path& file, long line, std::size_t cell, const std::string& what);
+
+// "missing column 'load_N' (accepted units: …)": what bind_header says of a required column.
+std::string missing_column(const ColumnSpec& spec);
+
 // The first column bound to spec `spec`, or nullptr.
 const Column* find_column(const std::vector<Column>& columns, std::size_t spec);
 

@@ -7,8 +7,11 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <optional>
 
 #include "io/csv_reader.hpp"
+#include "io/friction_files.hpp"
+#include "io/raw_friction.hpp"
 #include "lmcal/error.hpp"
 #include "lmcal/io/csv_writer.hpp"
 
@@ -21,7 +24,7 @@ using csv::Rule;
 
 constexpr double kDefaultViscosity40_mm2_s = 99.0;  // ν_i of Eq. 6 (PHYSICS.md §2)
 
-// The columns of a friction log, in the order the writer puts them.
+// The columns of a friction log, in the order the writer puts them; a raw log's last.
 enum Spec : std::size_t {
   kRun,
   kGuide,
@@ -33,24 +36,29 @@ enum Spec : std::size_t {
   kTemperature,
   kFriction,
   kViscosity40,
-  kDirection
+  kDirection,
+  kForce,
+  kPosition
 };
-constexpr std::array<csv::ColumnSpec, 11> kSpecs{{
-    {.name = "run", .text = true, .required = true},
+// Required columns are checked by the loader: a manifest may give them instead, and a raw log
+// has force where a tidy one has friction.
+constexpr std::array<csv::ColumnSpec, 13> kSpecs{{
+    {.name = "run", .text = true},
     {.name = "guide", .text = true},
     {.name = "time", .quantity = Quantity::time},
     {.name = "velocity",
      .quantity = Quantity::velocity,
-     .required = true,
      .rule = Rule::non_negative,
      .hint = " (a speed; the direction column gives the sense)"},
-    {.name = "load", .quantity = Quantity::force, .required = true, .rule = Rule::non_negative},
-    {.name = "preload", .quantity = Quantity::preload, .required = true, .rule = Rule::non_negative},
-    {.name = "block_length", .quantity = Quantity::length_mm, .required = true, .rule = Rule::positive},
-    {.name = "temperature", .quantity = Quantity::temperature, .required = true, .rule = Rule::above_absolute_zero},
-    {.name = "friction", .quantity = Quantity::force, .required = true},
+    {.name = "load", .quantity = Quantity::force, .rule = Rule::non_negative},
+    {.name = "preload", .quantity = Quantity::preload, .rule = Rule::non_negative},
+    {.name = "block_length", .quantity = Quantity::length_mm, .rule = Rule::positive},
+    {.name = "temperature", .quantity = Quantity::temperature, .rule = Rule::above_absolute_zero},
+    {.name = "friction", .quantity = Quantity::force},
     {.name = "viscosity40", .quantity = Quantity::viscosity, .rule = Rule::positive},
     {.name = "direction", .rule = Rule::plus_or_minus_one},
+    {.name = "force", .quantity = Quantity::force},
+    {.name = "position", .quantity = Quantity::distance_m},
 }};
 
 std::string header_of(Spec spec) {
@@ -88,85 +96,378 @@ std::string_view name_cell(const csv::Reader& reader, const csv::Column& column,
   return name;
 }
 
-// Appends the rows of one file to `log`.
-void append_file(const fs::path& file, FrictionLog& log, NameIndex& runs, NameIndex& guides) {
-  csv::Reader reader(file);
-  LoadReport report;
-  report.file = reader.file();
-  reader.read_header();
-  const std::vector<csv::Column> columns = csv::bind_header(reader, kSpecs, report);
-  const auto column = [&](Spec spec) { return csv::find_column(columns, spec); };
-  const csv::Column& run = *column(kRun);  // required columns are bound, or bind_header threw
-  const csv::Column& velocity = *column(kVelocity);
-  const csv::Column& load = *column(kLoad);
-  const csv::Column& preload = *column(kPreload);
-  const csv::Column& block_length = *column(kBlockLength);
-  const csv::Column& temperature = *column(kTemperature);
-  const csv::Column& friction = *column(kFriction);
-  const csv::Column* guide = column(kGuide);
-  const csv::Column* time = column(kTime);
-  const csv::Column* viscosity40 = column(kViscosity40);
-  const csv::Column* direction = column(kDirection);
+// The run conditions a manifest may give instead of columns.
+struct ConditionKey {
+  Spec spec;
+  std::optional<double> FrictionRunConditions::*field;
+  bool required;
+};
+constexpr std::array<ConditionKey, 5> kConditionKeys{{
+    {kLoad, &FrictionRunConditions::load_N, true},
+    {kPreload, &FrictionRunConditions::preload_um, true},
+    {kBlockLength, &FrictionRunConditions::block_length_mm, true},
+    {kTemperature, &FrictionRunConditions::temperature_C, true},
+    {kViscosity40, &FrictionRunConditions::viscosity40_mm2_s, false},
+}};
 
-  const std::size_t capacity = log.size() + reader.estimated_rows();
-  for (auto* v : {&log.time_s, &log.velocity_m_s, &log.load_N, &log.preload_um, &log.block_length_mm,
-                  &log.temperature_C, &log.friction_N, &log.viscosity40_mm2_s}) {
-    v->reserve(capacity);
+// One raw run of a file as read: samples in time order, duplicate times merged.
+struct RawRun {
+  std::uint32_t run = 0;
+  raw::RunSamples samples;
+  std::vector<long> line;           // of each sample (its first, when merged)
+  std::vector<std::uint32_t> merged;  // samples merged into each (1: none)
+  std::vector<std::uint32_t> guide;
+  std::vector<FrictionConditions<double>> conditions;  // velocity and direction unset
+  std::vector<double> viscosity40;
+};
+
+// A file of a log being read: its columns, where each condition comes from, the rows' checks.
+class FileLoader {
+ public:
+  FileLoader(const detail::FrictionFile& file, const RawFrictionOptions& raw, FrictionLog& log, NameIndex& runs,
+             NameIndex& guides)
+      : file_(file), raw_(raw), log_(log), runs_(runs), guides_(guides), reader_(file.path) {
+    report_.file = reader_.file();
+    reader_.read_header();
+    columns_ = csv::bind_header(reader_, kSpecs, report_);
+    bind();
   }
-  log.run.reserve(capacity);
-  log.guide.reserve(capacity);
-  log.direction.reserve(capacity);
 
-  // Time must not decrease within a run (within this file): the last time and line per run.
-  struct LastSample {
-    double time_s = std::numeric_limits<double>::quiet_NaN();
-    long line = 0;
-  };
-  std::vector<LastSample> last;
-  std::string scratch;
-  std::size_t skipped = 0;
-
-  while (reader.next()) {
-    ++report.rows_read;
-    const std::uint32_t run_index = runs(name_cell(reader, run, scratch));
-    const std::uint32_t guide_index = guides(guide ? name_cell(reader, *guide, scratch) : std::string_view());
-    const double t = time ? reader.number(*time, false) : std::numeric_limits<double>::quiet_NaN();
-    const double v = reader.number(velocity, false);
-    const double p = reader.number(load, false);
-    const double pc = reader.number(preload, false);
-    const double lb = reader.number(block_length, false);
-    const double temp = reader.number(temperature, false);
-    const double f = reader.number(friction, true);
-    const double nu40 = viscosity40 ? reader.number(*viscosity40, false) : kDefaultViscosity40_mm2_s;
-    const double dir = direction ? reader.number(*direction, false) : 1.0;
-
-    if (time) {
-      if (last.size() <= run_index) last.resize(run_index + 1);
-      LastSample& previous = last[run_index];
-      if (t < previous.time_s) {
-        reader.fail(time->cell,
-                    fmt::format("{} = {} is earlier than the previous sample of run '{}' (line {}); time "
-                                "must not decrease within a run",
-                                time->header, reader.cell(time->cell), log.run_names[run_index], previous.line));
-      }
-      previous = {t, reader.line()};
+  void load() {
+    reserve();
+    std::string scratch;
+    while (reader_.next()) {
+      ++report_.rows_read;
+      read_row(scratch);
     }
+    if (report_.rows_read == 0) reader_.fail_at(reader_.header_line(), 0, "no data rows below the header");
+    if (is_raw()) {
+      segment_raw_runs();
+    } else {
+      if (skipped_ != 0) report_.skipped[column(kFriction)->header + " empty or NaN"] = skipped_;
+      report_.rows_kept = report_.rows_read - skipped_;
+      warn_signed_friction();
+    }
+    report_.bytes = static_cast<double>(reader_.bytes());
+    log_.reports.push_back(std::move(report_));
+  }
+
+ private:
+  const csv::Column* column(Spec spec) const { return csv::find_column(columns_, spec); }
+  csv::Column* mutable_column(Spec spec) {
+    for (csv::Column& c : columns_)
+      if (c.spec == spec) return &c;
+    return nullptr;
+  }
+  bool is_raw() const { return column(kForce) != nullptr; }
+
+  [[noreturn]] void fail_header(const std::string& what) const { reader_.fail_at(reader_.header_line(), 1, what); }
+
+  // Which columns the file has decides its kind (tidy or raw) and what the manifest must give.
+  void bind() {
+    const bool raw = is_raw();
+    if (raw && column(kFriction)) {
+      reader_.fail(column(kForce)->cell, fmt::format("a log has '{}' (tidy: friction per sample) or '{}' (raw: the "
+                                                     "load cell's signed force), not both",
+                                                     column(kFriction)->header, column(kForce)->header));
+    }
+    if (!raw && !column(kFriction)) {
+      fail_header(fmt::format("{}; or, for a raw load-cell log, a force column ({}) with time and position or velocity",
+                              csv::missing_column(kSpecs[kFriction]), csv::accepted_names("force", Quantity::force)));
+    }
+    if (raw) {
+      if (!column(kTime)) fail_header(fmt::format("a raw log ({}) needs a time column: {}", column(kForce)->header,
+                                                  csv::accepted_names("time", Quantity::time)));
+      if (const csv::Column* d = column(kDirection)) {
+        reader_.fail(d->cell, fmt::format("a raw log ({}) takes the sense of motion from the motion itself; drop the "
+                                          "'{}' column",
+                                          column(kForce)->header, d->header));
+      }
+      if (column(kVelocity)) {
+        motion_ = mutable_column(kVelocity);
+        motion_->rule = Rule::any;  // signed in a raw log
+        if (const csv::Column* p = column(kPosition)) report_.ignored_columns.push_back(p->header + " (velocity used)");
+      } else if (column(kPosition)) {
+        motion_ = mutable_column(kPosition);
+        motion_kind_ = raw::Motion::position_m;
+      } else {
+        fail_header(fmt::format("a raw log ({}) needs the motion: a position column ({}) or a signed velocity ({})",
+                                column(kForce)->header, csv::accepted_names("position", Quantity::distance_m),
+                                csv::accepted_names("velocity", Quantity::velocity)));
+      }
+    } else {
+      if (!column(kVelocity)) fail_header(csv::missing_column(kSpecs[kVelocity]));
+      if (const csv::Column* p = column(kPosition)) report_.ignored_columns.push_back(p->header);
+    }
+
+    // The run: a column, or the manifest's name for the file; not both.
+    if (column(kRun) && !file_.run.empty()) {
+      reader_.fail(column(kRun)->cell, fmt::format("the manifest {} names this file's run ('{}'): drop the '{}' column "
+                                                   "or the run's file key",
+                                                   file_.manifest, file_.run, column(kRun)->header));
+    }
+    if (!column(kRun) && file_.run.empty()) fail_header(csv::missing_column(kSpecs[kRun]));
+
+    // Every condition from a column or the manifest, not both.
+    for (const ConditionKey& key : kConditionKeys) check_given_once(key.spec, [&](const FrictionRunConditions& c) {
+      return (c.*key.field).has_value() && !(key.spec == kBlockLength && c.block_length_from_catalog);
+    });
+    check_given_once(kGuide, [](const FrictionRunConditions& c) { return c.guide.has_value(); });
+    for (const ConditionKey& key : kConditionKeys) {
+      if (key.required && !column(key.spec) && file_.manifest.empty()) fail_header(csv::missing_column(kSpecs[key.spec]));
+    }
+  }
+
+  // The runs the manifest describes that rows of this file may belong to.
+  template <typename Has>
+  void check_given_once(Spec spec, Has has) const {
+    const csv::Column* c = column(spec);
+    if (!c) return;
+    for (const auto& [id, conditions] : file_.runs) {
+      if (has(conditions)) {
+        reader_.fail(c->cell, fmt::format("'{}' is both a column of this file and a key of run '{}' in {}: give it "
+                                          "once",
+                                          c->header, id, file_.manifest));
+      }
+    }
+  }
+
+  void reserve() {
+    const std::size_t capacity = log_.size() + reader_.estimated_rows();
+    for (auto* v : {&log_.time_s, &log_.velocity_m_s, &log_.load_N, &log_.preload_um, &log_.block_length_mm,
+                    &log_.temperature_C, &log_.friction_N, &log_.viscosity40_mm2_s}) {
+      v->reserve(capacity);
+    }
+    log_.run.reserve(capacity);
+    log_.guide.reserve(capacity);
+    log_.direction.reserve(capacity);
+  }
+
+  // The manifest's conditions of run `run_index` (nullptr when it does not list the run);
+  // a condition with neither column nor key is an error at the row's first run cell.
+  const FrictionRunConditions* manifest_conditions(std::uint32_t run_index) {
+    if (run_conditions_.size() <= run_index) run_conditions_.resize(run_index + 1, std::nullopt);
+    auto& cached = run_conditions_[run_index];
+    if (cached) return *cached;
+    const std::string& name = log_.run_names[run_index];
+    const FrictionRunConditions* found = nullptr;
+    if (const auto it = file_.runs.find(name); it != file_.runs.end()) found = &it->second;
+    for (const ConditionKey& key : kConditionKeys) {
+      if (!key.required || column(key.spec) || (found && (found->*key.field))) continue;
+      const std::string what =
+          fmt::format("run '{}' has no {}: add {} to its [[run]] in {}, or a '{}' column to this file", name,
+                      header_of(key.spec), header_of(key.spec), file_.manifest, header_of(key.spec));
+      if (column(kRun)) reader_.fail(column(kRun)->cell, what);
+      reader_.fail_at(reader_.line(), 0, what);
+    }
+    cached = found;
+    return found;
+  }
+
+  // A condition of the current row: its column, else the manifest's value, else `fallback`.
+  double condition(Spec spec, std::optional<double> FrictionRunConditions::*field, const FrictionRunConditions* c,
+                   double fallback = 0) const {
+    if (const csv::Column* col = column(spec)) return reader_.number(*col, false);
+    return c && (c->*field) ? *(c->*field) : fallback;
+  }
+
+  void read_row(std::string& scratch) {
+    const std::uint32_t run_index = runs_(column(kRun) ? name_cell(reader_, *column(kRun), scratch)
+                                                        : std::string_view(file_.run));
+    const FrictionRunConditions* given = manifest_conditions(run_index);
+    std::string_view guide_name;
+    if (column(kGuide)) guide_name = name_cell(reader_, *column(kGuide), scratch);
+    else if (given && given->guide) guide_name = *given->guide;
+    const std::uint32_t guide_index = guides_(guide_name);
+    const double t = column(kTime) ? reader_.number(*column(kTime), false) : kNaN;
+    const FrictionConditions<double> c{
+        .load_N = condition(kLoad, &FrictionRunConditions::load_N, given),
+        .preload_um = condition(kPreload, &FrictionRunConditions::preload_um, given),
+        .block_length_mm = condition(kBlockLength, &FrictionRunConditions::block_length_mm, given),
+        .temperature_C = condition(kTemperature, &FrictionRunConditions::temperature_C, given)};
+    const double nu40 =
+        condition(kViscosity40, &FrictionRunConditions::viscosity40_mm2_s, given, kDefaultViscosity40_mm2_s);
+    if (is_raw()) {
+      read_raw_row(run_index, guide_index, t, c, nu40);
+      return;
+    }
+    const double v = reader_.number(*column(kVelocity), false);
+    const double f = reader_.number(*column(kFriction), true);
+    const double dir = column(kDirection) ? reader_.number(*column(kDirection), false) : 1.0;
+    if (column(kTime)) check_time_order(run_index, t, false);
     // The rest of the row was checked: a missing friction value only skips the sample.
     if (std::isnan(f)) {
-      ++skipped;
-      continue;
+      ++skipped_;
+      return;
     }
-    log.append(run_index, guide_index, t,
-               {.load_N = p, .preload_um = pc, .block_length_mm = lb, .velocity_m_s = v, .temperature_C = temp,
-                .direction = dir},
-               f, nu40);
+    FrictionConditions<double> sample = c;
+    sample.velocity_m_s = v;
+    sample.direction = dir;
+    log_.append(run_index, guide_index, t, sample, f, nu40);
+    if (dir < 0) {
+      ++backward_rows_;
+      negative_backward_ += f < 0;
+    }
+    negative_rows_ += f < 0;
   }
-  if (report.rows_read == 0) reader.fail_at(reader.header_line(), 0, "no data rows below the header");
-  if (skipped != 0) report.skipped[friction.header + " empty or NaN"] = skipped;
-  report.rows_kept = report.rows_read - skipped;
-  report.bytes = static_cast<double>(reader.bytes());
-  log.reports.push_back(std::move(report));
-}
+
+  // Time must not decrease within a run (within this file); a raw log's repeated time is
+  // refused or merged (returns true: merge into the previous sample).
+  bool check_time_order(std::uint32_t run_index, double t, bool raw) {
+    if (last_.size() <= run_index) last_.resize(run_index + 1);
+    LastSample& previous = last_[run_index];
+    const csv::Column& time = *column(kTime);
+    if (t < previous.time_s) {
+      reader_.fail(time.cell, fmt::format("{} = {} is earlier than the previous sample of run '{}' (line {}); time "
+                                          "must not decrease within a run",
+                                          time.header, reader_.cell(time.cell), log_.run_names[run_index],
+                                          previous.line));
+    }
+    if (raw && t == previous.time_s) {
+      if (raw_.duplicate_times == DuplicateTimes::refuse) {
+        reader_.fail(time.cell, fmt::format("{} = {} repeats the time of the previous sample of run '{}' (line {}); "
+                                            "a raw log needs one sample per time: give --duplicate-times average to "
+                                            "average such samples",
+                                            time.header, reader_.cell(time.cell), log_.run_names[run_index],
+                                            previous.line));
+      }
+      return true;
+    }
+    previous = {t, reader_.line()};
+    return false;
+  }
+
+  void read_raw_row(std::uint32_t run_index, std::uint32_t guide_index, double t, const FrictionConditions<double>& c,
+                    double nu40) {
+    const double motion = reader_.number(*motion_, false);
+    const double force = reader_.number(*column(kForce), true);
+    if (std::isnan(force)) {
+      ++skipped_;
+      return;
+    }
+    const bool merge = check_time_order(run_index, t, true);
+    if (raw_index_.size() <= run_index) raw_index_.resize(run_index + 1, kNone);
+    if (raw_index_[run_index] == kNone) {
+      raw_index_[run_index] = raw_runs_.size();
+      raw_runs_.push_back({.run = run_index});
+    }
+    RawRun& r = raw_runs_[raw_index_[run_index]];
+    if (merge && !r.line.empty()) {
+      const double k = r.merged.back();
+      r.samples.motion.back() = (r.samples.motion.back() * k + motion) / (k + 1);
+      r.samples.force_N.back() = (r.samples.force_N.back() * k + force) / (k + 1);
+      ++r.merged.back();
+      ++merged_;
+      return;
+    }
+    r.samples.time_s.push_back(t);
+    r.samples.motion.push_back(motion);
+    r.samples.force_N.push_back(force);
+    r.line.push_back(reader_.line());
+    r.merged.push_back(1);
+    r.guide.push_back(guide_index);
+    r.conditions.push_back(c);
+    r.viscosity40.push_back(nu40);
+  }
+
+  // Each raw run cut into plateaus; the kept samples go into the log.
+  void segment_raw_runs() {
+    RunSegmentation total;
+    for (RawRun& r : raw_runs_) {
+      const std::string& name = log_.run_names[r.run];
+      raw::Segmented s;
+      try {
+        s = raw::segment(r.samples, motion_kind_, raw_);
+      } catch (const raw::SampleError& e) {
+        csv::fail_at_cell(file_.path, r.line[e.sample], motion_->cell, fmt::format("run '{}': {}", name, e.what()));
+      }
+      RunSegmentation seg{.run = name, .file = report_.file};
+      raw::tally(s, seg);
+      for (std::uint32_t m : r.merged) seg.averaged_duplicates += m - 1;
+      for (const std::string& w : raw::sign_warnings(name, column(kForce)->header, r.samples, s, raw_.force_sign))
+        report_.warnings.push_back(w);
+      for (std::size_t i = 0; i < s.fate.size(); ++i) {
+        if (s.fate[i] != raw::Fate::kept) continue;
+        const double v = s.plateaus[s.plateau[i]].velocity_m_s;
+        FrictionConditions<double> c = r.conditions[i];
+        c.velocity_m_s = std::abs(v);
+        c.direction = v < 0 ? -1.0 : 1.0;
+        log_.append(r.run, r.guide[i], r.samples.time_s[i], c, s.friction_N[i], r.viscosity40[i]);
+      }
+      log_.raw_traces.push_back(thin_trace(name, r.samples, s));
+      total.kept += seg.kept;
+      total.dropped_acceleration += seg.dropped_acceleration;
+      total.dropped_settling += seg.dropped_settling;
+      total.dropped_stationary += seg.dropped_stationary;
+      total.dropped_short += seg.dropped_short;
+      log_.segmentation.push_back(std::move(seg));
+    }
+    const auto skip = [&](std::size_t count, const std::string& reason) {
+      if (count != 0) report_.skipped[reason] = count;
+    };
+    skip(skipped_, column(kForce)->header + " empty or NaN");
+    skip(merged_, "merged into a sample at the same time");
+    skip(total.dropped_acceleration, fmt::format("accelerating (|a| > {} m/s²)", raw_.max_acceleration_m_s2));
+    skip(total.dropped_settling, fmt::format("settling ({} s after an acceleration)", raw_.settling_s));
+    skip(total.dropped_stationary, fmt::format("at rest (speed < {} m/s)", raw_.min_speed_m_s));
+    skip(total.dropped_short, fmt::format("in plateaus shorter than {} samples", raw_.min_plateau_samples));
+    report_.rows_kept = total.kept;
+  }
+
+  static RawTrace thin_trace(const std::string& run, const raw::RunSamples& samples, const raw::Segmented& s) {
+    RawTrace trace{.run = run};
+    const std::size_t n = samples.time_s.size();
+    const std::size_t stride = std::max<std::size_t>(1, (n + RawTrace::kMaxPoints - 1) / RawTrace::kMaxPoints);
+    for (std::size_t i = 0; i < n; i += stride) {
+      trace.time_s.push_back(samples.time_s[i]);
+      trace.velocity_m_s.push_back(s.velocity_m_s[i]);
+      trace.force_N.push_back(samples.force_N[i]);
+    }
+    return trace;
+  }
+
+  // A tidy log's friction is a magnitude; negative values where the block moves backwards
+  // are a signed force given in the wrong column.
+  void warn_signed_friction() {
+    const std::string& header = column(kFriction)->header;
+    if (backward_rows_ != 0 && 2 * negative_backward_ >= backward_rows_) {
+      report_.warnings.push_back(fmt::format(
+          "{} is negative on {} of the {} samples with direction = -1: a tidy log's friction is a magnitude (the "
+          "direction column gives the sense); take its absolute value, or give the signed force as a raw log "
+          "(force_N with time_s and position_mm or velocity_m_s)",
+          header, negative_backward_, backward_rows_));
+    } else if (!column(kDirection) && 4 * negative_rows_ >= log_.size() && negative_rows_ != 0) {
+      report_.warnings.push_back(fmt::format(
+          "{} is negative on {} of the {} samples: a tidy log's friction is a magnitude; for a signed force, give a "
+          "direction column and the magnitude, or a raw log (force_N with time_s and position_mm or velocity_m_s)",
+          header, negative_rows_, report_.rows_read));
+    }
+  }
+
+  static constexpr std::size_t kNone = static_cast<std::size_t>(-1);
+  static constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+  struct LastSample {
+    double time_s = kNaN;
+    long line = 0;
+  };
+
+  const detail::FrictionFile& file_;
+  const RawFrictionOptions& raw_;
+  FrictionLog& log_;
+  NameIndex& runs_;
+  NameIndex& guides_;
+  csv::Reader reader_;
+  LoadReport report_;
+  std::vector<csv::Column> columns_;
+  csv::Column* motion_ = nullptr;  // a raw log's position or velocity
+  raw::Motion motion_kind_ = raw::Motion::velocity_m_s;
+  std::vector<std::optional<const FrictionRunConditions*>> run_conditions_;  // by run index, once looked up
+  std::vector<LastSample> last_;                                             // by run index
+  std::vector<std::size_t> raw_index_;                                       // run index -> raw_runs_
+  std::vector<RawRun> raw_runs_;
+  std::size_t skipped_ = 0, merged_ = 0;
+  std::size_t backward_rows_ = 0, negative_backward_ = 0, negative_rows_ = 0;
+};
 
 }  // namespace
 
@@ -194,15 +495,28 @@ void FrictionLog::append(std::uint32_t run_index, std::uint32_t guide_index, dou
   direction.push_back(static_cast<std::int8_t>(c.direction));
 }
 
-FrictionLog load_friction_log(const fs::path& file) { return load_friction_logs({file}); }
+FrictionLog load_friction_log(const fs::path& file, const RawFrictionOptions& raw) {
+  return load_friction_logs({file}, raw);
+}
 
-FrictionLog load_friction_logs(const std::vector<fs::path>& files) {
+FrictionLog load_friction_logs(const std::vector<fs::path>& files, const RawFrictionOptions& raw) {
+  std::vector<detail::FrictionFile> list;
+  for (const fs::path& file : files) list.push_back({.path = file});
+  return detail::load_friction_files(list, raw);
+}
+
+namespace detail {
+
+FrictionLog load_friction_files(const std::vector<FrictionFile>& files, const RawFrictionOptions& raw) {
+  raw.validate();
   FrictionLog log;
   NameIndex runs(log.run_names);
   NameIndex guides(log.guide_names);
-  for (const fs::path& file : files) append_file(file, log, runs, guides);
+  for (const FrictionFile& file : files) FileLoader(file, raw, log, runs, guides).load();
   return log;
 }
+
+}  // namespace detail
 
 std::string friction_log_csv(const FrictionLog& log, const std::vector<std::string>& comments) {
   // Optional columns are written when they carry information: guide when a sample names

@@ -14,6 +14,20 @@
 // Bad input throws InputError(file, line, column, what was expected) before anything
 // is returned; the column is the 1-based character position of the offending cell.
 //
+// Raw load-cell time series. A log with a `force` column (any force unit) instead of
+// `friction` is a rig's raw record: `time` plus `position` (any distance unit; the velocity
+// is derived from it) or a signed `velocity`, and the force as the load cell gave it, signed.
+// Such a log is cut into constant-velocity plateaus (segment_raw_run below): samples while the
+// block accelerates (|a| above a threshold), for a settling time after it, at rest, and in
+// plateaus too short to trust are dropped; a kept sample takes its plateau's mean velocity
+// (sense in `direction`) and its friction is the force with the sign convention applied and
+// the inertia m·a taken off. `direction` is not a column of a raw log (the motion gives it).
+// FrictionLog::segmentation says, per run, what was kept and dropped.
+//
+// Run conditions without columns: a run's load, preload, block length, guide, temperature and
+// ν40 may come from a friction manifest (load_friction_dataset) instead of columns; a
+// quantity given both ways is refused.
+//
 // Example:
 //   auto log = lmcal::load_friction_log("measurements/friction/srn35c.csv");
 //   for (std::size_t i = 0; i < log.size(); ++i) use(log.conditions(i), log.friction_N[i]);
@@ -21,13 +35,74 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "lmcal/io/catalog.hpp"
 #include "lmcal/io/load_report.hpp"
 #include "lmcal/models/friction.hpp"
 
 namespace lmcal {
+
+// How a raw log's signed force relates to friction. `follows_motion`: the force is positive
+// while the block moves towards +x (the drive's pull, what an in-line load cell reads);
+// `opposes_motion`: the reverse (a cell mounted the other way round); `magnitude`: the force is
+// already unsigned. The direction always comes from the motion.
+enum class ForceSign { follows_motion, opposes_motion, magnitude };
+std::string_view to_string(ForceSign sign);
+// "follows-motion", "opposes-motion", "magnitude"; InvalidParameter otherwise.
+ForceSign parse_force_sign(std::string_view name);
+
+// Two samples of one run at the same time: refused (the default), or averaged into one.
+enum class DuplicateTimes { refuse, average };
+std::string_view to_string(DuplicateTimes d);
+DuplicateTimes parse_duplicate_times(std::string_view name);
+
+// How a raw load-cell log is cut into constant-velocity plateaus.
+struct RawFrictionOptions {
+  ForceSign force_sign = ForceSign::follows_motion;
+  double max_acceleration_m_s2 = 0.02;  // |a| above it: the block is accelerating (dropped)
+  double settling_s = 0.5;              // dropped after every acceleration (load-cell ringing)
+  double min_speed_m_s = 1e-4;          // slower: at rest (dropped)
+  // A sample whose own (filtered) velocity is off its plateau's median by more than this share
+  // is a transient too: at low speed a stop within one sample interval shows as little |a|.
+  double velocity_tolerance = 0.02;
+  std::size_t min_plateau_samples = 20; // shorter plateaus are dropped
+  std::size_t velocity_window = 11;     // samples of the local least-squares slope for v and a (odd, >= 3)
+  double moving_mass_kg = 0;            // > 0: the inertia m·a is taken off the force
+  DuplicateTimes duplicate_times = DuplicateTimes::refuse;
+  // InvalidParameter naming the option for a value out of range.
+  void validate() const;
+};
+
+// One constant-velocity plateau of a raw run.
+struct Plateau {
+  double start_s = 0, end_s = 0;
+  double velocity_m_s = 0;  // signed: the sense of the motion
+  std::size_t samples = 0;
+};
+
+// What segmentation did with one raw run.
+struct RunSegmentation {
+  std::string run, file;
+  std::size_t samples = 0;               // after duplicate times were averaged
+  std::size_t kept = 0;
+  std::size_t dropped_acceleration = 0;  // |a| above the threshold
+  std::size_t dropped_settling = 0;      // within the settling time after an acceleration
+  std::size_t dropped_stationary = 0;    // slower than min_speed
+  std::size_t dropped_short = 0;         // in a plateau with too few samples
+  std::size_t averaged_duplicates = 0;   // samples merged because they shared a time
+  std::vector<Plateau> plateaus;         // kept ones, in time order
+};
+
+// A raw run as recorded (thinned to at most kMaxPoints), for a plot of what was kept.
+struct RawTrace {
+  static constexpr std::size_t kMaxPoints = 4000;
+  std::string run;
+  std::vector<double> time_s, velocity_m_s, force_N;
+};
 
 // Columns, one entry per kept sample (struct of arrays: fast to load and to fit).
 struct FrictionLog {
@@ -45,6 +120,8 @@ struct FrictionLog {
   std::vector<double> viscosity40_mm2_s;
   std::vector<std::int8_t> direction;    // +1 or -1
   std::vector<LoadReport> reports;       // one per file loaded
+  std::vector<RunSegmentation> segmentation;  // one per raw run (none for a tidy log)
+  std::vector<RawTrace> raw_traces;           // one per raw run
 
   std::size_t size() const { return friction_N.size(); }
   // The operating point of sample i for the friction law, direction included (ν_ref is per
@@ -55,9 +132,48 @@ struct FrictionLog {
               double friction, double viscosity40);
 };
 
-FrictionLog load_friction_log(const std::filesystem::path& file);
+FrictionLog load_friction_log(const std::filesystem::path& file, const RawFrictionOptions& raw = {});
 // Several files into one log; run names are shared across files (same name = same run).
-FrictionLog load_friction_logs(const std::vector<std::filesystem::path>& files);
+FrictionLog load_friction_logs(const std::vector<std::filesystem::path>& files, const RawFrictionOptions& raw = {});
+
+// The conditions of a run that a manifest gives instead of columns (unset: from a column).
+struct FrictionRunConditions {
+  std::optional<std::string> guide;
+  std::optional<double> load_N, preload_um, block_length_mm, temperature_C, viscosity40_mm2_s;
+  bool block_length_from_catalog = false;  // the guide's catalog value: a column may still give it
+};
+
+// A friction manifest (TOML): the files of a data set and their runs' fixed conditions.
+//   name = "rig A"
+//   catalog = "guides.toml"          # optional: a user catalog for the guides named
+//   file = "friction.csv"            # optional: one file holding every run (a run column)
+//   [raw]                            # optional: how raw logs are segmented (the flags' names)
+//   force_sign = "opposes-motion"
+//   moving_mass_kg = 2.4
+//   [[run]]
+//   id = "r1"
+//   file = "friction/r1.csv"         # the run's own file (no run column needed), or omit
+//   guide = "SRN 35C"                # block_length_mm defaults to the catalog's
+//   load_N = 1000                    # any unit of the quantity: load_kgf, temperature_K, ...
+//   preload_um = 2.5
+//   temperature_C = 24
+//   viscosity40_mm2_s = 99
+// Keys and columns must not both give a quantity; a run the files hold but the manifest does
+// not list needs its conditions as columns.
+struct FrictionDataSet {
+  std::string name;
+  std::filesystem::path manifest;
+  std::string catalog_file;             // the user catalog used ("" = built-in only)
+  RawFrictionOptions raw;               // as the manifest's [raw] table sets them
+  std::vector<std::filesystem::path> files;
+  FrictionLog log;
+};
+// `user_catalog` (a --catalog given on the command line) wins over the manifest's `catalog`;
+// `raw` set by the caller (flags) wins over the manifest's [raw] table key by key when
+// `raw_given` names them ("force_sign", "moving_mass_kg", ...).
+FrictionDataSet load_friction_dataset(const std::filesystem::path& manifest, const GuideCatalog* user_catalog = nullptr,
+                                      const RawFrictionOptions& raw = {},
+                                      const std::vector<std::string>& raw_given = {});
 
 // Writes a log in the canonical units (the inverse of load_friction_log), with the given
 // '#' comment lines first.

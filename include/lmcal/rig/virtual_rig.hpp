@@ -157,6 +157,46 @@ struct FrictionRigOutput {
   std::string truth_json;
 };
 
+// A raw load-cell rig: every setup of a FrictionRigConfig (guide, preload, load, temperature)
+// is a run of its own, logged as a time series while the block moves back and forth over the
+// stroke at each speed in turn. A move is trapezoidal: accelerate at acceleration_m_s2 to the
+// speed, cruise, decelerate, dwell at rest, reverse. Logged: time, the encoder's position
+// (rounded to its resolution) or the velocity, and the load cell's signed force = the friction
+// law at the instantaneous speed (with the library's friction effects; the hidden effects are
+// not applied) in the motion's sense, + m·a, + the run's zero offset, + a drift, + AR(1) noise
+// (FrictionRigConfig's noise_N, noise_ar1, run_offset_N).
+struct RawFrictionRigConfig {
+  double sample_rate_Hz = 100;
+  double acceleration_m_s2 = 0.5;
+  double stroke_m = 0.1;
+  int cycles = 1;                      // back-and-forth moves per speed
+  double dwell_s = 0.3;                // at rest at each end
+  double encoder_resolution_m = 1e-6;
+  double moving_mass_kg = 2.0;
+  double drift_N_per_h = 0.5;          // the load cell's zero, drifting over the run
+  bool log_velocity = false;           // log velocity_m_s instead of position_mm
+  ForceSign force_sign = ForceSign::follows_motion;  // how the logged force is signed
+};
+
+// A constant-velocity phase of the motion, as generated: samples [first, last] of its run.
+struct CruiseSegment {
+  std::size_t first_sample = 0, last_sample = 0;
+  double start_s = 0, end_s = 0, velocity_m_s = 0;  // signed
+};
+
+struct RawFrictionRigOutput {
+  // The manifest (runs' conditions and the [raw] settings) and each run's CSV text; files
+  // relative to the data set's folder: "friction/<run>.csv".
+  std::string manifest_toml;
+  std::vector<std::pair<std::string, std::string>> run_files;  // file name -> CSV text
+  std::vector<std::string> run_names;
+  std::vector<std::vector<CruiseSegment>> cruises;  // per run
+  std::string truth_json;
+};
+
+RawFrictionRigOutput generate_raw_friction_logs(const FrictionRigConfig& config, const RawFrictionRigConfig& raw,
+                                                const RigEffects& effects, const std::vector<std::string>& comments = {});
+
 struct ThermalRigOutput {
   ThermalDataSet set;  // runs[i].file is "thermal/<id>.csv", relative to the data set's folder
   std::string truth_json;

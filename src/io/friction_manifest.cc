@@ -1,0 +1,239 @@
+// The friction manifest: a data set's files and its runs' fixed conditions (friction_log.hpp).
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include <algorithm>
+#include <array>
+#include <functional>
+#include <set>
+
+#include "io/csv_reader.hpp"
+#include "io/friction_files.hpp"
+#include "io/manifest.hpp"
+#include "lmcal/error.hpp"
+#include "lmcal/io/friction_log.hpp"
+
+namespace lmcal {
+
+namespace {
+
+namespace fs = std::filesystem;
+using manifest::Given;
+using manifest::Manifest;
+
+// The numeric [[run]] keys, any unit of their quantity ("load_kgf").
+struct ConditionKey {
+  std::string_view base;
+  Quantity quantity;
+  std::optional<double> FrictionRunConditions::*field;
+  bool strictly_positive;
+};
+constexpr std::array<ConditionKey, 5> kConditionKeys{{
+    {"load", Quantity::force, &FrictionRunConditions::load_N, false},
+    {"preload", Quantity::preload, &FrictionRunConditions::preload_um, false},
+    {"block_length", Quantity::length_mm, &FrictionRunConditions::block_length_mm, true},
+    {"temperature", Quantity::temperature, &FrictionRunConditions::temperature_C, false},
+    {"viscosity40", Quantity::viscosity, &FrictionRunConditions::viscosity40_mm2_s, true},
+}};
+
+std::string known_run_keys() {
+  std::vector<std::string> keys{"id", "file", "guide"};
+  for (const ConditionKey& k : kConditionKeys) keys.push_back(csv::canonical_name(k.base, k.quantity));
+  return fmt::format("{} (numbers in any unit of their quantity)", fmt::join(keys, ", "));
+}
+
+// The [raw] settings, by the names of RawFrictionOptions' fields.
+struct RawKey {
+  std::string_view name;
+  std::function<void(RawFrictionOptions&, const RawFrictionOptions&)> copy;
+};
+const std::vector<RawKey>& raw_keys() {
+  static const std::vector<RawKey> keys{
+      {"force_sign", [](auto& to, auto& from) { to.force_sign = from.force_sign; }},
+      {"duplicate_times", [](auto& to, auto& from) { to.duplicate_times = from.duplicate_times; }},
+      {"max_acceleration_m_s2", [](auto& to, auto& from) { to.max_acceleration_m_s2 = from.max_acceleration_m_s2; }},
+      {"settling_s", [](auto& to, auto& from) { to.settling_s = from.settling_s; }},
+      {"min_speed_m_s", [](auto& to, auto& from) { to.min_speed_m_s = from.min_speed_m_s; }},
+      {"velocity_tolerance", [](auto& to, auto& from) { to.velocity_tolerance = from.velocity_tolerance; }},
+      {"min_plateau_samples", [](auto& to, auto& from) { to.min_plateau_samples = from.min_plateau_samples; }},
+      {"velocity_window", [](auto& to, auto& from) { to.velocity_window = from.velocity_window; }},
+      {"moving_mass_kg", [](auto& to, auto& from) { to.moving_mass_kg = from.moving_mass_kg; }},
+  };
+  return keys;
+}
+
+std::size_t count_of(const Manifest& m, const toml::key& key, const toml::node& node) {
+  const double value = manifest::number_of(m, key, node);
+  if (!(value >= 0) || value != static_cast<double>(static_cast<std::size_t>(value)))
+    m.fail(node.source(), fmt::format("{} = {}: expected a whole number", key.str(), value));
+  return static_cast<std::size_t>(value);
+}
+
+RawFrictionOptions read_raw(const Manifest& m, const toml::table& table) {
+  RawFrictionOptions o;
+  for (const auto& [key, node] : table) {
+    const std::string_view k = key.str();
+    const auto known = std::find_if(raw_keys().begin(), raw_keys().end(), [&](const RawKey& r) { return r.name == k; });
+    if (known == raw_keys().end()) {
+      std::vector<std::string_view> names;
+      for (const RawKey& r : raw_keys()) names.push_back(r.name);
+      m.fail(key.source(), fmt::format("unknown key '{}' in [raw]; known: {}", k, fmt::join(names, ", ")));
+    }
+    try {
+      if (k == "force_sign") o.force_sign = parse_force_sign(manifest::string_of(m, key, node));
+      else if (k == "duplicate_times") o.duplicate_times = parse_duplicate_times(manifest::string_of(m, key, node));
+      else if (k == "max_acceleration_m_s2") o.max_acceleration_m_s2 = manifest::number_of(m, key, node);
+      else if (k == "settling_s") o.settling_s = manifest::number_of(m, key, node);
+      else if (k == "min_speed_m_s") o.min_speed_m_s = manifest::number_of(m, key, node);
+      else if (k == "velocity_tolerance") o.velocity_tolerance = manifest::number_of(m, key, node);
+      else if (k == "min_plateau_samples") o.min_plateau_samples = count_of(m, key, node);
+      else if (k == "velocity_window") o.velocity_window = count_of(m, key, node);
+      else if (k == "moving_mass_kg") o.moving_mass_kg = manifest::number_of(m, key, node);
+      RawFrictionOptions one;  // this key alone against its range
+      known->copy(one, o);
+      one.validate();
+    } catch (const InvalidParameter& e) {
+      m.fail(node.source(), e.what());
+    }
+  }
+  return o;
+}
+
+struct RunEntry {
+  std::string id;
+  std::optional<std::string> file;
+  const toml::node* file_node = nullptr;
+  FrictionRunConditions conditions;
+};
+
+RunEntry read_run(const Manifest& m, const toml::table& table, const GuideCatalog* catalog) {
+  RunEntry run;
+  std::array<std::optional<Given>, kConditionKeys.size()> numbers;
+  std::optional<Given> id, file, guide;
+  for (const auto& [key, node] : table) {
+    const std::string_view k = key.str();
+    if (k == "id" || k == "file" || k == "guide") {
+      manifest::string_of(m, key, node);
+      manifest::remember(m, k == "id" ? id : k == "file" ? file : guide, {&key, &node}, k);
+      continue;
+    }
+    bool known = false;
+    for (std::size_t i = 0; i < kConditionKeys.size() && !known; ++i) {
+      const ConditionKey& ck = kConditionKeys[i];
+      const auto conversion = manifest::unit_key(m, key, ck.base, ck.quantity);
+      if (!conversion) continue;
+      const double value = csv::to_internal(*conversion, manifest::number_of(m, key, node));
+      const bool ok = ck.quantity == Quantity::temperature ? value > -273.15
+                      : ck.strictly_positive                ? value > 0
+                                                            : value >= 0;
+      if (!ok) {
+        m.fail(node.source(), fmt::format("{} = {}: expected {}", k, manifest::number_of(m, key, node),
+                                          ck.quantity == Quantity::temperature ? "a temperature above absolute zero"
+                                          : ck.strictly_positive               ? "a value > 0"
+                                                                               : "a value >= 0"));
+      }
+      manifest::remember(m, numbers[i], {&key, &node, *conversion, value}, ck.base);
+      run.conditions.*ck.field = value;
+      known = true;
+    }
+    if (!known) m.fail(key.source(), fmt::format("unknown key '{}' in [[run]]; known: {}", k, known_run_keys()));
+  }
+  if (!id) m.fail(table.source(), "missing key 'id' in [[run]]");
+  run.id = id->node->as_string()->get();
+  if (file) {
+    run.file = file->node->as_string()->get();
+    run.file_node = file->node;
+  }
+  if (guide) {
+    run.conditions.guide = guide->node->as_string()->get();
+    try {
+      const GuideSpec& spec = find_guide(*run.conditions.guide, catalog);
+      if (!run.conditions.block_length_mm && spec.block_length_mm) {
+        run.conditions.block_length_mm = spec.block_length_mm;
+        run.conditions.block_length_from_catalog = true;
+      }
+    } catch (const InvalidParameter& e) {
+      m.fail(guide->node->source(), e.what());
+    }
+  }
+  return run;
+}
+
+}  // namespace
+
+FrictionDataSet load_friction_dataset(const fs::path& manifest_file, const GuideCatalog* user_catalog,
+                                      const RawFrictionOptions& raw, const std::vector<std::string>& raw_given) {
+  const Manifest m{manifest_file.string(), manifest_file.parent_path()};
+  const toml::table root = m.parse();
+  FrictionDataSet set;
+  set.manifest = manifest_file;
+  set.name = manifest_file.stem().string();
+
+  // The catalog first: the runs' guides are looked up in it.
+  GuideCatalog own_catalog;
+  const GuideCatalog* catalog = user_catalog;
+  if (const toml::node* node = root.get("catalog")) {
+    const toml::key& key = root.find("catalog")->first;
+    const fs::path path = m.existing_file(*node, manifest::string_of(m, key, *node));
+    if (!user_catalog) {
+      own_catalog = load_catalog(path);
+      catalog = &own_catalog;
+    }
+  }
+  if (catalog) set.catalog_file = catalog->source;
+
+  std::optional<std::pair<fs::path, const toml::node*>> common_file;
+  const toml::array* runs = nullptr;
+  for (const auto& [key, node] : root) {
+    const std::string_view k = key.str();
+    if (k == "name") {
+      set.name = manifest::string_of(m, key, node);
+    } else if (k == "description" || k == "catalog") {
+      manifest::string_of(m, key, node);
+    } else if (k == "file") {
+      common_file.emplace(m.existing_file(node, manifest::string_of(m, key, node)), &node);
+    } else if (k == "raw") {
+      set.raw = read_raw(m, manifest::table_of(m, key, node, "[raw]"));
+    } else if (k == "run") {
+      runs = node.as_array();
+      if (!runs || !runs->is_array_of_tables()) m.fail(node.source(), "expected [[run]] tables");
+    } else {
+      m.fail(key.source(), fmt::format("unknown key '{}'; known: name, description, catalog, file, raw, run", k));
+    }
+  }
+  for (const std::string& name : raw_given) {
+    const auto it = std::find_if(raw_keys().begin(), raw_keys().end(), [&](const RawKey& r) { return r.name == name; });
+    if (it == raw_keys().end()) throw InvalidParameter("raw_given", fmt::format("unknown setting '{}'", name));
+    it->copy(set.raw, raw);
+  }
+
+  std::map<std::string, FrictionRunConditions, std::less<>> conditions;  // of the runs in the common file
+  std::set<std::string> ids;
+  std::vector<detail::FrictionFile> files;
+  std::set<fs::path> own_files;
+  if (runs) {
+    for (const toml::node& node : *runs) {
+      const toml::table& table = *node.as_table();
+      RunEntry run = read_run(m, table, catalog);
+      if (!ids.insert(run.id).second) m.fail(table.source(), fmt::format("duplicate run id '{}'", run.id));
+      if (run.file) {
+        const fs::path path = m.existing_file(*run.file_node, *run.file);
+        if (!own_files.insert(path.lexically_normal()).second)
+          m.fail(run.file_node->source(), fmt::format("file '{}' is already another run's file", *run.file));
+        files.push_back({.path = path, .run = run.id, .runs = {{run.id, run.conditions}}, .manifest = m.file});
+      } else if (!common_file) {
+        m.fail(table.source(), fmt::format("run '{}' has no file, and the manifest no top-level file holding it", run.id));
+      } else {
+        conditions.emplace(run.id, run.conditions);
+      }
+    }
+  }
+  if (common_file)
+    files.insert(files.begin(), {.path = common_file->first, .runs = std::move(conditions), .manifest = m.file});
+  if (files.empty()) m.fail(root.source(), "the manifest names no file: give `file = \"...\"` or a file in a [[run]]");
+  for (const auto& f : files) set.files.push_back(f.path);
+  set.log = detail::load_friction_files(files, set.raw);
+  return set;
+}
+
+}  // namespace lmcal

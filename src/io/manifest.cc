@@ -1,0 +1,99 @@
+#include "io/manifest.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <fstream>
+#include <iterator>
+#include <utility>
+
+#include "io/csv_reader.hpp"
+#include "lmcal/error.hpp"
+
+namespace lmcal::manifest {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+bool before(const toml::source_region& a, const toml::source_region& b) {
+  return std::pair(a.begin.line, a.begin.column) < std::pair(b.begin.line, b.begin.column);
+}
+
+}  // namespace
+
+void Manifest::fail(const toml::source_region& where, const std::string& what) const {
+  throw InputError(file, static_cast<long>(where.begin.line), static_cast<long>(where.begin.column), what);
+}
+
+toml::table Manifest::parse() const {
+  std::error_code ec;
+  std::ifstream in(file, std::ios::binary);
+  if (!in || fs::is_directory(file, ec)) throw InputError(file, 0, 0, "cannot open manifest file");
+  const std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  if (in.bad()) throw InputError(file, 0, 0, "cannot read manifest file");
+  try {
+    return toml::parse(text, file);
+  } catch (const toml::parse_error& e) {
+    fail(e.source(), std::string(e.description()));
+  }
+}
+
+fs::path Manifest::existing_file(const toml::node& where, const std::string& name) const {
+  const fs::path path = folder / name;
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) {
+    fail(where.source(),
+         fmt::format("file '{}' not found (looked in {})", name, folder.empty() ? std::string(".") : folder.string()));
+  }
+  return path;
+}
+
+double number_of(const Manifest& m, const toml::key& key, const toml::node& node) {
+  std::optional<double> value;
+  if (const auto* i = node.as_integer()) value = static_cast<double>(i->get());
+  if (const auto* f = node.as_floating_point()) value = f->get();
+  if (!value) m.fail(node.source(), fmt::format("expected a number for {}", key.str()));
+  if (!std::isfinite(*value)) m.fail(node.source(), fmt::format("expected a finite number for {}", key.str()));
+  return *value;
+}
+
+const std::string& string_of(const Manifest& m, const toml::key& key, const toml::node& node) {
+  const auto* s = node.as_string();
+  if (!s) m.fail(node.source(), fmt::format("expected a string for {}", key.str()));
+  return s->get();
+}
+
+const toml::table& table_of(const Manifest& m, const toml::key& key, const toml::node& node, std::string_view where) {
+  const auto* t = node.as_table();
+  if (!t) m.fail(node.source(), fmt::format("expected a table {} for {}", where, key.str()));
+  return *t;
+}
+
+std::optional<Conversion> unit_key(const Manifest& m, const toml::key& key, std::string_view base, Quantity quantity) {
+  const csv::UnitMatch u = csv::match_unit(key.str(), base, quantity);
+  switch (u.kind) {
+    case csv::UnitMatch::other: return std::nullopt;
+    case csv::UnitMatch::no_unit:
+      m.fail(key.source(),
+             fmt::format("key '{}' has no unit; accepted: {}", key.str(), csv::accepted_names(base, quantity)));
+    case csv::UnitMatch::unknown_unit:
+      m.fail(key.source(), fmt::format("key '{}': unknown unit '{}'; accepted: {}", key.str(), u.unit,
+                                       csv::accepted_names(base, quantity)));
+    case csv::UnitMatch::match: break;
+  }
+  return u.split.conversion;
+}
+
+void remember(const Manifest& m, std::optional<Given>& slot, Given given, std::string_view what) {
+  if (slot) {
+    const bool later = before(slot->key->source(), given.key->source());
+    const Given& first = later ? *slot : given;
+    const Given& second = later ? given : *slot;
+    m.fail(second.key->source(),
+           fmt::format("duplicate key '{}': '{}' already gives {}", second.key->str(), first.key->str(), what));
+  }
+  slot = given;
+}
+
+}  // namespace lmcal::manifest

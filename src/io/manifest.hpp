@@ -1,0 +1,51 @@
+// Private TOML manifest machinery shared by the thermal and friction manifests: errors at the
+// key's line and column, numbers and strings checked as they are read, keys whose name carries
+// a unit ("load_kN"), and one key per quantity.
+#pragma once
+
+#include <toml++/toml.h>
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <string_view>
+
+#include "lmcal/io/units.hpp"
+
+namespace lmcal::manifest {
+
+struct Manifest {
+  std::string file;                 // as errors name it
+  std::filesystem::path folder;     // the files it names are relative to it
+
+  [[noreturn]] void fail(const toml::source_region& where, const std::string& what) const;
+  // The manifest's TOML; a syntax error is an InputError at its line and column.
+  toml::table parse() const;
+  // `name` relative to the folder; an InputError at `where` when it is not a file.
+  std::filesystem::path existing_file(const toml::node& where, const std::string& name) const;
+};
+
+// A key that was given, for duplicate and range messages.
+struct Given {
+  const toml::key* key = nullptr;
+  const toml::node* node = nullptr;
+  Conversion conversion;  // for keys with a unit: to internal units
+  double value = 0;       // for numbers: in internal units
+};
+
+// A finite TOML number (integer or float).
+double number_of(const Manifest& m, const toml::key& key, const toml::node& node);
+const std::string& string_of(const Manifest& m, const toml::key& key, const toml::node& node);
+// `where` names the table in messages: "[run.sensors_m]".
+const toml::table& table_of(const Manifest& m, const toml::key& key, const toml::node& node, std::string_view where);
+
+// The conversion of a key with a unit suffix that names `base` ("velocity_mm_s" for
+// "velocity"), nullopt for a key that names something else. A missing or unknown unit is an
+// error at the key.
+std::optional<Conversion> unit_key(const Manifest& m, const toml::key& key, std::string_view base, Quantity quantity);
+
+// Records `given` as the key giving `what`; two keys for one thing (velocity_m_s and
+// velocity_mm_s) are an error at the later one.
+void remember(const Manifest& m, std::optional<Given>& slot, Given given, std::string_view what);
+
+}  // namespace lmcal::manifest

@@ -1,0 +1,58 @@
+// Private: a raw load-cell run cut into constant-velocity plateaus (see friction_log.hpp for
+// the format and the options). The loader gathers a run's samples, in time order with
+// duplicate times already merged, and maps a SampleError back to the file's line and column.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "lmcal/io/friction_log.hpp"
+
+namespace lmcal::raw {
+
+// What the motion column holds.
+enum class Motion { position_m, velocity_m_s };
+
+// One run, in time order (strictly increasing times).
+struct RunSamples {
+  std::vector<double> time_s, motion, force_N;
+};
+
+// What became of a sample.
+enum class Fate : std::uint8_t { kept, acceleration, settling, stationary, short_plateau };
+
+struct Segmented {
+  std::vector<Fate> fate;                     // per sample
+  std::vector<std::uint32_t> plateau;         // per sample: index into plateaus (kept samples only)
+  std::vector<Plateau> plateaus;              // kept plateaus, in time order
+  std::vector<double> velocity_m_s;           // per sample: derived (or as given), signed
+  std::vector<double> acceleration_m_s2;      // per sample: derived
+  std::vector<double> friction_N;             // per sample: the friction the force gives (kept ones meaningful)
+};
+
+// A sample that makes the run unusable: its index in RunSamples and what is wrong.
+struct SampleError : std::runtime_error {
+  SampleError(std::size_t index, const std::string& what) : std::runtime_error(what), sample(index) {}
+  std::size_t sample;
+};
+
+// The least-squares slope of y over t in a centred window of `window` samples (shorter at the
+// ends), at every sample: the filtered derivative.
+std::vector<double> local_slope(const std::vector<double>& t, const std::vector<double>& y, std::size_t window);
+
+// Segments one run. Throws SampleError when the position goes back between reversals (the
+// velocity cannot be derived) or when no plateau is long enough.
+Segmented segment(const RunSamples& run, Motion motion, const RawFrictionOptions& options);
+
+// Counts per fate, into `out` (kept, dropped_*), and the plateaus.
+void tally(const Segmented& s, RunSegmentation& out);
+
+// Warnings about the sign convention, from a run's kept samples: a force that keeps its sign
+// while the motion reverses (a magnitude), friction that comes out mostly negative.
+std::vector<std::string> sign_warnings(const std::string& run, const std::string& force_column, const RunSamples& samples,
+                                       const Segmented& s, ForceSign sign);
+
+}  // namespace lmcal::raw

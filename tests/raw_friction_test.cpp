@@ -1,0 +1,359 @@
+// Raw load-cell time series (segmentation into plateaus, sign conventions, inertia, duplicate
+// times) and friction manifests (conditions as keys instead of columns), end to end from the
+// virtual rig's raw logs.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include "io/raw_friction.hpp"
+#include "lmcal/error.hpp"
+#include "lmcal/fit/friction_fit.hpp"
+#include "lmcal/io/friction_log.hpp"
+#include "lmcal/models/friction_effects.hpp"
+#include "lmcal/rig/virtual_rig.hpp"
+#include "support/temp_folder.hpp"
+
+namespace lmcal {
+namespace {
+
+class RawFriction : public test::TempFolderTest {
+ protected:
+  // Writes a raw rig's data set into the test folder; returns the manifest's path.
+  std::filesystem::path write_set(const RawFrictionRigOutput& made) const {
+    for (const auto& [file, text] : made.run_files) write(file, text);
+    return write("friction.toml", made.manifest_toml);
+  }
+};
+
+// One guide, one setup, a few speeds: a run a rig logs in a few minutes.
+FrictionRigConfig one_setup(std::vector<double> speeds = {0.01, 0.05, 0.11}) {
+  FrictionRigConfig c;
+  c.guides = {"SRN 35C"};
+  c.preload_um = {2.5};
+  c.load_N = {2000};
+  c.temperature_C = {26};
+  c.velocity_m_s = std::move(speeds);
+  c.runs = 1;
+  c.noise_N = 0.05;
+  c.run_offset_N = 0;
+  c.seed = 5;
+  return c;
+}
+
+RawFrictionRigConfig quiet_rig() {
+  RawFrictionRigConfig r;
+  r.sample_rate_Hz = 200;
+  r.cycles = 2;
+  r.drift_N_per_h = 0;
+  return r;
+}
+
+// Every kept plateau lies inside one of the generator's cruises, at its speed, and every
+// cruise long enough to outlast the filter and the settling time gives exactly one plateau,
+// starting within the settling time plus one filter window of the cruise's start and ending
+// within one window of its end.
+TEST_F(RawFriction, PlateausMatchTheRigsConstantVelocitySegments) {
+  const RawFrictionRigConfig rig = quiet_rig();
+  const RawFrictionRigOutput made = generate_raw_friction_logs(one_setup(), rig, {});
+  const FrictionDataSet set = load_friction_dataset(write_set(made));
+  ASSERT_EQ(set.log.segmentation.size(), 1u);
+  const RunSegmentation& seg = set.log.segmentation[0];
+  const std::vector<CruiseSegment>& cruises = made.cruises[0];
+  const RawFrictionOptions& o = set.raw;
+  const double dt = 1 / rig.sample_rate_Hz;
+  const double window_s = static_cast<double>(o.velocity_window) * dt;
+  ASSERT_EQ(cruises.size(), 3u * 2u * 2u);  // speeds × cycles × directions
+  ASSERT_EQ(seg.plateaus.size(), cruises.size());
+  for (std::size_t i = 0; i < cruises.size(); ++i) {
+    const CruiseSegment& c = cruises[i];
+    const Plateau& p = seg.plateaus[i];
+    EXPECT_GE(p.start_s, c.start_s) << i;
+    EXPECT_LE(p.end_s, c.end_s) << i;
+    EXPECT_LE(p.start_s - c.start_s, o.settling_s + window_s) << i;
+    EXPECT_LE(c.end_s - p.end_s, window_s) << i;
+    EXPECT_NEAR(p.velocity_m_s, c.velocity_m_s, 1e-3 * std::abs(c.velocity_m_s)) << i;  // encoder steps of 1 µm
+    EXPECT_EQ(p.samples, static_cast<std::size_t>(std::llround((p.end_s - p.start_s) / dt)) + 1) << i;
+  }
+  EXPECT_EQ(seg.kept + seg.dropped_acceleration + seg.dropped_settling + seg.dropped_stationary + seg.dropped_short,
+            seg.samples);
+  EXPECT_GT(seg.dropped_acceleration, 0u);
+  EXPECT_GT(seg.dropped_stationary, 0u);  // the dwells
+  EXPECT_EQ(set.log.size(), seg.kept);
+  EXPECT_TRUE(set.log.reports.at(0).warnings.empty());
+}
+
+// The kept samples' friction, averaged per plateau, is the law at the plateau's speed in both
+// directions, whatever the sign convention of the force, once the loader is told it.
+TEST_F(RawFriction, FrictionIsTheLawOnEveryPlateauUnderEachSignConvention) {
+  for (ForceSign sign : {ForceSign::follows_motion, ForceSign::opposes_motion, ForceSign::magnitude}) {
+    RawFrictionRigConfig rig = quiet_rig();
+    rig.force_sign = sign;
+    const RawFrictionRigOutput made = generate_raw_friction_logs(one_setup(), rig, {});
+    const FrictionDataSet set = load_friction_dataset(write_set(made));  // the manifest's [raw] names the sign
+    EXPECT_EQ(set.raw.force_sign, sign);
+    const FrictionLog& log = set.log;
+    // (set speed, direction) -> (sum, n); a plateau's measured speed is within 0.1 % of it.
+    std::map<std::pair<double, int>, std::pair<double, int>> per_plateau;
+    for (std::size_t i = 0; i < log.size(); ++i) {
+      double set_speed = 0;
+      for (double s : {0.01, 0.05, 0.11})
+        if (std::abs(log.velocity_m_s[i] - s) < 1e-3 * s) set_speed = s;
+      auto& [sum, n] = per_plateau[{set_speed, log.direction[i]}];
+      sum += log.friction_N[i];
+      ++n;
+    }
+    EXPECT_EQ(per_plateau.size(), 3u * 2u);
+    for (const auto& [key, value] : per_plateau) {
+      FrictionConditions<double> c = log.conditions(0);
+      c.velocity_m_s = key.first;
+      c.direction = key.second;
+      const double law = friction_force_N(paper_friction_constants(), c);
+      EXPECT_NEAR(value.first / value.second, law, 4 * 0.05 / std::sqrt(value.second) + 1e-3)
+          << to_string(sign) << " at " << key.first << " m/s, direction " << key.second;
+    }
+    EXPECT_TRUE(log.reports.at(0).warnings.empty()) << to_string(sign);
+  }
+}
+
+TEST_F(RawFriction, AWrongSignConventionIsAWarning) {
+  RawFrictionRigConfig rig = quiet_rig();
+  rig.force_sign = ForceSign::opposes_motion;
+  RawFrictionRigOutput made = generate_raw_friction_logs(one_setup(), rig, {});
+  const auto manifest = write_set(made);
+  const auto warnings = [&](ForceSign read_as) {
+    RawFrictionOptions o;
+    o.force_sign = read_as;
+    return load_friction_dataset(manifest, nullptr, o, {"force_sign"}).log.reports.at(0).warnings;
+  };
+  const auto reversed = warnings(ForceSign::follows_motion);
+  ASSERT_EQ(reversed.size(), 1u);
+  EXPECT_NE(reversed[0].find("looks reversed; give --force-sign opposes-motion"), std::string::npos) << reversed[0];
+
+  rig.force_sign = ForceSign::magnitude;
+  made = generate_raw_friction_logs(one_setup(), rig, {});
+  write_set(made);
+  const auto magnitude = warnings(ForceSign::follows_motion);
+  ASSERT_EQ(magnitude.size(), 1u);
+  EXPECT_NE(magnitude[0].find("looks like a magnitude"), std::string::npos) << magnitude[0];
+  EXPECT_TRUE(warnings(ForceSign::magnitude).empty());
+}
+
+// A slow steady acceleration below the threshold stays in the plateau; the inertia m·a is
+// taken off the force exactly.
+TEST(RawSegmentation, InertiaIsTakenOffTheForce) {
+  raw::RunSamples run;
+  const double a = 0.01, m = 100, F = 20;  // m·a = 1 N
+  for (int k = 0; k < 200; ++k) {
+    const double t = 0.01 * k, v = 0.05 + a * t;
+    run.time_s.push_back(t);
+    run.motion.push_back(v);
+    run.force_N.push_back(F + m * a);
+  }
+  RawFrictionOptions o;
+  o.moving_mass_kg = m;
+  o.settling_s = 0;
+  const raw::Segmented s = raw::segment(run, raw::Motion::velocity_m_s, o);
+  ASSERT_EQ(s.plateaus.size(), 1u);
+  for (std::size_t i = 0; i < run.time_s.size(); ++i) EXPECT_NEAR(s.friction_N[i], F, 1e-9) << i;
+  o.moving_mass_kg = 0;
+  EXPECT_NEAR(raw::segment(run, raw::Motion::velocity_m_s, o).friction_N[100], F + m * a, 1e-9);
+}
+
+TEST(RawSegmentation, LocalSlopeIsExactOnAQuadratic) {
+  std::vector<double> t, x;
+  for (int k = 0; k < 50; ++k) {
+    t.push_back(1e6 + 0.1 * k);  // epoch-like times: centred sums keep the digits
+    x.push_back(3 + 2 * (0.1 * k));
+  }
+  const auto v = raw::local_slope(t, x, 7);
+  for (double vi : v) EXPECT_NEAR(vi, 2.0, 1e-6);
+}
+
+std::string raw_csv(const std::vector<std::string>& rows) {
+  std::string text = "run,time_s,position_mm,force_N,load_N,preload_um,block_length_mm,temperature_C\n";
+  for (const auto& r : rows) text += r + "\n";
+  return text;
+}
+
+// 30 samples of one plateau at 10 mm/s, from line 2 on.
+std::vector<std::string> plateau_rows(double t0 = 0, double x0_mm = 0) {
+  std::vector<std::string> rows;
+  for (int k = 0; k < 30; ++k)
+    rows.push_back(fmt::format("a,{},{},20,1000,2.5,120.2,24", t0 + 0.1 * k, x0_mm + 1.0 * k));
+  return rows;
+}
+
+TEST_F(RawFriction, RepeatedTimesAreRefusedOrAveragedAsAsked) {
+  std::vector<std::string> rows = plateau_rows();
+  rows.insert(rows.begin() + 10, "a,0.9,9,22,1000,2.5,120.2,24");  // line 12 repeats line 11's time
+  const auto file = write("dup.csv", raw_csv(rows));
+  RawFrictionOptions o;
+  o.settling_s = 0;
+  o.min_plateau_samples = 10;
+  try {
+    load_friction_log(file, o);
+    FAIL() << "a repeated time was accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.line(), 12);
+    EXPECT_NE(std::string(e.what()).find("--duplicate-times average"), std::string::npos) << e.what();
+  }
+  o.duplicate_times = DuplicateTimes::average;
+  const FrictionLog log = load_friction_log(file, o);
+  ASSERT_EQ(log.segmentation.size(), 1u);
+  EXPECT_EQ(log.segmentation[0].averaged_duplicates, 1u);
+  EXPECT_EQ(log.segmentation[0].samples, 30u);
+  EXPECT_EQ(log.reports[0].skipped.at("merged into a sample at the same time"), 1u);
+  const auto at = std::find(log.time_s.begin(), log.time_s.end(), 0.9) - log.time_s.begin();
+  EXPECT_DOUBLE_EQ(log.friction_N[static_cast<std::size_t>(at)], 21.0);  // (20 + 22) / 2
+}
+
+TEST_F(RawFriction, APositionThatGoesBackWithinAPlateauIsRefusedAtItsCell) {
+  std::vector<std::string> rows = plateau_rows();
+  rows[20] = "a,2,18.5,20,1000,2.5,120.2,24";  // line 22: behind line 21's 19 mm
+  const auto file = write("back.csv", raw_csv(rows));
+  RawFrictionOptions o;
+  o.settling_s = 0;
+  o.min_plateau_samples = 5;
+  try {
+    load_friction_log(file, o);
+    FAIL() << "a non-monotone position was accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.line(), 22);
+    EXPECT_EQ(e.column(), 5);  // the position cell
+    EXPECT_NE(std::string(e.what()).find("monotone between reversals"), std::string::npos) << e.what();
+  }
+}
+
+TEST_F(RawFriction, ARunWithNoLongEnoughPlateauIsRefused) {
+  const auto file = write("short.csv", raw_csv(plateau_rows()));
+  RawFrictionOptions o;
+  o.min_plateau_samples = 50;
+  try {
+    load_friction_log(file, o);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.line(), 2);
+    EXPECT_NE(std::string(e.what()).find("too few samples per plateau"), std::string::npos) << e.what();
+  }
+}
+
+TEST_F(RawFriction, TheRigsRawRunsFitToTheTrueConstants) {
+  FrictionRigConfig c = one_setup({0.002, 0.005, 0.01, 0.03, 0.066, 0.11});
+  c.guides = {"SRG 25C", "SRN 35C"};
+  c.preload_um = {1.5, 2.5, 4.0};
+  c.load_N = {1000, 3000};
+  c.temperature_C = {22, 40};
+  c.noise_N = 0.15;
+  RawFrictionRigConfig rig = quiet_rig();
+  rig.sample_rate_Hz = 20;
+  rig.stroke_m = 0.05;
+  rig.cycles = 1;
+  const RawFrictionRigOutput made = generate_raw_friction_logs(c, rig, {});
+  RawFrictionOptions o;
+  o.settling_s = 0.2;
+  o.velocity_window = 5;
+  o.min_plateau_samples = 5;
+  const FrictionDataSet set = load_friction_dataset(write_set(made), nullptr, o, {"settling_s", "velocity_window", "min_plateau_samples"});
+  EXPECT_EQ(set.log.run_names.size(), 24u);
+  const FrictionFitResult fit = fit_friction(set.log, {});
+  ASSERT_TRUE(fit.fit.solver.usable);
+  const auto k = paper_friction_constants();
+  const double truth[] = {k.k1, k.k2, k.mu_st, k.v_st_m_s, k.mu_v, k.beta_per_K, k.f0};
+  for (std::size_t j = 0; j < 7; ++j) {
+    const ParameterEstimate& p = fit.fit.parameters[j];
+    EXPECT_LE(std::abs(p.value - truth[j]), 4 * p.se) << p.name << " = " << p.value << " ± " << p.se;
+  }
+  EXPECT_NEAR(fit.rmse_N, 0.15, 0.02);
+}
+
+// ---- Friction manifests ---------------------------------------------------------------------
+
+const char* kTidyHeader = "run,time_s,velocity_m_s,load_N,preload_um,block_length_mm,temperature_C,friction_N,direction\n";
+
+TEST_F(RawFriction, ConditionsAsKeysGiveTheSameLogAndFitAsColumns) {
+  FrictionRigConfig c = one_setup({0.002, 0.005, 0.01, 0.02, 0.05, 0.11});
+  c.load_N = {1000, 3000};
+  c.temperature_C = {22, 40};
+  c.preload_um = {1.5, 4.0};
+  c.one_setup_per_run = true;
+  c.runs = 2;
+  c.temperature_noise_K = 0;  // a run's temperature is one value, as a key gives it
+  const FrictionLog columns = generate_friction_log(c, {}).log;
+  const auto tidy = write("columns.csv", friction_log_csv(columns));
+
+  // The same samples, with the conditions moved into the manifest.
+  std::string lean = "run,time_s,velocity_m_s,friction_N,direction\n", manifest = "name = \"lean\"\nfile = \"lean.csv\"\n";
+  std::vector<bool> described(columns.run_names.size(), false);
+  for (std::size_t i = 0; i < columns.size(); ++i) {
+    const std::uint32_t r = columns.run[i];
+    lean += fmt::format("{},{},{},{},{}\n", columns.run_names[r], columns.time_s[i], columns.velocity_m_s[i],
+                        columns.friction_N[i], columns.direction[i]);
+    if (described[r]) continue;
+    described[r] = true;
+    manifest += fmt::format(
+        "[[run]]\nid = \"{}\"\nguide = \"{}\"\nload_kN = {}\npreload_um = {}\ntemperature_C = {}\n"
+        "viscosity40_mm2_s = {}\n",
+        columns.run_names[r], columns.guide_names[columns.guide[i]], columns.load_N[i] / 1000, columns.preload_um[i],
+        columns.temperature_C[i], columns.viscosity40_mm2_s[i]);
+  }
+  write("lean.csv", lean);
+  const FrictionDataSet set = load_friction_dataset(write("lean.toml", manifest));
+  const FrictionLog& keys = set.log;
+  ASSERT_EQ(keys.size(), columns.size());
+  EXPECT_EQ(keys.run_names, columns.run_names);
+  EXPECT_EQ(keys.load_N, columns.load_N);
+  EXPECT_EQ(keys.preload_um, columns.preload_um);
+  EXPECT_EQ(keys.block_length_mm, columns.block_length_mm);  // from the catalog, by the guide
+  EXPECT_EQ(keys.temperature_C, columns.temperature_C);
+  EXPECT_EQ(keys.friction_N, columns.friction_N);
+  const FrictionFitResult a = fit_friction(load_friction_log(tidy), {});
+  const FrictionFitResult b = fit_friction(keys, {});
+  for (std::size_t j = 0; j < 7; ++j) EXPECT_EQ(a.fit.parameters[j].value, b.fit.parameters[j].value) << j;
+}
+
+TEST_F(RawFriction, AManifestRefusesAConditionGivenTwiceOrNotAtAll) {
+  write("both.csv", std::string(kTidyHeader) + "r1,0,0.01,1000,2.5,120.2,24,20,1\n");
+  const auto both = write("both.toml", "file = \"both.csv\"\n[[run]]\nid = \"r1\"\nload_N = 1000\n");
+  try {
+    load_friction_dataset(both);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.line(), 1);
+    EXPECT_NE(std::string(e.what()).find("'load_N' is both a column of this file and a key of run 'r1'"),
+              std::string::npos)
+        << e.what();
+  }
+  write("lean.csv", "run,velocity_m_s,friction_N\nr1,0.01,20\nr2,0.01,21\n");
+  const auto partial = write("partial.toml",
+                             "file = \"lean.csv\"\n[[run]]\nid = \"r1\"\nguide = \"SRN 35C\"\nload_N = 1000\n"
+                             "preload_um = 2.5\ntemperature_C = 24\n");
+  try {
+    load_friction_dataset(partial);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.line(), 3);  // r2's row: the manifest does not list it
+    EXPECT_NE(std::string(e.what()).find("run 'r2' has no load_N"), std::string::npos) << e.what();
+  }
+  const auto bad_key = write("bad.toml", "file = \"lean.csv\"\n[[run]]\nid = \"r1\"\nload_lb = 3\n");
+  try {
+    load_friction_dataset(bad_key);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.line(), 4);
+    EXPECT_NE(std::string(e.what()).find("unknown unit 'lb'"), std::string::npos) << e.what();
+  }
+}
+
+TEST_F(RawFriction, SignedFrictionInATidyLogIsAWarning) {
+  std::string text = kTidyHeader;
+  for (int k = 0; k < 10; ++k)
+    text += fmt::format("a,{},0.01,1000,2.5,120.2,24,{},{}\n", k, k % 2 ? -20 : 20, k % 2 ? -1 : 1);
+  const auto warnings = load_friction_log(write("signed.csv", text)).reports.at(0).warnings;
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_NE(warnings[0].find("negative on 5 of the 5 samples with direction = -1"), std::string::npos) << warnings[0];
+}
+
+}  // namespace
+}  // namespace lmcal
