@@ -22,6 +22,7 @@ struct CalibrateOptions {
   FitOptions uncertainty;  // --covariance, --bootstrap: for every fit
   FrictionConstantOptions constants;
   ThermalModelOptions thermal_model;
+  FrictionInputOptions input;  // --catalog and the raw logs' segmentation
   const CLI::Option* lrt_p = nullptr;
   const CLI::Option* starts = nullptr;
   const CLI::Option* seed = nullptr;
@@ -30,6 +31,9 @@ struct CalibrateOptions {
 void run_calibrate(CalibrateOptions& o) {
   const CalibrationSet set = find_calibration_set(o.set);
   CalibrationOptions& options = o.calibration;
+  options.catalog_file = o.input.catalog_file;
+  options.raw = o.input.parsed();
+  options.raw_given = o.input.raw_given();
   // One setting, every step that has it: the published fits, the diagnoses' baselines and
   // the calibrated model's fits.
   apply_friction_constant_options(o.constants, options.friction);
@@ -79,6 +83,8 @@ void setup_calibrate(CLI::App& app) {
   o->starts = calibrate->add_option("--starts", c.friction.fit.starts, "Multi-start local searches of the friction fits")
                   ->capture_default_str();
   o->seed = calibrate->add_option("--seed", c.friction.fit.seed, "Seed of the multi-start sequence")->capture_default_str();
+  // The guides' catalog and the raw load-cell logs' segmentation.
+  o->input.add_to(*calibrate);
   // The rail model: heat, source, numerics, h, offsets.
   o->thermal_model.add_to(*calibrate, c.thermal);
   ThermalModelOptions::add_offsets(*calibrate, c.thermal);

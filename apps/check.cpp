@@ -39,15 +39,31 @@ void print_trace(const ThermalTrace& trace) {
   std::cout << "\n";
 }
 
-void check_friction(const std::vector<std::string>& files) {
-  std::vector<fs::path> paths(files.begin(), files.end());
-  const FrictionLog log = load_friction_logs(paths);
-  std::cout << fmt::format("friction log: {} samples, {} runs, {} guides\n", log.size(), log.run_names.size(),
-                           log.guide_names.size());
-  for (const auto& r : log.reports) print_report(r);
+// What segmentation kept and dropped of each raw run.
+void print_segmentation(const RunSegmentation& s) {
+  std::cout << fmt::format("    run {}: {} samples, {} kept in {} plateaus; dropped {} accelerating, {} settling, {} at "
+                           "rest, {} in short plateaus",
+                           s.run, s.samples, s.kept, s.plateaus.size(), s.dropped_acceleration, s.dropped_settling,
+                           s.dropped_stationary, s.dropped_short);
+  if (s.averaged_duplicates) std::cout << fmt::format("; {} repeated times averaged", s.averaged_duplicates);
+  std::cout << "\n";
+  for (const Plateau& p : s.plateaus)
+    std::cout << fmt::format("      {:>10.3f} s to {:>10.3f} s  {:+.5g} m/s  {} samples\n", p.start_s, p.end_s,
+                             p.velocity_m_s, p.samples);
 }
 
-void check_thermal(const std::vector<std::string>& files) {
+void check_friction(const std::vector<std::string>& files, const FrictionInputOptions& options) {
+  const FrictionLog log = load_friction_input(files, options).log;
+  std::cout << fmt::format("friction log: {} samples, {} runs, {} guides\n", log.size(), log.run_names.size(),
+                           log.guide_names.size());
+  for (const auto& r : log.reports) {
+    print_report(r);
+    for (const auto& s : log.segmentation)
+      if (s.file == r.file) print_segmentation(s);
+  }
+}
+
+void check_thermal(const std::vector<std::string>& files, const std::string& catalog_file) {
   for (const auto& file : files) {
     if (fs::path(file).extension() == ".csv") {
       const ThermalTrace trace = load_thermal_trace(file);
@@ -56,7 +72,8 @@ void check_thermal(const std::vector<std::string>& files) {
       print_trace(trace);
       continue;
     }
-    const ThermalDataSet set = load_thermal_dataset(file);
+    const std::optional<GuideCatalog> catalog = user_catalog(catalog_file);
+    const ThermalDataSet set = load_thermal_dataset(file, catalog ? &*catalog : nullptr);
     std::cout << fmt::format("thermal data set '{}': {} runs\n", set.name, set.runs.size());
     for (const auto& run : set.runs) {
       std::cout << fmt::format("  run {}: {} at {} m/s, {} N\n", run.id, run.guide, run.velocity_m_s, run.load_N);
@@ -88,13 +105,18 @@ void setup_check(CLI::App& app) {
   CLI::App* check = app.add_subcommand("check", "Load measurement files and report what was found or what is wrong");
   check->require_subcommand(1);
   auto friction_files = std::make_shared<std::vector<std::string>>();
-  CLI::App* friction = check->add_subcommand("friction", "Friction log CSV file(s)");
-  friction->add_option("files", *friction_files, "Friction log CSV files")->required();
-  friction->callback([friction_files] { check_friction(*friction_files); });
+  auto friction_input = std::make_shared<FrictionInputOptions>();
+  CLI::App* friction = check->add_subcommand("friction", "Friction log CSV file(s) or a friction manifest (.toml)");
+  friction->add_option("files", *friction_files, "Friction log CSV files, or one friction manifest")->required();
+  friction_input->add_to(*friction);
+  friction->callback([friction_files, friction_input] { check_friction(*friction_files, *friction_input); });
   auto thermal_files = std::make_shared<std::vector<std::string>>();
+  auto thermal_catalog = std::make_shared<std::string>();
   CLI::App* thermal = check->add_subcommand("thermal", "Thermal manifest(s) (.toml) or run CSV file(s)");
   thermal->add_option("files", *thermal_files, "Manifests or thermal run CSVs")->required();
-  thermal->callback([thermal_files] { check_thermal(*thermal_files); });
+  thermal->add_option("--catalog", *thermal_catalog,
+                      kCatalogHelp);
+  thermal->callback([thermal_files, thermal_catalog] { check_thermal(*thermal_files, *thermal_catalog); });
 
   auto o = std::make_shared<ResampleOptions>();
   CLI::App* resample = app.add_subcommand("resample", "Coarsen a thermal run CSV (the paper kept every 120th record)");

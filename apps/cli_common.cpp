@@ -4,6 +4,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 
@@ -96,7 +97,7 @@ void GuideOptions::add_to(CLI::App& app) {
   app.add_option("--guide", guides, "Guide model(s) from the catalog, e.g. \"SRN 35C\" (a list sweeps them)")
       ->delimiter(',')
       ->capture_default_str();
-  app.add_option("--catalog", catalog_file, "Your guide catalog (TOML: [[guide]] and [[bar]] tables), searched before the built-in one");
+  app.add_option("--catalog", catalog_file, kCatalogHelp);
   add_assignments(app, "--set", overrides, "Override a catalog value: --set conductivity_W_mK=36 (repeatable)");
 }
 
@@ -164,6 +165,72 @@ std::vector<std::string> given(const std::vector<const CLI::Option*>& options) {
   for (const CLI::Option* o : options)
     if (o->count() > 0) names.push_back(o->get_name());
   return names;
+}
+
+void FrictionInputOptions::add_to(CLI::App& app) {
+  auto* group = app.add_option_group("Raw load-cell logs", "How a raw log (force_N, time_s, position or velocity) is cut into plateaus");
+  const auto add = [&](CLI::Option* option, const char* field) {
+    option->capture_default_str();
+    options_.emplace_back(option, field);
+  };
+  add(group->add_option("--force-sign", force_sign, "follows-motion (positive moving towards +x), opposes-motion or magnitude"),
+      "force_sign");
+  add(group->add_option("--max-acceleration", raw.max_acceleration_m_s2, "|a| above which a sample is a transient, m/s2"),
+      "max_acceleration_m_s2");
+  add(group->add_option("--settling", raw.settling_s, "Dropped after every acceleration, s"), "settling_s");
+  add(group->add_option("--min-speed", raw.min_speed_m_s, "Slower is at rest, m/s"), "min_speed_m_s");
+  add(group->add_option("--speed-tolerance", raw.velocity_tolerance,
+                        "A sample off its plateau's median speed by more than this share is a transient"),
+      "velocity_tolerance");
+  add(group->add_option("--min-plateau", raw.min_plateau_samples, "Fewest samples of a kept plateau"), "min_plateau_samples");
+  add(group->add_option("--velocity-window", raw.velocity_window, "Samples of the filter deriving v and a (odd)"),
+      "velocity_window");
+  add(group->add_option("--moving-mass", raw.moving_mass_kg, "Moving mass, kg: the inertia m*a is taken off the force"),
+      "moving_mass_kg");
+  add(group->add_option("--duplicate-times", duplicate_times, "Samples sharing a time: refuse or average"),
+      "duplicate_times");
+  app.add_option("--catalog", catalog_file, kCatalogHelp);
+}
+
+std::vector<std::string> FrictionInputOptions::raw_given() const {
+  std::vector<std::string> names;
+  for (const auto& [option, field] : options_)
+    if (option->count() > 0) names.push_back(field);
+  return names;
+}
+
+RawFrictionOptions FrictionInputOptions::parsed() const {
+  RawFrictionOptions r = raw;
+  r.force_sign = parse_force_sign(force_sign);
+  r.duplicate_times = parse_duplicate_times(duplicate_times);
+  return r;
+}
+
+std::optional<GuideCatalog> user_catalog(const std::string& file) {
+  return file.empty() ? std::nullopt : std::optional(load_catalog(file));
+}
+
+FrictionInput load_friction_input(const std::vector<std::string>& files, const FrictionInputOptions& options) {
+  FrictionInput in;
+  const auto is_manifest = [](const std::string& f) { return std::filesystem::path(f).extension() == ".toml"; };
+  const auto manifests = std::count_if(files.begin(), files.end(), is_manifest);
+  const std::optional<GuideCatalog> catalog = user_catalog(options.catalog_file);
+  if (catalog) in.inputs.emplace_back(options.catalog_file, sha256_file(options.catalog_file));
+  if (manifests == 0) {
+    in.raw = options.parsed();
+    in.log = load_friction_logs(std::vector<std::filesystem::path>(files.begin(), files.end()), in.raw);
+    for (const auto& file : files) in.inputs.emplace_back(file, sha256_file(file));
+    return in;
+  }
+  if (files.size() != 1)
+    throw InvalidParameter("files", "give one friction manifest (.toml), or CSV logs, not both or several manifests");
+  FrictionDataSet set = load_friction_dataset(files.front(), catalog ? &*catalog : nullptr, options.parsed(),
+                                              options.raw_given());
+  in.inputs.emplace_back(files.front(), sha256_file(files.front()));
+  for (const auto& file : set.files) in.inputs.emplace_back(file.string(), sha256_file(file));
+  in.raw = set.raw;
+  in.log = std::move(set.log);
+  return in;
 }
 
 void ModelOptions::add_to(CLI::App& app, const char* help) { app.add_option("--model", file, help); }

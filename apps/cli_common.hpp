@@ -38,11 +38,17 @@ nlohmann::json run_record(const std::vector<std::string>& argv);
 #include <CLI/CLI.hpp>
 
 #include "lmcal/io/catalog.hpp"
+#include "lmcal/io/friction_log.hpp"
 #include "lmcal/fit/model_file.hpp"
 #include "lmcal/fit/thermal_fit.hpp"
 #include "lmcal/models/friction.hpp"
 
 namespace lmcal::cli {
+
+// The help of every --catalog option.
+inline constexpr const char* kCatalogHelp =
+    "Your guide catalog (TOML: [[guide]] and [[bar]] tables), searched before the built-in one (and instead of a "
+    "manifest's catalog)";
 
 // --guide, --catalog and --set FIELD=VALUE overrides of catalog values.
 struct GuideOptions {
@@ -159,6 +165,34 @@ struct FrictionConstantOptions {
 void add_friction_constant_options(CLI::App& app, FrictionConstantOptions& o);
 // Into `f` (InvalidParameter naming the option for an unknown constant or a bad bound).
 void apply_friction_constant_options(const FrictionConstantOptions& o, FrictionFitOptions& f);
+
+// How raw load-cell logs are segmented (--force-sign, --max-acceleration, --settling, ...),
+// and --catalog for the guides a manifest names; the friction files a command reads (CSV logs,
+// or one friction manifest) loaded with them.
+struct FrictionInputOptions {
+  RawFrictionOptions raw;
+  std::string force_sign = "follows-motion", duplicate_times = "refuse";
+  std::string catalog_file;
+  void add_to(CLI::App& app);
+  // The settings the user gave, by RawFrictionOptions' field names (they win over a manifest's [raw]).
+  std::vector<std::string> raw_given() const;
+  // `raw` with the names parsed.
+  RawFrictionOptions parsed() const;
+
+ private:
+  std::vector<std::pair<const CLI::Option*, std::string>> options_;  // option -> field name
+};
+
+// --catalog FILE: the user's catalog, loaded (none without it).
+std::optional<GuideCatalog> user_catalog(const std::string& file);
+
+struct FrictionInput {
+  FrictionLog log;
+  std::vector<std::pair<std::string, std::string>> inputs;  // every file read -> sha256
+  RawFrictionOptions raw;                                   // as applied
+};
+// CSV logs, or one .toml friction manifest (its runs' conditions and its [raw] settings).
+FrictionInput load_friction_input(const std::vector<std::string>& files, const FrictionInputOptions& options);
 
 // A list option parsed with parse_list.
 void add_list(CLI::App& app, const char* name, std::vector<double>& values, const char* help);

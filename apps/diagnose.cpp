@@ -18,6 +18,7 @@ namespace {
 
 struct DiagnoseFrictionOptions {
   std::vector<std::string> files;
+  FrictionInputOptions input;
   std::string name = "friction_diagnosis";
   std::string output_dir = "fits";
   FrictionConstantOptions constants;
@@ -84,6 +85,7 @@ void print(const FrictionDiagnosis& d) {
 
 struct DiagnoseThermalOptions {
   std::string manifest;
+  std::string catalog_file;
   std::string name = "thermal_diagnosis";
   std::string output_dir = "fits";
   ThermalModelOptions model;
@@ -106,7 +108,8 @@ void print(const ThermalDiagnosis& d) {
 void run_diagnose_thermal(DiagnoseThermalOptions& o) {
   std::vector<std::pair<std::string, std::string>> inputs;
   o.model.apply(o.diagnosis.fit, inputs);
-  const ThermalDataSet data = load_thermal_dataset(o.manifest);
+  const std::optional<GuideCatalog> catalog = user_catalog(o.catalog_file);
+  const ThermalDataSet data = load_thermal_dataset(o.manifest, catalog ? &*catalog : nullptr);
   const ThermalDiagnosis d = with_progress("thermal diagnosis", [&](const Progress& progress) {
     o.diagnosis.progress = progress;
     return diagnose_thermal(data, o.diagnosis);
@@ -119,8 +122,7 @@ void run_diagnose_thermal(DiagnoseThermalOptions& o) {
 
 void run_diagnose_friction(DiagnoseFrictionOptions& o) {
   apply_friction_constant_options(o.constants, o.diagnosis.fit);
-  std::vector<std::filesystem::path> paths(o.files.begin(), o.files.end());
-  const FrictionLog log = load_friction_logs(paths);
+  const FrictionLog log = load_friction_input(o.files, o.input).log;
   const FrictionDiagnosis d = with_progress("friction diagnosis", [&](const Progress& progress) {
     o.diagnosis.progress = progress;
     return diagnose_friction(log, o.diagnosis);
@@ -138,7 +140,8 @@ void setup_diagnose(CLI::App& app) {
   diagnose->require_subcommand(1);
   auto o = std::make_shared<DiagnoseFrictionOptions>();
   CLI::App* friction = diagnose->add_subcommand("friction", "Friction law against load-cell logs");
-  friction->add_option("files", o->files, "Friction log CSV files")->required();
+  friction->add_option("files", o->files, "Friction log CSV files, or one friction manifest (.toml)")->required();
+  o->input.add_to(*friction);
   friction->add_option("--name", o->name, "Name of the output")->capture_default_str();
   friction->add_option("-o,--output-dir", o->output_dir, "Output folder")->capture_default_str();
   friction->add_option("--min-gain", o->diagnosis.min_cv_gain_percent, "Least held-out RMSE gain to accept a cause, %")
@@ -150,6 +153,8 @@ void setup_diagnose(CLI::App& app) {
   auto t = std::make_shared<DiagnoseThermalOptions>();
   CLI::App* thermal = diagnose->add_subcommand("thermal", "Rail model against thermocouple traces");
   thermal->add_option("manifest", t->manifest, "Thermal data set manifest (TOML)")->required();
+  thermal->add_option("--catalog", t->catalog_file,
+                      kCatalogHelp);
   thermal->add_option("--name", t->name, "Name of the output")->capture_default_str();
   thermal->add_option("-o,--output-dir", t->output_dir, "Output folder")->capture_default_str();
   t->model.add_to(*thermal, t->diagnosis.fit);

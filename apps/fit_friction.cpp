@@ -24,6 +24,7 @@ namespace fs = std::filesystem;
 
 struct FitFrictionOptions {
   std::vector<std::string> files;
+  FrictionInputOptions input;
   std::string name = "friction";
   std::string output_dir = "fits";
   FrictionConstantOptions constants;
@@ -67,10 +68,9 @@ FrictionFitOptions to_fit_options(const FitFrictionOptions& o) {
 
 void run_fit_friction(const FitFrictionOptions& o, const std::vector<std::string>& argv) {
   const FrictionFitOptions options = to_fit_options(o);
-  std::vector<fs::path> paths(o.files.begin(), o.files.end());
-  const FrictionLog log = load_friction_logs(paths);
-  FitProvenance provenance{o.name, {}, argv};
-  for (const auto& file : o.files) provenance.inputs.emplace_back(file, sha256_file(file));
+  const FrictionInput input = load_friction_input(o.files, o.input);
+  const FrictionLog& log = input.log;
+  const FitProvenance provenance{o.name, input.inputs, argv};
   const FrictionFitResult result = with_progress("friction fit", [&](const Progress&) { return fit_friction(log, options); });
   const std::string written = write_outputs(o.output_dir, friction_fit_files(result, log, options, provenance));
   std::cout << "friction fit '" << o.name << "': " << friction_fit_summary(result);
@@ -84,7 +84,8 @@ void setup_fit(CLI::App& app, const std::vector<std::string>& argv) {
   fit->require_subcommand(1);
   auto o = std::make_shared<FitFrictionOptions>();
   CLI::App* friction = fit->add_subcommand("friction", "Friction constants from load-cell logs");
-  friction->add_option("files", o->files, "Friction log CSV files")->required();
+  friction->add_option("files", o->files, "Friction log CSV files, or one friction manifest (.toml)")->required();
+  o->input.add_to(*friction);
   friction->add_option("--name", o->name, "Name of the fit (output file names)")->capture_default_str();
   friction->add_option("-o,--output-dir", o->output_dir, "Output folder")->capture_default_str();
   add_friction_constant_options(*friction, o->constants);

@@ -26,6 +26,7 @@ struct FitThermalOptions {
   std::string manifest;
   std::string name = "thermal";
   std::string output_dir = "fits";
+  std::string catalog_file;  // wins over the manifest's `catalog`
   ThermalModelOptions model;
   ThermalFitOptions fit;
 };
@@ -34,8 +35,10 @@ void run_fit_thermal(FitThermalOptions& o, const std::vector<std::string>& argv)
   ThermalFitOptions& f = o.fit;
   std::vector<std::pair<std::string, std::string>> inputs;
   o.model.apply(f, inputs);
-  const ThermalDataSet data = load_thermal_dataset(o.manifest);
+  const std::optional<GuideCatalog> catalog = user_catalog(o.catalog_file);
+  const ThermalDataSet data = load_thermal_dataset(o.manifest, catalog ? &*catalog : nullptr);
   inputs.emplace_back(o.manifest, sha256_file(o.manifest));
+  if (!data.catalog_file.empty()) inputs.emplace_back(data.catalog_file.string(), sha256_file(data.catalog_file));
   for (const auto& run : data.runs) inputs.emplace_back(run.file.string(), sha256_file(run.file));
 
   const ThermalFitResult result = with_progress("thermal fit", [&](const Progress&) { return fit_thermal(data, f); });
@@ -52,6 +55,7 @@ void setup_fit_thermal(CLI::App& fit, const std::vector<std::string>& argv) {
   app->add_option("manifest", o->manifest, "Thermal data set manifest (TOML)")->required();
   app->add_option("--name", o->name, "Name of the fit (output file names)")->capture_default_str();
   app->add_option("-o,--output-dir", o->output_dir, "Output folder")->capture_default_str();
+  app->add_option("--catalog", o->catalog_file, kCatalogHelp);
   o->model.add_to(*app, o->fit);
   o->model.add_friction_file(*app);
   ThermalModelOptions::add_offsets(*app, o->fit);

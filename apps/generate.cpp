@@ -2,6 +2,8 @@
 // truth, realistic imperfections and optional named effects (virtual_rig.hpp).
 //
 //   lmcal generate friction -o DIR   -> DIR/friction.csv, DIR/friction_truth.json
+//   lmcal generate friction --raw -o DIR -> DIR/friction.toml, DIR/friction/<run>.csv (raw
+//                                       load-cell time series), DIR/friction_truth.json
 //   lmcal generate thermal  -o DIR   -> DIR/thermal.toml, DIR/thermal/<run>.csv,
 //                                       DIR/thermal_truth.json
 #include <fmt/format.h>
@@ -26,6 +28,9 @@ struct GenerateOptions {
   std::uint64_t seed = 1;
   std::string output;
   FrictionRigConfig friction;
+  bool raw = false;  // raw load-cell time series
+  RawFrictionRigConfig raw_rig;
+  std::string raw_force_sign = "follows-motion";
   ThermalRigConfig thermal;
   std::string name = "synthetic";
 };
@@ -57,12 +62,27 @@ void run_generate_friction(GenerateOptions& o, const std::vector<std::string>& a
   require_autocorrelation("--noise-ar1", o.friction.noise_ar1);
   o.friction.seed = o.seed;
   const RigEffects effects = resolve_effects(o.effects);
-  const FrictionRigOutput made = generate_friction_log(o.friction, effects);
   const fs::path dir = o.output;
   const std::vector<std::string> comments = {
       "SYNTHETIC friction log made by the lmcal virtual rig, not measured.",
       "Command: " + command_line(argv),
       "Effects: " + active_effects(effects) + "; every true value is in friction_truth.json"};
+  if (o.raw) {
+    o.raw_rig.force_sign = parse_force_sign(o.raw_force_sign);
+    const RawFrictionRigOutput made = with_progress("logging the raw runs", [&](const Progress&) {
+      return generate_raw_friction_logs(o.friction, o.raw_rig, effects, comments);
+    });
+    OutputSet out;
+    for (const auto& [file, text] : made.run_files) out.add(dir / file, text);
+    out.add(dir / "friction.toml", made.manifest_toml);
+    out.add(dir / "friction_truth.json", made.truth_json);
+    out.commit();
+    std::cout << fmt::format("wrote {} raw runs to {} (manifest {}, truth {})\n", made.run_names.size(),
+                             (dir / "friction").string(), (dir / "friction.toml").string(),
+                             (dir / "friction_truth.json").string());
+    return;
+  }
+  const FrictionRigOutput made = generate_friction_log(o.friction, effects);
   OutputSet out;
   out.add(dir / "friction.csv", friction_log_csv(made.log, comments));
   out.add(dir / "friction_truth.json", made.truth_json);
@@ -133,6 +153,20 @@ void setup_generate(CLI::App& app, const std::vector<std::string>& argv) {
   friction->add_option("--run-offset", f.run_offset_N, "Zero offset per run (sigma), N")->capture_default_str();
   friction->add_option("--noise-ar1", f.noise_ar1, "Lag-1 autocorrelation of the load-cell noise within a run, [0, 1)")
       ->capture_default_str();
+  auto* raw = friction->add_option_group("Raw load-cell logs", "--raw: time series of a rig moving back and forth");
+  raw->add_flag("--raw", o->raw,
+                "Raw load-cell time series, one run per setup, with a friction.toml manifest of the runs' conditions");
+  raw->add_option("--sample-rate", o->raw_rig.sample_rate_Hz, "Samples per second, Hz")->capture_default_str();
+  raw->add_option("--acceleration", o->raw_rig.acceleration_m_s2, "Acceleration of every move, m/s2")->capture_default_str();
+  raw->add_option("--stroke", o->raw_rig.stroke_m, "Stroke, m")->capture_default_str();
+  raw->add_option("--cycles", o->raw_rig.cycles, "Back-and-forth moves per speed")->capture_default_str();
+  raw->add_option("--dwell", o->raw_rig.dwell_s, "Rest at each end, s")->capture_default_str();
+  raw->add_option("--encoder-resolution", o->raw_rig.encoder_resolution_m, "Encoder step, m")->capture_default_str();
+  raw->add_option("--moving-mass", o->raw_rig.moving_mass_kg, "Moving mass, kg (the force carries m*a)")->capture_default_str();
+  raw->add_option("--drift", o->raw_rig.drift_N_per_h, "Load-cell zero drift, N/h")->capture_default_str();
+  raw->add_flag("--log-velocity", o->raw_rig.log_velocity, "Log velocity_m_s instead of position_mm");
+  raw->add_option("--force-sign", o->raw_force_sign, "How the logged force is signed: follows-motion, opposes-motion, magnitude")
+      ->capture_default_str();
   friction->callback([o, &argv] { run_generate_friction(*o, argv); });
 
   CLI::App* thermal = generate->add_subcommand("thermal", "A thermal data set (manifest + runs) and its truth");
@@ -166,6 +200,18 @@ void setup_generate(CLI::App& app, const std::vector<std::string>& argv) {
                       "Write mean_friction_uncertainty_N = this x mean_friction_N for every run (0: not written)")
       ->capture_default_str();
   thermal->add_option("--tc-bias", t.tc_bias_K, "Thermocouple bias bound (uniform +-), K")->capture_default_str();
+  thermal->add_option_function<double>("--heater", [&t](double W) { t.heat_rate_W = W; },
+                                       "A heater run of this heat rate, W (heat_rate_W; no friction, no --velocity)");
+  thermal->add_option_function<double>("--heater-off", [&t](double s) { t.heater_off_s = s; },
+                                       "The heater switches off at this time, s; the run goes on cooling");
+  thermal->add_option_function<double>("--stop", [&t](double s) { t.stop_s = s; },
+                                       "The block stops at this time, s (a schedule phase with velocity 0)");
+  thermal->add_option("--stated-heat-uncertainty", t.stated_heat_uncertainty,
+                      "Write heat_rate_uncertainty_W = this x the heater's heat_rate_W (0: not written)")
+      ->capture_default_str();
+  thermal->add_flag_function("--no-ambient-columns", [&t](std::int64_t) { t.ambient_columns = false; },
+                             "No ambient columns: the manifest's ambient_C (--ambient) instead");
+  thermal->add_option("--ambient-wave", t.ambient_wave_K, "Amplitude of the ambient's 2 h wave, K")->capture_default_str();
   thermal->callback([o, &argv] { run_generate_thermal(*o, argv); });
 
   CLI::App* list = generate->add_subcommand("effects", "List the named effects");

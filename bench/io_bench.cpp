@@ -1,7 +1,10 @@
 // Loading speed of the CSV readers on files the size real rigs produce:
 //   - a 6 h thermal log at 50 Hz: 1.08 M rows x 6 columns (time_s, ambient1_C, ambient2_C,
 //     tc1_C, tc2_C, tc3_C), numbers as "%.3f", ~55 MB;
-//   - a friction log of 1 M samples with all eleven columns.
+//   - a friction log of 1 M samples with all eleven columns;
+//   - a raw load-cell run of 1 M samples at 1 kHz (time_s, position_mm, force_N; its conditions
+//     in a friction manifest), from the virtual rig: loading includes deriving v and a and
+//     cutting the run into plateaus. Target: >= 150 MB/s.
 // The files are generated once into a temporary folder (removed at exit). Throughput is
 // reported as bytes/s of CSV text. Target: >= 200 MB/s for the thermal log.
 // Run: build/bench/lmcal_io_bench
@@ -16,6 +19,7 @@
 
 #include "lmcal/io/friction_log.hpp"
 #include "lmcal/io/thermal_run.hpp"
+#include "lmcal/rig/virtual_rig.hpp"
 
 namespace {
 
@@ -122,5 +126,43 @@ void BM_LoadFrictionLog(benchmark::State& state) {
   state.counters["file_MB"] = static_cast<double>(fs::file_size(file)) / 1e6;
 }
 BENCHMARK(BM_LoadFrictionLog)->Unit(benchmark::kMillisecond)->MinTime(3.0);
+
+// One setup moving back and forth at four speeds, 25 cycles each, logged at 1 kHz.
+const fs::path& raw_friction_manifest() {
+  static const fs::path file = [] {
+    lmcal::FrictionRigConfig config;
+    config.guides = {"SRN 35C"};
+    config.preload_um = {2.5};
+    config.load_N = {2000};
+    config.temperature_C = {26};
+    config.velocity_m_s = {0.01, 0.02, 0.05, 0.1};
+    config.runs = 1;
+    lmcal::RawFrictionRigConfig raw;
+    raw.sample_rate_Hz = 1000;
+    raw.cycles = 25;
+    const lmcal::RawFrictionRigOutput made = lmcal::generate_raw_friction_logs(config, raw, {});
+    fs::create_directories(scratch().path() / "friction");
+    for (const auto& [name, text] : made.run_files) write(scratch().path() / name, text);
+    const fs::path path = scratch().path() / "friction.toml";
+    write(path, made.manifest_toml);
+    return path;
+  }();
+  return file;
+}
+
+void BM_LoadRawFrictionLog(benchmark::State& state) {
+  const fs::path& manifest = raw_friction_manifest();
+  const fs::path csv = manifest.parent_path() / "friction" / "run01.csv";
+  for (auto _ : state) {
+    lmcal::FrictionDataSet set = lmcal::load_friction_dataset(manifest);
+    benchmark::DoNotOptimize(set.log.friction_N.data());
+  }
+  state.SetBytesProcessed(state.iterations() * static_cast<std::int64_t>(fs::file_size(csv)));
+  const lmcal::FrictionDataSet set = lmcal::load_friction_dataset(manifest);
+  state.counters["rows"] = static_cast<double>(set.log.segmentation.at(0).samples);
+  state.counters["kept"] = static_cast<double>(set.log.size());
+  state.counters["file_MB"] = static_cast<double>(fs::file_size(csv)) / 1e6;
+}
+BENCHMARK(BM_LoadRawFrictionLog)->Unit(benchmark::kMillisecond)->MinTime(3.0);
 
 }  // namespace

@@ -171,7 +171,7 @@ TOML
 "$LMCAL" --config calopts.toml calibrate calset -o calset --no-diagnosis --bootstrap 0 >calagain.txt 2>&1
 check "calibrate -o SET twice: its own outputs are not read as logs" grep -q 'friction_samples.csv not read: it is an output of lmcal calibrate' calagain.txt
 check "calibrate options from --config reach the fits and calibration.json" grep -q '"starts": 3' calset/calibration.json
-check "a folder without measurements refused" refused "expected friction logs (friction*.csv) or a thermal manifest" calibrate out
+check "a folder without measurements refused" refused "expected friction logs (friction*.csv or a friction*.toml manifest) or a thermal manifest" calibrate out
 check "a missing folder refused" refused "expected a measurement folder" calibrate no_such_folder -o out
 
 # --- calibrate once, use everywhere: simulate with the calibrated model ------------------------
@@ -269,6 +269,32 @@ check "coupled heat rate falls while the rail warms" awk -F, 'NR > 1 && $11 == 0
   if (n++ && !($9 < q && $12 > t)) bad = 1; q = $9; t = $12 } END { exit bad || n < 10 }' mm_time.csv
 check "with mechanisms the steady state is hotter than after 2 h" awk -F, '$10 == "end_of_run" && $11 == 0 {e = $12}
   $10 == "steady_state" && $11 == 0 {s = $12} END { exit !(s > e) }' mm_profile.csv
+
+# --- raw load-cell logs and friction manifests --------------------------------------------------
+"$LMCAL" generate friction --raw -o raw --guides "SRN 35C" --preload 1.5,4 --load 1000,3000 --temperature 22,40 \
+  --velocity 0.005,0.01,0.05,0.11 --stroke 0.2 --sample-rate 100 --run-offset 0 --runs 1 --seed 3 >/dev/null
+check "generate --raw writes a manifest, runs and the truth" test -s raw/friction.toml -a -s raw/friction/run08.csv -a -s raw/friction_truth.json
+check "a raw run is time, position and signed force" grep -q '^time_s,position_mm,force_N$' raw/friction/run01.csv
+check "the truth lists the cruises by sample" grep -q '"first_sample"' raw/friction_truth.json
+"$LMCAL" check friction raw/friction.toml >raw_check.txt
+check "check lists each raw run's plateaus" grep -q "run run01: .* kept in 8 plateaus; dropped .* accelerating" raw_check.txt
+check "check shows a plateau's velocity" grep -qE -- "-0.11 m/s +[0-9]+ samples" raw_check.txt
+"$LMCAL" check friction raw/friction.toml --force-sign opposes-motion >raw_sign.txt
+check "a wrong sign convention is a warning" grep -q "looks reversed; give --force-sign follows-motion" raw_sign.txt
+"$LMCAL" fit friction raw/friction.toml -o raw_fit --name raw >/dev/null
+check "fit friction takes a manifest" test -s raw_fit/raw.json
+check "the manifest and its runs are the fit's inputs" grep -q 'friction/run08.csv' raw_fit/raw.json
+"$LMCAL" calibrate raw -o raw_cal >raw_cal.txt 2>&1
+check "calibrate reads a folder's friction manifest" grep -q '"raw_friction"' raw_cal/calibration.json
+check "the report plots a raw trace with its plateaus" grep -q 'data-plot="raw-trace-force"' raw_cal/report.html
+# A position that goes back between reversals: refused at its cell, nothing written.
+awk -F, -v OFS=, 'NR == 400 { $2 = $2 - 1 } { print }' raw/friction/run01.csv >back.csv
+printf 'file = "back.csv"\n[[run]]\nid = "a"\nguide = "SRN 35C"\nload_N = 1000\npreload_um = 2.5\ntemperature_C = 24\n' >back.toml
+sed -i 's/^time_s,/run,time_s,/; s/^\([0-9]\)/a,\1/' back.csv
+check "a non-monotone position is refused at its line" refused "back.csv:400:" fit friction back.toml -o out
+check "and says why" grep -q "position must be monotone between reversals" stderr.txt
+printf 'file = "back.csv"\n[[run]]\nid = "a"\nload_N = 1000\nload_kN = 1\n' >twice.toml
+check "a manifest refuses a key given twice" refused "twice.toml:5:1: duplicate key 'load_kN'" check friction twice.toml
 
 # The bundled set is exactly what the recorded commands make (the command lines aside).
 LMCAL="$LMCAL" bash "$SOURCE/scripts/make-bundled-data.sh" "$work/bundled" >/dev/null

@@ -382,5 +382,103 @@ TEST(RailThermal, TwoWayCouplingLowersTheHeatAsTheRailWarms) {
   EXPECT_DOUBLE_EQ(constant.temperature_C(2, 0), frozen.temperature_C(2, 0));
 }
 
+
+// A heater switched on and off: the energy balance still closes, and the injected energy is
+// α·∫Q dt of the schedule, for every source model and scheme.
+TEST(RailThermal, OnOffScheduleKeepsTheEnergyBalanceExact) {
+  const auto g = srn35c_geometry();
+  auto p = srn35c_params();
+  p.heat_schedule = HeatRateSchedule<double>::steps({0, 3000, 9000, 12000}, {6.0, 0.0, 3.0, 0.0});
+  const double heat_J = 6.0 * 3000 + 3.0 * 3000;  // what the schedule puts in over the run
+  RailOutputs out{.duration_s = kSixHours_s, .sensor_positions_m = {0.0}, .output_times_s = {0, 4000, kSixHours_s},
+                  .energy_balance = true};
+  for (auto source : {SourceModel::paper, SourceModel::averaged, SourceModel::moving}) {
+    for (auto scheme : {TimeScheme::backward_euler, TimeScheme::crank_nicolson}) {
+      const int segments = source == SourceModel::moving ? 150 : 50;
+      const double dt = source == SourceModel::moving ? 0.5 : 600;
+      const auto sol = simulate_rail(g, numerics(source, scheme, segments, dt), out, p, AmbientTrace::constant(26.0));
+      const double expected =
+          (source == SourceModel::paper ? g.stroke_m / g.contact_length_m : 1.0) * p.heat_partition * heat_J;
+      EXPECT_NEAR(sol.energy.injected_J, expected, 1e-9 * expected) << to_string(source) << " " << to_string(scheme);
+      EXPECT_LT(std::abs(sol.energy.imbalance_J()), 1e-3 * expected) << to_string(source) << " " << to_string(scheme);
+      EXPECT_EQ(sol.heat_rate_W[1], 0.0);  // at 4000 s the heater is off
+    }
+  }
+}
+
+// A schedule that never changes is the constant heat rate, to the last bit of the solution.
+TEST(RailThermal, ConstantScheduleEqualsTheConstantHeatRate) {
+  const auto g = srn35c_geometry();
+  const auto p = srn35c_params();
+  auto scheduled = p;
+  scheduled.heat_rate_W = 0;  // unused once a schedule is given
+  scheduled.heat_schedule = HeatRateSchedule<double>::steps({0, 5000}, {p.heat_rate_W, p.heat_rate_W});
+  RailOutputs out{.duration_s = kSixHours_s, .sensor_positions_m = {0.0, 0.1}, .output_times_s = {3600, kSixHours_s}};
+  const auto n = numerics(SourceModel::averaged, TimeScheme::crank_nicolson, 50, 300);
+  const auto a = simulate_rail(g, n, out, p, AmbientTrace::constant(26.0));
+  const auto b = simulate_rail(g, n, out, scheduled, AmbientTrace::constant(26.0));
+  for (std::size_t k = 0; k < a.sensor_temperature_C.size(); ++k)
+    EXPECT_NEAR(b.sensor_temperature_C[k], a.sensor_temperature_C[k], 1e-12 * a.sensor_temperature_C[k]) << k;
+  EXPECT_GT(a.temperature_C(1, 0), 27.0);  // the heat did warm the rail
+}
+
+// The heater switches off 450 s into a 600 s step: the step gets 450 s of heat, not 0 or 600;
+// and a measured power ramp (linear knots) is integrated exactly too.
+TEST(RailThermal, StepSwitchingOffMidStepInjectsTheExactEnergy) {
+  const auto g = srn35c_geometry();
+  auto p = srn35c_params();
+  RailOutputs out{.duration_s = 1200, .sensor_positions_m = {0.0}, .output_times_s = {1200}, .energy_balance = true};
+  const auto n = numerics(SourceModel::averaged, TimeScheme::backward_euler, 50, 600);
+  p.heat_schedule = HeatRateSchedule<double>::steps({0, 450}, {5.0, 0.0});
+  EXPECT_NEAR(simulate_rail(g, n, out, p, AmbientTrace::constant(26.0)).energy.injected_J,
+              p.heat_partition * 5.0 * 450, 1e-10 * 5.0 * 450);
+  p.heat_schedule = {{100, 700}, {2.0, 8.0}};  // 2 W until 100 s, a ramp to 8 W at 700 s, then 8 W
+  const double ramp_J = 2.0 * 100 + 0.5 * (2.0 + 8.0) * 600 + 8.0 * 500;
+  EXPECT_NEAR(simulate_rail(g, n, out, p, AmbientTrace::constant(26.0)).energy.injected_J, p.heat_partition * ramp_J,
+              1e-10 * ramp_J);
+  EXPECT_DOUBLE_EQ(p.heat_schedule.integral_J(400, 1000), 0.5 * (5.0 + 8.0) * 300 + 8.0 * 300);
+}
+
+// α and the phase heats as Jets: the derivative of a temperature after a switch-off matches
+// central differences.
+TEST(RailThermal, ScheduleCarriesJetDerivatives) {
+  using J2 = ceres::Jet<double, 2>;
+  const auto g = srn35c_geometry();
+  const auto p = srn35c_params();
+  RailOutputs out{.duration_s = 9000, .sensor_positions_m = {0.0}, .output_times_s = {9000}};
+  const auto n = numerics(SourceModel::averaged, TimeScheme::crank_nicolson, 40, 300);
+  auto simulate = [&](double alpha, double q_on) {
+    RailParams<double> q = p;
+    q.heat_partition = alpha;
+    q.heat_schedule = HeatRateSchedule<double>::steps({0, 4000}, {q_on, 0.0});
+    return simulate_rail(g, n, out, q, AmbientTrace::constant(26.0)).temperature_C(0, 0);
+  };
+  RailParams<J2> q{.heat_partition = J2(p.heat_partition, 0), .heat_rate_W = J2(0.0), .h_W_m2K = J2(p.h_W_m2K),
+                   .conductivity_W_mK = J2(p.conductivity_W_mK), .density_kg_m3 = J2(p.density_kg_m3),
+                   .specific_heat_J_kgK = J2(p.specific_heat_J_kgK), .initial_temperature_C = J2(26.0)};
+  q.heat_schedule = HeatRateSchedule<J2>::steps({0, 4000}, {J2(5.0, 1), J2(0.0)});
+  const J2 T = simulate_rail(g, n, out, q, AmbientTrace::constant(26.0)).temperature_C(0, 0);
+  EXPECT_NEAR(T.a, simulate(p.heat_partition, 5.0), 1e-12 * T.a);
+  const double h = 1e-5;
+  EXPECT_NEAR(T.v[0], (simulate(p.heat_partition + h, 5.0) - simulate(p.heat_partition - h, 5.0)) / (2 * h), 1e-6);
+  EXPECT_NEAR(T.v[1], (simulate(p.heat_partition, 5.0 + h) - simulate(p.heat_partition, 5.0 - h)) / (2 * h), 1e-6);
+  EXPECT_GT(T.v[1], 0.0);
+}
+
+TEST(RailThermal, RefusesABadScheduleAndScheduleWithCoupling) {
+  const auto g = srn35c_geometry();
+  auto p = srn35c_params();
+  RailOutputs out{.duration_s = 600, .sensor_positions_m = {0.0}, .output_times_s = {600}};
+  const auto n = numerics(SourceModel::averaged, TimeScheme::backward_euler, 20, 60);
+  p.heat_schedule = {{0, 300, 200}, {1.0, 1.0, 1.0}};
+  EXPECT_THROW(simulate_rail(g, n, out, p, AmbientTrace::constant(26.0)), InvalidParameter);
+  p.heat_schedule = {{0, 300}, {1.0, -1.0}};
+  EXPECT_THROW(simulate_rail(g, n, out, p, AmbientTrace::constant(26.0)), InvalidParameter);
+  p.heat_schedule = HeatRateSchedule<double>::steps({0, 300}, {1.0, 0.0});
+  EXPECT_THROW(simulate_rail(g, n, out, p, AmbientTrace::constant(26.0),
+                             HeatRateModel<double>([](const double&) { return 1.0; })),
+               InvalidParameter);
+}
+
 }  // namespace
 }  // namespace lmcal

@@ -7,6 +7,8 @@
 
 #include "fit/thermal_model.hpp"
 #include "support/finite_differences.hpp"
+#include "support/temp_folder.hpp"
+#include "lmcal/io/catalog.hpp"
 #include "lmcal/rig/virtual_rig.hpp"
 
 namespace lmcal {
@@ -20,6 +22,12 @@ ThermalRigConfig clean_rig(double duration_s = 4 * 3600.0) {
   c.noise_K = c.tc_bias_K = c.ambient_bias_K = 0;
   c.friction_noise_N = 0;
   return c;
+}
+
+// The estimate's interval holds the truth.
+void expect_interval_holds(const ParameterEstimate& estimate, double truth) {
+  EXPECT_LE(estimate.ci_low, truth) << estimate.name;
+  EXPECT_GE(estimate.ci_high, truth) << estimate.name;
 }
 
 ThermalFitOptions options_for_rig() {
@@ -67,8 +75,7 @@ TEST(ThermalFit, NoisyBiasedRunsGiveAnIntervalThatContainsTheTruth) {
   o.per_run_fits = false;
   const auto result = fit_thermal(data, o);
   const auto& alpha = result.joint.parameter("alpha");
-  EXPECT_LE(alpha.ci_low, 0.6);
-  EXPECT_GE(alpha.ci_high, 0.6);
+  expect_interval_holds(alpha, 0.6);
   EXPECT_NEAR(alpha.value, 0.6, 0.03);
 }
 
@@ -253,6 +260,154 @@ TEST(ThermalFit, OffsetsAreFittedWhereARunStartsIsothermalAndHeldWhereNot) {
   EXPECT_EQ(offsets, 2 * data.runs[0].trace.rail.size());  // runs 0 and 2
   o.offsets = ThermalOffsets::held;
   for (const auto& run : fit_thermal(data, o).runs) EXPECT_FALSE(run.offsets_fitted);
+}
+
+
+// ---- Runs as rigs produce them ----
+
+// A 6 W heater on for 2 h, then off for 2 h, on a clean rig.
+ThermalRigConfig heater_rig() {
+  ThermalRigConfig c = clean_rig();
+  c.heat_rate_W = 6.0;
+  c.heater_off_s = 7200;
+  return c;
+}
+
+// A heater of known power on for 2 h, then off for 2 h: the joint fit recovers α within its
+// interval, takes the heat's stated uncertainty into it, and fits the cooling records too.
+TEST(ThermalFit, HeaterRunWithAnOffPhaseFitsAlphaFromBothPhases) {
+  auto rig = heater_rig();
+  rig.stated_heat_uncertainty = 0.01;
+  rig.noise_K = 0.05;
+  rig.repeats = 2;
+  rig.seed = 5;
+  const auto data = generate_thermal_dataset(rig, {}, "heater").set;
+  ASSERT_EQ(data.runs.size(), 2u);
+  ASSERT_EQ(data.runs[0].schedule.size(), 2u);
+  auto o = options_for_rig();
+  o.heat = HeatInput::automatic;
+  o.per_run_fits = false;
+  const auto result = fit_thermal(data, o);
+  const auto& alpha = result.joint.parameter("alpha");
+  expect_interval_holds(alpha, 0.6);
+  EXPECT_NEAR(alpha.value, 0.6, 0.02);
+  EXPECT_EQ(result.runs[0].heat_source, "given heat rate");
+  EXPECT_NEAR(result.runs[0].heat_relative_se, 0.01, 1e-4);
+  EXPECT_NEAR(result.runs[0].heat_rate_W, 3.0, 1e-9);  // the schedule's mean: 6 W for half the run
+  // The cooling phase is fitted: its records are samples, and the model cools through them.
+  std::size_t cooling = 0;
+  double at_off = 0, at_end = 0;
+  for (const auto& sample : result.samples) {
+    if (sample.run != 0 || sample.sensor != 0) continue;
+    if (sample.time_s > 7200) ++cooling;
+    if (sample.time_s == 7200) at_off = sample.simulated_C;
+    at_end = sample.simulated_C;
+  }
+  EXPECT_EQ(cooling, static_cast<std::size_t>(7200 / rig.record_every_s));
+  EXPECT_LT(at_end, at_off - 1.0);
+}
+
+// Cooling alone determines α: a fit of the records after the switch-off (the heating's
+// records hidden) still finds it.
+TEST(ThermalFit, CoolingRecordsAloneCarryAlpha) {
+  auto data = generate_thermal_dataset(heater_rig(), {}, "heater").set;
+  for (auto& channel : data.runs[0].trace.rail)
+    for (std::size_t i = 0; i < channel.values.size(); ++i)
+      if (data.runs[0].trace.time_s[i] < 7200 && i > 0) channel.values[i] = std::nan("");
+  auto o = options_for_rig();
+  o.per_run_fits = false;
+  o.offsets = ThermalOffsets::held;
+  EXPECT_NEAR(fit_thermal(data, o).joint.parameter("alpha").value, 0.6, 0.006);
+}
+
+// No ambient column: the manifest's constant ambient_C drives the model.
+TEST(ThermalFit, RunWithAmbientKeyAndNoAmbientColumnFits) {
+  auto rig = clean_rig();
+  rig.ambient_columns = false;
+  rig.ambient_drift_K_per_h = rig.ambient_wave_K = 0;
+  rig.velocity_m_s = {0.11};
+  const auto data = generate_thermal_dataset(rig, {}, "no_ambient").set;
+  ASSERT_TRUE(data.runs[0].trace.ambient.empty());
+  ASSERT_TRUE(data.runs[0].ambient_C);
+  const auto result = fit_thermal(data, options_for_rig());
+  EXPECT_NEAR(result.joint.parameter("alpha").value, 0.6, 0.006);
+  EXPECT_TRUE(std::isnan(result.runs[0].ambient_difference_percent));
+}
+
+// A stopped block (velocity 0 from 2 h) makes no heat: the fit takes the schedule's friction
+// heat (the law at the phase's speed) and recovers α, with the model cooling after the stop.
+TEST(ThermalFit, StopPhaseTurnsTheFrictionHeatOff) {
+  auto rig = clean_rig();
+  rig.stop_s = 7200;
+  rig.velocity_m_s = {0.11};
+  auto data = generate_thermal_dataset(rig, {}, "stop").set;
+  ASSERT_EQ(data.runs[0].schedule.size(), 2u);
+  EXPECT_EQ(data.runs[0].schedule[1].velocity_m_s, 0.0);
+  auto o = options_for_rig();
+  o.per_run_fits = false;
+  const auto result = fit_thermal(data, o);
+  EXPECT_NEAR(result.joint.parameter("alpha").value, 0.6, 0.006);
+  double at_stop = 0, at_end = 0;
+  for (const auto& sample : result.samples) {
+    if (sample.sensor != 0) continue;
+    if (sample.time_s == 7200) at_stop = sample.simulated_C;
+    at_end = sample.simulated_C;
+  }
+  EXPECT_LT(at_end, at_stop - 1.0);
+  // The moving block keeps one speed: a stop is refused with it.
+  o.source = SourceModel::moving;
+  EXPECT_THROW(fit_thermal(data, o), InvalidParameter);
+}
+
+// The run's h (manifest h_W_m2K) is the model's where h is not fitted.
+TEST(ThermalFit, RunConvectionCoefficientWinsOverTheOption) {
+  auto rig = clean_rig();
+  rig.h_W_m2K = 8.0;
+  rig.velocity_m_s = {0.11};
+  auto data = generate_thermal_dataset(rig, {}, "h8").set;
+  auto o = options_for_rig();
+  o.per_run_fits = false;
+  EXPECT_GT(std::abs(fit_thermal(data, o).joint.parameter("alpha").value - 0.6), 0.02);  // h = 5.3, wrong
+  data.runs[0].h_W_m2K = 8.0;
+  EXPECT_NEAR(fit_thermal(data, o).joint.parameter("alpha").value, 0.6, 0.006);
+}
+
+// The run's oil (viscosity40_mm2_s) goes into the friction law the heat comes from.
+TEST(ThermalFit, RunViscosityFeedsTheFrictionLaw) {
+  auto rig = clean_rig();
+  rig.constants.nu_ref_mm2_s = 68;  // a VG68 oil instead of the paper's 99 mm²/s
+  rig.velocity_m_s = {0.11};
+  auto data = generate_thermal_dataset(rig, {}, "vg68").set;
+  auto o = options_for_rig();
+  o.per_run_fits = false;
+  EXPECT_GT(std::abs(fit_thermal(data, o).joint.parameter("alpha").value - 0.6), 0.05);  // with ν40 = 99
+  data.runs[0].viscosity40_mm2_s = 68;
+  EXPECT_NEAR(fit_thermal(data, o).joint.parameter("alpha").value, 0.6, 0.006);
+}
+
+class ThermalFitCatalogTest : public test::TempFolderTest {};
+
+// A user catalog's [[bar]], named by the manifest's catalog key, loads and fits.
+TEST_F(ThermalFitCatalogTest, UserBarFromTheManifestCatalogFits) {
+  write("bars.toml", "[[bar]]\nname = \"steel bar 20x20\"\narea_m2 = 4e-4\nperimeter_m = 0.08\n"
+                     "conductivity_W_mK = 45\ndensity_kg_m3 = 7850\nspecific_heat_J_kgK = 470\ncontact_length_mm = 50\n");
+  const GuideCatalog catalog = load_catalog(dir_ / "bars.toml");
+  auto rig = clean_rig();
+  rig.catalog = &catalog;
+  rig.guide = "steel bar 20x20";
+  rig.heat_rate_W = 4.0;
+  rig.sensor_position_m = {0.0, 0.1};
+  ThermalDataSet made = generate_thermal_dataset(rig, {}, "bar").set;
+  for (ThermalRun& run : made.runs) {
+    run.file = dir_ / run.file;
+    write(run.file.lexically_relative(dir_), thermal_trace_csv(run.trace));
+  }
+  const std::string manifest = thermal_manifest_toml(made, dir_);
+  ASSERT_NE(manifest.find("catalog = \"bars.toml\""), std::string::npos) << manifest;
+  const ThermalDataSet data = load_thermal_dataset(write("bar.toml", manifest));
+  EXPECT_EQ(data.catalog_file, dir_ / "bars.toml");
+  EXPECT_EQ(data.runs[0].guide_spec.kind, "bar");
+  EXPECT_NEAR(fit_thermal(data, options_for_rig()).joint.parameter("alpha").value, 0.6, 0.006);
 }
 
 }  // namespace

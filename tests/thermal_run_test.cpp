@@ -301,6 +301,8 @@ TEST_F(ThermalRunTest, WrittenManifestLoadsBackIdentically) {
       run.mean_friction_uncertainty_N = 0.9 / 7;
       run.start_friction_N = 47.3 + 1.0 / 3.0;
       run.guide_overrides = {{"conductivity_W_mK", 36.0}, {"perimeter_m", 0.14 / 3}};
+    } else {  // the catalog has no material for SRG 45C, and a run is refused at load without it
+      run.guide_overrides = {{"conductivity_W_mK", 40.0}, {"density_kg_m3", 7800.0}, {"specific_heat_J_kgK", 461.0}};
     }
     run.trace = awkward_trace(20 + 10 * k, 5.0);
     run.sensor_position_m = {{"tc1_C", -0.0}, {"tc2_C", -0.05 / 3}};
@@ -343,6 +345,172 @@ TEST_F(ThermalRunTest, WrittenManifestLoadsBackIdentically) {
   }
   // Written again, the loaded set gives the same text.
   EXPECT_EQ(thermal_manifest_toml(back, dir_), manifest);
+}
+
+
+// ---- Runs as rigs produce them: given heat, schedules, ambient_C, h, ν40, user catalogs ----
+
+// A run of the keys given in `extra` (one per line, from line 9 of the manifest), on a CSV
+// with or without ambient columns and a heat_rate_W column.
+class RigRunTest : public test::TempFolderTest {
+ protected:
+  void SetUp() override {
+    TempFolderTest::SetUp();
+    write("thermal/plain.csv", "time_s,ambient1_C,tc1_C\n0,24,24\n60,24.1,24.5\n120,24.2,25\n");
+    write("thermal/bare.csv", "time_s,tc1_C\n0,24\n60,24.5\n120,25\n");
+    write("thermal/power.csv", "time_min,tc1_C,heat_rate_W\n0,24,5\n1,24.5,5.5\n2,25,0\n");
+  }
+  ThermalDataSet load(const std::string& extra, const std::string& csv = "plain.csv", const std::string& top = "") {
+    return load_thermal_dataset(write("set.toml", manifest(extra, csv, top)));
+  }
+  static std::string manifest(const std::string& extra, const std::string& csv, const std::string& top) {
+    return fmt::format("{}\n[[run]]\nid = \"r\"\nfile = \"thermal/{}\"\nguide = \"SRN 35C\"\nload_N = 3000\n"
+                       "stroke_m = 0.2\nrail_length_m = 0.6\n{}\n[run.sensors_m]\ntc1_C = 0.0\n",
+                       top, csv, extra);
+  }
+  // Refused with an InputError at `line` of set.toml whose message holds `what`.
+  void expect_refused(const std::string& extra, long line, const std::string& what, const std::string& csv = "plain.csv",
+                      const std::string& top = "") {
+    try {
+      load(extra, csv, top);
+      ADD_FAILURE() << "accepted: " << extra;
+    } catch (const InputError& e) {
+      EXPECT_EQ(fs::path(e.file()).filename(), "set.toml") << e.what();
+      EXPECT_EQ(e.line(), line) << e.what();
+      EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+    }
+  }
+};
+
+TEST_F(RigRunTest, GivenHeatAmbientConvectionAndViscosityKeysLoad) {
+  const ThermalDataSet set =
+      load("heat_rate_W = 8\nheat_rate_uncertainty_W = 0.2\nambient_K = 297.15\nh_W_m2K = 6.5\nviscosity40_mm2_s = 68",
+           "bare.csv");
+  const ThermalRun& run = set.runs.front();
+  EXPECT_EQ(run.heat_rate_W, 8.0);
+  EXPECT_EQ(run.heat_rate_uncertainty_W, 0.2);
+  EXPECT_NEAR(*run.ambient_C, 24.0, 1e-12);
+  EXPECT_EQ(run.h_W_m2K, 6.5);
+  EXPECT_EQ(run.viscosity40_mm2_s, 68.0);
+  EXPECT_EQ(run.velocity_m_s, 0.0);  // a given heat needs no speed
+  EXPECT_TRUE(run.trace.ambient.empty());
+  EXPECT_EQ(run.guide_spec.model, "SRN 35C");
+  EXPECT_TRUE(set.catalog_file.empty());
+}
+
+TEST_F(RigRunTest, ScheduleTakesAnyTimeUnitAndVelocityOrHeat) {
+  const ThermalDataSet set = load("mean_friction_N = 40\n[[run.schedule]]\nfrom_s = 0\nvelocity_m_s = 0.11\n"
+                                  "[[run.schedule]]\nfrom_min = 1.5\nvelocity_mm_s = 0\n[[run.schedule]]\nfrom_h = 1\n"
+                                  "heat_rate_W = 3");
+  const auto& phases = set.runs.front().schedule;
+  ASSERT_EQ(phases.size(), 3u);
+  EXPECT_EQ(phases[0].velocity_m_s, 0.11);
+  EXPECT_EQ(phases[1].from_s, 90.0);
+  EXPECT_EQ(phases[1].velocity_m_s, 0.0);  // the block stopped
+  EXPECT_EQ(phases[2].from_s, 3600.0);
+  EXPECT_EQ(phases[2].heat_rate_W, 3.0);
+  EXPECT_FALSE(phases[2].velocity_m_s);
+}
+
+TEST_F(RigRunTest, HeatRateColumnIsRead) {
+  const ThermalDataSet set = load("ambient_C = 24", "power.csv");
+  EXPECT_EQ(set.runs.front().trace.heat_rate_W, (std::vector<double>{5, 5.5, 0}));
+  EXPECT_EQ(set.runs.front().trace.time_s, (std::vector<double>{0, 60, 120}));
+}
+
+TEST_F(RigRunTest, NewKeysRoundTrip) {
+  const ThermalDataSet set = load("ambient_C = 23.5\nh_W_m2K = 6\nviscosity40_mm2_s = 68\nheat_rate_uncertainty_W = 0.1\n"
+                                  "[[run.schedule]]\nfrom_s = 0\nheat_rate_W = 10\n[[run.schedule]]\nfrom_s = 60\n"
+                                  "velocity_m_s = 0.05\n[[run.schedule]]\nfrom_s = 90\nheat_rate_W = 0",
+                                  "bare.csv");
+  const std::string text = thermal_manifest_toml(set, dir_);
+  const ThermalDataSet back = load_thermal_dataset(write("back.toml", text));
+  const ThermalRun &a = set.runs.front(), &b = back.runs.front();
+  EXPECT_EQ(b.ambient_C, a.ambient_C);
+  EXPECT_EQ(b.h_W_m2K, a.h_W_m2K);
+  EXPECT_EQ(b.viscosity40_mm2_s, a.viscosity40_mm2_s);
+  EXPECT_EQ(b.heat_rate_uncertainty_W, a.heat_rate_uncertainty_W);
+  ASSERT_EQ(b.schedule.size(), 3u) << text;
+  for (std::size_t i = 0; i < 3; ++i) {
+    EXPECT_EQ(b.schedule[i].from_s, a.schedule[i].from_s);
+    EXPECT_EQ(b.schedule[i].velocity_m_s, a.schedule[i].velocity_m_s);
+    EXPECT_EQ(b.schedule[i].heat_rate_W, a.schedule[i].heat_rate_W);
+  }
+  // The power column survives the trace writer, and heat_rate_W the manifest writer.
+  const ThermalTrace power = load_thermal_dataset(write("p.toml", manifest("ambient_C = 24", "power.csv", ""))).runs[0].trace;
+  write("thermal/power2.csv", thermal_trace_csv(power));
+  EXPECT_EQ(load_thermal_trace(dir_ / "thermal/power2.csv").heat_rate_W, power.heat_rate_W);
+  const ThermalDataSet heater = load("heat_rate_W = 7.5");
+  EXPECT_EQ(load_thermal_dataset(write("h.toml", thermal_manifest_toml(heater, dir_))).runs[0].heat_rate_W, 7.5);
+}
+
+TEST_F(RigRunTest, RefusesBadSchedulesNamingFileAndLine) {
+  const std::string first = "velocity_m_s = 0.1\n[[run.schedule]]\n";  // the first phase's table is at line 10
+  expect_refused(first + "from_s = 5\nheat_rate_W = 1", 10, "must start at 0");
+  expect_refused(first + "from_s = 0\nheat_rate_W = 1\n[[run.schedule]]\nfrom_s = 0\nheat_rate_W = 2", 13,
+                 "not later than");
+  expect_refused(first + "from_s = 0\nheat_rate_W = 1\nvelocity_m_s = 0.1", 10, "not both");
+  expect_refused(first + "from_s = 0", 10, "found neither");
+  expect_refused(first + "from_s = 0\nheat_rate_W = -1", 12, "heat_rate_W = -1");
+  expect_refused(first + "heat_rate_W = 1", 10, "without from_s");
+  expect_refused(first + "from_s = 0\npower_W = 1", 12, "unknown key 'power_W'");
+}
+
+TEST_F(RigRunTest, RefusesConflictingHeatAndMissingAmbient) {
+  expect_refused("mean_friction_N = 40\nheat_rate_W = 8", 10, "not both");
+  expect_refused("start_friction_N = 40\nheat_rate_W = 8", 10, "start_friction_N");
+  expect_refused("heat_rate_W = -2", 9, "heat_rate_W = -2");
+  expect_refused("velocity_m_s = 0.1", 2, "no ambient column", "bare.csv");
+  expect_refused("velocity_m_s = 0.1\nambient_C = 24", 10, "has ambient columns");
+  expect_refused("velocity_m_s = 0.1\nheat_rate_uncertainty_W = 0.1", 10, "without a heat rate");
+  expect_refused("ambient_C = 24\nheat_rate_W = 3", 10, "heat_rate_W column", "power.csv");
+  expect_refused("preload_um = 4", 2, "missing key 'velocity_m_s'");
+}
+
+TEST_F(RigRunTest, UserCatalogFromTheManifestOrTheArgument) {
+  write("cat/bars.toml", "[[bar]]\nname = \"steel bar\"\narea_m2 = 4e-4\nperimeter_m = 0.08\nconductivity_W_mK = 45\n"
+                         "density_kg_m3 = 7850\nspecific_heat_J_kgK = 470\ncontact_length_mm = 50\n");
+  const std::string bar_run = "heat_rate_W = 5";
+  std::string text = manifest(bar_run, "plain.csv", "catalog = \"cat/bars.toml\"");
+  text.replace(text.find("SRN 35C"), 7, "steel bar");
+  const ThermalDataSet set = load_thermal_dataset(write("set.toml", text));
+  EXPECT_EQ(set.runs.front().guide_spec.kind, "bar");
+  EXPECT_EQ(set.runs.front().guide_spec.conductivity_W_mK, 45.0);
+  EXPECT_EQ(set.catalog_file, dir_ / "cat/bars.toml");
+  EXPECT_NE(thermal_manifest_toml(set, dir_).find("catalog = \"cat/bars.toml\""), std::string::npos);
+  // The argument wins over the manifest's key.
+  GuideCatalog other = parse_catalog("[[bar]]\nname = \"steel bar\"\narea_m2 = 4e-4\nperimeter_m = 0.08\n"
+                                     "conductivity_W_mK = 20\ndensity_kg_m3 = 7850\nspecific_heat_J_kgK = 470\n"
+                                     "contact_length_mm = 50\n",
+                                     "cli.toml");
+  const ThermalDataSet cli = load_thermal_dataset(dir_ / "set.toml", &other);
+  EXPECT_EQ(cli.runs.front().guide_spec.conductivity_W_mK, 20.0);
+  EXPECT_EQ(cli.catalog_file, "cli.toml");
+}
+
+TEST_F(RigRunTest, RefusesMissingCatalogsAndIncompleteGuidesAtLoad) {
+  expect_refused("velocity_m_s = 0.1", 1, "file 'none.toml' not found", "plain.csv", "catalog = \"none.toml\"");
+  write("broken.toml", "[[bar]]\nname = \"b\"\ndensity_kg_m3 = \"heavy\"\n");
+  try {
+    load("velocity_m_s = 0.1", "plain.csv", "catalog = \"broken.toml\"");
+    ADD_FAILURE() << "a broken catalog was accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(fs::path(e.file()).filename(), "broken.toml") << e.what();  // the catalog's own error
+    EXPECT_EQ(e.line(), 3) << e.what();
+  }
+  // A bar without its perimeter: refused at load, at the run's guide line, with require()'s words.
+  write("thin.toml", "[[bar]]\nname = \"thin\"\narea_m2 = 4e-4\nconductivity_W_mK = 45\ndensity_kg_m3 = 7850\n"
+                     "specific_heat_J_kgK = 470\ncontact_length_mm = 50\n");
+  std::string text = manifest("heat_rate_W = 5", "plain.csv", "catalog = \"thin.toml\"");
+  text.replace(text.find("SRN 35C"), 7, "thin");
+  try {
+    load_thermal_dataset(write("set.toml", text));
+    ADD_FAILURE() << "a guide without a perimeter was accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(fs::path(e.file()).filename(), "set.toml");
+    EXPECT_EQ(e.line(), 5) << e.what();
+    EXPECT_NE(std::string(e.what()).find("perimeter_m"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

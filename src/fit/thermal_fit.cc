@@ -32,6 +32,8 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 // RunInfo::heat_source of a heat from the manifest's friction force.
 constexpr const char* kMeasuredMeanFriction = "measured mean friction";
 constexpr const char* kMeasuredStartFriction = "measured friction at the start temperature";
+// ... and of a heat the manifest gives (heat_rate_W, a schedule's heats, the CSV's column).
+constexpr const char* kGivenHeat = "given heat rate";
 
 double mean_of_finite(const std::vector<double>& values, std::size_t from, std::size_t to) {
   double sum = 0;
@@ -72,6 +74,60 @@ bool offsets_determined(const ThermalRun& run, double ambient_start_C, const The
   return true;
 }
 
+// The source model: the option's, unless an extension switches it.
+SourceModel source_of(const ThermalFitOptions& o) {
+  SourceModel source = o.source;
+  for (const auto& name : o.extensions)
+    if (const auto switched = detail::thermal_extension(name).source) source = *switched;
+  return source;
+}
+
+// Whether the manifest gives the whole heat (no phase of it is friction × speed).
+bool heat_given(const ThermalRun& run) {
+  if (run.heat_rate_W || !run.trace.heat_rate_W.empty()) return true;
+  return !run.schedule.empty() &&
+         std::all_of(run.schedule.begin(), run.schedule.end(), [](const ThermalPhase& p) { return p.heat_rate_W.has_value(); });
+}
+
+// The given heat its heat_rate_uncertainty_W is stated at: the run's, else the largest given.
+double given_heat_reference_W(const ThermalRun& run) {
+  if (run.heat_rate_W) return *run.heat_rate_W;
+  double largest = 0;
+  for (double q : run.trace.heat_rate_W) largest = std::max(largest, q);
+  for (const ThermalPhase& p : run.schedule) largest = std::max(largest, p.heat_rate_W.value_or(0.0));
+  return largest;
+}
+
+// The block's speed for the geometry (the `moving` source, the velocity regressors): the run's,
+// else the fastest phase's. A `moving` block cannot change speed: a schedule of speeds is refused.
+double run_velocity_m_s(const ThermalRun& run, SourceModel source) {
+  double fastest = 0;
+  for (const ThermalPhase& p : run.schedule) fastest = std::max(fastest, p.velocity_m_s.value_or(0.0));
+  const double V = run.velocity_m_s > 0 ? run.velocity_m_s : fastest;
+  for (const ThermalPhase& p : run.schedule)
+    if (source == SourceModel::moving && p.velocity_m_s && *p.velocity_m_s != V)
+      throw InvalidParameter(run.id, "the moving source keeps the block at one speed; a schedule of speeds (here "
+                                     "a phase at " + fmt::format("{} m/s", *p.velocity_m_s) +
+                                     ") needs the averaged or paper source");
+  return V;
+}
+
+// Q_f(t) of a run with a schedule or a measured power (empty otherwise), t since the first
+// record; `friction_heat_W(V)` is friction × speed for the phases that give a speed.
+template <typename FrictionHeat>
+HeatRateSchedule<double> heat_schedule_of(const ThermalRun& run, const FrictionHeat& friction_heat_W) {
+  HeatRateSchedule<double> schedule;
+  for (std::size_t i = 0; i < run.trace.heat_rate_W.size(); ++i)
+    schedule.add(run.trace.time_s[i] - run.trace.time_s.front(), run.trace.heat_rate_W[i]);
+  std::vector<double> from_s, heat_W;
+  for (const ThermalPhase& p : run.schedule) {
+    from_s.push_back(p.from_s);
+    heat_W.push_back(p.heat_rate_W ? *p.heat_rate_W : friction_heat_W(*p.velocity_m_s));
+  }
+  if (!from_s.empty()) schedule = HeatRateSchedule<double>::steps(from_s, heat_W);
+  return schedule;
+}
+
 struct Prepared {
   PreparedRun run;
   RunInfo info;
@@ -82,7 +138,7 @@ Prepared prepare_run(const ThermalRun& run, const ThermalFitOptions& o) {
   const ThermalTrace& trace = run.trace;
   if (trace.size() < 2) throw InvalidParameter(run.id, "a thermal run needs at least two records");
   if (o.every < 1) throw InvalidParameter("every", 0.0, "at least 1");
-  const GuideSpec spec = with_overrides(builtin_catalog().find(run.guide), run.guide_overrides);
+  const GuideSpec spec = resolved_guide(run);
   Prepared out;
   PreparedRun& pr = out.run;
   pr.id = run.id;
@@ -92,11 +148,13 @@ Prepared prepare_run(const ThermalRun& run, const ThermalFitOptions& o) {
                  .perimeter_m = require(spec, &GuideSpec::perimeter_m, "perimeter_m"),
                  .stroke_m = run.stroke_m,
                  .contact_length_m = Lb1 * 1e-3,
-                 .velocity_m_s = run.velocity_m_s};
+                 .velocity_m_s = run_velocity_m_s(run, source_of(o))};
 
-  // Ambient: the mean of the ambient sensors (NaN left out), or the one named.
+  // Ambient: the mean of the ambient sensors (NaN left out), or the one named; the manifest's
+  // constant ambient_C for a CSV without ambient columns.
   const double t0 = trace.time_s.front();
-  for (std::size_t i = 0; i < trace.size(); ++i) {
+  if (trace.ambient.empty() && run.ambient_C) pr.ambient = AmbientTrace::constant(*run.ambient_C);
+  for (std::size_t i = 0; i < trace.size() && !trace.ambient.empty(); ++i) {
     double T = kNaN;
     if (o.ambient == "mean") {
       double sum = 0;
@@ -117,7 +175,9 @@ Prepared prepare_run(const ThermalRun& run, const ThermalFitOptions& o) {
     pr.ambient.time_s.push_back(trace.time_s[i] - t0);
     pr.ambient.temperature_C.push_back(T);
   }
-  if (pr.ambient.time_s.empty() || pr.ambient.time_s.front() > 0 || pr.ambient.time_s.back() < trace.time_s.back() - t0)
+  const bool constant_ambient = pr.ambient.time_s.size() == 1 && trace.ambient.empty();
+  if (!constant_ambient && (pr.ambient.time_s.empty() || pr.ambient.time_s.front() > 0 ||
+                            pr.ambient.time_s.back() < trace.time_s.back() - t0))
     throw InvalidParameter(run.id, "the ambient record must cover the run from its first to its last record");
 
   for (const auto& channel : trace.rail) {
@@ -149,48 +209,74 @@ Prepared prepare_run(const ThermalRun& run, const ThermalFitOptions& o) {
   pr.fit_offsets = out.info.offsets_fitted;
   if (std::isnan(T0) || pr.fit_offsets) T0 = ambient_start;
 
-  // Heat: the friction law at the start (the rail and grease at the ambient, which the two
+  // Heat: given in the manifest (a heater, a measured power: it wins over o.heat), or friction ×
+  // speed: the friction law at the start (the rail and grease at the ambient, which the two
   // ambient sensors measure better than one biased thermocouple), or the measured friction:
   // at the start temperature when the manifest gives it, else the run's mean (and a
-  // temperature-following heat then keeps that mean).
+  // temperature-following heat then keeps that mean). A schedule's speed phases take the same
+  // friction, at their own speed.
+  const bool given = heat_given(run);
   HeatInput heat = o.heat;
   const bool measured = run.mean_friction_N || run.start_friction_N;
   if (heat == HeatInput::automatic) heat = o.friction || !measured ? HeatInput::friction_law : HeatInput::measured_friction;
-  double Q = 0;
-  if (heat == HeatInput::measured_friction) {
+  if (!given && heat == HeatInput::measured_friction) {
     if (!measured)
       throw InvalidParameter(run.id, "the run has no mean_friction_N or start_friction_N in the manifest; give a friction "
                                      "fit (--friction)");
-    pr.heat_is_run_mean = !run.start_friction_N;
-    Q = (run.start_friction_N ? *run.start_friction_N : *run.mean_friction_N) * run.velocity_m_s;
+    pr.heat_is_run_mean = !run.start_friction_N && run.schedule.empty();
     out.info.heat_source = run.start_friction_N ? kMeasuredStartFriction : kMeasuredMeanFriction;
   }
-  {
-    const FrictionConstants<double> k = o.friction ? *o.friction : paper_friction_constants();
+  if (!given) {
+    FrictionConstants<double> k = o.friction ? *o.friction : paper_friction_constants();
+    if (run.viscosity40_mm2_s) {  // the run's oil: ν at 40 °C
+      k.nu_ref_mm2_s = *run.viscosity40_mm2_s;
+      k.T_ref_C = 40.0;
+    }
     const FrictionConditions<double> c{
         .load_N = run.load_N,
         .preload_um = run.preload_um ? *run.preload_um : require(spec, &GuideSpec::preload_um, "preload_um"),
         .block_length_mm = run.block_length_mm ? *run.block_length_mm : require(spec, &GuideSpec::block_length_mm, "block_length_mm"),
-        .velocity_m_s = run.velocity_m_s,
+        .velocity_m_s = pr.geometry.velocity_m_s,
         .temperature_C = pr.ambient.temperature_C.front()};
     pr.friction = k;
     pr.friction_effects = o.friction_effects;
     pr.conditions = c;  // the coupling extension scales Q_f by the law's change from here
-    if (heat != HeatInput::measured_friction) {
-      Q = heat_rate_with_effects_W(k, o.friction_effects, c);
+    if (heat != HeatInput::measured_friction)
       out.info.heat_source = o.friction ? "friction law (fitted constants)" : "friction law (the paper's constants)";
-    }
+  } else {
+    out.info.heat_source = kGivenHeat;
   }
+  const auto friction_heat_W = [&](double V) {
+    if (heat == HeatInput::measured_friction) return (run.start_friction_N ? *run.start_friction_N : *run.mean_friction_N) * V;
+    FrictionConditions<double> c = pr.conditions;
+    c.velocity_m_s = V;
+    return heat_rate_with_effects_W(pr.friction, pr.friction_effects, c);
+  };
+  const HeatRateSchedule<double> schedule = heat_schedule_of(run, friction_heat_W);
+  const double duration_s = trace.time_s.back() - t0;
+  // Q: the constant heat, or a schedule's mean over the run (what RunInfo reports).
+  const double Q = !schedule.empty() ? schedule.integral_J(0.0, duration_s) / duration_s
+                   : run.heat_rate_W ? *run.heat_rate_W
+                                     : friction_heat_W(pr.geometry.velocity_m_s);
+  if (!schedule.empty() && std::find(o.extensions.begin(), o.extensions.end(), "coupling") != o.extensions.end())
+    throw InvalidParameter(run.id, "the coupling extension cannot follow a heat schedule or a measured power");
   pr.params = {.heat_partition = o.alpha_start,
                .heat_rate_W = Q,
-               .h_W_m2K = o.h_W_m2K,
+               .h_W_m2K = run.h_W_m2K ? *run.h_W_m2K : o.h_W_m2K,  // the run's own h wins where h is not fitted
                .conductivity_W_mK = require(spec, &GuideSpec::conductivity_W_mK, "conductivity_W_mK"),
                .density_kg_m3 = require(spec, &GuideSpec::density_kg_m3, "density_kg_m3"),
                .specific_heat_J_kgK = require(spec, &GuideSpec::specific_heat_J_kgK, "specific_heat_J_kgK"),
-               .initial_temperature_C = T0};
+               .initial_temperature_C = T0,
+               .heat_schedule = schedule};
   // The heat scale's prior: σ_Q from the temperature Q_f was evaluated at and the law's own
   // uncertainty; σ_T from the thermocouples' second differences (insensitive to the warm-up).
-  if (o.fit_heat_scales) {
+  if (o.fit_heat_scales && given) {  // the stated uncertainty of the given heat, else the law's share
+    const double sigma_Q = run.heat_rate_uncertainty_W ? *run.heat_rate_uncertainty_W / given_heat_reference_W(run)
+                                                       : o.heat_law_uncertainty;
+    if (!(sigma_Q > 0)) throw InvalidParameter("heat_rate_uncertainty_W", "the heat rate's uncertainty must be positive");
+    pr.heat_prior_sigma_K = std::max(thermocouple_noise_K(trace), 1e-3);
+    pr.heat_prior_weight = pr.heat_prior_sigma_K / sigma_Q;
+  } else if (o.fit_heat_scales) {
     const double dT = 0.5;
     FrictionConditions<double> lo = pr.conditions, hi = pr.conditions;
     lo.temperature_C -= dT;
@@ -204,7 +290,7 @@ Prepared prepare_run(const ThermalRun& run, const ThermalFitOptions& o) {
     pr.heat_prior_sigma_K = sigma_T;
   }
   out.info.id = run.id;
-  out.info.velocity_m_s = run.velocity_m_s;
+  out.info.velocity_m_s = pr.geometry.velocity_m_s;
   out.info.load_N = run.load_N;
   out.info.heat_rate_W = Q;
   out.info.initial_temperature_C = T0;
@@ -299,14 +385,6 @@ std::pair<ThermalLayout, std::vector<ParameterSpec>> layout_for(const std::vecto
   }
   layout.size = static_cast<int>(specs.size());
   return {layout, specs};
-}
-
-// The source model: the option's, unless an extension switches it.
-SourceModel source_of(const ThermalFitOptions& o) {
-  SourceModel source = o.source;
-  for (const auto& name : o.extensions)
-    if (const auto switched = detail::thermal_extension(name).source) source = *switched;
-  return source;
 }
 
 RailNumerics numerics_of(const ThermalFitOptions& o) {
@@ -421,6 +499,11 @@ HeatUncertainty heat_uncertainty(const std::vector<PreparedRun>& runs, const std
       const auto& run = data.runs[i];
       if (run.mean_friction_uncertainty_N) measured[r] = *run.mean_friction_uncertainty_N / *run.mean_friction_N;
       else missing.push_back(run.id + ": no mean_friction_uncertainty_N in the manifest");
+    } else if (infos[i].heat_source == kGivenHeat) {
+      // Relative at the largest given heat: a power meter's (or heater's) error is mostly its gain.
+      const auto& run = data.runs[i];
+      if (run.heat_rate_uncertainty_W) measured[r] = *run.heat_rate_uncertainty_W / given_heat_reference_W(run);
+      else missing.push_back(run.id + ": no heat_rate_uncertainty_W in the manifest");
     } else if (o.friction_fit && o.friction_fit->covariance.allFinite()) {
       gradient.row(r) = log_heat_gradient(runs[i], *o.friction_fit);
     } else {
@@ -436,7 +519,7 @@ HeatUncertainty heat_uncertainty(const std::vector<PreparedRun>& runs, const std
   }
   if (!measured.isZero()) {
     h.covariance += measured * measured.transpose();
-    counted.push_back("the measured mean friction's stated uncertainty, as one systematic error of all runs");
+    counted.push_back("the measured friction's or given heat's stated uncertainty, as one systematic error of all runs");
     h.draws.clear();  // a mixture: the bootstrap draws from the covariance instead
   }
   h.description = fmt::format("{}", fmt::join(counted, "; "));

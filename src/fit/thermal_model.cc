@@ -86,15 +86,21 @@ std::vector<std::vector<T>> simulate_run(const PreparedRun& run, const RailNumer
                                          const ThermalLayout& layout, std::size_t r, const Param& param,
                                          RailProfile* end_profile = nullptr) {
   const bool scaled = !layout.heat_scale.empty() && layout.heat_scale[r] >= 0;
+  const T heat_scale = scaled ? param(layout.heat_scale[r]) : T(1.0);
+  // A schedule's phase heats carry the run's heat scale too (and with it its derivative).
+  HeatRateSchedule<T> schedule;
+  for (std::size_t k = 0; k < run.params.heat_schedule.time_s.size(); ++k)
+    schedule.add(run.params.heat_schedule.time_s[k], run.params.heat_schedule.heat_rate_W[k] * heat_scale);
   RailParams<T> p{.heat_partition = param(layout.alpha),
-                  .heat_rate_W = scaled ? run.params.heat_rate_W * param(layout.heat_scale[r]) : T(run.params.heat_rate_W),
+                  .heat_rate_W = scaled ? run.params.heat_rate_W * heat_scale : T(run.params.heat_rate_W),
                   .h_W_m2K = layout.h >= 0 ? param(layout.h) : T(run.params.h_W_m2K),
                   .conductivity_W_mK = T(run.params.conductivity_W_mK),
                   .density_kg_m3 = T(run.params.density_kg_m3),
                   .specific_heat_J_kgK = T(run.params.specific_heat_J_kgK),
                   .initial_temperature_C = layout.initial[r] >= 0 ? param(layout.initial[r])
                                                                   : T(run.params.initial_temperature_C),
-                  .base_loss_W_mK = T(run.params.base_loss_W_mK)};
+                  .base_loss_W_mK = T(run.params.base_loss_W_mK),
+                  .heat_schedule = std::move(schedule)};
   ThermalRunSetup<T> setup{.velocity_m_s = run.geometry.velocity_m_s,
                            .friction = &run.friction,
                            .friction_effects = &run.friction_effects,

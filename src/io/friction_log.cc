@@ -110,15 +110,39 @@ constexpr std::array<ConditionKey, 5> kConditionKeys{{
     {kViscosity40, &FrictionRunConditions::viscosity40_mm2_s, false},
 }};
 
+// The conditions of a raw sample besides its motion: they rarely change within a run, so each
+// sample keeps an index into a table of them.
+struct SampleSetup {
+  std::uint32_t guide = 0;
+  FrictionConditions<double> conditions;  // velocity and direction unset
+  double viscosity40 = 0;
+  bool operator==(const SampleSetup& o) const {
+    return guide == o.guide && viscosity40 == o.viscosity40 && conditions.load_N == o.conditions.load_N &&
+           conditions.preload_um == o.conditions.preload_um &&
+           conditions.block_length_mm == o.conditions.block_length_mm &&
+           conditions.temperature_C == o.conditions.temperature_C;
+  }
+};
+
 // One raw run of a file as read: samples in time order, duplicate times merged.
 struct RawRun {
   std::uint32_t run = 0;
   raw::RunSamples samples;
-  std::vector<long> line;           // of each sample (its first, when merged)
-  std::vector<std::uint32_t> merged;  // samples merged into each (1: none)
-  std::vector<std::uint32_t> guide;
-  std::vector<FrictionConditions<double>> conditions;  // velocity and direction unset
-  std::vector<double> viscosity40;
+  std::vector<long> line;             // of each sample (its first, when merged)
+  std::uint32_t last_merged = 1;      // samples merged into the last one
+  std::size_t merged = 0;             // samples merged into others
+  std::vector<std::uint32_t> setup;   // of each sample: index into setups
+  std::vector<SampleSetup> setups;
+
+  void reserve(std::size_t n) {
+    for (auto* v : {&samples.time_s, &samples.motion, &samples.force_N}) v->reserve(n);
+    line.reserve(n);
+    setup.reserve(n);
+  }
+  void add_setup(const SampleSetup& s) {
+    if (setups.empty() || !(setups.back() == s)) setups.push_back(s);
+    setup.push_back(static_cast<std::uint32_t>(setups.size() - 1));
+  }
 };
 
 // A file of a log being read: its columns, where each condition comes from, the rows' checks.
@@ -130,6 +154,7 @@ class FileLoader {
     report_.file = reader_.file();
     reader_.read_header();
     columns_ = csv::bind_header(reader_, kSpecs, report_);
+    for (std::size_t spec = 0; spec < kSpecs.size(); ++spec) bound_[spec] = csv::find_column(columns_, spec);
     bind();
   }
 
@@ -153,7 +178,7 @@ class FileLoader {
   }
 
  private:
-  const csv::Column* column(Spec spec) const { return csv::find_column(columns_, spec); }
+  const csv::Column* column(Spec spec) const { return bound_[spec]; }
   csv::Column* mutable_column(Spec spec) {
     for (csv::Column& c : columns_)
       if (c.spec == spec) return &c;
@@ -272,8 +297,8 @@ class FileLoader {
   }
 
   void read_row(std::string& scratch) {
-    const std::uint32_t run_index = runs_(column(kRun) ? name_cell(reader_, *column(kRun), scratch)
-                                                        : std::string_view(file_.run));
+    if (!column(kRun) && !file_run_) file_run_ = runs_(file_.run);
+    const std::uint32_t run_index = column(kRun) ? runs_(name_cell(reader_, *column(kRun), scratch)) : *file_run_;
     const FrictionRunConditions* given = manifest_conditions(run_index);
     std::string_view guide_name;
     if (column(kGuide)) guide_name = name_cell(reader_, *column(kGuide), scratch);
@@ -350,13 +375,15 @@ class FileLoader {
     if (raw_index_[run_index] == kNone) {
       raw_index_[run_index] = raw_runs_.size();
       raw_runs_.push_back({.run = run_index});
+      if (raw_runs_.size() == 1) raw_runs_.back().reserve(reader_.estimated_rows());  // most raw files hold one run
     }
     RawRun& r = raw_runs_[raw_index_[run_index]];
     if (merge && !r.line.empty()) {
-      const double k = r.merged.back();
+      const double k = r.last_merged;
       r.samples.motion.back() = (r.samples.motion.back() * k + motion) / (k + 1);
       r.samples.force_N.back() = (r.samples.force_N.back() * k + force) / (k + 1);
-      ++r.merged.back();
+      ++r.last_merged;
+      ++r.merged;
       ++merged_;
       return;
     }
@@ -364,10 +391,8 @@ class FileLoader {
     r.samples.motion.push_back(motion);
     r.samples.force_N.push_back(force);
     r.line.push_back(reader_.line());
-    r.merged.push_back(1);
-    r.guide.push_back(guide_index);
-    r.conditions.push_back(c);
-    r.viscosity40.push_back(nu40);
+    r.last_merged = 1;
+    r.add_setup({guide_index, c, nu40});
   }
 
   // Each raw run cut into plateaus; the kept samples go into the log.
@@ -383,16 +408,18 @@ class FileLoader {
       }
       RunSegmentation seg{.run = name, .file = report_.file};
       raw::tally(s, seg);
-      for (std::uint32_t m : r.merged) seg.averaged_duplicates += m - 1;
-      for (const std::string& w : raw::sign_warnings(name, column(kForce)->header, r.samples, s, raw_.force_sign))
+      seg.averaged_duplicates = r.merged;
+      for (const std::string& w : raw::sign_warnings(name, column(kForce)->header, r.samples, s, raw_))
         report_.warnings.push_back(w);
       for (std::size_t i = 0; i < s.fate.size(); ++i) {
         if (s.fate[i] != raw::Fate::kept) continue;
         const double v = s.plateaus[s.plateau[i]].velocity_m_s;
-        FrictionConditions<double> c = r.conditions[i];
+        const SampleSetup& setup = r.setups[r.setup[i]];
+        FrictionConditions<double> c = setup.conditions;
         c.velocity_m_s = std::abs(v);
         c.direction = v < 0 ? -1.0 : 1.0;
-        log_.append(r.run, r.guide[i], r.samples.time_s[i], c, s.friction_N[i], r.viscosity40[i]);
+        log_.append(r.run, setup.guide, r.samples.time_s[i], c, raw::friction_N(r.samples, s, raw_, i),
+                    setup.viscosity40);
       }
       log_.raw_traces.push_back(thin_trace(name, r.samples, s));
       total.kept += seg.kept;
@@ -459,7 +486,9 @@ class FileLoader {
   csv::Reader reader_;
   LoadReport report_;
   std::vector<csv::Column> columns_;
+  std::array<const csv::Column*, kSpecs.size()> bound_{};  // by spec: its column, or nullptr
   csv::Column* motion_ = nullptr;  // a raw log's position or velocity
+  std::optional<std::uint32_t> file_run_;  // the manifest's run of a file without a run column
   raw::Motion motion_kind_ = raw::Motion::velocity_m_s;
   std::vector<std::optional<const FrictionRunConditions*>> run_conditions_;  // by run index, once looked up
   std::vector<LastSample> last_;                                             // by run index

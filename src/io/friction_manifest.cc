@@ -193,7 +193,7 @@ FrictionDataSet load_friction_dataset(const fs::path& manifest_file, const Guide
     } else if (k == "file") {
       common_file.emplace(m.existing_file(node, manifest::string_of(m, key, node)), &node);
     } else if (k == "raw") {
-      set.raw = read_raw(m, manifest::table_of(m, key, node, "[raw]"));
+      set.raw = read_raw(m, manifest::table_of(m, node, "[raw]"));
     } else if (k == "run") {
       runs = node.as_array();
       if (!runs || !runs->is_array_of_tables()) m.fail(node.source(), "expected [[run]] tables");

@@ -64,9 +64,9 @@ const std::string& string_of(const Manifest& m, const toml::key& key, const toml
   return s->get();
 }
 
-const toml::table& table_of(const Manifest& m, const toml::key& key, const toml::node& node, std::string_view where) {
+const toml::table& table_of(const Manifest& m, const toml::node& node, std::string_view where) {
   const auto* t = node.as_table();
-  if (!t) m.fail(node.source(), fmt::format("expected a table {} for {}", where, key.str()));
+  if (!t) m.fail(node.source(), fmt::format("expected a table {}", where));
   return *t;
 }
 

@@ -37,7 +37,7 @@ struct Given {
 double number_of(const Manifest& m, const toml::key& key, const toml::node& node);
 const std::string& string_of(const Manifest& m, const toml::key& key, const toml::node& node);
 // `where` names the table in messages: "[run.sensors_m]".
-const toml::table& table_of(const Manifest& m, const toml::key& key, const toml::node& node, std::string_view where);
+const toml::table& table_of(const Manifest& m, const toml::node& node, std::string_view where);
 
 // The conversion of a key with a unit suffix that names `base` ("velocity_mm_s" for
 // "velocity"), nullopt for a key that names something else. A missing or unknown unit is an

@@ -47,30 +47,41 @@ void RawFrictionOptions::validate() const {
 
 namespace raw {
 
-std::vector<double> local_slope(const std::vector<double>& t, const std::vector<double>& y, std::size_t window) {
-  const std::size_t n = t.size();
+namespace {
+
+// f(i, lo, hi) at every sample i, over the window [lo, hi) of `window` samples centred on it
+// (shorter at the ends).
+template <typename F>
+std::vector<double> over_windows(std::size_t n, std::size_t window, F f) {
+  std::vector<double> out(n);
   const std::size_t half = window / 2;
-  std::vector<double> slope(n, 0.0);
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::size_t lo = i >= half ? i - half : 0;
-    const std::size_t hi = std::min(n, i + half + 1);
-    // Centred on sample i for round-off: times may be large (epoch seconds).
-    double st = 0, sy = 0;
+  for (std::size_t i = 0; i < n; ++i) out[i] = f(i, i >= half ? i - half : 0, std::min(n, i + half + 1));
+  return out;
+}
+
+}  // namespace
+
+std::vector<double> local_slope(const std::vector<double>& t, const std::vector<double>& y, std::size_t window) {
+  return over_windows(t.size(), window, [&](std::size_t i, std::size_t lo, std::size_t hi) {
+    // Offsets from sample i, for round-off (times may be epoch seconds); one pass of sums.
+    double st = 0, sy = 0, stt = 0, sty = 0;
     for (std::size_t j = lo; j < hi; ++j) {
-      st += t[j] - t[i];
-      sy += y[j] - y[i];
+      const double dt = t[j] - t[i], dy = y[j] - y[i];
+      st += dt;
+      sy += dy;
+      stt += dt * dt;
+      sty += dt * dy;
     }
     const double count = static_cast<double>(hi - lo);
-    const double mt = st / count, my = sy / count;
-    double stt = 0, sty = 0;
-    for (std::size_t j = lo; j < hi; ++j) {
-      const double dt = t[j] - t[i] - mt;
-      stt += dt * dt;
-      sty += dt * (y[j] - y[i] - my);
-    }
-    slope[i] = stt > 0 ? sty / stt : 0.0;
-  }
-  return slope;
+    const double var = stt - st * st / count;
+    return var > 0 ? (sty - st * sy / count) / var : 0.0;
+  });
+}
+
+std::vector<double> window_difference(const std::vector<double>& t, const std::vector<double>& y, std::size_t window) {
+  return over_windows(t.size(), window, [&](std::size_t, std::size_t lo, std::size_t hi) {
+    return hi - 1 > lo ? (y[hi - 1] - y[lo]) / (t[hi - 1] - t[lo]) : 0.0;
+  });
 }
 
 namespace {
@@ -178,24 +189,19 @@ void check_monotone(const RunSamples& run, const Segmented& s) {
   }
 }
 
-// The friction of every sample: the force in the motion's frame less the inertia m·a.
-void friction(const RunSamples& run, const RawFrictionOptions& o, Segmented& s) {
-  const std::size_t n = run.time_s.size();
-  s.friction_N.assign(n, 0.0);
-  for (std::size_t i = 0; i < n; ++i) {
-    const double sense = s.fate[i] == Fate::kept ? sign_of(s.plateaus[s.plateau[i]].velocity_m_s)
-                                                 : sign_of(s.velocity_m_s[i]);
-    const double inertia_N = o.moving_mass_kg * s.acceleration_m_s2[i];
-    const double f = run.force_N[i];
-    switch (o.force_sign) {
-      case ForceSign::follows_motion: s.friction_N[i] = sense * (f - inertia_N); break;
-      case ForceSign::opposes_motion: s.friction_N[i] = sense * (-f - inertia_N); break;
-      case ForceSign::magnitude: s.friction_N[i] = f - sense * inertia_N; break;
-    }
-  }
-}
-
 }  // namespace
+
+double friction_N(const RunSamples& run, const Segmented& s, const RawFrictionOptions& o, std::size_t i) {
+  const double sense = s.fate[i] == Fate::kept ? sign_of(s.plateaus[s.plateau[i]].velocity_m_s) : sign_of(s.velocity_m_s[i]);
+  const double inertia_N = o.moving_mass_kg * s.acceleration_m_s2[i];
+  const double f = run.force_N[i];
+  switch (o.force_sign) {
+    case ForceSign::follows_motion: return sense * (f - inertia_N);
+    case ForceSign::opposes_motion: return sense * (-f - inertia_N);
+    case ForceSign::magnitude: return f - sense * inertia_N;
+  }
+  return f;
+}
 
 Segmented segment(const RunSamples& run, Motion motion, const RawFrictionOptions& o) {
   Segmented s;
@@ -204,7 +210,7 @@ Segmented segment(const RunSamples& run, Motion motion, const RawFrictionOptions
   } else {
     s.velocity_m_s = run.motion;
   }
-  s.acceleration_m_s2 = local_slope(run.time_s, s.velocity_m_s, o.velocity_window);
+  s.acceleration_m_s2 = window_difference(run.time_s, s.velocity_m_s, o.velocity_window);
   // Twice: the samples off their stretch's speed are transients, with a settling time after.
   classify(run, o, std::vector<bool>(run.time_s.size(), false), s);
   classify(run, o, off_speed(o, s), s);
@@ -219,7 +225,6 @@ Segmented segment(const RunSamples& run, Motion motion, const RawFrictionOptions
                                      o.min_plateau_samples, run.time_s.size(), counts.dropped_acceleration,
                                      counts.dropped_settling, counts.dropped_stationary, counts.dropped_short));
   }
-  friction(run, o, s);
   return s;
 }
 
@@ -239,7 +244,8 @@ void tally(const Segmented& s, RunSegmentation& out) {
 }
 
 std::vector<std::string> sign_warnings(const std::string& run, const std::string& force_column, const RunSamples& samples,
-                                       const Segmented& s, ForceSign sign) {
+                                       const Segmented& s, const RawFrictionOptions& o) {
+  const ForceSign sign = o.force_sign;
   std::vector<std::string> warnings;
   std::size_t kept = 0, negative = 0;
   // Per sense of motion: samples with a positive and a negative raw force.
@@ -247,7 +253,7 @@ std::vector<std::string> sign_warnings(const std::string& run, const std::string
   for (std::size_t i = 0; i < s.fate.size(); ++i) {
     if (s.fate[i] != Fate::kept) continue;
     ++kept;
-    negative += s.friction_N[i] < 0;
+    negative += friction_N(samples, s, o, i) < 0;
     const int sense = s.plateaus[s.plateau[i]].velocity_m_s > 0;
     positive_force[sense] += samples.force_N[i] > 0;
     negative_force[sense] += samples.force_N[i] < 0;

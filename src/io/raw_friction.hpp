@@ -29,8 +29,7 @@ struct Segmented {
   std::vector<std::uint32_t> plateau;         // per sample: index into plateaus (kept samples only)
   std::vector<Plateau> plateaus;              // kept plateaus, in time order
   std::vector<double> velocity_m_s;           // per sample: derived (or as given), signed
-  std::vector<double> acceleration_m_s2;      // per sample: derived
-  std::vector<double> friction_N;             // per sample: the friction the force gives (kept ones meaningful)
+  std::vector<double> acceleration_m_s2;      // per sample: window difference of the velocity
 };
 
 // A sample that makes the run unusable: its index in RunSamples and what is wrong.
@@ -43,9 +42,17 @@ struct SampleError : std::runtime_error {
 // ends), at every sample: the filtered derivative.
 std::vector<double> local_slope(const std::vector<double>& t, const std::vector<double>& y, std::size_t window);
 
+// The difference quotient of y across a centred window of `window` samples (shorter at the
+// ends): the derivative of an already filtered series, in O(1) per sample.
+std::vector<double> window_difference(const std::vector<double>& t, const std::vector<double>& y, std::size_t window);
+
 // Segments one run. Throws SampleError when the position goes back between reversals (the
 // velocity cannot be derived) or when no plateau is long enough.
 Segmented segment(const RunSamples& run, Motion motion, const RawFrictionOptions& options);
+
+// The friction sample i gives: the force in the motion's sense (a kept sample's plateau's) less
+// the inertia m·a, by the sign convention.
+double friction_N(const RunSamples& run, const Segmented& s, const RawFrictionOptions& o, std::size_t i);
 
 // Counts per fate, into `out` (kept, dropped_*), and the plateaus.
 void tally(const Segmented& s, RunSegmentation& out);
@@ -53,6 +60,6 @@ void tally(const Segmented& s, RunSegmentation& out);
 // Warnings about the sign convention, from a run's kept samples: a force that keeps its sign
 // while the motion reverses (a magnitude), friction that comes out mostly negative.
 std::vector<std::string> sign_warnings(const std::string& run, const std::string& force_column, const RunSamples& samples,
-                                       const Segmented& s, ForceSign sign);
+                                       const Segmented& s, const RawFrictionOptions& o);
 
 }  // namespace lmcal::raw

@@ -12,6 +12,7 @@
 #include <limits>
 
 #include "io/csv_reader.hpp"
+#include "io/manifest.hpp"
 #include "lmcal/error.hpp"
 #include "lmcal/io/catalog.hpp"
 #include "lmcal/io/csv_writer.hpp"
@@ -25,12 +26,12 @@ namespace fs = std::filesystem;
 
 // ---- Trace CSV ----------------------------------------------------------------------------
 
-enum TraceSpec : std::size_t { kTime, kAmbient, kRail };
-constexpr std::array<csv::ColumnSpec, 3> kTraceSpecs{{
+// Ambient columns are optional here: a manifest run without them gives ambient_C instead.
+enum TraceSpec : std::size_t { kTime, kAmbient, kRail, kHeatColumn };
+constexpr std::array<csv::ColumnSpec, 4> kTraceSpecs{{
     {.name = "time", .quantity = Quantity::time, .required = true},
     {.name = "ambient",
      .quantity = Quantity::temperature,
-     .required = true,
      .family = true,
      .rule = csv::Rule::above_absolute_zero},
     {.name = "tc",
@@ -38,6 +39,7 @@ constexpr std::array<csv::ColumnSpec, 3> kTraceSpecs{{
      .required = true,
      .family = true,
      .rule = csv::Rule::above_absolute_zero},
+    {.name = "heat_rate_W", .rule = csv::Rule::non_negative, .hint = "a heat rate is >= 0"},
 }};
 
 // A gap is an interval longer than 1.5x the median interval (the logger's step).
@@ -64,21 +66,25 @@ std::string canonical_channel(const std::string& name) {
 
 // ---- Manifest -----------------------------------------------------------------------------
 
-struct Manifest {
-  std::string file;  // as errors name it
-  fs::path folder;   // run files are relative to it
+using manifest::Given;
+using manifest::number_of;
+using manifest::remember;
+using manifest::string_of;
+using manifest::unit_key;
 
-  [[noreturn]] void fail(const toml::source_region& where, const std::string& what) const {
-    throw InputError(file, static_cast<long>(where.begin.line), static_cast<long>(where.begin.column), what);
-  }
+// A thermal manifest as read: its file and folder, and the user's catalog.
+struct Manifest : manifest::Manifest {
+  const GuideCatalog* catalog = nullptr;  // the user's, searched before the built-in one
 };
 
-// Numeric [[run]] keys; each takes any unit of its quantity ("velocity_mm_s").
+// Numeric [[run]] keys; each takes any unit of its quantity ("velocity_mm_s"), or, without
+// a quantity (units.hpp has no power), only the name as written ("heat_rate_W").
+enum class Bound { non_negative, positive, above_absolute_zero };
 struct NumberKey {
   std::string_view base;
-  Quantity quantity;
+  std::optional<Quantity> quantity;
   bool required;
-  bool strictly_positive;  // > 0, else >= 0
+  Bound bound;
 };
 enum NumberKeyIndex : std::size_t {
   kVelocity,
@@ -90,86 +96,63 @@ enum NumberKeyIndex : std::size_t {
   kBlockLength,
   kMeanFrictionUncertainty,
   kMeanFriction,
-  kStartFriction
+  kStartFriction,
+  kHeatRateUncertainty,
+  kHeatRate,
+  kAmbientC,
+  kConvection,
+  kViscosity40
 };
 // A key is matched against the bases in this order; a base that extends another
 // (mean_friction_uncertainty) comes first, so a bad unit on it is reported as its own
 // ("mean_friction_uncertainty_kgs": unknown unit 'kgs'), not as mean_friction's.
-constexpr std::array<NumberKey, 10> kNumberKeys{{
-    {"velocity", Quantity::velocity, true, true},
-    {"load", Quantity::force, true, false},
-    {"preload", Quantity::preload, false, false},
-    {"stroke", Quantity::distance_m, true, true},
-    {"rail_length", Quantity::distance_m, true, true},
-    {"contact_length", Quantity::length_mm, false, true},
-    {"block_length", Quantity::length_mm, false, true},
-    {"mean_friction_uncertainty", Quantity::force, false, false},
-    {"mean_friction", Quantity::force, false, false},
-    {"start_friction", Quantity::force, false, false},
+// velocity is required unless the heat is given (checked once the CSV is read).
+constexpr std::array<NumberKey, 15> kNumberKeys{{
+    {"velocity", Quantity::velocity, false, Bound::positive},
+    {"load", Quantity::force, true, Bound::non_negative},
+    {"preload", Quantity::preload, false, Bound::non_negative},
+    {"stroke", Quantity::distance_m, true, Bound::positive},
+    {"rail_length", Quantity::distance_m, true, Bound::positive},
+    {"contact_length", Quantity::length_mm, false, Bound::positive},
+    {"block_length", Quantity::length_mm, false, Bound::positive},
+    {"mean_friction_uncertainty", Quantity::force, false, Bound::non_negative},
+    {"mean_friction", Quantity::force, false, Bound::non_negative},
+    {"start_friction", Quantity::force, false, Bound::non_negative},
+    {"heat_rate_uncertainty_W", std::nullopt, false, Bound::non_negative},
+    {"heat_rate_W", std::nullopt, false, Bound::non_negative},
+    {"ambient", Quantity::temperature, false, Bound::above_absolute_zero},
+    {"h_W_m2K", std::nullopt, false, Bound::positive},
+    {"viscosity40", Quantity::viscosity, false, Bound::positive},
 }};
+std::string canonical_name(const NumberKey& k) {
+  return k.quantity ? csv::canonical_name(k.base, *k.quantity) : std::string(k.base);
+}
 // A number key in internal units ("mean_friction_N"), as the writer writes it.
-std::string canonical_key(NumberKeyIndex i) {
-  return csv::canonical_name(kNumberKeys[i].base, kNumberKeys[i].quantity);
+std::string canonical_key(NumberKeyIndex i) { return canonical_name(kNumberKeys[i]); }
+
+// Whether `value` is inside the key's bound; `what` says the bound for messages.
+bool within(Bound bound, double value, std::string& what) {
+  switch (bound) {
+    case Bound::positive: what = "> 0"; return value > 0;
+    case Bound::non_negative: what = ">= 0"; return value >= 0;
+    case Bound::above_absolute_zero: what = "above absolute zero"; return value > -273.15;
+  }
+  return false;
 }
 
 constexpr std::string_view kSensors = "sensors";  // [run.sensors_m]: positions, any distance unit
 constexpr std::string_view kOverrides = "guide_overrides";
+constexpr std::string_view kSchedule = "schedule";  // [[run.schedule]] phases
 enum TextKeyIndex : std::size_t { kId, kFile, kGuide };
 constexpr std::array<std::string_view, 3> kTextKeys{"id", "file", "guide"};
 
 std::string known_run_keys() {
   std::vector<std::string> keys(kTextKeys.begin(), kTextKeys.end());
-  for (const NumberKey& k : kNumberKeys) keys.push_back(csv::canonical_name(k.base, k.quantity));
+  for (const NumberKey& k : kNumberKeys) keys.push_back(canonical_name(k));
   keys.push_back(csv::canonical_name(kSensors, Quantity::distance_m));
   keys.emplace_back(kOverrides);
+  keys.emplace_back(kSchedule);
   return fmt::format("{} (numbers in any unit of their quantity)", fmt::join(keys, ", "));
-}
-
-bool before(const toml::source_region& a, const toml::source_region& b) {
-  return std::pair(a.begin.line, a.begin.column) < std::pair(b.begin.line, b.begin.column);
-}
-
-// A key of a [[run]] that was given, for duplicate and range messages.
-struct Given {
-  const toml::key* key = nullptr;
-  const toml::node* node = nullptr;
-  Conversion conversion;  // for keys with a unit: to internal units
-  double value = 0;       // for numbers: in internal units
-};
-
-// A finite TOML number (integer or float).
-double number_of(const Manifest& m, const toml::key& key, const toml::node& node) {
-  std::optional<double> value;
-  if (const auto* i = node.as_integer()) value = static_cast<double>(i->get());
-  if (const auto* f = node.as_floating_point()) value = f->get();
-  if (!value) m.fail(node.source(), fmt::format("expected a number for {}", key.str()));
-  if (!std::isfinite(*value)) m.fail(node.source(), fmt::format("expected a finite number for {}", key.str()));
-  return *value;
-}
-
-const std::string& string_of(const Manifest& m, const toml::key& key, const toml::node& node) {
-  const auto* s = node.as_string();
-  if (!s) m.fail(node.source(), fmt::format("expected a string for {}", key.str()));
-  return s->get();
-}
-
-const toml::table& table_of(const Manifest& m, const toml::key& key, const toml::node& node) {
-  const auto* t = node.as_table();
-  if (!t) m.fail(node.source(), fmt::format("expected a table [run.{}]", key.str()));
-  return *t;
-}
-
-// Records `key` as the one giving `what`; two keys for one thing (velocity_m_s and
-// velocity_mm_s) are an error at the later one.
-void remember(const Manifest& m, std::optional<Given>& slot, Given given, std::string_view what) {
-  if (slot) {
-    const bool later = before(slot->key->source(), given.key->source());
-    const Given& first = later ? *slot : given;
-    const Given& second = later ? given : *slot;
-    m.fail(second.key->source(),
-           fmt::format("duplicate key '{}': '{}' already gives {}", second.key->str(), first.key->str(), what));
-  }
-  slot = given;
 }
 
 // Everything of a [[run]] table, checked one key at a time.
@@ -178,24 +161,24 @@ struct RunKeys {
   std::array<std::optional<Given>, kNumberKeys.size()> number;
   std::optional<Given> sensors;
   std::optional<Given> overrides;
+  std::optional<Given> schedule;
 };
 
-// The conversion of a key with a unit suffix that names `base` ("velocity_mm_s" for
-// "velocity"), nullopt for a key that names something else. A missing or unknown unit is an
-// error at the key.
-std::optional<Conversion> unit_key(const Manifest& m, const toml::key& key, std::string_view base, Quantity quantity) {
-  const csv::UnitMatch u = csv::match_unit(key.str(), base, quantity);
-  switch (u.kind) {
-    case csv::UnitMatch::other: return std::nullopt;
-    case csv::UnitMatch::no_unit:
-      m.fail(key.source(),
-             fmt::format("key '{}' has no unit; accepted: {}", key.str(), csv::accepted_names(base, quantity)));
-    case csv::UnitMatch::unknown_unit:
-      m.fail(key.source(), fmt::format("key '{}': unknown unit '{}'; accepted: {}", key.str(), u.unit,
-                                       csv::accepted_names(base, quantity)));
-    case csv::UnitMatch::match: break;
-  }
-  return u.split.conversion;
+// unit_key for a number key: a key without a quantity matches its name only.
+std::optional<Conversion> number_key(const Manifest& m, const toml::key& key, const NumberKey& nk) {
+  if (!nk.quantity) return key.str() == nk.base ? std::optional(Conversion{}) : std::nullopt;
+  return unit_key(m, key, nk.base, *nk.quantity);
+}
+
+// A number key's value in internal units, refused outside its bound.
+double bounded_number(const Manifest& m, const toml::key& key, const toml::node& node, const NumberKey& nk,
+                      const Conversion& conversion) {
+  const double written = number_of(m, key, node);
+  const double value = csv::to_internal(conversion, written);
+  std::string bound;
+  if (!within(nk.bound, value, bound))
+    m.fail(node.source(), fmt::format("{} = {}: a thermal run needs {} {}", key.str(), written, nk.base, bound));
+  return value;
 }
 
 RunKeys read_run_keys(const Manifest& m, const toml::table& table) {
@@ -208,26 +191,28 @@ RunKeys read_run_keys(const Manifest& m, const toml::table& table) {
       continue;
     }
     if (k == kOverrides) {
-      table_of(m, key, node);
+      manifest::table_of(m, node, fmt::format("[run.{}]", k));
       remember(m, keys.overrides, {&key, &node}, k);
       continue;
     }
+    if (k == kSchedule) {
+      const auto* phases = node.as_array();
+      if (!phases || !phases->is_array_of_tables() || phases->empty())
+        m.fail(node.source(), "expected [[run.schedule]] tables");
+      remember(m, keys.schedule, {&key, &node}, k);
+      continue;
+    }
     if (const auto conversion = unit_key(m, key, kSensors, Quantity::distance_m)) {
-      table_of(m, key, node);
+      manifest::table_of(m, node, fmt::format("[run.{}]", k));
       remember(m, keys.sensors, {&key, &node, *conversion}, kSensors);
       continue;
     }
     bool known = false;
     for (std::size_t i = 0; i < kNumberKeys.size() && !known; ++i) {
       const NumberKey& nk = kNumberKeys[i];
-      const auto conversion = unit_key(m, key, nk.base, nk.quantity);
+      const auto conversion = number_key(m, key, nk);
       if (!conversion) continue;
-      const double written = number_of(m, key, node);
-      if (!(nk.strictly_positive ? written > 0 : written >= 0)) {
-        m.fail(node.source(), fmt::format("{} = {}: a thermal run needs {} {} 0", k, written, nk.base,
-                                          nk.strictly_positive ? ">" : ">="));
-      }
-      remember(m, keys.number[i], {&key, &node, *conversion, csv::to_internal(*conversion, written)}, nk.base);
+      remember(m, keys.number[i], {&key, &node, *conversion, bounded_number(m, key, node, nk, *conversion)}, nk.base);
       known = true;
     }
     if (!known) m.fail(key.source(), fmt::format("unknown key '{}' in [[run]]; known: {}", k, known_run_keys()));
@@ -260,6 +245,125 @@ TemperatureChannel* find_channel(std::vector<TemperatureChannel>& rail, std::str
   return nullptr;
 }
 
+// One [[run.schedule]] table: from_<time unit>, and velocity_<unit> or heat_rate_W.
+ThermalPhase read_phase(const Manifest& m, const toml::table& table) {
+  static constexpr NumberKey kFrom{"from", Quantity::time, true, Bound::non_negative};
+  const std::array<const NumberKey*, 3> keys{&kFrom, &kNumberKeys[kVelocity], &kNumberKeys[kHeatRate]};
+  std::array<std::optional<Given>, 3> given;
+  for (const auto& [key, node] : table) {
+    std::size_t i = 0;
+    std::optional<Conversion> conversion;
+    for (; i < keys.size() && !conversion; ++i) conversion = number_key(m, key, *keys[i]);
+    if (!conversion)
+      m.fail(key.source(), fmt::format("unknown key '{}' in [[run.{}]]; known: from_s, velocity_m_s, heat_rate_W (from "
+                                       "and velocity in any unit of their quantity)",
+                                       key.str(), kSchedule));
+    const NumberKey& nk = *keys[i - 1];
+    // A stopped block is a phase too: velocity 0 is allowed here.
+    const NumberKey bound{nk.base, nk.quantity, false, Bound::non_negative};
+    remember(m, given[i - 1], {&key, &node, *conversion, bounded_number(m, key, node, bound, *conversion)}, nk.base);
+  }
+  if (!given[0]) m.fail(table.source(), fmt::format("[[run.{}]] phase without from_s (its start since the first record)", kSchedule));
+  if (given[1].has_value() == given[2].has_value())
+    m.fail(table.source(), fmt::format("a [[run.{}]] phase needs one of velocity_m_s (the block's speed; 0: stopped) and "
+                                       "heat_rate_W (the heat, given), {}",
+                                       kSchedule, given[1] ? "not both" : "found neither"));
+  ThermalPhase phase{.from_s = given[0]->value};
+  if (given[1]) phase.velocity_m_s = given[1]->value;
+  if (given[2]) phase.heat_rate_W = given[2]->value;
+  return phase;
+}
+
+// The phases in order: the first from 0 (the first record), each later than the one before.
+std::vector<ThermalPhase> read_schedule(const Manifest& m, const toml::array& tables) {
+  std::vector<ThermalPhase> phases;
+  for (const toml::node& element : tables) {
+    const toml::table& table = *element.as_table();
+    phases.push_back(read_phase(m, table));
+    const double from_s = phases.back().from_s;
+    if (phases.size() == 1 && from_s != 0)
+      m.fail(table.source(), fmt::format("the first [[run.{}]] phase starts at from_s = {}; it must start at 0 (the "
+                                         "first record)",
+                                         kSchedule, from_s));
+    if (phases.size() > 1 && !(from_s > phases[phases.size() - 2].from_s))
+      m.fail(table.source(), fmt::format("[[run.{}]] phase at from_s = {} is not later than the one before ({} s); "
+                                         "phases go in ascending order",
+                                         kSchedule, from_s, phases[phases.size() - 2].from_s));
+  }
+  return phases;
+}
+
+// The run's guide from the user's catalog or the built-in one, with its overrides; the values
+// the thermal model cannot do without are required here, at load, not later in a fit.
+GuideSpec read_guide(const Manifest& m, const ThermalRun& run, const Given& guide, const std::optional<Given>& overrides) {
+  GuideSpec spec;
+  try {
+    spec = find_guide(run.guide, m.catalog);
+  } catch (const InvalidParameter& e) {
+    m.fail(guide.node->source(), e.what());
+  }
+  try {
+    spec = with_overrides(spec, run.guide_overrides);
+  } catch (const InvalidParameter& e) {
+    m.fail(overrides->node->source(), e.what());
+  }
+  try {
+    require(spec, &GuideSpec::area_m2, "area_m2");
+    require(spec, &GuideSpec::perimeter_m, "perimeter_m");
+    require(spec, &GuideSpec::conductivity_W_mK, "conductivity_W_mK");
+    require(spec, &GuideSpec::density_kg_m3, "density_kg_m3");
+    require(spec, &GuideSpec::specific_heat_J_kgK, "specific_heat_J_kgK");
+    if (!run.contact_length_mm) require(spec, &GuideSpec::contact_length_mm, "contact_length_mm");
+  } catch (const InvalidParameter& e) {
+    m.fail(guide.node->source(), fmt::format("run '{}': {}", run.id, e.what()));
+  }
+  return spec;
+}
+
+// The heat: given (heat_rate_W, a schedule's heats, the CSV's column) or friction × speed,
+// never two sources for one run.
+void check_heat(const Manifest& m, const ThermalRun& run, const RunKeys& keys) {
+  const auto key_of = [&](NumberKeyIndex i) { return keys.number[i]->key; };
+  const bool friction_given = run.mean_friction_N || run.start_friction_N;
+  const NumberKeyIndex friction_key = run.mean_friction_N ? kMeanFriction : kStartFriction;
+  if (run.heat_rate_W && friction_given)
+    m.fail(key_of(kHeatRate)->source(),
+           fmt::format("heat_rate_W given with {}: the heat is either given or friction × speed, not both",
+                       key_of(friction_key)->str()));
+  if (run.heat_rate_W && keys.schedule)
+    m.fail(key_of(kHeatRate)->source(), fmt::format("heat_rate_W given with [[run.{}]]: give the heat in each phase", kSchedule));
+  const std::string file = run.file.filename().string();
+  if (!run.trace.heat_rate_W.empty()) {
+    const toml::key* other = run.heat_rate_W ? key_of(kHeatRate) : keys.schedule ? keys.schedule->key
+                             : friction_given ? key_of(friction_key) : nullptr;
+    if (other)
+      m.fail(other->source(), fmt::format("'{}' has a heat_rate_W column, which gives the run's heat; drop {}", file,
+                                          other->str()));
+  }
+  bool heat_given = run.heat_rate_W || !run.trace.heat_rate_W.empty();
+  for (const ThermalPhase& phase : run.schedule) heat_given = heat_given || phase.heat_rate_W;
+  if (run.heat_rate_uncertainty_W && !heat_given)
+    m.fail(key_of(kHeatRateUncertainty)->source(),
+           "heat_rate_uncertainty_W given without a heat rate (heat_rate_W, in the run, a phase or the CSV): it is that "
+           "value's uncertainty");
+}
+
+// A speed where the heat is friction × speed, and an ambient, from columns or ambient_C.
+void check_speed_and_ambient(const Manifest& m, const ThermalRun& run, const RunKeys& keys, const toml::table& table) {
+  const std::string file = run.file.filename().string();
+  if (!keys.number[kVelocity] && !run.heat_rate_W && run.trace.heat_rate_W.empty() && run.schedule.empty())
+    m.fail(table.source(),
+           fmt::format("missing key 'velocity_m_s' in [[run]] '{}' (accepted units: {}); a run whose heat is given "
+                       "(heat_rate_W, [[run.schedule]]) may leave it out",
+                       run.id, csv::accepted_names("velocity", Quantity::velocity)));
+  if (run.trace.ambient.empty() && !run.ambient_C)
+    m.fail(table.source(), fmt::format("'{}' has no ambient column and run '{}' has no ambient_C: give one", file, run.id));
+  if (!run.trace.ambient.empty() && run.ambient_C)
+    m.fail(keys.number[kAmbientC]->key->source(),
+           fmt::format("{} given but '{}' has ambient columns: ambient_C is for a CSV without them",
+                       keys.number[kAmbientC]->key->str(), file));
+}
+
 ThermalRun read_run(const Manifest& m, const toml::table& table) {
   const RunKeys keys = read_run_keys(m, table);
   const auto text = [&](TextKeyIndex i) -> const std::string& { return keys.text[i]->node->as_string()->get(); };
@@ -273,15 +377,14 @@ ThermalRun read_run(const Manifest& m, const toml::table& table) {
   for (std::size_t i = 0; i < kNumberKeys.size(); ++i) {
     const NumberKey& nk = kNumberKeys[i];
     if (nk.required && !keys.number[i]) {
-      m.fail(table.source(),
-             fmt::format("missing key '{}' in [[run]] '{}' (accepted units: {})",
-                         csv::canonical_name(nk.base, nk.quantity), run.id, csv::accepted_names(nk.base, nk.quantity)));
+      m.fail(table.source(), fmt::format("missing key '{}' in [[run]] '{}' (accepted units: {})", canonical_name(nk),
+                                         run.id, csv::accepted_names(nk.base, *nk.quantity)));
     }
   }
   const auto value = [&](NumberKeyIndex i) {
     return keys.number[i] ? std::optional(keys.number[i]->value) : std::nullopt;
   };
-  run.velocity_m_s = *value(kVelocity);
+  run.velocity_m_s = value(kVelocity).value_or(0.0);
   run.load_N = *value(kLoad);
   run.preload_um = value(kPreload);
   run.stroke_m = *value(kStroke);
@@ -291,45 +394,39 @@ ThermalRun read_run(const Manifest& m, const toml::table& table) {
   run.mean_friction_N = value(kMeanFriction);
   run.mean_friction_uncertainty_N = value(kMeanFrictionUncertainty);
   run.start_friction_N = value(kStartFriction);
+  run.heat_rate_W = value(kHeatRate);
+  run.heat_rate_uncertainty_W = value(kHeatRateUncertainty);
+  run.ambient_C = value(kAmbientC);
+  run.h_W_m2K = value(kConvection);
+  run.viscosity40_mm2_s = value(kViscosity40);
+  if (keys.schedule) run.schedule = read_schedule(m, *keys.schedule->node->as_array());
   if (run.mean_friction_uncertainty_N && !run.mean_friction_N) {
     const Given& u = *keys.number[kMeanFrictionUncertainty];
     m.fail(u.key->source(), fmt::format("{} given without {}: it is the uncertainty of the measured mean friction",
                                         u.key->str(), canonical_key(kMeanFriction)));
   }
 
-  // The guide must be in the catalog; overrides name its fields.
+  // The guide must be in a catalog; overrides name its fields.
   run.guide = text(kGuide);
-  const GuideSpec* guide = nullptr;
-  try {
-    guide = &builtin_catalog().find(run.guide);
-  } catch (const InvalidParameter& e) {
-    m.fail(keys.text[kGuide]->node->source(), e.what());
-  }
   if (keys.overrides) run.guide_overrides = read_overrides(m, *keys.overrides->node->as_table());
+  run.guide_spec = read_guide(m, run, *keys.text[kGuide], keys.overrides);
 
   // The rail must hold the stroke plus the block's contact length.
-  std::optional<double> contact_mm = run.contact_length_mm;
-  if (const auto it = run.guide_overrides.find("contact_length_mm"); !contact_mm && it != run.guide_overrides.end()) {
-    contact_mm = it->second;
-  }
-  if (!contact_mm) contact_mm = field_value(*guide, "contact_length_mm");
-  const double needed_m = run.stroke_m + contact_mm.value_or(0) * 1e-3;
+  const double contact_mm = run.contact_length_mm ? *run.contact_length_mm : *run.guide_spec.contact_length_mm;
+  const double needed_m = run.stroke_m + contact_mm * 1e-3;
   if (!(run.rail_length_m > needed_m)) {
     const Given& rail = *keys.number[kRailLength];
     m.fail(rail.node->source(),
-           fmt::format("{} = {}: a thermal run needs rail length > stroke{} = {:.6g} m", rail.key->str(),
-                       number_of(m, *rail.key, *rail.node), contact_mm ? " + contact length" : "", needed_m));
+           fmt::format("{} = {}: a thermal run needs rail length > stroke + contact length = {:.6g} m",
+                       rail.key->str(), number_of(m, *rail.key, *rail.node), needed_m));
   }
 
   // The CSV, relative to the manifest's folder.
   const std::string& file = text(kFile);
-  run.file = m.folder / file;
-  std::error_code ec;
-  if (!fs::is_regular_file(run.file, ec)) {
-    m.fail(keys.text[kFile]->node->source(), fmt::format("file '{}' not found (looked in {})", file,
-                                                         m.folder.empty() ? std::string(".") : m.folder.string()));
-  }
+  run.file = m.existing_file(*keys.text[kFile]->node, file);
   run.trace = load_thermal_trace(run.file);
+  check_heat(m, run, keys);
+  check_speed_and_ambient(m, run, keys, table);
 
   // A position for every tc column, and only for tc columns.
   if (keys.sensors) {
@@ -360,15 +457,6 @@ ThermalRun read_run(const Manifest& m, const toml::table& table) {
     }
   }
   return run;
-}
-
-std::string read_text_file(const fs::path& file) {
-  std::error_code ec;
-  std::ifstream in(file, std::ios::binary);
-  if (!in || fs::is_directory(file, ec)) throw InputError(file.string(), 0, 0, "cannot open manifest file");
-  std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-  if (in.bad()) throw InputError(file.string(), 0, 0, "cannot read manifest file");
-  return text;
 }
 
 // ---- Manifest writer ----------------------------------------------------------------------
@@ -419,11 +507,12 @@ ThermalTrace load_thermal_trace(const fs::path& file) {
   reader.read_header();
   const std::vector<csv::Column> columns = csv::bind_header(reader, kTraceSpecs, report);
   const csv::Column& time = *csv::find_column(columns, kTime);
+  const csv::Column* heat = csv::find_column(columns, kHeatColumn);
 
   // Channels in header order, ambient and rail apart.
   std::vector<const csv::Column*> channel_columns;
   for (const csv::Column& c : columns) {
-    if (c.spec == kTime) continue;
+    if (c.spec == kTime || c.spec == kHeatColumn) continue;
     (c.spec == kAmbient ? trace.ambient : trace.rail).push_back({c.header, {}});
     channel_columns.push_back(&c);
   }
@@ -451,6 +540,8 @@ ThermalTrace load_thermal_trace(const fs::path& file) {
                                          time.header, reader.cell(time.cell), previous_line));
     }
     trace.time_s.push_back(t);
+    // A measured power has no gaps to skip: the heat between records must be known.
+    if (heat) trace.heat_rate_W.push_back(reader.number(*heat, false));
     previous_line = reader.line();
     for (Channel& c : channels) {
       const double value = reader.number(*c.column, true);
@@ -479,40 +570,59 @@ std::string thermal_trace_csv(const ThermalTrace& trace, const std::vector<std::
       columns.push_back(&channel.values);
     }
   }
+  const bool heat = !trace.heat_rate_W.empty();
+  LMCAL_ASSERT(!heat || trace.heat_rate_W.size() == trace.size(), "heat_rate_W length differs from time_s");
+  if (heat) header.emplace_back(kTraceSpecs[kHeatColumn].name);
   CsvText csv(header, comments);
   for (std::size_t i = 0; i < trace.size(); ++i) {
     csv.cell(trace.time_s[i]);
     for (const auto* values : columns) csv.cell((*values)[i]);
+    if (heat) csv.cell(trace.heat_rate_W[i]);
     csv.end_row();
   }
   return csv.str();
 }
 
-ThermalDataSet load_thermal_dataset(const fs::path& manifest) {
-  const Manifest m{manifest.string(), manifest.parent_path()};
-  const std::string text = read_text_file(manifest);
-  toml::table root;
-  try {
-    root = toml::parse(text, m.file);
-  } catch (const toml::parse_error& e) {
-    m.fail(e.source(), std::string(e.description()));
-  }
+GuideSpec resolved_guide(const ThermalRun& run) {
+  if (!run.guide_spec.model.empty()) return run.guide_spec;
+  return with_overrides(builtin_catalog().find(run.guide), run.guide_overrides);
+}
+
+ThermalDataSet load_thermal_dataset(const fs::path& manifest, const GuideCatalog* user_catalog) {
+  Manifest m;
+  m.file = manifest.string();
+  m.folder = manifest.parent_path();
+  const toml::table root = m.parse();
 
   ThermalDataSet set;
   set.manifest = manifest;
   set.name = manifest.stem().string();
   const toml::array* runs = nullptr;
+  const toml::node* catalog = nullptr;
   for (const auto& [key, node] : root) {
     if (key.str() == "name") {
       set.name = string_of(m, key, node);
     } else if (key.str() == "description") {
       set.description = string_of(m, key, node);
+    } else if (key.str() == "catalog") {
+      string_of(m, key, node);
+      catalog = &node;
     } else if (key.str() == "run") {
       runs = node.as_array();
       if (!runs || !runs->is_array_of_tables()) m.fail(node.source(), "expected [[run]] tables");
     } else {
-      m.fail(key.source(), fmt::format("unknown key '{}'; known: name, description, run", key.str()));
+      m.fail(key.source(), fmt::format("unknown key '{}'; known: name, description, catalog, run", key.str()));
     }
+  }
+  // The user's catalog: the caller's (the command line) wins over the manifest's.
+  std::optional<GuideCatalog> own;
+  if (user_catalog) {
+    m.catalog = user_catalog;
+    set.catalog_file = user_catalog->source;
+  } else if (catalog) {
+    set.catalog_file = m.existing_file(*catalog, catalog->as_string()->get());
+    own = load_catalog(set.catalog_file);  // its own InputError, naming the catalog's line
+    m.catalog = &*own;
   }
   if (!runs || runs->empty()) throw InputError(m.file, 0, 0, "no [[run]] tables; a data set needs at least one run");
 
@@ -548,11 +658,12 @@ std::string thermal_manifest_toml(const ThermalDataSet& set, const fs::path& fol
 
   std::string out = fmt::format("name = {}\n", toml_string(set.name));
   if (!set.description.empty()) out += fmt::format("description = {}\n", toml_string(set.description));
+  if (!set.catalog_file.empty()) out += fmt::format("catalog = {}\n", toml_string(relative(set.catalog_file)));
   for (const ThermalRun& run : set.runs) {
     out += "\n[[run]]\n";
     out += fmt::format("id = {}\nfile = {}\nguide = {}\n", toml_string(run.id), toml_string(relative(run.file)),
                        toml_string(run.guide));
-    number(out, canonical_key(kVelocity), run.velocity_m_s);
+    if (run.velocity_m_s > 0) number(out, canonical_key(kVelocity), run.velocity_m_s);
     number(out, canonical_key(kLoad), run.load_N);
     optional(out, canonical_key(kPreload), run.preload_um);
     number(out, canonical_key(kStroke), run.stroke_m);
@@ -562,7 +673,17 @@ std::string thermal_manifest_toml(const ThermalDataSet& set, const fs::path& fol
     optional(out, canonical_key(kMeanFriction), run.mean_friction_N);
     optional(out, canonical_key(kMeanFrictionUncertainty), run.mean_friction_uncertainty_N);
     optional(out, canonical_key(kStartFriction), run.start_friction_N);
-    if (!run.sensor_position_m.empty()) {
+    optional(out, canonical_key(kHeatRate), run.heat_rate_W);
+    optional(out, canonical_key(kHeatRateUncertainty), run.heat_rate_uncertainty_W);
+    optional(out, canonical_key(kAmbientC), run.ambient_C);
+    optional(out, canonical_key(kConvection), run.h_W_m2K);
+    optional(out, canonical_key(kViscosity40), run.viscosity40_mm2_s);
+    for (const ThermalPhase& phase : run.schedule) {
+      out += fmt::format("[[run.{}]]\n", kSchedule);
+      number(out, "from_s", phase.from_s);
+      optional(out, canonical_key(kVelocity), phase.velocity_m_s);
+      optional(out, canonical_key(kHeatRate), phase.heat_rate_W);
+    }    if (!run.sensor_position_m.empty()) {
       out += fmt::format("[run.{}]\n", csv::canonical_name(kSensors, Quantity::distance_m));
       for (const auto& [name, x] : run.sensor_position_m) number(out, name, x);
     }

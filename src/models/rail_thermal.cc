@@ -33,6 +33,38 @@ double AmbientTrace::at(double t) const {
   return temperature_C[j - 1] + s * (temperature_C[j] - temperature_C[j - 1]);
 }
 
+template <typename T>
+T HeatRateSchedule<T>::at(double t) const {
+  LMCAL_ASSERT(!time_s.empty() && time_s.size() == heat_rate_W.size(), "heat schedule is empty or ragged");
+  const auto it = std::upper_bound(time_s.begin(), time_s.end(), t);
+  if (it == time_s.begin()) return heat_rate_W.front();
+  if (it == time_s.end()) return heat_rate_W.back();
+  const std::size_t j = static_cast<std::size_t>(it - time_s.begin());
+  const double s = (t - time_s[j - 1]) / (time_s[j] - time_s[j - 1]);
+  return heat_rate_W[j - 1] + s * (heat_rate_W[j] - heat_rate_W[j - 1]);
+}
+
+template <typename T>
+T HeatRateSchedule<T>::integral_J(double t0, double t1) const {
+  LMCAL_ASSERT(!time_s.empty() && time_s.size() == heat_rate_W.size(), "heat schedule is empty or ragged");
+  const std::size_t n = time_s.size();
+  // Pieces: constant before knot 0, linear between knots j-1 and j, constant after knot n-1.
+  auto value = [&](std::size_t j, double t) {  // on piece j (1 <= j < n), at t inside it
+    const double s = (t - time_s[j - 1]) / (time_s[j] - time_s[j - 1]);
+    return heat_rate_W[j - 1] + s * (heat_rate_W[j] - heat_rate_W[j - 1]);
+  };
+  T sum(0.0);
+  if (t0 < time_s.front()) sum += heat_rate_W.front() * (std::min(t1, time_s.front()) - t0);
+  if (t1 > time_s.back()) sum += heat_rate_W.back() * (t1 - std::max(t0, time_s.back()));
+  // The first piece that can overlap [t0, t1]: the one ending after t0.
+  std::size_t j = static_cast<std::size_t>(std::upper_bound(time_s.begin(), time_s.end(), t0) - time_s.begin());
+  for (j = std::max<std::size_t>(j, 1); j < n && time_s[j - 1] < t1; ++j) {
+    const double lo = std::max(t0, time_s[j - 1]), hi = std::min(t1, time_s[j]);
+    if (hi > lo) sum += 0.5 * (value(j, lo) + value(j, hi)) * (hi - lo);  // a step has hi == lo
+  }
+  return sum;
+}
+
 void validate(const RailGeometry& g) {
   require_positive("rail_length_m", g.rail_length_m);
   require_positive("area_m2", g.area_m2);
@@ -89,6 +121,20 @@ void validate(const AmbientTrace& ambient, double duration_s) {
     throw InvalidParameter("ambient", "the trace covers [" + std::to_string(ambient.time_s.front()) + ", " +
                                           std::to_string(ambient.time_s.back()) + "] s but the run needs [0, " +
                                           std::to_string(duration_s) + "] s");
+}
+
+template <typename T>
+void validate(const HeatRateSchedule<T>& schedule) {
+  if (schedule.time_s.size() != schedule.heat_rate_W.size())
+    throw InvalidParameter("heat_schedule", "the heat schedule needs as many heat rates as times");
+  for (std::size_t i = 0; i < schedule.time_s.size(); ++i) {
+    require_finite("heat_schedule time_s", schedule.time_s[i]);
+    require_non_negative("heat_schedule heat_rate_W", value_of(schedule.heat_rate_W[i]));
+    if (i > 0 && schedule.time_s[i] < schedule.time_s[i - 1])
+      throw InvalidParameter("heat_schedule time_s", schedule.time_s[i], "times in ascending order");
+    if (i > 1 && schedule.time_s[i] == schedule.time_s[i - 2])
+      throw InvalidParameter("heat_schedule time_s", schedule.time_s[i], "at most two knots at one time (a step)");
+  }
 }
 
 void validate_times(const char* name, const std::vector<double>& times, double duration_s) {
@@ -430,10 +476,18 @@ RailSolution<T> simulate_rail(const RailGeometry& geometry, const RailNumerics& 
   constexpr int kStartupSubsteps = 4;
   const ThetaStepper<T> startup(op, n, 1.0, dt / kStartupSubsteps);
 
+  const HeatRateSchedule<T>& schedule = params.heat_schedule;
+  validate(schedule);
+  if (!schedule.empty() && heat_rate)
+    throw InvalidParameter("heat_schedule", "a heat schedule cannot also follow the rail temperature (coupling)");
   SourceTerm<T> source(numerics.source, prep.motion, grid, params.heat_partition * params.heat_rate_W);
   // Q_f for the step starting from `field`: constant, or from the coupling model.
   auto heat_rate_for = [&](const std::vector<T>& field) {
     return heat_rate ? heat_rate(source.source_temperature(field)) : params.heat_rate_W;
+  };
+  // The mean Q_f over [t0, t0 + dt]: the schedule's exact integral, else the step's Q_f.
+  auto mean_heat_rate = [&](double t0, double dt, const T& q) {
+    return schedule.empty() ? q : schedule.integral_J(t0, t0 + dt) / dt;
   };
 
   RailSolution<T> sol;
@@ -458,7 +512,8 @@ RailSolution<T> simulate_rail(const RailGeometry& geometry, const RailNumerics& 
       record_sensors(prep.probes, before, after, s, sol.sensor_temperature_C);
       const T ts_before = source.source_temperature(before), ts_after = source.source_temperature(after);
       sol.source_temperature_C.push_back(ts_before + s * (ts_after - ts_before));
-      sol.heat_rate_W.push_back(q_before + s * (q_after - q_before));
+      sol.heat_rate_W.push_back(schedule.empty() ? q_before + s * (q_after - q_before)
+                                                 : schedule.at(outputs.output_times_s[next_output]));
     }
     for (; next_profile < outputs.profile_times_s.size() && within(outputs.profile_times_s[next_profile]);
          ++next_profile) {
@@ -478,7 +533,7 @@ RailSolution<T> simulate_rail(const RailGeometry& geometry, const RailNumerics& 
     const bool substeps = crank_nicolson && step == 0;
     const ThetaStepper<T>& s = substeps ? startup : stepper;
     for (int k = 0; k < (substeps ? kStartupSubsteps : 1); ++k) {
-      source.set_power(params.heat_partition * q);
+      source.set_power(params.heat_partition * mean_heat_rate(t, s.dt(), q));
       s.advance(current, next, t, ambient, source, tally);
       const bool last = step + 1 == steps && (!substeps || k + 1 == kStartupSubsteps);
       const double t_next = last ? outputs.duration_s : t + s.dt();
@@ -536,6 +591,11 @@ RailSolution<T> steady_rail(const RailGeometry& geometry, const RailNumerics& nu
                                           const std::vector<double>&, const RailParams<T>&, double);
 
 LMCAL_INSTANTIATE_RAIL(double)
+template struct HeatRateSchedule<double>;
+template struct HeatRateSchedule<ceres::Jet<double, 1>>;
+template struct HeatRateSchedule<ceres::Jet<double, 2>>;
+template struct HeatRateSchedule<ceres::Jet<double, 4>>;
+template struct HeatRateSchedule<ceres::Jet<double, 8>>;
 using Jet1 = ceres::Jet<double, 1>;
 using Jet2 = ceres::Jet<double, 2>;
 using Jet4 = ceres::Jet<double, 4>;

@@ -36,7 +36,7 @@ CalibrationSet find_calibration_set(const fs::path& dir) {
   CalibrationSet set;
   set.dir = dir;
   set.name = fs::weakly_canonical(dir).filename().string();
-  std::vector<fs::path> manifests;
+  std::vector<fs::path> manifests, friction_manifests;
   for (const auto& entry : fs::directory_iterator(dir)) {
     if (!entry.is_regular_file()) continue;
     const std::string file = entry.path().filename().string();
@@ -49,6 +49,7 @@ CalibrationSet find_calibration_set(const fs::path& dir) {
       set.friction_logs.push_back(entry.path());
     }
     if (file.starts_with("thermal") && entry.path().extension() == ".toml") manifests.push_back(entry.path());
+    if (file.starts_with("friction") && entry.path().extension() == ".toml") friction_manifests.push_back(entry.path());
   }
   std::sort(set.friction_logs.begin(), set.friction_logs.end());
   std::sort(manifests.begin(), manifests.end());
@@ -56,8 +57,16 @@ CalibrationSet find_calibration_set(const fs::path& dir) {
     throw InputError(manifests[1].string(), 0, 0,
                      fmt::format("expected one thermal manifest in {}, found {} (thermal*.toml)", dir.string(), manifests.size()));
   if (!manifests.empty()) set.thermal_manifest = manifests.front();
-  if (set.friction_logs.empty() && !set.thermal_manifest)
-    throw InputError(dir.string(), 0, 0, "expected friction logs (friction*.csv) or a thermal manifest (thermal*.toml) in the folder");
+  std::sort(friction_manifests.begin(), friction_manifests.end());
+  if (friction_manifests.size() > 1)
+    throw InputError(friction_manifests[1].string(), 0, 0,
+                     fmt::format("expected one friction manifest in {}, found {} (friction*.toml)", dir.string(),
+                                 friction_manifests.size()));
+  if (!friction_manifests.empty()) set.friction_manifest = friction_manifests.front();
+  if (set.friction_logs.empty() && !set.friction_manifest && !set.thermal_manifest)
+    throw InputError(dir.string(), 0, 0,
+                     "expected friction logs (friction*.csv or a friction*.toml manifest) or a thermal manifest "
+                     "(thermal*.toml) in the folder");
   return set;
 }
 
@@ -131,7 +140,7 @@ Calibration calibrate(const CalibrationSet& set, const CalibrationOptions& optio
   c.set = set;
   c.options = options;
   c.command = {"lmcal", "calibrate", set.dir.string()};
-  const bool friction = !set.friction_logs.empty(), thermal = set.thermal_manifest.has_value();
+  const bool friction = !set.friction_logs.empty() || set.friction_manifest, thermal = set.thermal_manifest.has_value();
   std::vector<std::string> steps = {"loading the measurements"};
   if (friction) steps.insert(steps.end(), {"friction fit", "friction diagnosis"});
   if (friction) steps.insert(steps.end(), {"calibrated friction model"});
@@ -147,10 +156,26 @@ Calibration calibrate(const CalibrationSet& set, const CalibrationOptions& optio
   start("loading the measurements");
   for (const auto& file : set.ignored_files)
     c.notes.push_back(fmt::format("{} not read: it is an output of lmcal calibrate, not a measurement", file.string()));
-  for (const auto& file : set.friction_logs) c.inputs.emplace_back(file.string(), sha256_file(file));
-  if (friction) c.friction_log = load_friction_logs(set.friction_logs);
+  const std::optional<GuideCatalog> catalog =
+      options.catalog_file.empty() ? std::nullopt : std::optional(load_catalog(options.catalog_file));
+  if (catalog) c.inputs.emplace_back(options.catalog_file, sha256_file(options.catalog_file));
+  if (set.friction_manifest) {
+    FrictionDataSet data = load_friction_dataset(*set.friction_manifest, catalog ? &*catalog : nullptr, options.raw,
+                                                 options.raw_given);
+    c.inputs.emplace_back(set.friction_manifest->string(), sha256_file(*set.friction_manifest));
+    for (const auto& file : data.files) c.inputs.emplace_back(file.string(), sha256_file(file));
+    for (const auto& file : set.friction_logs)
+      if (std::find(data.files.begin(), data.files.end(), file) == data.files.end())
+        c.notes.push_back(fmt::format("{} not read: the friction manifest {} lists the set's friction logs, and not it",
+                                      file.string(), set.friction_manifest->string()));
+    c.options.raw = data.raw;  // as applied: the manifest's [raw] under the user's flags
+    c.friction_log = std::move(data.log);
+  } else if (friction) {
+    for (const auto& file : set.friction_logs) c.inputs.emplace_back(file.string(), sha256_file(file));
+    c.friction_log = load_friction_logs(set.friction_logs, options.raw);
+  }
   if (thermal) {
-    c.thermal_data = load_thermal_dataset(*set.thermal_manifest);
+    c.thermal_data = load_thermal_dataset(*set.thermal_manifest, catalog ? &*catalog : nullptr);
     c.inputs.emplace_back(set.thermal_manifest->string(), sha256_file(*set.thermal_manifest));
     for (const auto& run : c.thermal_data->runs) c.inputs.emplace_back(run.file.string(), sha256_file(run.file));
   }
@@ -348,8 +373,22 @@ nlohmann::json thermal_options_json(const ThermalFitOptions& t) {
 
 // Every setting the calibration ran with (`lmcal calibrate` flags or --config), so that the
 // outputs say how they were made.
+nlohmann::json raw_options_json(const RawFrictionOptions& r) {
+  return {{"force_sign", to_string(r.force_sign)},
+          {"max_acceleration_m_s2", r.max_acceleration_m_s2},
+          {"settling_s", r.settling_s},
+          {"min_speed_m_s", r.min_speed_m_s},
+          {"velocity_tolerance", r.velocity_tolerance},
+          {"min_plateau_samples", r.min_plateau_samples},
+          {"velocity_window", r.velocity_window},
+          {"moving_mass_kg", r.moving_mass_kg},
+          {"duplicate_times", to_string(r.duplicate_times)}};
+}
+
 nlohmann::json options_json(const CalibrationOptions& o) {
   return {{"diagnose", o.diagnose},
+          {"catalog", o.catalog_file.empty() ? "<built-in>" : o.catalog_file},
+          {"raw_friction", raw_options_json(o.raw)},
           {"friction", friction_options_json(o.friction)},
           {"friction_diagnosis",
            {{"fit", friction_options_json(o.friction_diagnosis.fit)},

@@ -4,6 +4,8 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include <functional>
+#include <limits>
 #include <map>
 
 #include "sections.hpp"
@@ -34,6 +36,61 @@ std::vector<std::string> report_row(const LoadReport& r) {
           r.time_gaps ? std::to_string(r.time_gaps) : ""};
 }
 
+// Horizontal segments, one per plateau, at `level(p)`: NaN pairs break the line between them.
+Series plateau_segments(const std::vector<Plateau>& plateaus, const std::function<double(const Plateau&)>& level) {
+  Series s{.label = "kept plateaus", .color = "#d62728"};
+  for (const Plateau& p : plateaus) {
+    const double y = level(p);
+    s.x.insert(s.x.end(), {p.start_s, p.end_s, std::numeric_limits<double>::quiet_NaN()});
+    s.y.insert(s.y.end(), {y, y, std::numeric_limits<double>::quiet_NaN()});
+  }
+  return s;
+}
+
+// What segmentation kept of the raw load-cell runs, and the first run's trace with its kept
+// plateaus marked.
+void raw_friction_segmentation(Page& page, const FrictionLog& log) {
+  if (log.segmentation.empty()) return;
+  page.heading(3, "Raw load-cell runs: the constant-velocity plateaus kept");
+  std::vector<std::vector<std::string>> rows;
+  for (const RunSegmentation& s : log.segmentation)
+    rows.push_back({s.run, s.file, std::to_string(s.samples), std::to_string(s.kept), std::to_string(s.plateaus.size()),
+                    std::to_string(s.dropped_acceleration), std::to_string(s.dropped_settling),
+                    std::to_string(s.dropped_stationary), std::to_string(s.dropped_short),
+                    std::to_string(s.averaged_duplicates)});
+  page.table({"run", "file", "samples", "kept", "plateaus", "accelerating", "settling", "at rest", "short plateaus",
+              "repeated times averaged"},
+             rows);
+  const RawTrace& trace = log.raw_traces.front();
+  const RunSegmentation& seg = log.segmentation.front();
+  Plot velocity{.id = "raw-trace-velocity",
+                .title = fmt::format("Run {}: velocity (filtered) and the plateaus kept", trace.run),
+                .x_label = "time (s)",
+                .y_label = "velocity (m/s)"};
+  velocity.series.push_back({.label = "velocity", .x = trace.time_s, .y = trace.velocity_m_s});
+  velocity.series.push_back(plateau_segments(seg.plateaus, [](const Plateau& p) { return p.velocity_m_s; }));
+  Plot force{.id = "raw-trace-force",
+             .title = fmt::format("Run {}: load-cell force as logged, and its mean on each kept plateau", trace.run),
+             .x_label = "time (s)",
+             .y_label = "force (N)"};
+  force.series.push_back({.label = "force", .x = trace.time_s, .y = trace.force_N});
+  force.series.push_back(plateau_segments(seg.plateaus, [&](const Plateau& p) {
+    double sum = 0;
+    int n = 0;
+    for (std::size_t i = 0; i < trace.time_s.size(); ++i)
+      if (trace.time_s[i] >= p.start_s && trace.time_s[i] <= p.end_s) {
+        sum += trace.force_N[i];
+        ++n;
+      }
+    return n ? sum / n : std::numeric_limits<double>::quiet_NaN();
+  }));
+  page.figures({velocity, force});
+  page.paragraph("Samples while the block accelerates (|a| above the threshold, or off the plateau's speed), for the "
+                 "settling time after, at rest and in plateaus too short to trust are dropped; a kept sample's "
+                 "velocity is its plateau's and its friction the force with the sign convention applied and the "
+                 "inertia m·a taken off (calibration.json: options.raw_friction).");
+}
+
 }  // namespace
 
 void data_section(Page& page, const Calibration& c) {
@@ -54,6 +111,7 @@ void data_section(Page& page, const Calibration& c) {
   if (c.thermal_data)
     for (const auto& run : c.thermal_data->runs) rows.push_back(report_row(run.trace.report));
   page.table({"file", "rows read", "kept", "skipped", "converted", "ignored columns", "time gaps"}, rows);
+  if (c.friction_log) raw_friction_segmentation(page, *c.friction_log);
   if (c.thermal) {
     rows.clear();
     for (const auto& run : c.thermal->runs)

@@ -18,6 +18,43 @@
 
 namespace lmcal {
 
+namespace {
+
+// The heater's and the stop's options, checked against each other and the effects.
+void validate_phases(const ThermalRigConfig& config, bool moving, bool coupled) {
+  if (config.heat_rate_W) require_non_negative("heat_rate_W", *config.heat_rate_W);
+  if (config.heater_off_s && !config.heat_rate_W)
+    throw InvalidParameter("heater_off_s", *config.heater_off_s, "a heater (heat_rate_W) to switch off");
+  if (config.heater_off_s) require_in_range("heater_off_s", *config.heater_off_s, 1e-9, config.duration_s);
+  if (config.stop_s && config.heat_rate_W)
+    throw InvalidParameter("stop_s", *config.stop_s, "a block heated by friction, not a heater run");
+  if (config.stop_s) require_in_range("stop_s", *config.stop_s, 1e-9, config.duration_s);
+  require_non_negative("stated_heat_uncertainty", config.stated_heat_uncertainty);
+  const bool phased = config.heat_rate_W || config.stop_s;
+  if (phased && moving) throw InvalidParameter("heat_rate_W", "a heater run or a stop needs the static source, not the moving block");
+  if (phased && coupled) throw InvalidParameter("heat_rate_W", "a heater run or a stop cannot have the friction-temperature coupling");
+}
+
+// The phase that ends the heat (the heater off, the block stopped), if any, s since the start.
+std::optional<double> heat_end_s(const ThermalRigConfig& config) {
+  return config.heat_rate_W ? config.heater_off_s : config.stop_s;
+}
+
+// The manifest's record of the heat: the heater's heat_rate_W, or a schedule with the phase
+// that ends it.
+void record_heat(const ThermalRigConfig& config, double V, ThermalRun& run) {
+  const std::optional<double> end_s = heat_end_s(config);
+  if (config.heat_rate_W && !end_s) run.heat_rate_W = *config.heat_rate_W;
+  if (config.heat_rate_W && end_s)
+    run.schedule = {{.from_s = 0, .heat_rate_W = *config.heat_rate_W}, {.from_s = *end_s, .heat_rate_W = 0.0}};
+  if (!config.heat_rate_W && end_s)
+    run.schedule = {{.from_s = 0, .velocity_m_s = V}, {.from_s = *end_s, .velocity_m_s = 0.0}};
+  if (config.heat_rate_W && config.stated_heat_uncertainty > 0)
+    run.heat_rate_uncertainty_W = rig::round_to(config.stated_heat_uncertainty * *config.heat_rate_W, 4);
+}
+
+}  // namespace
+
 using rig::Ar1Noise;
 using rig::derive_seed;
 using rig::kDailyStreamKey;
@@ -38,12 +75,15 @@ ThermalRigOutput generate_thermal_dataset(const ThermalRigConfig& config, const 
   require_non_negative("heat_variation", config.heat_variation);
   require_non_negative("friction_gain_error", config.friction_gain_error);
   require_non_negative("stated_friction_uncertainty", config.stated_friction_uncertainty);
-  const GuideSpec spec = with_overrides(builtin_catalog().find(config.guide), config.guide_overrides);
-  const double Lb = require(spec, &GuideSpec::block_length_mm, "block_length_mm");
-  const double Lb1 = require(spec, &GuideSpec::contact_length_mm, "contact_length_mm");
-  const double pc = require(spec, &GuideSpec::preload_um, "preload_um");
+  const GuideSpec spec = with_overrides(find_guide(config.guide, config.catalog), config.guide_overrides);
   const bool moving = effects.thermal.moving_source != 0;
   const bool coupled = effects.thermal.coupling != 0;
+  validate_phases(config, moving, coupled);
+  const bool heater = config.heat_rate_W.has_value();
+  // A heater needs no friction law, hence no block length or preload (a plain bar has none).
+  const double Lb = heater ? 0.0 : require(spec, &GuideSpec::block_length_mm, "block_length_mm");
+  const double Lb1 = require(spec, &GuideSpec::contact_length_mm, "contact_length_mm");
+  const double pc = heater ? 0.0 : require(spec, &GuideSpec::preload_um, "preload_um");
   // Truth numerics: converged (2 mm cells; 1 s steps for the moving block, 5 s otherwise).
   const RailNumerics numerics{.source = moving ? SourceModel::moving : SourceModel::averaged,
                               .scheme = TimeScheme::crank_nicolson,
@@ -60,6 +100,7 @@ ThermalRigOutput generate_thermal_dataset(const ThermalRigConfig& config, const 
   ThermalRigOutput out;
   out.set.name = name;
   out.set.description = "Synthetic: made by the lmcal virtual rig (see the truth file); not measured.";
+  if (config.catalog) out.set.catalog_file = config.catalog->source;
   nlohmann::json runs_truth = nlohmann::json::array();
   // The logger's temperature: truth + bias + AR(1) noise, at 0.01 K.
   const auto logged_channel = [&](std::string column, const std::vector<double>& true_C, double bias_K, Rng& rng) {
@@ -72,11 +113,13 @@ ThermalRigOutput generate_thermal_dataset(const ThermalRigConfig& config, const 
   const double friction_gain =  // 1 + g
       positive_factor("friction_gain_error", config.friction_gain_error, later.normal(), "the load cell's gain");
   std::size_t stream = 0;
-  for (double V : config.velocity_m_s) {
+  // A heater data set has one "speed" (none: the block stands still).
+  const std::vector<double> speeds = heater ? std::vector<double>{0.0} : config.velocity_m_s;
+  for (double V : speeds) {
     for (int r = 0; r < config.repeats; ++r, ++stream) {
       Rng rng(derive_seed(config.seed, stream));
-      const std::string id = config.repeats == 1 ? fmt::format("v{:03.0f}", V * 1000)
-                                                 : fmt::format("v{:03.0f}_r{}", V * 1000, r + 1);
+      const std::string stem = heater ? std::string("heater") : fmt::format("v{:03.0f}", V * 1000);
+      const std::string id = config.repeats == 1 ? stem : fmt::format("{}_r{}", stem, r + 1);
       const double heat_factor =
           positive_factor("heat_variation", config.heat_variation, later.normal(), "the heat factor of run " + id);
       // The true ambient: drift plus a slow wave with a random phase; with the hidden daily
@@ -105,15 +148,18 @@ ThermalRigOutput generate_thermal_dataset(const ThermalRigConfig& config, const 
                                   .stroke_m = config.stroke_m,
                                   .contact_length_m = Lb1 * 1e-3,
                                   .velocity_m_s = V};
-      const RailParams<double> params{
+      RailParams<double> params{
           .heat_partition = alpha_with_velocity(config.alpha, effects.thermal.alpha_velocity, V),
-          .heat_rate_W = heat_at(T0),
+          .heat_rate_W = heater ? heat_factor * *config.heat_rate_W : heat_at(T0),
           .h_W_m2K = convection_with_velocity(config.h_W_m2K, effects.thermal.convection_velocity, V),
           .conductivity_W_mK = require(spec, &GuideSpec::conductivity_W_mK, "conductivity_W_mK"),
           .density_kg_m3 = require(spec, &GuideSpec::density_kg_m3, "density_kg_m3"),
           .specific_heat_J_kgK = require(spec, &GuideSpec::specific_heat_J_kgK, "specific_heat_J_kgK"),
           .initial_temperature_C = T0,
           .base_loss_W_mK = effects.thermal.base_loss};
+      // The heat ends with the heater switched off or the block stopped.
+      if (const auto end_s = heat_end_s(config))
+        params.heat_schedule = HeatRateSchedule<double>::steps({0.0, *end_s}, {params.heat_rate_W, 0.0});
       const RailOutputs outputs{
           .duration_s = times.back(), .sensor_positions_m = config.sensor_position_m, .output_times_s = times};
       const HeatRateModel<double> coupling = heat_at;
@@ -126,13 +172,16 @@ ThermalRigOutput generate_thermal_dataset(const ThermalRigConfig& config, const 
       run.guide = spec.model;
       run.velocity_m_s = V;
       run.load_N = config.load_N;
-      run.preload_um = pc;
+      if (!heater) run.preload_um = pc;
       run.stroke_m = config.stroke_m;
       run.rail_length_m = config.rail_length_m;
       run.guide_overrides = config.guide_overrides;
+      run.guide_spec = spec;
+      record_heat(config, V, run);
+      if (!config.ambient_columns) run.ambient_C = round_to(config.ambient_C, 2);
       run.trace.time_s = times;
       nlohmann::json ambient_truth = nlohmann::json::array(), tc_truth = nlohmann::json::array();
-      for (int a = 0; a < config.ambient_sensors; ++a) {
+      for (int a = 0; a < (config.ambient_columns ? config.ambient_sensors : 0); ++a) {
         const double bias = rng.uniform(-config.ambient_bias_K, config.ambient_bias_K);
         TemperatureChannel channel =
             logged_channel(fmt::format("ambient{}_C", a + 1), ambient_logged, bias, rng);
@@ -151,17 +200,24 @@ ThermalRigOutput generate_thermal_dataset(const ThermalRigConfig& config, const 
                             {"true_final_C", truth.back()}});
         run.trace.rail.push_back(std::move(channel));
       }
-      double mean_Q = 0;
-      for (double q : sol.heat_rate_W) mean_Q += q;
-      mean_Q /= static_cast<double>(sol.heat_rate_W.size());
+      // The mean heat while the block moves (a stopped block makes none, its load cell reads none).
+      double mean_Q = 0, moving_records = 0;
+      for (std::size_t t = 0; t < times.size(); ++t) {
+        if (config.stop_s && times[t] >= *config.stop_s) continue;
+        mean_Q += sol.heat_rate_W[t];
+        moving_records += 1;
+      }
+      mean_Q /= moving_records;
       // The load cell sees the friction, not the heat factor; it has the data set's gain error.
       // Logged as the run's mean (its time average over the records), as a load cell's log
       // averages to: with coupling, below the friction at the start.
-      const double mean_friction_true_N = mean_Q / heat_factor / V;
-      run.mean_friction_N =
-          round_to(mean_friction_true_N * friction_gain + config.friction_noise_N * rng.normal(), 2);
-      if (config.stated_friction_uncertainty > 0)
-        run.mean_friction_uncertainty_N = round_to(config.stated_friction_uncertainty * *run.mean_friction_N, 4);
+      const double mean_friction_true_N = heater ? 0.0 : mean_Q / heat_factor / V;
+      if (!heater) {
+        run.mean_friction_N =
+            round_to(mean_friction_true_N * friction_gain + config.friction_noise_N * rng.normal(), 2);
+        if (config.stated_friction_uncertainty > 0)
+          run.mean_friction_uncertainty_N = round_to(config.stated_friction_uncertainty * *run.mean_friction_N, 4);
+      }
       runs_truth.push_back({{"id", id},
                             {"velocity_m_s", V},
                             {"alpha", params.heat_partition},
@@ -180,6 +236,11 @@ ThermalRigOutput generate_thermal_dataset(const ThermalRigConfig& config, const 
                                          {"sensors", ambient_truth}}},
                             {"thermocouples", tc_truth}});
       if (config.heat_variation != 0) runs_truth.back()["heat_factor"] = heat_factor;
+      if (heater) runs_truth.back()["heater"] = {{"heat_rate_W", *config.heat_rate_W}};
+      if (config.heater_off_s) runs_truth.back()["heater"]["off_s"] = *config.heater_off_s;
+      if (config.stop_s) runs_truth.back()["stop_s"] = *config.stop_s;
+      if (!config.ambient_columns)
+        runs_truth.back()["ambient"]["logged"] = {{"columns", false}, {"ambient_C", *run.ambient_C}};
       if (effects.thermal.ambient_daily_K != 0) {
         runs_truth.back()["ambient"]["daily_K"] = effects.thermal.ambient_daily_K;
         runs_truth.back()["ambient"]["daily_period_s"] = 86400;

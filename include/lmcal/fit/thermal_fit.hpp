@@ -4,8 +4,14 @@
 //   r = (T_measured(t, x_s) - offset_s - T_model(t, x_s; α, h, T0)) / σ
 //
 // with T_model driven by the run's measured ambient (mean of the ambient sensors, or one
-// named), Q_f from the friction law with fitted constants (a friction fit) or from the
-// run's measured mean friction force, and the chosen source model. Derivatives come from
+// named; the manifest's ambient_C for a run without ambient columns), Q_f from the friction
+// law with fitted constants (a friction fit) or from the run's measured mean friction force —
+// or, when the manifest gives it (heat_rate_W, a schedule's heats, a CSV heat_rate_W column),
+// the given heat, whatever `heat` says — and the chosen source model. A [[run.schedule]] makes
+// Q_f change during the run (friction × each phase's speed, or its given heat): every record
+// is fitted, so a heater's off phase (cooling) informs α too. The `moving` source refuses a
+// schedule of speeds (InvalidParameter: its block keeps one speed), the coupling extension any
+// schedule or measured power. Derivatives come from
 // the templated solver with ceres::Jet. Without free h (or coupling) the model is linear
 // in α, the offsets and T0, and the fit is one exact Gauss-Newton step.
 //
@@ -93,6 +99,8 @@ struct ThermalFitOptions {
   std::optional<FitResult> friction_fit;
   double alpha_start = 0.6, alpha_lower = 0.0, alpha_upper = 1.0;
   bool fit_h = false;                        // one h for all runs
+  // h's start when fitted; the fixed h when not, except for a run whose manifest gives its own
+  // h_W_m2K (that run's wins; a fitted h is one for all runs and ignores it).
   double h_W_m2K = 5.3, h_lower = 0.5, h_upper = 50.0;
   // One offset per thermocouple and run; the rail then starts at the ambient (at rest, in
   // equilibrium with the room), and the offsets take each thermocouple's bias against the
@@ -149,8 +157,10 @@ struct SensorGoodness {
 
 struct RunInfo {
   std::string id;
-  double velocity_m_s = 0, load_N = 0, heat_rate_W = 0, initial_temperature_C = 0;
-  std::string heat_source;  // "friction law …", "measured mean friction" or "measured friction at the start temperature"
+  double velocity_m_s = 0, load_N = 0, initial_temperature_C = 0;
+  double heat_rate_W = 0;  // Q_f; with a schedule or a measured power, its mean over the run
+  std::string heat_source;  // "friction law …", "measured mean friction", "measured friction at the start temperature"
+                            // or "given heat rate" (heat_rate_uncertainty_W then feeds heat_relative_se)
   double heat_relative_se = 0;  // of the heat rate, as counted in the intervals (NaN: not known)
   bool offsets_fitted = false;
   std::string offsets_note;     // why the offsets were held, when they were

@@ -25,11 +25,32 @@
 //   [run.guide_overrides]           # optional overrides of catalog values (not [run.guide]:
 //   conductivity_W_mK = 36          #   TOML cannot have `guide` both a string and a table)
 //
+// Runs as rigs produce them (all optional):
+//   catalog = "my_guides.toml"      # top level: a user catalog (catalog.hpp), searched before the
+//                                   #   built-in one; a user_catalog argument (the command line) wins
+//   heat_rate_W = 8.0               # the heat, given (a heater, a measured power): not with
+//   heat_rate_uncertainty_W = 0.1   #   mean/start_friction_N; its 1 σ, into α's interval
+//   ambient_C = 23.5                # a constant ambient, for a CSV without ambient columns
+//   h_W_m2K = 6.0                   # this run's convection coefficient (the fit's h where h is not fitted)
+//   viscosity40_mm2_s = 68          # the oil's ν40, for a heat from the friction law (default 99)
+//   [[run.schedule]]                # piecewise-constant phases from their from_s to the next one's:
+//   from_s = 0                      #   the first at 0 (the first record), ascending, the last to
+//   heat_rate_W = 10                #   the end; each gives velocity_m_s (0 = stopped; heat =
+//   [[run.schedule]]                #   friction × that speed) or heat_rate_W, not both
+//   from_h = 2
+//   heat_rate_W = 0
+// The CSV may carry a `heat_rate_W` column (a measured power, W): linear between records, like
+// the ambient; it gives the run's heat, so no heat key or schedule goes with it.
+//
 // Rules: time strictly increasing; an empty or NaN temperature cell is kept as NaN and
 // counted in report.missing (fits skip it); intervals longer than 1.5x the median step
-// are counted in report.time_gaps. A thermal run needs velocity > 0, load >= 0,
+// are counted in report.time_gaps. A thermal run needs velocity > 0 (optional when the heat is
+// given: heat_rate_W, a schedule or the CSV column), load >= 0,
 // stroke > 0, rail length > stroke + contact length, and a position for every tc column;
-// mean_friction_uncertainty_N needs mean_friction_N (it is that value's uncertainty).
+// mean_friction_uncertainty_N needs mean_friction_N (it is that value's uncertainty), and
+// heat_rate_uncertainty_W a given heat (taken at the largest: a gain error of the power
+// meter); an ambient column or ambient_C; a guide whose catalog entry (with the overrides)
+// has area, perimeter, k, ρ, c and contact length — refused at load, not in the fit.
 //
 // Trap: mean_friction_N is the run's mean (what a load cell's log averages to), not the
 // friction of the cold rail: the grease thins as the rail warms, so a mean over a 6 h run is
@@ -46,6 +67,7 @@
 #include <string>
 #include <vector>
 
+#include "lmcal/io/catalog.hpp"
 #include "lmcal/io/load_report.hpp"
 
 namespace lmcal {
@@ -59,6 +81,7 @@ struct ThermalTrace {
   std::vector<double> time_s;
   std::vector<TemperatureChannel> ambient;
   std::vector<TemperatureChannel> rail;  // the tc… columns
+  std::vector<double> heat_rate_W;       // the optional heat_rate_W column (empty: none), W
   LoadReport report;
   std::size_t size() const { return time_s.size(); }
 };
@@ -66,6 +89,13 @@ struct ThermalTrace {
 ThermalTrace load_thermal_trace(const std::filesystem::path& file);
 // Writes a trace in canonical units (°C, s) with the given '#' comment lines first.
 std::string thermal_trace_csv(const ThermalTrace& trace, const std::vector<std::string>& comments = {});
+
+// One [[run.schedule]] phase: from from_s (since the first record) until the next phase.
+struct ThermalPhase {
+  double from_s = 0;
+  std::optional<double> velocity_m_s;  // the block's speed (0: stopped), heat = friction × speed
+  std::optional<double> heat_rate_W;   // or the heat, given
+};
 
 struct ThermalRun {
   std::string id;
@@ -83,17 +113,31 @@ struct ThermalRun {
   std::optional<double> start_friction_N;             // friction at the start temperature (the run's first minutes)
   std::map<std::string, double> sensor_position_m;  // tc column name -> x from the rail centre
   std::map<std::string, double> guide_overrides;    // catalog field -> value
+  std::optional<double> heat_rate_W;                // the heat, given (not friction × speed)
+  std::optional<double> heat_rate_uncertainty_W;    // its standard uncertainty (1 σ)
+  std::optional<double> ambient_C;                  // constant ambient (no ambient column)
+  std::optional<double> h_W_m2K;                    // this run's convection coefficient
+  std::optional<double> viscosity40_mm2_s;          // the oil's ν40 for the friction law
+  std::vector<ThermalPhase> schedule;               // empty: one phase, the whole run
+  GuideSpec guide_spec;  // the catalog entry of `guide` with guide_overrides applied (filled at load)
   ThermalTrace trace;
 };
+
+// The run's guide: guide_spec when the loader filled it, else (a run made in code) the built-in
+// catalog's entry with the overrides.
+GuideSpec resolved_guide(const ThermalRun& run);
 
 struct ThermalDataSet {
   std::string name;
   std::string description;
   std::filesystem::path manifest;
+  std::filesystem::path catalog_file;  // the user catalog the guides were resolved with (empty: none)
   std::vector<ThermalRun> runs;
 };
 
-ThermalDataSet load_thermal_dataset(const std::filesystem::path& manifest);
+// `user_catalog` (the command line's) wins over the manifest's `catalog` key; its source names
+// the file recorded in catalog_file.
+ThermalDataSet load_thermal_dataset(const std::filesystem::path& manifest, const GuideCatalog* user_catalog = nullptr);
 // The manifest text for a data set (file paths written relative to `folder`).
 std::string thermal_manifest_toml(const ThermalDataSet& set, const std::filesystem::path& folder);
 

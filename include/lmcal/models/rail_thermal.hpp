@@ -80,6 +80,36 @@ struct RailOutputs {
   bool energy_balance = false;             // account injected / stored / convected energy
 };
 
+// Q_f(t) for a heat that changes during the run (a heater switched off, a block that stops, a
+// measured power trace), t from the run's start (s): linear between knots, constant before the
+// first knot and after the last; a time given twice is a step (the earlier value up to it, the
+// later one from it). The solver takes the exact integral ∫ Q dt over every step, so a step
+// that switches the heat off part way injects exactly the energy before the switch.
+// Example, a 10 W heater switched off after 2 h:
+//   auto q = lmcal::HeatRateSchedule<double>::steps({0, 7200}, {10.0, 0.0});
+template <typename T>
+struct HeatRateSchedule {
+  std::vector<double> time_s;  // non-decreasing; at most two equal times (a step)
+  std::vector<T> heat_rate_W;  // Q_f at each knot, >= 0
+
+  bool empty() const { return time_s.empty(); }
+  // Piecewise constant: heat_rate_W[i] from from_s[i] until from_s[i + 1], the last to the end.
+  static HeatRateSchedule steps(const std::vector<double>& from_s, const std::vector<T>& heat_rate_W) {
+    HeatRateSchedule s;
+    for (std::size_t i = 0; i < from_s.size(); ++i) {
+      if (i > 0) s.add(from_s[i], heat_rate_W[i - 1]);
+      s.add(from_s[i], heat_rate_W[i]);
+    }
+    return s;
+  }
+  void add(double t, const T& q) {
+    time_s.push_back(t);
+    heat_rate_W.push_back(q);
+  }
+  T at(double t) const;                   // the later value at a step
+  T integral_J(double t0, double t1) const;  // ∫_{t0}^{t1} Q dt, exact for the linear pieces, t0 <= t1
+};
+
 // The physical parameters, of the scalar type: everything a fit may free.
 template <typename T>
 struct RailParams {
@@ -91,12 +121,13 @@ struct RailParams {
   T specific_heat_J_kgK{461.0};     // c
   T initial_temperature_C{26.0};    // uniform T(x, 0)
   T base_loss_W_mK{0.0};            // b, conductance to the ambient through the base, W/K per m of rail
+  HeatRateSchedule<T> heat_schedule;  // Q_f(t); when given it replaces heat_rate_W (which is then unused)
 };
 
 // Two-way coupling: Q_f as a function of the rail temperature under the block (the source-
 // weighted mean of the temperature field), evaluated at the start of every step (explicit,
 // first order in Δt: keep Δt well below the time constant when it is used). Empty = the
-// constant RailParams::heat_rate_W.
+// constant RailParams::heat_rate_W. Not together with a heat schedule (InvalidParameter).
 template <typename T>
 using HeatRateModel = std::function<T(const T& source_temperature_C)>;
 
@@ -140,7 +171,12 @@ struct RailSolution {
 
 // Runs the transient model. Throws InvalidParameter, naming the parameter and its
 // value, for non-physical input (lengths <= 0, α outside [0, 1], segments < 1,
-// Δt <= 0, NaN anywhere, a sensor off the rail, a stroke + contact longer than the rail).
+// Δt <= 0, NaN anywhere, a sensor off the rail, a stroke + contact longer than the rail,
+// a heat schedule with a negative heat or times out of order).
+// With a heat schedule, every step gets α·∫Q dt exactly (RailOutputs::energy_balance closes
+// to round-off) and RailSolution::heat_rate_W holds the schedule at the output times. The
+// `moving` block keeps moving at velocity_m_s: a schedule changes its power, not its speed (a
+// block that stops is the caller's to refuse, or to model with a static source).
 template <typename T>
 RailSolution<T> simulate_rail(const RailGeometry& geometry, const RailNumerics& numerics,
                               const RailOutputs& outputs, const RailParams<T>& params,

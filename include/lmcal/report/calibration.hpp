@@ -9,8 +9,9 @@
 // friction model). The fits of the published models stay, for comparison: they are
 // conditional on a model the diagnosis rejects.
 //
-// A measurement set is a folder: its friction logs are the `friction*.csv` files in it, its
-// thermal data the `thermal*.toml` manifest (at most one). Either half may be missing; the
+// A measurement set is a folder: its friction logs are the `friction*.csv` files in it, or the
+// files a `friction*.toml` manifest lists (at most one; it gives the runs' conditions and how
+// raw load-cell logs are segmented), its thermal data the `thermal*.toml` manifest (at most one). Either half may be missing; the
 // thermal half then takes its heat from the manifest's measured mean friction (or is skipped).
 // The outputs are the files `lmcal fit …` and `lmcal diagnose …` write, a summary
 // (calibration.json) and the report (report.html, see html_report.hpp).
@@ -48,6 +49,7 @@ struct CalibrationSet {
   std::filesystem::path dir;
   std::string name;                                   // the folder's name
   std::vector<std::filesystem::path> friction_logs;   // friction*.csv, sorted
+  std::optional<std::filesystem::path> friction_manifest;  // friction*.toml: its files instead of friction_logs
   std::optional<std::filesystem::path> thermal_manifest;
   std::vector<std::filesystem::path> ignored_files;   // lmcal's own outputs (friction_samples.csv, …): never inputs
 };
@@ -61,6 +63,9 @@ bool is_calibration_output(std::string_view file_name);
 CalibrationSet find_calibration_set(const std::filesystem::path& dir);
 
 struct CalibrationOptions {
+  std::string catalog_file;  // the user's guide catalog ("" = the built-in one only); wins over a manifest's `catalog`
+  RawFrictionOptions raw;    // how raw load-cell logs are segmented
+  std::vector<std::string> raw_given;  // those of `raw` set by the user (they win over a manifest's [raw])
   FrictionFitOptions friction;
   FrictionDiagnosisOptions friction_diagnosis;
   ThermalFitOptions thermal;  // the friction constants are set from the friction fit

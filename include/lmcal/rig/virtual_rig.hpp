@@ -150,6 +150,18 @@ struct ThermalRigConfig {
   double friction_gain_error = 0;       // relative σ of the load cell's gain, one draw per data set
   double stated_friction_uncertainty = 0;  // > 0: mean_friction_uncertainty_N = this · mean_friction_N
   std::uint64_t seed = 1;
+  // Runs as rigs produce them. A heater (heat_rate_W) heats the rail instead of the block's
+  // friction: one run per repeat ("heater", "heater_r2"), velocity_m_s unused; it switches off
+  // at heater_off_s and the run goes on cooling. stop_s: the block stops then (velocity 0, no
+  // friction heat). Neither works with the moving source or coupling (refused).
+  std::optional<double> heat_rate_W;
+  std::optional<double> heater_off_s;
+  std::optional<double> stop_s;
+  double stated_heat_uncertainty = 0;   // > 0: heat_rate_uncertainty_W = this · heat_rate_W
+  // false: no ambient columns; the manifest's ambient_C (ambient_C above) instead. The true
+  // air keeps its drift and wave: zero them for a room that is truly constant.
+  bool ambient_columns = true;
+  const GuideCatalog* catalog = nullptr;  // a user catalog searched before the built-in one
 };
 
 struct FrictionRigOutput {
