@@ -32,6 +32,8 @@ struct GenerateOptions {
   RawFrictionRigConfig raw_rig;
   std::string raw_force_sign = "follows-motion";
   ThermalRigConfig thermal;
+  std::string catalog_file;  // thermal: the user's catalog (its guides and bars)
+  std::optional<GuideCatalog> catalog;
   std::string name = "synthetic";
 };
 
@@ -98,6 +100,8 @@ void run_generate_thermal(GenerateOptions& o, const std::vector<std::string>& ar
   require_non_negative("--friction-gain-error", o.thermal.friction_gain_error);
   require_non_negative("--stated-friction-uncertainty", o.thermal.stated_friction_uncertainty);
   o.thermal.seed = o.seed;
+  o.catalog = user_catalog(o.catalog_file);
+  if (o.catalog) o.thermal.catalog = &*o.catalog;
   const RigEffects effects = resolve_effects(o.effects);
   const ThermalRigOutput made = with_progress("simulating the thermal runs", [&](const Progress&) {
     return generate_thermal_dataset(o.thermal, effects, o.name);
@@ -173,7 +177,8 @@ void setup_generate(CLI::App& app, const std::vector<std::string>& argv) {
   add_common(*thermal, *o);
   ThermalRigConfig& t = o->thermal;
   thermal->add_option("--name", o->name, "Data set name")->capture_default_str();
-  thermal->add_option("--guide", t.guide, "Guide model")->capture_default_str();
+  thermal->add_option("--guide", t.guide, "Guide model (or a bar of --catalog)")->capture_default_str();
+  thermal->add_option("--catalog", o->catalog_file, kCatalogHelp);
   add_assignments(*thermal, "--set", t.guide_overrides, "Override a catalog value: --set conductivity_W_mK=36");
   add_list(*thermal, "--velocity", t.velocity_m_s, "Speeds, m/s (default 0.066,0.083,0.11)");
   thermal->add_option("--repeats", t.repeats, "Runs per speed")->capture_default_str();

@@ -2,7 +2,8 @@
 # The main job: installs what is missing, builds (Release) and runs lmcal on the
 # bundled case: a check of the bundled (synthetic) measurements, a simulation of the paper's
 # SRN 35C rail case (Cheng et al. 2017, Tables 2-3; fits/simulation/), and last the whole
-# calibration of the bundled measurements with its report (fits/cheng2017/report.html).
+# calibration of the bundled measurements with its report (fits/cheng2017/report.html), and
+# of the rig-shaped set (fits/rig/report.html).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/build.sh
@@ -33,3 +34,8 @@ echo
 echo "== The calibration of the bundled measurements: friction fit and diagnosis, thermal fit and"
 echo "   diagnosis, spread across runs, and the report (open fits/cheng2017/report.html) =="
 "$lmcal" calibrate measurements/cheng2017
+
+echo
+echo "== A rig-shaped set (measurements/rig, synthetic): raw load-cell time series cut into"
+echo "   constant-velocity plateaus, thermal runs that stop and cool (open fits/rig/report.html) =="
+"$lmcal" calibrate measurements/rig

@@ -319,6 +319,48 @@ TEST_F(CalibrationTest, HeatFromThePapersConstantsIsAWarning) {
   EXPECT_NE(c.warnings[0].find("the heat came from the paper's friction constants"), std::string::npos) << c.warnings[0];
 }
 
+// A lab's heated bar from the user's catalog (given on the command line, or by the manifest),
+// heated and then left to cool: calibrated on both phases, and named in the report.
+TEST_F(CalibrationTest, AUserCatalogBarCalibratesAndTheReportNamesIt) {
+  const std::string bars = "[[bar]]\nname = \"steel bar 20x20\"\narea_m2 = 4e-4\nperimeter_m = 0.08\n"
+                           "conductivity_W_mK = 45\ndensity_kg_m3 = 7850\nspecific_heat_J_kgK = 470\n"
+                           "contact_length_mm = 50\n";
+  std::ofstream(dir_ / "bars.toml") << bars;
+  const GuideCatalog catalog = load_catalog(dir_ / "bars.toml");
+  ThermalRigConfig config;
+  config.catalog = &catalog;
+  config.guide = "steel bar 20x20";
+  config.heat_rate_W = 4.0;
+  config.heater_off_s = 3 * 3600;
+  config.duration_s = 5 * 3600;
+  config.record_every_s = 60;
+  config.sensor_position_m = {0.0, 0.1};
+  ThermalDataSet set = generate_thermal_dataset(config, {}, "bar").set;
+  OutputSet out;
+  for (ThermalRun& run : set.runs) {
+    out.add(dir_ / run.file, thermal_trace_csv(run.trace));
+    run.file = dir_ / run.file;
+  }
+  set.catalog_file.clear();  // the manifest names no catalog: the command line must
+  out.add(dir_ / "thermal.toml", thermal_manifest_toml(set, dir_));
+  out.commit();
+  CalibrationOptions options;
+  options.diagnose = false;
+  EXPECT_THROW(calibrate(find_calibration_set(dir_), options), InputError);  // an unknown guide, at its line
+  options.catalog_file = (dir_ / "bars.toml").string();
+  const Calibration c = calibrate(find_calibration_set(dir_), options);
+  ASSERT_TRUE(c.calibrated.thermal);
+  const ParameterEstimate& alpha = c.calibrated.thermal->joint.parameter("alpha");
+  EXPECT_LE(alpha.ci_low, 0.6);
+  EXPECT_GE(alpha.ci_high, 0.6);
+  const std::size_t after_off = static_cast<std::size_t>(std::count_if(
+      c.thermal->samples.begin(), c.thermal->samples.end(), [](const auto& s) { return s.time_s > 3 * 3600; }));
+  EXPECT_GT(after_off, 100u);  // the cooling phase is fitted, not cut away
+  const std::string html = calibration_report_html(c);
+  EXPECT_NE(html.find("steel bar 20x20 (a plain bar, from " + options.catalog_file + ")"), std::string::npos);
+  EXPECT_EQ(nlohmann::json::parse(calibration_json(c))["options"]["catalog"], options.catalog_file);
+}
+
 // ---- the committed results of the bundled set -------------------------------------------
 
 // Numbers equal to a relative 1e-6 (or 1e-9 absolute, for values that are zero up to rounding),
@@ -404,6 +446,36 @@ TEST(BundledCalibration, AFreshRunReproducesTheCommittedResults) {
   const double true_alpha = thermal_truth["alpha_reference"].get<double>();
   EXPECT_LE(alpha.ci_low, true_alpha) << alpha.value << " ± " << alpha.se;
   EXPECT_GE(alpha.ci_high, true_alpha) << alpha.value << " ± " << alpha.se;
+}
+
+// The rig-shaped bundled set (measurements/rig: raw load-cell runs with a friction manifest,
+// thermal runs that stop and cool without ambient sensors) calibrates to its truth: the seven
+// constants within 3 SE, α inside its interval, nothing named by the diagnoses, and the
+// report shows the raw trace with its plateaus.
+TEST(BundledCalibration, TheRigShapedSetCalibratesToItsTruth) {
+  const fs::path root = LMCAL_SOURCE_DIR;
+  const Calibration c = calibrate(find_calibration_set(root / "measurements" / "rig"), {});
+  ASSERT_TRUE(c.set.friction_manifest);
+  ASSERT_EQ(c.friction_log->segmentation.size(), 8u);
+  for (const RunSegmentation& s : c.friction_log->segmentation) EXPECT_EQ(s.plateaus.size(), 10u) << s.run;  // 5 speeds × 2 senses
+  ASSERT_TRUE(c.calibrated.friction && c.calibrated.thermal && c.friction_diagnosis && c.thermal_diagnosis);
+  EXPECT_TRUE(c.friction_diagnosis->accepted.empty());
+  EXPECT_TRUE(c.thermal_diagnosis->accepted.empty());
+  EXPECT_TRUE(c.warnings.empty()) << c.warnings.front();
+  const auto truth = [&](const char* file) { return nlohmann::json::parse(read(root / "measurements" / "rig" / file)); };
+  const auto friction_truth = truth("friction_truth.json");
+  for (const auto& name : kFrictionConstantNames) {
+    const ParameterEstimate& p = c.calibrated.friction->fit.parameter(name);
+    const double value = friction_truth["friction_constants"][name].get<double>();
+    EXPECT_LT(std::abs(p.value - value), 3 * p.se) << p.name << " " << p.value << " ± " << p.se << ", truth " << value;
+  }
+  const ParameterEstimate& alpha = c.calibrated.thermal->joint.parameter("alpha");
+  const double true_alpha = truth("thermal_truth.json")["alpha_reference"].get<double>();
+  EXPECT_LE(alpha.ci_low, true_alpha) << alpha.value << " ± " << alpha.se;
+  EXPECT_GE(alpha.ci_high, true_alpha) << alpha.value << " ± " << alpha.se;
+  const std::string html = calibration_report_html(c);
+  EXPECT_NE(html.find("data-plot=\"raw-trace-velocity\""), std::string::npos);
+  EXPECT_NE(html.find("SRN 35C (guide, built-in catalog)"), std::string::npos);
 }
 
 }  // namespace

@@ -296,12 +296,33 @@ check "and says why" grep -q "position must be monotone between reversals" stder
 printf 'file = "back.csv"\n[[run]]\nid = "a"\nload_N = 1000\nload_kN = 1\n' >twice.toml
 check "a manifest refuses a key given twice" refused "twice.toml:5:1: duplicate key 'load_kN'" check friction twice.toml
 
+# --- thermal runs as rigs produce them: a heater switched off, no ambient sensor, a user's bar ---
+"$LMCAL" generate thermal -o heater --heater 4 --heater-off 7200 --duration 10800 --record-every 60 \
+  --no-ambient-columns >/dev/null
+check "a heater run gives its heat and schedule" grep -q '^heat_rate_W = 0.0$' heater/thermal.toml
+check "without ambient columns the manifest gives ambient_C" grep -q '^ambient_C = 24.0$' heater/thermal.toml
+check "and the run has no ambient column" grep -q '^time_s,tc1_C,tc2_C,tc3_C$' heater/thermal/heater.csv
+"$LMCAL" fit thermal heater/thermal.toml -o heater_fit >/dev/null
+check "a heater run fits with its given heat" grep -q '"heat_source": "given heat rate"' heater_fit/thermal.json
+check "the cooling records are fitted" awk -F, 'NR == 1 { for (i = 1; i <= NF; ++i) c[$i] = i; next }
+  $c["time_s"] > 7200 { n++ } END { exit !(n > 100) }' heater_fit/thermal_samples.csv
+printf '[[bar]]\nname = "lab bar"\narea_m2 = 4e-4\nperimeter_m = 0.08\nconductivity_W_mK = 45\ndensity_kg_m3 = 7850\nspecific_heat_J_kgK = 470\ncontact_length_mm = 50\n' >lab.toml
+sed 's/^guide = "SRN 35C"$/guide = "lab bar"/' heater/thermal.toml >heater/bar.toml
+check "a bar no catalog knows is refused at its line" refused "bar.toml:7:" check thermal heater/bar.toml
+check "check thermal --catalog finds the user's bar" "$LMCAL" check thermal heater/bar.toml --catalog lab.toml
+printf '[[bar]]\nname = "lab bar"\narea_m2 = 4e-4\nperimeter_m = 0.08\n' >thin.toml
+"$LMCAL" generate thermal -o barset --catalog lab.toml --guide "lab bar" --heater 3 --duration 3600 --record-every 60 >/dev/null
+check "generate thermal makes a user's bar, its manifest naming the catalog" grep -q '^catalog = ' barset/thermal.toml
+check "and the manifest's catalog is found again" "$LMCAL" check thermal barset/thermal.toml
+check "a bar missing its material is refused at load, naming where to add it" refused "add conductivity_W_mK to its entry there" check thermal heater/bar.toml --catalog thin.toml
+
 # The bundled set is exactly what the recorded commands make (the command lines aside).
-LMCAL="$LMCAL" bash "$SOURCE/scripts/make-bundled-data.sh" "$work/bundled" >/dev/null
-same_as_bundled() {
-  diff -r -q -I '^# Command:' "$SOURCE/measurements/cheng2017" "$work/bundled" -x README.md
+LMCAL="$LMCAL" bash "$SOURCE/scripts/make-bundled-data.sh" "$work/bundled" "$work/bundled-rig" >/dev/null
+same_as_bundled() {  # same_as_bundled SET FOLDER
+  diff -r -q -I '^# Command:' "$SOURCE/measurements/$1" "$2" -x README.md
 }
-check "bundled data set regenerates identically" same_as_bundled
+check "bundled data set regenerates identically" same_as_bundled cheng2017 "$work/bundled"
+check "the rig-shaped set regenerates identically" same_as_bundled rig "$work/bundled-rig"
 
 echo "$pass passed, $failures failed"
 exit $((failures > 0))

@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include <algorithm>
 #include <functional>
 #include <limits>
 #include <map>
@@ -91,6 +92,13 @@ void raw_friction_segmentation(Page& page, const FrictionLog& log) {
                  "inertia m·a taken off (calibration.json: options.raw_friction).");
 }
 
+// "steel bar 20x20 (a plain bar, from my_guides.toml)", "SRN 35C (guide, built-in catalog)".
+std::string guide_text(const GuideSpec& spec) {
+  const bool built_in = spec.source.empty() || spec.source == "<built-in>";
+  return fmt::format("{} ({}, {})", spec.model, spec.kind == "bar" ? "a plain bar" : "guide",
+                     built_in ? "built-in catalog" : "from " + spec.source);
+}
+
 }  // namespace
 
 void data_section(Page& page, const Calibration& c) {
@@ -112,11 +120,17 @@ void data_section(Page& page, const Calibration& c) {
     for (const auto& run : c.thermal_data->runs) rows.push_back(report_row(run.trace.report));
   page.table({"file", "rows read", "kept", "skipped", "converted", "ignored columns", "time gaps"}, rows);
   if (c.friction_log) raw_friction_segmentation(page, *c.friction_log);
-  if (c.thermal) {
+  if (c.thermal && c.thermal_data) {
     rows.clear();
-    for (const auto& run : c.thermal->runs)
-      rows.push_back({run.id, num(run.velocity_m_s), num(run.load_N), num(run.heat_rate_W), run.heat_source});
-    page.table({"thermal run", "velocity (m/s)", "load (N)", "heat rate at the start (W)", "heat from"}, rows);
+    for (const auto& run : c.thermal->runs) {
+      const auto data = std::find_if(c.thermal_data->runs.begin(), c.thermal_data->runs.end(),
+                                     [&](const ThermalRun& r) { return r.id == run.id; });
+      rows.push_back({run.id, data == c.thermal_data->runs.end() ? "" : guide_text(resolved_guide(*data)),
+                      num(run.velocity_m_s), num(run.load_N), num(run.heat_rate_W), run.heat_source});
+    }
+    page.table({"thermal run", "guide or bar (catalog)", "velocity (m/s)", "load (N)", "heat rate at the start (W)",
+                "heat from"},
+               rows);
   }
 }
 

@@ -73,7 +73,8 @@ CovarianceEstimate hac_covariance(const ScoreInputs& in, double max_bandwidth_fr
   std::size_t shortest = series.empty() ? 0 : static_cast<std::size_t>(series.front().rows());
   for (const auto& s : series) shortest = std::min(shortest, static_cast<std::size_t>(s.rows()));
   const double cap = max_bandwidth_fraction * static_cast<double>(shortest);
-  const double chosen = kBandwidthFactor * andrews_bandwidth(series);
+  double chosen = kBandwidthFactor * andrews_bandwidth(series);
+  if (!(chosen >= 0)) chosen = 0;  // non-finite scores (a fit that failed): no lags, not a NaN cast to a count
   const auto lags = static_cast<std::size_t>(std::floor(std::min(chosen, cap)));
   e.bandwidth = static_cast<double>(lags);
   // Fixed-b correction (Kiefer & Vogelsang 2005): with a bandwidth M = L + 1 that is a
