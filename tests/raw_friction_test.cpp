@@ -336,6 +336,18 @@ TEST_F(RawFriction, AManifestRefusesAConditionGivenTwiceOrNotAtAll) {
     EXPECT_EQ(e.line(), 3);  // r2's row: the manifest does not list it
     EXPECT_NE(std::string(e.what()).find("run 'r2' has no load_N"), std::string::npos) << e.what();
   }
+  write("one.csv", "run,velocity_m_s,friction_N\nr1,0.01,20\n");
+  const auto listed = write("listed.toml",
+                            "file = \"one.csv\"\n[[run]]\nid = \"r1\"\nguide = \"SRN 35C\"\nload_N = 1000\n"
+                            "preload_um = 2.5\ntemperature_C = 24\n[[run]]\nid = \"R2\"\nguide = \"SRN 35C\"\n"
+                            "load_N = 1000\npreload_um = 2.5\ntemperature_C = 24\n");
+  try {
+    load_friction_dataset(listed);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.line(), 8);  // the [[run]] of R2
+    EXPECT_NE(std::string(e.what()).find("run 'R2' is listed, but"), std::string::npos) << e.what();
+  }
   const auto bad_key = write("bad.toml", "file = \"lean.csv\"\n[[run]]\nid = \"r1\"\nload_lb = 3\n");
   try {
     load_friction_dataset(bad_key);

@@ -209,6 +209,7 @@ FrictionDataSet load_friction_dataset(const fs::path& manifest_file, const Guide
 
   std::map<std::string, FrictionRunConditions, std::less<>> conditions;  // of the runs in the common file
   std::set<std::string> ids;
+  std::vector<std::pair<std::string, const toml::table*>> in_common_file;  // runs the common file must hold
   std::vector<detail::FrictionFile> files;
   std::set<fs::path> own_files;
   if (runs) {
@@ -225,6 +226,7 @@ FrictionDataSet load_friction_dataset(const fs::path& manifest_file, const Guide
         m.fail(table.source(), fmt::format("run '{}' has no file, and the manifest no top-level file holding it", run.id));
       } else {
         conditions.emplace(run.id, run.conditions);
+        in_common_file.emplace_back(run.id, &table);
       }
     }
   }
@@ -233,6 +235,11 @@ FrictionDataSet load_friction_dataset(const fs::path& manifest_file, const Guide
   if (files.empty()) m.fail(root.source(), "the manifest names no file: give `file = \"...\"` or a file in a [[run]]");
   for (const auto& f : files) set.files.push_back(f.path);
   set.log = detail::load_friction_files(files, set.raw);
+  // A listed run without rows is a typo in an id, or the wrong file.
+  for (const auto& [id, table] : in_common_file)
+    if (std::find(set.log.run_names.begin(), set.log.run_names.end(), id) == set.log.run_names.end())
+      m.fail(table->source(), fmt::format("run '{}' is listed, but {} has no row of it (run ids are case-sensitive)", id,
+                                          common_file->first.string()));
   return set;
 }
 
