@@ -289,6 +289,14 @@ class FileLoader {
     return found;
   }
 
+  // Without a guide column, a run's guide is the manifest's (or none): looked up once per run.
+  std::uint32_t run_guide(std::uint32_t run_index, const FrictionRunConditions* given) {
+    if (run_guide_.size() <= run_index) run_guide_.resize(run_index + 1, std::nullopt);
+    auto& cached = run_guide_[run_index];
+    if (!cached) cached = guides_(given && given->guide ? std::string_view(*given->guide) : std::string_view());
+    return *cached;
+  }
+
   // A condition of the current row: its column, else the manifest's value, else `fallback`.
   double condition(Spec spec, std::optional<double> FrictionRunConditions::*field, const FrictionRunConditions* c,
                    double fallback = 0) const {
@@ -300,10 +308,8 @@ class FileLoader {
     if (!column(kRun) && !file_run_) file_run_ = runs_(file_.run);
     const std::uint32_t run_index = column(kRun) ? runs_(name_cell(reader_, *column(kRun), scratch)) : *file_run_;
     const FrictionRunConditions* given = manifest_conditions(run_index);
-    std::string_view guide_name;
-    if (column(kGuide)) guide_name = name_cell(reader_, *column(kGuide), scratch);
-    else if (given && given->guide) guide_name = *given->guide;
-    const std::uint32_t guide_index = guides_(guide_name);
+    const std::uint32_t guide_index = column(kGuide) ? guides_(name_cell(reader_, *column(kGuide), scratch))
+                                                     : run_guide(run_index, given);
     const double t = column(kTime) ? reader_.number(*column(kTime), false) : kNaN;
     const FrictionConditions<double> c{
         .load_N = condition(kLoad, &FrictionRunConditions::load_N, given),
@@ -491,6 +497,7 @@ class FileLoader {
   std::optional<std::uint32_t> file_run_;  // the manifest's run of a file without a run column
   raw::Motion motion_kind_ = raw::Motion::velocity_m_s;
   std::vector<std::optional<const FrictionRunConditions*>> run_conditions_;  // by run index, once looked up
+  std::vector<std::optional<std::uint32_t>> run_guide_;                      // by run index, without a guide column
   std::vector<LastSample> last_;                                             // by run index
   std::vector<std::size_t> raw_index_;                                       // run index -> raw_runs_
   std::vector<RawRun> raw_runs_;
