@@ -76,7 +76,9 @@ void check_thermal(const std::vector<std::string>& files, const std::string& cat
     const ThermalDataSet set = load_thermal_dataset(file, catalog ? &*catalog : nullptr);
     std::cout << fmt::format("thermal data set '{}': {} runs\n", set.name, set.runs.size());
     for (const auto& run : set.runs) {
-      std::cout << fmt::format("  run {}: {} at {} m/s, {} N\n", run.id, run.guide, run.velocity_m_s, run.load_N);
+      const GuideSpec spec = resolved_guide(run);
+      std::cout << fmt::format("  run {}: {} ({}, {}) at {} m/s, {} N\n", run.id, spec.model, spec.kind,
+                               spec.source.empty() ? "<built-in>" : spec.source, run.velocity_m_s, run.load_N);
       print_report(run.trace.report);
       print_trace(run.trace);
     }

@@ -32,7 +32,7 @@ struct GenerateOptions {
   RawFrictionRigConfig raw_rig;
   std::string raw_force_sign = "follows-motion";
   ThermalRigConfig thermal;
-  std::string catalog_file;  // thermal: the user's catalog (its guides and bars)
+  std::string catalog_file;  // the user's catalog (its guides and bars)
   std::optional<GuideCatalog> catalog;
   std::string name = "synthetic";
 };
@@ -63,6 +63,8 @@ void run_generate_friction(GenerateOptions& o, const std::vector<std::string>& a
   // The options by the names the user typed; the library re-checks everything it is given.
   require_autocorrelation("--noise-ar1", o.friction.noise_ar1);
   o.friction.seed = o.seed;
+  o.catalog = user_catalog(o.catalog_file);
+  if (o.catalog) o.friction.catalog = &*o.catalog;
   const RigEffects effects = resolve_effects(o.effects);
   const fs::path dir = o.output;
   const std::vector<std::string> comments = {
@@ -142,7 +144,10 @@ void setup_generate(CLI::App& app, const std::vector<std::string>& argv) {
   CLI::App* friction = generate->add_subcommand("friction", "A friction log (load-cell CSV) and its truth");
   add_common(*friction, *o);
   FrictionRigConfig& f = o->friction;
-  friction->add_option("--guides", f.guides, "Guide models")->delimiter(',')->capture_default_str();
+  friction->add_option("--guides", f.guides, "Guide models (of the built-in catalog or --catalog)")
+      ->delimiter(',')
+      ->capture_default_str();
+  friction->add_option("--catalog", o->catalog_file, kCatalogHelp);
   add_list(*friction, "--preload", f.preload_um, "Preload amounts, um (default 1.5,2.5,4)");
   add_list(*friction, "--load", f.load_N, "Loads, N (default 1000,2000,3000)");
   add_list(*friction, "--velocity", f.velocity_m_s, "Speeds, m/s (default 0.002 ... 0.15)");

@@ -314,6 +314,10 @@ printf '[[bar]]\nname = "lab bar"\narea_m2 = 4e-4\nperimeter_m = 0.08\n' >thin.t
 "$LMCAL" generate thermal -o barset --catalog lab.toml --guide "lab bar" --heater 3 --duration 3600 --record-every 60 >/dev/null
 check "generate thermal makes a user's bar, its manifest naming the catalog" grep -q '^catalog = ' barset/thermal.toml
 check "and the manifest's catalog is found again" "$LMCAL" check thermal barset/thermal.toml
+printf '[[guide]]\nmodel = "MY 30"\nblock_length_mm = 100\n' >myguide.toml
+"$LMCAL" generate friction --raw --catalog myguide.toml --guides "MY 30" --preload 2 --load 1000 --temperature 24 \
+  --velocity 0.01,0.05 --runs 1 -o myraw >/dev/null
+check "a raw log of the user's guide loads with its block length" "$LMCAL" check friction myraw/friction.toml
 check "a bar missing its material is refused at load, naming where to add it" refused "add conductivity_W_mK to its entry there" check thermal heater/bar.toml --catalog thin.toml
 
 # The bundled set is exactly what the recorded commands make (the command lines aside).

@@ -348,6 +348,18 @@ TEST_F(RawFriction, AManifestRefusesAConditionGivenTwiceOrNotAtAll) {
     EXPECT_EQ(e.line(), 8);  // the [[run]] of R2
     EXPECT_NE(std::string(e.what()).find("run 'R2' is listed, but"), std::string::npos) << e.what();
   }
+  const auto unknown = write("unknown.toml",
+                             "file = \"one.csv\"\n[[run]]\nid = \"r1\"\nguide = \"MY 30\"\nload_N = 1000\n"
+                             "preload_um = 2.5\ntemperature_C = 24\n");
+  try {
+    load_friction_dataset(unknown);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("run 'r1' has no block_length_mm"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("unknown model 'MY 30'"), std::string::npos) << e.what();
+  }
+  std::ofstream(dir_ / "unknown.toml", std::ios::app) << "block_length_mm = 100\n";  // then the guide is a name
+  EXPECT_EQ(load_friction_dataset(unknown).log.guide_names.at(0), "MY 30");
   const auto bad_key = write("bad.toml", "file = \"lean.csv\"\n[[run]]\nid = \"r1\"\nload_lb = 3\n");
   try {
     load_friction_dataset(bad_key);

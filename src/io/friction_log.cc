@@ -279,9 +279,11 @@ class FileLoader {
     if (const auto it = file_.runs.find(name); it != file_.runs.end()) found = &it->second;
     for (const ConditionKey& key : kConditionKeys) {
       if (!key.required || column(key.spec) || (found && (found->*key.field))) continue;
-      const std::string what =
+      std::string what =
           fmt::format("run '{}' has no {}: add {} to its [[run]] in {}, or a '{}' column to this file", name,
                       header_of(key.spec), header_of(key.spec), file_.manifest, header_of(key.spec));
+      if (key.spec == kBlockLength && found && !found->block_length_note.empty())
+        what += fmt::format(" ({})", found->block_length_note);
       if (column(kRun)) reader_.fail(column(kRun)->cell, what);
       reader_.fail_at(reader_.line(), 0, what);
     }

@@ -94,7 +94,7 @@ RawFrictionRigOutput generate_raw_friction_logs(const FrictionRigConfig& config,
       for (double pc : config.preload_um)
         for (double P : config.load_N)
           for (double T : config.temperature_C) {
-            const GuideSpec& spec = builtin_catalog().find(model);
+            const GuideSpec& spec = find_guide(model, config.catalog);
             const std::string name = fmt::format("run{:02d}", ++r);
             Rng rng(rig::derive_seed(config.seed, static_cast<std::uint64_t>(r - 1)));
             const double offset_N = config.run_offset_N * rng.normal();
@@ -135,6 +135,8 @@ RawFrictionRigOutput generate_raw_friction_logs(const FrictionRigConfig& config,
                 "\n[[run]]\nid = {}\nfile = {}\nguide = {}\nload_N = {}\npreload_um = {}\ntemperature_C = {}\n"
                 "viscosity40_mm2_s = {}\n",
                 toml_quoted(name), toml_quoted(file), toml_quoted(spec.model), P, pc, T, config.constants.nu_ref_mm2_s);
+            // A user's guide: its block length written out, as the built-in catalog cannot supply it.
+            if (config.catalog) manifest += fmt::format("block_length_mm = {}\n", c.block_length_mm);
             nlohmann::json segments = nlohmann::json::array();
             for (const CruiseSegment& s : cruises)
               segments.push_back({{"first_sample", s.first_sample}, {"last_sample", s.last_sample},

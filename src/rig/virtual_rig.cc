@@ -186,7 +186,7 @@ FrictionRigOutput generate_friction_log(const FrictionRigConfig& config, const R
     const std::size_t first = config.one_setup_per_run ? static_cast<std::size_t>(r) % setups.size() : 0;
     for (std::size_t k = first; k < first + per_run; ++k) {
       const Setup& setup = setups[k];
-      const GuideSpec& spec = builtin_catalog().find(setup.model);
+      const GuideSpec& spec = find_guide(setup.model, config.catalog);
       const double Lb = require(spec, &GuideSpec::block_length_mm, "block_length_mm");
       const std::uint32_t guide_index = index_of(log.guide_names, spec.model);
       for (double V : config.velocity_m_s)

@@ -141,6 +141,7 @@ struct FrictionRunConditions {
   std::optional<std::string> guide;
   std::optional<double> load_N, preload_um, block_length_mm, temperature_C, viscosity40_mm2_s;
   bool block_length_from_catalog = false;  // the guide's catalog value: a column may still give it
+  std::string block_length_note;           // why the guide's catalog could not give it ("" = it did, or no guide)
 };
 
 // A friction manifest (TOML): the files of a data set and their runs' fixed conditions.

@@ -121,6 +121,7 @@ struct FrictionRigConfig {
   double load_cell_range_N = 98.0665;   // 10 kgf: conditions above 95 % of it are skipped
   double seconds_per_sample = 2.0;
   std::uint64_t seed = 1;
+  const GuideCatalog* catalog = nullptr;  // a user catalog searched before the built-in one
 };
 
 struct ThermalRigConfig {
