@@ -34,6 +34,7 @@ struct ThermalSweepOptions {
   std::vector<double> contact_length_mm;  // Lb1 for the heat input; empty: the catalog's
   std::vector<double> stroke_m{0.2};
   double heat_rate_W = NAN;               // set: skip the friction law
+  double stop_s = NAN;                    // set: the block stops (no heat) from then on
   double friction_temperature_C = NAN;    // unset: the initial temperature
   double alpha = 0.6;
   double h_W_m2K = 5.3;
@@ -132,6 +133,8 @@ std::vector<Case> enumerate_cases(const ThermalSweepOptions& o, double initial_C
                 if (law_needed) validate(c.conditions);
                 if (std::isnan(c.heat_rate_W)) c.heat_rate_W = heat_rate_with_effects_W(law.constants, law.effects, c.conditions);
                 c.params.heat_rate_W = c.heat_rate_W;
+                if (!std::isnan(o.stop_s))
+                  c.params.heat_schedule = HeatRateSchedule<double>::steps({0.0, o.stop_s}, {c.heat_rate_W, 0.0});
                 c.geometry = {.rail_length_m = o.rail_length_m, .area_m2 = area, .perimeter_m = perimeter,
                               .stroke_m = L1, .contact_length_m = Lb1 * 1e-3, .velocity_m_s = V};
                 cases.push_back(c);
@@ -227,6 +230,8 @@ void run_simulate_thermal(const ThermalSweepOptions& o, const std::vector<std::s
   require_positive("--duration", o.duration_s);
   require_positive("--output-every", o.output_every_s);
   if (!std::isnan(o.heat_rate_W)) require_non_negative("--heat-rate", o.heat_rate_W);
+  if (!std::isnan(o.stop_s) && !(o.stop_s > 0 && o.stop_s < o.duration_s))
+    throw InvalidParameter("--stop", o.stop_s, "a time within the run (0 < stop < --duration)");
   const std::optional<LoadedModel> model = LoadedModel::read(o.model, "thermal");
   const RailModel rail = rail_model(o, model ? &*model : nullptr);
   const FrictionLaw law = o.friction.law(model ? &*model : nullptr);
@@ -309,7 +314,10 @@ void run_simulate_thermal(const ThermalSweepOptions& o, const std::vector<std::s
     std::cout << fmt::format("{:>4}  {:<8} {:>7.3f} {:>6.0f} {:>7.1f} {:>6.3f} {:>7.3f}  {:>8.2f}  {}\n", k, c.guide,
                              c.velocity_m_s, c.load_N, c.block_length_mm, c.stroke_m, c.heat_rate_W,
                              peak - ambient.at(o.duration_s), at_end);
-    if (sol.heat_rate_W.back() != sol.heat_rate_W.front())
+    if (!std::isnan(o.stop_s))
+      std::cout << fmt::format("      the block stops at {:g} s: no heat from then on; the steady state is the running block's\n",
+                               o.stop_s);
+    else if (sol.heat_rate_W.back() != sol.heat_rate_W.front())
       std::cout << fmt::format("      Q_f follows the rail: {:.3f} W at the end of the run, {:.3f} W at steady state\n",
                                sol.heat_rate_W.back(), steady.heat_rate_W);
     if (!rail.mechanisms.empty()) steady_changes.push_back({{"case", k}, {"last_change_K", steady.last_change_K}});
@@ -370,6 +378,9 @@ void setup_simulate_thermal(CLI::App& parent, const std::vector<std::string>& ar
   add_list(*app, "--contact-length", o->contact_length_mm, "Contact lengths Lb1 (heat input), mm (default: the catalog's)");
   add_list(*app, "--stroke", o->stroke_m, "Strokes L1, m (default 0.2)");
   app->add_option("--heat-rate", o->heat_rate_W, "Frictional heat Q_f, W (default: from the friction law)");
+  app->add_option("--stop", o->stop_s,
+                  "The block stops at this time, s: no heat from then on, the rail cools (the steady state "
+                  "stays the running block's)");
   app->add_option("--friction-temperature", o->friction_temperature_C,
                   "Temperature at which the friction law gives Q_f, C (default: the initial temperature)");
   o->rail_options = {app->add_option("--alpha", o->alpha, "Heat partition coefficient alpha")->capture_default_str(),

@@ -52,11 +52,17 @@ check "time csv header" grep -q '^case,guide,velocity_m_s,load_N,preload_um,bloc
 check "rail warms at the centre" awk -F, 'NR > 1 && $11 == 0 {if (first == "") first = $12; last = $12} END { exit !(last > first + 1) }' t_time.csv
 check "steady state hotter than after 2 h" awk -F, '$10 == "end_of_run" && $11 == 0 {e = $12} $10 == "steady_state" && $11 == 0 {s = $12} END { exit !(s > e) }' t_profile.csv
 
+"$LMCAL" simulate thermal -o stop --velocity 0.11 --duration 21600 --stop 14400 --output-every 3600 >/dev/null
+check "a block that stops: the rail warms, then cools" awk -F, 'NR > 1 && $11 == 0 { T[$10] = $12 }
+  END { exit !(T[14400] > T[10800] && T[18000] < T[14400] - 3 && T[21600] < T[18000]) }' stop_time.csv
+check "and no heat after the stop" awk -F, 'NR > 1 && $10 > 14400 && $9 != 0 { bad = 1 } END { exit bad }' stop_time.csv
+
 # --- refusals ----------------------------------------------------------------------------------
 check "alpha outside [0, 1]" refused "--alpha = 1.5" simulate thermal -o out/t --alpha 1.5
 check "NaN alpha" refused "--alpha = nan" simulate thermal -o out/t --alpha nan
 check "zero segments" refused "--segments = 0" simulate thermal -o out/t --segments 0
 check "negative step" refused "--dt = -1" simulate thermal -o out/t --dt -1
+check "a stop after the run's end" refused "--stop = 99999" simulate thermal -o out/t --stop 99999
 check "negative rail length" refused "--rail-length = -0.5" simulate thermal -o out/t --rail-length -0.5
 check "rail shorter than stroke + block" refused "rail_length_m = 0.25" simulate thermal -o out/t --rail-length 0.25
 check "negative load" refused "load_N = -10" simulate friction -o out/f.csv --load -10
