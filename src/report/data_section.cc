@@ -65,13 +65,13 @@ void raw_friction_segmentation(Page& page, const FrictionLog& log) {
   const RawTrace& trace = log.raw_traces.front();
   const RunSegmentation& seg = log.segmentation.front();
   Plot velocity{.id = "raw-trace-velocity",
-                .title = fmt::format("Run {}: velocity (filtered) and the plateaus kept", trace.run),
+                .title = fmt::format("Run {}: velocity, plateaus kept", trace.run),
                 .x_label = "time (s)",
                 .y_label = "velocity (m/s)"};
   velocity.series.push_back({.label = "velocity", .x = trace.time_s, .y = trace.velocity_m_s});
   velocity.series.push_back(plateau_segments(seg.plateaus, [](const Plateau& p) { return p.velocity_m_s; }));
   Plot force{.id = "raw-trace-force",
-             .title = fmt::format("Run {}: load-cell force as logged, and its mean on each kept plateau", trace.run),
+             .title = fmt::format("Run {}: force as logged, plateau means", trace.run),
              .x_label = "time (s)",
              .y_label = "force (N)"};
   force.series.push_back({.label = "force", .x = trace.time_s, .y = trace.force_N});
