@@ -6,6 +6,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <deque>
+#include <memory>
+#include <mutex>
+#include <optional>
 #include <string>
 
 #include "lmcal/error.hpp"
@@ -345,15 +349,58 @@ SourceModel static_shape(SourceModel model) {
   return model == SourceModel::moving ? SourceModel::averaged : model;
 }
 
+// The moving block's sweep over each step of a run, in step order. It depends on the motion,
+// the grid and the step times only, so the many simulations of one run in a fit share it: a
+// small process-wide cache of the last few runs' sweeps (the same numbers as computing afresh).
+struct StepSweep {
+  double t0 = 0, t1 = 0;
+  SweepEnergy energy;
+};
+using StepSweeps = std::vector<StepSweep>;
+
+std::shared_ptr<const StepSweeps> moving_sweeps(const BlockMotion& motion, const std::vector<double>& faces,
+                                                const std::vector<std::pair<double, double>>& steps) {
+  struct Entry {
+    BlockMotion motion;
+    std::vector<double> faces;
+    std::vector<std::pair<double, double>> steps;
+    std::shared_ptr<const StepSweeps> sweeps;
+  };
+  constexpr std::size_t kEntries = 16;  // more runs than a data set holds
+  static std::mutex mutex;
+  static std::deque<Entry> cache;
+  const auto same = [&](const Entry& e) {
+    return e.motion.stroke_m == motion.stroke_m && e.motion.contact_length_m == motion.contact_length_m &&
+           e.motion.velocity_m_s == motion.velocity_m_s && e.faces == faces && e.steps == steps;
+  };
+  {
+    const std::lock_guard lock(mutex);
+    if (const auto it = std::find_if(cache.begin(), cache.end(), same); it != cache.end()) return it->sweeps;
+  }
+  auto sweeps = std::make_shared<StepSweeps>(steps.size());
+  for (std::size_t k = 0; k < steps.size(); ++k) {
+    (*sweeps)[k].t0 = steps[k].first;
+    (*sweeps)[k].t1 = steps[k].second;
+    moving_source_energy(motion, faces, steps[k].first, steps[k].second, (*sweeps)[k].energy);
+  }
+  const std::lock_guard lock(mutex);
+  if (cache.size() == kEntries) cache.pop_front();
+  cache.push_back({motion, faces, steps, sweeps});
+  return sweeps;
+}
+
 // Heat input per step: P times the static weights, or the moving block's exact sweep.
 // P may change from step to step (two-way coupling).
 template <typename T>
 class SourceTerm {
  public:
-  SourceTerm(SourceModel model, const BlockMotion& motion, const Grid& grid, const T& power)
-      : model_(model), motion_(motion), faces_(grid.faces), power_(power),
-        weights_(static_source_weights(static_shape(model), motion, grid.faces)) {
+  // `sweeps`: the moving block's sweep of every step, in the order add() is called (moving only).
+  SourceTerm(SourceModel model, const BlockMotion& motion, const Grid& grid, const T& power,
+             std::shared_ptr<const StepSweeps> sweeps = nullptr)
+      : model_(model), power_(power), weights_(static_source_weights(static_shape(model), motion, grid.faces)),
+        sweeps_(std::move(sweeps)) {
     for (double w : weights_) weight_total_ += w;
+    LMCAL_ASSERT(model != SourceModel::moving || sweeps_, "the moving source needs its sweeps");
   }
 
   void set_power(const T& power) { power_ = power; }
@@ -371,11 +418,13 @@ class SourceTerm {
   T add(double t0, double t1, std::vector<T>& rhs) {
     const double dt = t1 - t0;
     if (model_ == SourceModel::moving) {
-      moving_source_energy(motion_, faces_, t0, t1, sweep_);
+      LMCAL_ASSERT(next_sweep_ < sweeps_->size(), "more steps than sweeps");
+      const StepSweep& sweep = (*sweeps_)[next_sweep_++];
+      LMCAL_ASSERT(sweep.t0 == t0 && sweep.t1 == t1, "the sweeps follow the steps");
       double total_s = 0;
-      for (std::size_t k = 0; k < sweep_.energy_s.size(); ++k) {
-        rhs[sweep_.first + k] += power_ * (sweep_.energy_s[k] / dt);
-        total_s += sweep_.energy_s[k];
+      for (std::size_t k = 0; k < sweep.energy.energy_s.size(); ++k) {
+        rhs[sweep.energy.first + k] += power_ * (sweep.energy.energy_s[k] / dt);
+        total_s += sweep.energy.energy_s[k];
       }
       return power_ * total_s;
     }
@@ -385,12 +434,11 @@ class SourceTerm {
 
  private:
   SourceModel model_;
-  BlockMotion motion_;
-  const std::vector<double>& faces_;
   T power_;
   std::vector<double> weights_;  // share of P per volume (the averaged shape for `moving`)
   double weight_total_ = 0;
-  SweepEnergy sweep_;
+  std::shared_ptr<const StepSweeps> sweeps_;
+  std::size_t next_sweep_ = 0;
 };
 
 // One θ-scheme step of fixed length, factorised once:
@@ -480,7 +528,33 @@ RailSolution<T> simulate_rail(const RailGeometry& geometry, const RailNumerics& 
   validate(schedule);
   if (!schedule.empty() && heat_rate)
     throw InvalidParameter("heat_schedule", "a heat schedule cannot also follow the rail temperature (coupling)");
-  SourceTerm<T> source(numerics.source, prep.motion, grid, params.heat_partition * params.heat_rate_W);
+  // The steps, in order: (start, the stepper), the last ending exactly at the duration.
+  struct Step {
+    double t0, t_next;
+    const ThetaStepper<T>* stepper;
+    bool last;
+  };
+  std::vector<Step> plan;
+  {
+    double t = 0.0;
+    for (int step = 0; step < steps; ++step) {
+      const bool substeps = crank_nicolson && step == 0;
+      const ThetaStepper<T>& s = substeps ? startup : stepper;
+      for (int k = 0; k < (substeps ? kStartupSubsteps : 1); ++k) {
+        const bool last = step + 1 == steps && (!substeps || k + 1 == kStartupSubsteps);
+        const double t_next = last ? outputs.duration_s : t + s.dt();
+        plan.push_back({t, t_next, &s, last});
+        t = t_next;
+      }
+    }
+  }
+  std::shared_ptr<const StepSweeps> sweeps;
+  if (numerics.source == SourceModel::moving) {
+    std::vector<std::pair<double, double>> intervals;
+    for (const Step& p : plan) intervals.emplace_back(p.t0, p.t0 + p.stepper->dt());  // as advance() takes them
+    sweeps = moving_sweeps(prep.motion, grid.faces, intervals);
+  }
+  SourceTerm<T> source(numerics.source, prep.motion, grid, params.heat_partition * params.heat_rate_W, sweeps);
   // Q_f for the step starting from `field`: constant, or from the coupling model.
   auto heat_rate_for = [&](const std::vector<T>& field) {
     return heat_rate ? heat_rate(source.source_temperature(field)) : params.heat_rate_W;
@@ -500,6 +574,7 @@ RailSolution<T> simulate_rail(const RailGeometry& geometry, const RailNumerics& 
 
   std::vector<T> current(n, params.initial_temperature_C), next(n);
   std::size_t next_output = 0, next_profile = 0;
+  std::optional<T> carried_source_temperature;  // of the last interval's end, when computed
   // Records the outputs that fall in (t_before, t_after], interpolating linearly in time.
   auto emit = [&](double t_before, double t_after, const std::vector<T>& before, const std::vector<T>& after,
                   const T& q_before, const T& q_after, bool last) {
@@ -507,11 +582,19 @@ RailSolution<T> simulate_rail(const RailGeometry& geometry, const RailNumerics& 
     auto share = [&](double t) {
       return t_after > t_before ? std::clamp((t - t_before) / (t_after - t_before), 0.0, 1.0) : 1.0;
     };
+    // The temperature under the block at both ends, once per interval with outputs (the start's
+    // carried over from the previous interval when it was computed there).
+    const bool any = next_output < outputs.output_times_s.size() && within(outputs.output_times_s[next_output]);
+    std::optional<T> ts_before, ts_after;
+    if (any) {
+      ts_before = carried_source_temperature ? *carried_source_temperature : source.source_temperature(before);
+      ts_after = source.source_temperature(after);
+    }
+    carried_source_temperature = ts_after;
     for (; next_output < outputs.output_times_s.size() && within(outputs.output_times_s[next_output]); ++next_output) {
       const double s = share(outputs.output_times_s[next_output]);
       record_sensors(prep.probes, before, after, s, sol.sensor_temperature_C);
-      const T ts_before = source.source_temperature(before), ts_after = source.source_temperature(after);
-      sol.source_temperature_C.push_back(ts_before + s * (ts_after - ts_before));
+      sol.source_temperature_C.push_back(*ts_before + s * (*ts_after - *ts_before));
       sol.heat_rate_W.push_back(schedule.empty() ? q_before + s * (q_after - q_before)
                                                  : schedule.at(outputs.output_times_s[next_output]));
     }
@@ -528,21 +611,13 @@ RailSolution<T> simulate_rail(const RailGeometry& geometry, const RailNumerics& 
 
   RailEnergy<T> energy;
   RailEnergy<T>* tally = outputs.energy_balance ? &energy : nullptr;
-  double t = 0.0;
-  for (int step = 0; step < steps; ++step) {
-    const bool substeps = crank_nicolson && step == 0;
-    const ThetaStepper<T>& s = substeps ? startup : stepper;
-    for (int k = 0; k < (substeps ? kStartupSubsteps : 1); ++k) {
-      source.set_power(params.heat_partition * mean_heat_rate(t, s.dt(), q));
-      s.advance(current, next, t, ambient, source, tally);
-      const bool last = step + 1 == steps && (!substeps || k + 1 == kStartupSubsteps);
-      const double t_next = last ? outputs.duration_s : t + s.dt();
-      const T q_next = heat_rate ? heat_rate_for(next) : q;
-      emit(t, t_next, current, next, q, q_next, last);
-      q = q_next;
-      std::swap(current, next);
-      t = t_next;
-    }
+  for (const Step& p : plan) {
+    source.set_power(params.heat_partition * mean_heat_rate(p.t0, p.stepper->dt(), q));
+    p.stepper->advance(current, next, p.t0, ambient, source, tally);
+    const T q_next = heat_rate ? heat_rate_for(next) : q;
+    emit(p.t0, p.t_next, current, next, q, q_next, p.last);
+    q = q_next;
+    std::swap(current, next);
   }
 
   if (tally) {
