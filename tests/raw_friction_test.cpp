@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <sstream>
 
 #include "io/raw_friction.hpp"
 #include "lmcal/error.hpp"
@@ -82,6 +83,29 @@ TEST_F(RawFriction, PlateausMatchTheRigsConstantVelocitySegments) {
   EXPECT_GT(seg.dropped_stationary, 0u);  // the dwells
   EXPECT_EQ(set.log.size(), seg.kept);
   EXPECT_TRUE(set.log.reports.at(0).warnings.empty());
+}
+
+// An encoder that jitters by a count (seen at rest) is no position going back: the same
+// plateaus as without the jitter.
+TEST_F(RawFriction, EncoderJitterOfACountIsNotAStepBack) {
+  RawFrictionRigConfig rig = quiet_rig();
+  const RawFrictionRigOutput made = generate_raw_friction_logs(one_setup(), rig, {});
+  std::string jittered;
+  std::istringstream in(made.run_files.at(0).second);
+  int k = 0;
+  for (std::string line; std::getline(in, line);) {
+    if (!line.empty() && line[0] != '#' && line[0] != 't') {  // a data row: time, position_mm, force
+      const auto a = line.find(','), b = line.find(',', a + 1);
+      const double x_mm = std::stod(line.substr(a + 1, b - a - 1)) + 0.001 * ((k++ % 3) - 1);  // -1, 0, +1 µm
+      line = line.substr(0, a + 1) + fmt::format("{:.3f}", x_mm) + line.substr(b);
+    }
+    jittered += line + "\n";
+  }
+  const FrictionDataSet clean = load_friction_dataset(write_set(made));
+  write(made.run_files.at(0).first, jittered);
+  const FrictionDataSet noisy = load_friction_dataset(dir_ / "friction.toml");
+  ASSERT_EQ(noisy.log.segmentation.at(0).plateaus.size(), clean.log.segmentation.at(0).plateaus.size());
+  EXPECT_NEAR(static_cast<double>(noisy.log.size()), static_cast<double>(clean.log.size()), 0.02 * clean.log.size());
 }
 
 // The kept samples' friction, averaged per plateau, is the law at the plateau's speed in both

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "lmcal/error.hpp"
 
@@ -173,18 +174,28 @@ void group(const RunSamples& run, Motion motion, const RawFrictionOptions& o, Se
 }
 
 // Between reversals the position must move one way: within every stretch of samples moving
-// in one sense (not at rest), a step back means the velocity cannot be derived.
+// in one sense (not at rest), a step back means the velocity cannot be derived. An encoder's
+// jitter is no such step: where the block rests the encoder shows it (the smallest step seen
+// at rest is a count), and steps back of up to two counts are allowed while it moves.
 void check_monotone(const RunSamples& run, const Segmented& s) {
+  double count_m = 0;
+  for (std::size_t j = 1; j < run.motion.size(); ++j) {
+    if (s.fate[j] != Fate::stationary || s.fate[j - 1] != Fate::stationary) continue;
+    const double step = std::abs(run.motion[j] - run.motion[j - 1]);
+    if (step > 0 && (count_m == 0 || step < count_m)) count_m = step;
+  }
+  const double jitter_m = 2.5 * count_m;  // two counts, and the rounding of the logged numbers
   for (std::size_t j = 1; j < s.fate.size(); ++j) {
     if (s.fate[j] == Fate::stationary || s.fate[j - 1] == Fate::stationary) continue;
     const double sense = sign_of(s.velocity_m_s[j]);
     if (sense != sign_of(s.velocity_m_s[j - 1])) continue;  // the reversal itself
-    if (sense * (run.motion[j] - run.motion[j - 1]) < 0) {
+    if (sense * (run.motion[j] - run.motion[j - 1]) < -jitter_m) {
       throw SampleError(j, fmt::format("the position goes back ({:.6g} m after {:.6g} m, at {:.6g} s) while the block "
-                                       "moves {}: position must be monotone between reversals, or the velocity cannot "
-                                       "be derived (a noisy or wrapped encoder? give a velocity column instead)",
+                                       "moves {}, by more than the encoder's jitter at rest ({:.3g} m): position must be "
+                                       "monotone between reversals, or the velocity cannot be derived (a wrapped "
+                                       "encoder, a glitch? give a velocity column instead)",
                                        run.motion[j], run.motion[j - 1], run.time_s[j],
-                                       sense > 0 ? "towards +x" : "towards -x"));
+                                       sense > 0 ? "towards +x" : "towards -x", count_m));
     }
   }
 }
