@@ -108,6 +108,32 @@ TEST_F(RawFriction, EncoderJitterOfACountIsNotAStepBack) {
   EXPECT_NEAR(static_cast<double>(noisy.log.size()), static_cast<double>(clean.log.size()), 0.02 * clean.log.size());
 }
 
+// A drive's velocity feedback is noisy (±1 % here): filtered before the classification, it
+// gives the generator's plateaus, at the plateau speed to 0.1 %.
+TEST_F(RawFriction, ANoisyVelocityColumnGivesTheSamePlateaus) {
+  RawFrictionRigConfig rig = quiet_rig();
+  rig.log_velocity = true;
+  const RawFrictionRigOutput made = generate_raw_friction_logs(one_setup(), rig, {});
+  std::string noisy_text;
+  std::istringstream in(made.run_files.at(0).second);
+  int k = 0;
+  for (std::string line; std::getline(in, line);) {
+    if (!line.empty() && line[0] != '#' && line[0] != 't') {  // time, velocity_m_s, force
+      const auto a = line.find(','), b = line.find(',', a + 1);
+      const double v = std::stod(line.substr(a + 1, b - a - 1)) * (1 + 0.005 * ((k++ % 5) - 2));  // up to ±1 %
+      line = line.substr(0, a + 1) + fmt::format("{:.7g}", v) + line.substr(b);
+    }
+    noisy_text += line + "\n";
+  }
+  write(made.run_files.at(0).first, noisy_text);
+  write("friction.toml", made.manifest_toml);
+  const FrictionDataSet noisy = load_friction_dataset(dir_ / "friction.toml");
+  const std::vector<Plateau>& plateaus = noisy.log.segmentation.at(0).plateaus;
+  ASSERT_EQ(plateaus.size(), made.cruises.at(0).size());
+  for (std::size_t i = 0; i < plateaus.size(); ++i)
+    EXPECT_NEAR(plateaus[i].velocity_m_s, made.cruises[0][i].velocity_m_s, 1e-3 * std::abs(made.cruises[0][i].velocity_m_s));
+}
+
 // The kept samples' friction, averaged per plateau, is the law at the plateau's speed in both
 // directions, whatever the sign convention of the force, once the loader is told it.
 TEST_F(RawFriction, FrictionIsTheLawOnEveryPlateauUnderEachSignConvention) {

@@ -62,8 +62,10 @@ std::vector<double> over_windows(std::size_t n, std::size_t window, F f) {
 
 }  // namespace
 
-std::vector<double> local_slope(const std::vector<double>& t, const std::vector<double>& y, std::size_t window) {
-  return over_windows(t.size(), window, [&](std::size_t i, std::size_t lo, std::size_t hi) {
+LocalLine local_line(const std::vector<double>& t, const std::vector<double>& y, std::size_t window) {
+  LocalLine line;
+  line.value.resize(t.size());
+  line.slope = over_windows(t.size(), window, [&](std::size_t i, std::size_t lo, std::size_t hi) {
     // Offsets from sample i, for round-off (times may be epoch seconds); one pass of sums.
     double st = 0, sy = 0, stt = 0, sty = 0;
     for (std::size_t j = lo; j < hi; ++j) {
@@ -75,8 +77,15 @@ std::vector<double> local_slope(const std::vector<double>& t, const std::vector<
     }
     const double count = static_cast<double>(hi - lo);
     const double var = stt - st * st / count;
-    return var > 0 ? (sty - st * sy / count) / var : 0.0;
+    const double slope = var > 0 ? (sty - st * sy / count) / var : 0.0;
+    line.value[i] = y[i] + sy / count - slope * st / count;  // the line at t_i
+    return slope;
   });
+  return line;
+}
+
+std::vector<double> local_slope(const std::vector<double>& t, const std::vector<double>& y, std::size_t window) {
+  return local_line(t, y, window).slope;
 }
 
 std::vector<double> window_difference(const std::vector<double>& t, const std::vector<double>& y, std::size_t window) {
@@ -216,12 +225,16 @@ double friction_N(const RunSamples& run, const Segmented& s, const RawFrictionOp
 
 Segmented segment(const RunSamples& run, Motion motion, const RawFrictionOptions& o) {
   Segmented s;
+  // The velocity as the classification sees it: filtered over the window either way (a drive's
+  // velocity feedback is noisy too); a plateau's own velocity is the unfiltered one's mean.
   if (motion == Motion::position_m) {
     s.velocity_m_s = local_slope(run.time_s, run.motion, o.velocity_window);
+    s.acceleration_m_s2 = window_difference(run.time_s, s.velocity_m_s, o.velocity_window);
   } else {
-    s.velocity_m_s = run.motion;
+    LocalLine line = local_line(run.time_s, run.motion, o.velocity_window);
+    s.velocity_m_s = std::move(line.value);
+    s.acceleration_m_s2 = std::move(line.slope);
   }
-  s.acceleration_m_s2 = window_difference(run.time_s, s.velocity_m_s, o.velocity_window);
   // Twice: the samples off their stretch's speed are transients, with a settling time after.
   classify(run, o, std::vector<bool>(run.time_s.size(), false), s);
   classify(run, o, off_speed(o, s), s);

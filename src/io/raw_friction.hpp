@@ -28,8 +28,8 @@ struct Segmented {
   std::vector<Fate> fate;                     // per sample
   std::vector<std::uint32_t> plateau;         // per sample: index into plateaus (kept samples only)
   std::vector<Plateau> plateaus;              // kept plateaus, in time order
-  std::vector<double> velocity_m_s;           // per sample: derived (or as given), signed
-  std::vector<double> acceleration_m_s2;      // per sample: window difference of the velocity
+  std::vector<double> velocity_m_s;           // per sample, signed: derived, or the given one filtered (local line)
+  std::vector<double> acceleration_m_s2;      // per sample: the derivative of the filtered velocity
 };
 
 // A sample that makes the run unusable: its index in RunSamples and what is wrong.
@@ -38,8 +38,14 @@ struct SampleError : std::runtime_error {
   std::size_t sample;
 };
 
-// The least-squares slope of y over t in a centred window of `window` samples (shorter at the
-// ends), at every sample: the filtered derivative.
+// The least-squares line through y over t in a centred window of `window` samples (shorter at
+// the ends), at every sample: its value there (the filtered y) and its slope (the filtered
+// derivative); unbiased on a linear trend, also in the shorter windows at the ends.
+struct LocalLine {
+  std::vector<double> value, slope;
+};
+LocalLine local_line(const std::vector<double>& t, const std::vector<double>& y, std::size_t window);
+// local_line's slope alone.
 std::vector<double> local_slope(const std::vector<double>& t, const std::vector<double>& y, std::size_t window);
 
 // The difference quotient of y across a centred window of `window` samples (shorter at the
