@@ -14,6 +14,7 @@
 #include "lmcal/io/friction_log.hpp"
 #include "lmcal/models/friction_effects.hpp"
 #include "lmcal/rig/virtual_rig.hpp"
+#include "support/refusal.hpp"
 #include "support/temp_folder.hpp"
 
 namespace lmcal {
@@ -85,22 +86,32 @@ TEST_F(RawFriction, PlateausMatchTheRigsConstantVelocitySegments) {
   EXPECT_TRUE(set.log.reports.at(0).warnings.empty());
 }
 
+// A raw run's CSV text with its motion column (the second) rewritten: `cell(k, value)` gives
+// the k-th data row's new cell.
+template <typename Cell>
+std::string with_motion(const std::string& csv, Cell cell) {
+  std::string out;
+  std::istringstream in(csv);
+  int k = 0;
+  for (std::string line; std::getline(in, line);) {
+    if (!line.empty() && line[0] != '#' && line[0] != 't') {  // a data row (not a comment or the header)
+      const auto a = line.find(','), b = line.find(',', a + 1);
+      line = line.substr(0, a + 1) + cell(k++, std::stod(line.substr(a + 1, b - a - 1))) + line.substr(b);
+    }
+    out += line + "\n";
+  }
+  return out;
+}
+
 // An encoder that jitters by a count (seen at rest) is no position going back: the same
 // plateaus as without the jitter.
 TEST_F(RawFriction, EncoderJitterOfACountIsNotAStepBack) {
   RawFrictionRigConfig rig = quiet_rig();
   const RawFrictionRigOutput made = generate_raw_friction_logs(one_setup(), rig, {});
-  std::string jittered;
-  std::istringstream in(made.run_files.at(0).second);
-  int k = 0;
-  for (std::string line; std::getline(in, line);) {
-    if (!line.empty() && line[0] != '#' && line[0] != 't') {  // a data row: time, position_mm, force
-      const auto a = line.find(','), b = line.find(',', a + 1);
-      const double x_mm = std::stod(line.substr(a + 1, b - a - 1)) + 0.001 * ((k++ % 3) - 1);  // -1, 0, +1 µm
-      line = line.substr(0, a + 1) + fmt::format("{:.3f}", x_mm) + line.substr(b);
-    }
-    jittered += line + "\n";
-  }
+  // -1, 0, +1 µm in turn
+  const std::string jittered = with_motion(made.run_files.at(0).second, [](int k, double x_mm) {
+    return fmt::format("{:.3f}", x_mm + 0.001 * ((k % 3) - 1));
+  });
   const FrictionDataSet clean = load_friction_dataset(write_set(made));
   write(made.run_files.at(0).first, jittered);
   const FrictionDataSet noisy = load_friction_dataset(dir_ / "friction.toml");
@@ -114,17 +125,10 @@ TEST_F(RawFriction, ANoisyVelocityColumnGivesTheSamePlateaus) {
   RawFrictionRigConfig rig = quiet_rig();
   rig.log_velocity = true;
   const RawFrictionRigOutput made = generate_raw_friction_logs(one_setup(), rig, {});
-  std::string noisy_text;
-  std::istringstream in(made.run_files.at(0).second);
-  int k = 0;
-  for (std::string line; std::getline(in, line);) {
-    if (!line.empty() && line[0] != '#' && line[0] != 't') {  // time, velocity_m_s, force
-      const auto a = line.find(','), b = line.find(',', a + 1);
-      const double v = std::stod(line.substr(a + 1, b - a - 1)) * (1 + 0.005 * ((k++ % 5) - 2));  // up to ±1 %
-      line = line.substr(0, a + 1) + fmt::format("{:.7g}", v) + line.substr(b);
-    }
-    noisy_text += line + "\n";
-  }
+  // up to ±1 %
+  const std::string noisy_text = with_motion(made.run_files.at(0).second, [](int k, double v) {
+    return fmt::format("{:.7g}", v * (1 + 0.005 * ((k % 5) - 2)));
+  });
   write(made.run_files.at(0).first, noisy_text);
   write("friction.toml", made.manifest_toml);
   const FrictionDataSet noisy = load_friction_dataset(dir_ / "friction.toml");
@@ -242,12 +246,10 @@ TEST_F(RawFriction, RepeatedTimesAreRefusedOrAveragedAsAsked) {
   RawFrictionOptions o;
   o.settling_s = 0;
   o.min_plateau_samples = 10;
-  try {
-    load_friction_log(file, o);
-    FAIL() << "a repeated time was accepted";
-  } catch (const InputError& e) {
+  {
+    const InputError e = test::refusal([&] { load_friction_log(file, o); });
     EXPECT_EQ(e.line(), 12);
-    EXPECT_NE(std::string(e.what()).find("--duplicate-times average"), std::string::npos) << e.what();
+    EXPECT_TRUE(test::says(e, "--duplicate-times average"));
   }
   o.duplicate_times = DuplicateTimes::average;
   const FrictionLog log = load_friction_log(file, o);
@@ -266,27 +268,19 @@ TEST_F(RawFriction, APositionThatGoesBackWithinAPlateauIsRefusedAtItsCell) {
   RawFrictionOptions o;
   o.settling_s = 0;
   o.min_plateau_samples = 5;
-  try {
-    load_friction_log(file, o);
-    FAIL() << "a non-monotone position was accepted";
-  } catch (const InputError& e) {
-    EXPECT_EQ(e.line(), 22);
-    EXPECT_EQ(e.column(), 5);  // the position cell
-    EXPECT_NE(std::string(e.what()).find("monotone between reversals"), std::string::npos) << e.what();
-  }
+  const InputError e = test::refusal([&] { load_friction_log(file, o); });
+  EXPECT_EQ(e.line(), 22);
+  EXPECT_EQ(e.column(), 5);  // the position cell
+  EXPECT_TRUE(test::says(e, "monotone between reversals"));
 }
 
 TEST_F(RawFriction, ARunWithNoLongEnoughPlateauIsRefused) {
   const auto file = write("short.csv", raw_csv(plateau_rows()));
   RawFrictionOptions o;
   o.min_plateau_samples = 50;
-  try {
-    load_friction_log(file, o);
-    FAIL();
-  } catch (const InputError& e) {
-    EXPECT_EQ(e.line(), 2);
-    EXPECT_NE(std::string(e.what()).find("too few samples per plateau"), std::string::npos) << e.what();
-  }
+  const InputError e = test::refusal([&] { load_friction_log(file, o); });
+  EXPECT_EQ(e.line(), 2);
+  EXPECT_TRUE(test::says(e, "too few samples per plateau"));
 }
 
 TEST_F(RawFriction, TheRigsRawRunsFitToTheTrueConstants) {
@@ -366,57 +360,45 @@ TEST_F(RawFriction, ConditionsAsKeysGiveTheSameLogAndFitAsColumns) {
 TEST_F(RawFriction, AManifestRefusesAConditionGivenTwiceOrNotAtAll) {
   write("both.csv", std::string(kTidyHeader) + "r1,0,0.01,1000,2.5,120.2,24,20,1\n");
   const auto both = write("both.toml", "file = \"both.csv\"\n[[run]]\nid = \"r1\"\nload_N = 1000\n");
-  try {
-    load_friction_dataset(both);
-    FAIL();
-  } catch (const InputError& e) {
+  {
+    const InputError e = test::refusal([&] { load_friction_dataset(both); });
     EXPECT_EQ(e.line(), 1);
-    EXPECT_NE(std::string(e.what()).find("'load_N' is both a column of this file and a key of run 'r1'"),
-              std::string::npos)
-        << e.what();
+    EXPECT_TRUE(test::says(e, "'load_N' is both a column of this file and a key of run 'r1'"));
   }
   write("lean.csv", "run,velocity_m_s,friction_N\nr1,0.01,20\nr2,0.01,21\n");
   const auto partial = write("partial.toml",
                              "file = \"lean.csv\"\n[[run]]\nid = \"r1\"\nguide = \"SRN 35C\"\nload_N = 1000\n"
                              "preload_um = 2.5\ntemperature_C = 24\n");
-  try {
-    load_friction_dataset(partial);
-    FAIL();
-  } catch (const InputError& e) {
+  {
+    const InputError e = test::refusal([&] { load_friction_dataset(partial); });
     EXPECT_EQ(e.line(), 3);  // r2's row: the manifest does not list it
-    EXPECT_NE(std::string(e.what()).find("run 'r2' has no load_N"), std::string::npos) << e.what();
+    EXPECT_TRUE(test::says(e, "run 'r2' has no load_N"));
   }
   write("one.csv", "run,velocity_m_s,friction_N\nr1,0.01,20\n");
   const auto listed = write("listed.toml",
                             "file = \"one.csv\"\n[[run]]\nid = \"r1\"\nguide = \"SRN 35C\"\nload_N = 1000\n"
                             "preload_um = 2.5\ntemperature_C = 24\n[[run]]\nid = \"R2\"\nguide = \"SRN 35C\"\n"
                             "load_N = 1000\npreload_um = 2.5\ntemperature_C = 24\n");
-  try {
-    load_friction_dataset(listed);
-    FAIL();
-  } catch (const InputError& e) {
+  {
+    const InputError e = test::refusal([&] { load_friction_dataset(listed); });
     EXPECT_EQ(e.line(), 8);  // the [[run]] of R2
-    EXPECT_NE(std::string(e.what()).find("run 'R2' is listed, but"), std::string::npos) << e.what();
+    EXPECT_TRUE(test::says(e, "run 'R2' is listed, but"));
   }
   const auto unknown = write("unknown.toml",
                              "file = \"one.csv\"\n[[run]]\nid = \"r1\"\nguide = \"MY 30\"\nload_N = 1000\n"
                              "preload_um = 2.5\ntemperature_C = 24\n");
-  try {
-    load_friction_dataset(unknown);
-    FAIL();
-  } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("run 'r1' has no block_length_mm"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("unknown model 'MY 30'"), std::string::npos) << e.what();
+  {
+    const InputError e = test::refusal([&] { load_friction_dataset(unknown); });
+    EXPECT_TRUE(test::says(e, "run 'r1' has no block_length_mm"));
+    EXPECT_TRUE(test::says(e, "unknown model 'MY 30'"));
   }
   std::ofstream(dir_ / "unknown.toml", std::ios::app) << "block_length_mm = 100\n";  // then the guide is a name
   EXPECT_EQ(load_friction_dataset(unknown).log.guide_names.at(0), "MY 30");
   const auto bad_key = write("bad.toml", "file = \"lean.csv\"\n[[run]]\nid = \"r1\"\nload_lb = 3\n");
-  try {
-    load_friction_dataset(bad_key);
-    FAIL();
-  } catch (const InputError& e) {
+  {
+    const InputError e = test::refusal([&] { load_friction_dataset(bad_key); });
     EXPECT_EQ(e.line(), 4);
-    EXPECT_NE(std::string(e.what()).find("unknown unit 'lb'"), std::string::npos) << e.what();
+    EXPECT_TRUE(test::says(e, "unknown unit 'lb'"));
   }
 }
 

@@ -85,6 +85,26 @@ std::optional<Conversion> unit_key(const Manifest& m, const toml::key& key, std:
   return u.split.conversion;
 }
 
+std::string toml_string(std::string_view s) {
+  std::string out = "\"";
+  for (const char c : s) {
+    switch (c) {
+      case '"': out += "\\\""; break;
+      case '\\': out += "\\\\"; break;
+      case '\n': out += "\\n"; break;
+      case '\t': out += "\\t"; break;
+      case '\r': out += "\\r"; break;
+      default:
+        if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) {
+          out += fmt::format("\\u{:04X}", static_cast<unsigned char>(c));
+        } else {
+          out += c;
+        }
+    }
+  }
+  return out + "\"";
+}
+
 void remember(const Manifest& m, std::optional<Given>& slot, Given given, std::string_view what) {
   if (slot) {
     const bool later = before(slot->key->source(), given.key->source());

@@ -10,6 +10,7 @@
 #include <string>
 #include <string_view>
 
+#include "io/toml_text.hpp"
 #include "lmcal/io/units.hpp"
 
 namespace lmcal::manifest {

@@ -70,6 +70,7 @@ using manifest::Given;
 using manifest::number_of;
 using manifest::remember;
 using manifest::string_of;
+using manifest::toml_string;
 using manifest::unit_key;
 
 // A thermal manifest as read: its file and folder, and the user's catalog.
@@ -460,26 +461,6 @@ ThermalRun read_run(const Manifest& m, const toml::table& table) {
 }
 
 // ---- Manifest writer ----------------------------------------------------------------------
-
-std::string toml_string(std::string_view s) {
-  std::string out = "\"";
-  for (const char c : s) {
-    switch (c) {
-      case '"': out += "\\\""; break;
-      case '\\': out += "\\\\"; break;
-      case '\n': out += "\\n"; break;
-      case '\t': out += "\\t"; break;
-      case '\r': out += "\\r"; break;
-      default:
-        if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) {
-          out += fmt::format("\\u{:04X}", static_cast<unsigned char>(c));
-        } else {
-          out += c;
-        }
-    }
-  }
-  return out + "\"";
-}
 
 std::string toml_key(std::string_view key) {
   const bool bare = !key.empty() && std::all_of(key.begin(), key.end(), [](char c) {

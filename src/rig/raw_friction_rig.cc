@@ -5,6 +5,7 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 
+#include "io/toml_text.hpp"
 #include "lmcal/error.hpp"
 #include "lmcal/io/catalog.hpp"
 #include "lmcal/io/csv_writer.hpp"
@@ -70,8 +71,6 @@ void validate(const RawFrictionRigConfig& raw) {
   if (!std::isfinite(raw.drift_N_per_h)) throw InvalidParameter("drift_N_per_h", raw.drift_N_per_h, "finite");
 }
 
-std::string toml_quoted(std::string_view s) { return nlohmann::json(std::string(s)).dump(); }
-
 }  // namespace
 
 RawFrictionRigOutput generate_raw_friction_logs(const FrictionRigConfig& config, const RawFrictionRigConfig& raw,
@@ -86,7 +85,7 @@ RawFrictionRigOutput generate_raw_friction_logs(const FrictionRigConfig& config,
   std::string manifest = fmt::format(
       "# SYNTHETIC raw load-cell runs made by the lmcal virtual rig, not measured.\n"
       "name = \"virtual raw rig\"\n\n[raw]\nforce_sign = {}\nmoving_mass_kg = {}\n",
-      toml_quoted(to_string(raw.force_sign)), raw.moving_mass_kg);
+      manifest::toml_string(to_string(raw.force_sign)), raw.moving_mass_kg);
   nlohmann::json runs = nlohmann::json::array();
   int r = 0;
   for (int repeat = 0; repeat < config.runs; ++repeat)
@@ -134,7 +133,8 @@ RawFrictionRigOutput generate_raw_friction_logs(const FrictionRigConfig& config,
             manifest += fmt::format(
                 "\n[[run]]\nid = {}\nfile = {}\nguide = {}\nload_N = {}\npreload_um = {}\ntemperature_C = {}\n"
                 "viscosity40_mm2_s = {}\n",
-                toml_quoted(name), toml_quoted(file), toml_quoted(spec.model), P, pc, T, config.constants.nu_ref_mm2_s);
+                manifest::toml_string(name), manifest::toml_string(file), manifest::toml_string(spec.model), P, pc, T,
+                config.constants.nu_ref_mm2_s);
             // A user's guide: its block length written out, as the built-in catalog cannot supply it.
             if (config.catalog) manifest += fmt::format("block_length_mm = {}\n", c.block_length_mm);
             nlohmann::json segments = nlohmann::json::array();
