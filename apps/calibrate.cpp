@@ -4,8 +4,13 @@
 // all, and the verdicts on stdout. Progress on the terminal (stderr), none in a pipe.
 #include <fmt/format.h>
 
+#include <chrono>
+#include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "cli_common.hpp"
 #include "lmcal/report/calibration.hpp"
@@ -26,6 +31,37 @@ struct CalibrateOptions {
   const CLI::Option* lrt_p = nullptr;
   const CLI::Option* starts = nullptr;
   const CLI::Option* seed = nullptr;
+  bool timings = false;  // --timings: each step's wall time on stderr
+};
+
+// Wall time of each step, printed on stderr when asked (--timings): where a slow calibration
+// spends its time, without a profiler.
+class StepTimes {
+ public:
+  using Clock = std::chrono::steady_clock;
+  void start(const std::string& name) {
+    stop();
+    steps_.emplace_back(name, 0.0);
+    since_ = Clock::now();
+    running_ = true;
+  }
+  void stop() {
+    if (running_) steps_.back().second = std::chrono::duration<double>(Clock::now() - since_).count();
+    running_ = false;
+  }
+  void print(std::FILE* out) const {
+    double total = 0;
+    for (const auto& [name, seconds] : steps_) {
+      fmt::print(out, "{:>8.3f} s  {}\n", seconds, name);
+      total += seconds;
+    }
+    fmt::print(out, "{:>8.3f} s  total\n", total);
+  }
+
+ private:
+  std::vector<std::pair<std::string, double>> steps_;
+  Clock::time_point since_ = Clock::now();
+  bool running_ = false;
 };
 
 void run_calibrate(CalibrateOptions& o) {
@@ -53,12 +89,20 @@ void run_calibrate(CalibrateOptions& o) {
     if (o.seed->count() > 0) fit->seed = options.friction.fit.seed;
   }
   TerminalProgress progress;
+  StepTimes times;
   const Calibration c = calibrate(set, options,
-                                  {.step = [&](std::size_t i, std::size_t n, const std::string& name) { progress.step(i, n, name); },
+                                  {.step =
+                                       [&](std::size_t i, std::size_t n, const std::string& name) {
+                                         times.start(name);
+                                         progress.step(i, n, name);
+                                       },
                                    .detail = progress.detail_callback()});
+  times.start("writing the outputs");
   const std::filesystem::path dir = o.output_dir.empty() ? std::filesystem::path("fits") / set.name : std::filesystem::path(o.output_dir);
   const std::string written = write_outputs(dir, calibration_outputs(c));
+  times.stop();
   progress.clear();
+  if (o.timings) times.print(stderr);
   std::cout << "calibration of " << set.dir.string() << "\n" << calibration_summary(c);
   std::cout << "wrote " << written << "\nreport: " << (dir / "report.html").string() << "\n";
 }
@@ -76,6 +120,7 @@ void setup_calibrate(CLI::App& app) {
       ->required();
   calibrate->add_option("-o,--output-dir", o->output_dir, "Output folder (default: fits/<folder name>)");
   calibrate->add_flag("!--no-diagnosis", c.diagnose, "Skip the two diagnoses (fits and report only)");
+  calibrate->add_flag("--timings", o->timings, "Print each step's wall time on stderr");
   add_uncertainty_options(*calibrate, o->uncertainty);
   // The friction fits: constants held, freed, started and bounded; the load cell's zero; the
   // multi-start search.

@@ -167,6 +167,9 @@ check "calibrate says the thermal half was skipped" grep -q 'note: no thermal ma
 check "calibrate is quiet on stderr when it is not a terminal" test ! -s calibrate.err
 script -qec "'$LMCAL' calibrate calset -o ttyout --no-diagnosis" /dev/null >tty.txt 2>&1
 check "calibrate shows its steps on a terminal" grep -q '\[2/[0-9]\] friction fit' tty.txt
+"$LMCAL" calibrate calset -o timed --no-diagnosis --timings >/dev/null 2>timings.txt
+check "calibrate --timings gives each step's wall time and the total on stderr" \
+  bash -c "grep -qE '^ +[0-9]+\.[0-9]{3} s  friction fit$' timings.txt && grep -qE '^ +[0-9]+\.[0-9]{3} s  total$' timings.txt"
 check "calibrate defaults to fits/<folder name>" bash -c "cd calset && '$LMCAL' calibrate . >/dev/null && test -s fits/calset/report.html"
 cat >calopts.toml <<'TOML'
 [calibrate]

@@ -213,7 +213,7 @@ ThermalFitResult fit_model(const ThermalDataSet& data, const ThermalDiagnosisOpt
   if (terms.empty()) f.fit.max_iterations = std::min(f.fit.max_iterations, kCandidateIterations);
   if (from) {
     f.alpha_start = std::clamp(from->joint.parameter("alpha").value, f.alpha_lower, f.alpha_upper);
-    for (const auto& p : from->joint.parameters) f.extension_start.emplace_back(p.name, p.value);
+    for (const auto& p : from->joint.parameters) f.parameter_start.emplace_back(p.name, p.value);
   }
   try {
     return fit_thermal(data, f);
@@ -304,6 +304,7 @@ ThermalDiagnosis diagnose_thermal(const ThermalDataSet& data, const ThermalDiagn
                                      .noise_floor = std::isfinite(d.noise_K) ? d.noise_K : 0.0,
                                      .min_excess_removed = o.min_excess_removed,
                                      .max_effects = o.max_effects,
+                                     .parallel = true,
                                      .progress = o.progress};
   auto selection = detail::forward_select(library, d.baseline_fit, fit_candidate, summarise, rules);
   d.rounds = std::move(selection.rounds);

@@ -440,7 +440,7 @@ Estimate estimate(const LeastSquaresModel& model, const std::vector<ParameterSpe
   std::vector<double> theta = e.starts.best;
   // Large problems: converge on a tenth of the residuals first, so that the polish over all
   // of them starts next to the minimum and needs only a step or two.
-  if (n > 20000 && !linear) {
+  if (n > 20000 && !linear && model.rows_evaluate_separately()) {
     std::vector<std::size_t> rows;
     for (std::size_t k = 0; k < n / 10; ++k) rows.push_back(k * 10);
     theta = polish(*model.cost_function(rows, loss), specs, held, theta, options.max_iterations).theta;

@@ -58,6 +58,11 @@ class LeastSquaresModel {
     (void)held;
     return false;
   }
+  // True when a cost over a tenth of the rows costs about a tenth (a row is evaluated on its
+  // own). False when every row needs the whole computation (a simulation): then a fit over a
+  // subset of rows saves nothing, and the engine's first pass over a tenth of the rows is
+  // skipped (it would only move the start away from the optimum of all rows).
+  virtual bool rows_evaluate_separately() const { return true; }
   // What the design of the data rules out before any fit (e.g. one temperature: no β); each
   // issue names in `held` the parameters to hold. `free` are the parameters asked free.
   virtual std::vector<IdentifiabilityIssue> design_issues(const std::vector<std::string>& free) const {

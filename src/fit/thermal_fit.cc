@@ -315,12 +315,7 @@ std::pair<ThermalLayout, std::vector<ParameterSpec>> layout_for(const std::vecto
       throw InvalidParameter("extension", fmt::format("'{}' is given twice", name));
     layout.extensions.push_back(&e);
     layout.extension_first.push_back(static_cast<int>(specs.size()));
-    for (const auto& p : e.parameters) {
-      double start = p.start;
-      for (const auto& [given, value] : o.extension_start)
-        if (given == p.name) start = std::clamp(value, p.lower, p.upper);
-      specs.push_back({p.name, p.unit, start, p.lower, p.upper, true, p.scale});
-    }
+    for (const auto& p : e.parameters) specs.push_back({p.name, p.unit, p.start, p.lower, p.upper, true, p.scale});
   }
   // The sensor terms: a coefficient each, sized so that 1 typical unit moves the readings by
   // 0.1 K; one period for the ambient-periodic terms, one τ per lag.
@@ -384,6 +379,9 @@ std::pair<ThermalLayout, std::vector<ParameterSpec>> layout_for(const std::vecto
     layout.heat_scale.push_back(scale);
   }
   layout.size = static_cast<int>(specs.size());
+  for (auto& spec : specs)
+    for (const auto& [name, value] : o.parameter_start)
+      if (name == spec.name) spec.start = std::clamp(value, spec.lower, spec.upper);
   return {layout, specs};
 }
 

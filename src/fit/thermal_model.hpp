@@ -60,6 +60,7 @@ class ThermalModel : public LeastSquaresModel {
   std::unique_ptr<ceres::CostFunction> cost_function(const std::vector<std::size_t>& rows,
                                                      const RowLoss& loss) const override;
   bool linear(const std::vector<bool>& held) const override;
+  bool rows_evaluate_separately() const override { return false; }  // every row needs the runs' simulations
   // The most parameters one run's simulation depends on (the Jet size it needs; at most 8).
   std::size_t max_local_parameters() const;
   void explain(IdentifiabilityIssue& issue) const override;

@@ -119,7 +119,7 @@ void calibrate_thermal_model(Calibration& c, const CalibrationOptions& options) 
     for (const auto& cause : c.thermal_diagnosis->accepted) m.thermal_causes.push_back(cause.effect);
     t.extensions = m.thermal_causes;
     t.alpha_start = std::clamp(final_fit.joint.parameter("alpha").value, t.alpha_lower, t.alpha_upper);
-    for (const auto& p : final_fit.joint.parameters) t.extension_start.emplace_back(p.name, p.value);
+    for (const auto& p : final_fit.joint.parameters) t.parameter_start.emplace_back(p.name, p.value);
     // An empirical term on the readings (a drift, a swing the ambient sensors miss) is fitted
     // with the model, so that α is not bent to absorb it; it describes the readings, not the
     // rail, and the model file records it as such.

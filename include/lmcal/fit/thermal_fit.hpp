@@ -117,10 +117,12 @@ struct ThermalFitOptions {
   double heat_temperature_uncertainty_K = 0.3;
   double heat_law_uncertainty = 0.01;
   // Named mechanisms of the extension library added to the model (`lmcal fit thermal
-  // --extension`, thermal_extension_names()), each with its own parameter(s); their starting
-  // values may be given in `extension_start` (name -> value).
+  // --extension`, thermal_extension_names()), each with its own parameter(s).
   std::vector<std::string> extensions;
-  std::vector<std::pair<std::string, double>> extension_start;
+  // Start values by parameter name (name -> value, clamped to the bounds; names the model does
+  // not have are ignored): a warm start from an earlier fit of the same data, every offset,
+  // heat scale and mechanism where it was. Before alpha_start, h_W_m2K and the terms' own.
+  std::vector<std::pair<std::string, double>> parameter_start;
   // Empirical sensor terms added to every reading (parameters "c<j> <symbol>"; one period
   // "P_s" ("P2_s", …) shared by the ambient-periodic terms of the same start period; "tau<j>_s"
   // per lag). Their parameters enter the
