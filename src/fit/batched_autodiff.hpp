@@ -92,8 +92,10 @@ class BatchedAutoDiffCostFunction final : public ceres::CostFunction {
   }
 
  private:
+  // Flattened: GCC otherwise leaves Eigen's Jet assignments out of line in the row loop (a
+  // call per Jet operation); inlined, the 100 k-sample diagnosis's Jet<16> fits run 1.5x faster.
   template <int N>
-  bool evaluate_jets(const double* theta, double* residuals, double* jacobian) const {
+  [[gnu::flatten]] bool evaluate_jets(const double* theta, double* residuals, double* jacobian) const {
     using Jet = ceres::Jet<double, N>;
     const int p = parameter_block_sizes()[0];
     std::array<Jet, N> t;
