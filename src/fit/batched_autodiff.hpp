@@ -15,6 +15,8 @@
 #include <ceres/cost_function.h>
 #include <ceres/jet.h>
 
+#include <Eigen/Core>
+
 #include <algorithm>
 #include <array>
 #include <vector>
@@ -56,8 +58,72 @@ T robust_residual(const T& r, const RowLoss& loss) {
   return r;
 }
 
+// A cost whose Gauss-Newton normal equations can be accumulated row by row, without
+// storing its Jacobian (least_squares.cc then solves it by its own Levenberg-Marquardt):
+// fills ½‖r‖², JᵀJ and Jᵀr at θ over all parameters. False when a residual is not finite.
+class NormalEquationsCost {
+ public:
+  virtual ~NormalEquationsCost() = default;
+  virtual bool normal_equations(const double* theta, double& cost, Eigen::MatrixXd& JtJ, Eigen::VectorXd& Jtr) const = 0;
+};
+
+// Sums of x xᵀ over rows x = [J_i, r_i], centred within groups the way
+// BatchedAutoDiffCostFunction centres its residuals (x_i - c_g · mean_g(x)), accumulated in
+// chunks of consecutive rows of one group (Welford: a chunk's co-moment about its own mean,
+// then its mean's share once the group's mean is known): exact where a column is constant
+// within a group, as a run's load is (the raw sums would cancel to rounding noise there).
+class CentredSums {
+ public:
+  explicit CentredSums(Eigen::Index size) : size_(size), total_(Eigen::MatrixXd::Zero(size, size)) {}
+
+  void add(std::size_t group, const double* x) {
+    if (chunks_.empty() || chunks_.back().group != group) {
+      chunks_.push_back({group, 0, Eigen::VectorXd::Zero(size_)});
+      if (group >= group_count_.size()) group_count_.resize(group + 1, 0.0), group_sum_.resize(group + 1, Eigen::VectorXd::Zero(size_));
+    }
+    Chunk& c = chunks_.back();
+    c.n += 1;
+    const Eigen::Map<const Eigen::VectorXd> v(x, size_);
+    delta_ = v - c.mean;
+    c.mean += delta_ / c.n;
+    // The co-moment's upper triangle: δ (x - mean_new)ᵀ.
+    for (Eigen::Index b = 0; b < size_; ++b) {
+      const double after = x[b] - c.mean[b];
+      for (Eigen::Index a = 0; a <= b; ++a) total_(a, b) += delta_[a] * after;
+    }
+  }
+
+  // Σ (x - c_g m_g)(x - c_g m_g)ᵀ, `shrink` c_g per group (empty: no centring, c = 0).
+  Eigen::MatrixXd finish(const std::vector<double>& shrink) {
+    for (const Chunk& c : chunks_) {
+      group_count_[c.group] += c.n;
+      group_sum_[c.group] += c.n * c.mean;
+    }
+    Eigen::MatrixXd out = total_.selfadjointView<Eigen::Upper>();
+    for (const Chunk& c : chunks_) {
+      const double share = shrink.empty() ? 0.0 : shrink[c.group];
+      const Eigen::VectorXd d = c.mean - share * group_sum_[c.group] / group_count_[c.group];
+      out.noalias() += c.n * d * d.transpose();
+    }
+    return out;
+  }
+
+ private:
+  struct Chunk {
+    std::size_t group;
+    double n;
+    Eigen::VectorXd mean;
+  };
+  Eigen::Index size_;
+  Eigen::MatrixXd total_;
+  Eigen::VectorXd delta_;
+  std::vector<Chunk> chunks_;
+  std::vector<double> group_count_;
+  std::vector<Eigen::VectorXd> group_sum_;
+};
+
 template <typename RowFunctor>
-class BatchedAutoDiffCostFunction final : public ceres::CostFunction {
+class BatchedAutoDiffCostFunction final : public ceres::CostFunction, public NormalEquationsCost {
  public:
   // `groups` (one id per row, optional): residuals and their derivatives are centred within
   // each group, r_i - c_g · mean_g(r), which profiles out one free offset per group (c_g = 1,
@@ -74,6 +140,31 @@ class BatchedAutoDiffCostFunction final : public ceres::CostFunction {
     set_num_residuals(static_cast<int>(rows));
   }
 
+  bool normal_equations(const double* theta, double& cost, Eigen::MatrixXd& JtJ, Eigen::VectorXd& Jtr) const override {
+    const int p = parameter_block_sizes()[0];
+    CentredSums sums(p + 1);
+    std::vector<double> x(static_cast<std::size_t>(p) + 1);
+    auto add = [&](std::size_t i, double r) {
+      x[static_cast<std::size_t>(p)] = r;
+      sums.add(groups_.empty() ? 0 : groups_[i], x.data());
+      return std::isfinite(r);
+    };
+    bool ok = true;
+    if (analytic()) {
+      ok = analytic_rows(theta, x.data(), add);
+    } else if (p <= 8) {
+      ok = jet_rows<8>(theta, x.data(), add);
+    } else {
+      ok = jet_rows<16>(theta, x.data(), add);
+    }
+    if (!ok) return false;
+    const Eigen::MatrixXd S = sums.finish(groups_.empty() ? std::vector<double>{} : shrink_or_ones());
+    JtJ = S.topLeftCorner(p, p);
+    Jtr = S.col(p).head(p);
+    cost = 0.5 * S(p, p);
+    return std::isfinite(cost);
+  }
+
   bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
     const double* theta = parameters[0];
     bool ok = true;
@@ -83,6 +174,8 @@ class BatchedAutoDiffCostFunction final : public ceres::CostFunction {
         residuals[i] = robust_residual(functor_(prepared, i), loss_);
         ok = std::isfinite(residuals[i]);
       }
+    } else if (analytic()) {
+      ok = evaluate_analytic(theta, residuals, jacobians[0]);
     } else {
       ok = parameter_block_sizes()[0] <= 8 ? evaluate_jets<8>(theta, residuals, jacobians[0])
                                            : evaluate_jets<16>(theta, residuals, jacobians[0]);
@@ -92,10 +185,54 @@ class BatchedAutoDiffCostFunction final : public ceres::CostFunction {
   }
 
  private:
+  // A functor may also give a row's residual and gradient in closed form (far cheaper than
+  // Jets where the model is known):
+  //   bool analytic() const;   // the closed form applies to this functor's parameters
+  //   double gradient(Prepared<double>& prepared, std::size_t row, double* gradient) const;
+  bool analytic() const {
+    if constexpr (requires(const RowFunctor& f) { f.analytic(); }) return functor_.analytic();
+    return false;
+  }
+
+  // Each row's gradient into `gradient` (p values), then visit(row, residual); false when
+  // visit does.
+  template <typename Visit>
+  bool analytic_rows(const double* theta, double* gradient, const Visit& visit) const {
+    if constexpr (requires(const RowFunctor& f, decltype(f.prepare(theta)) prepared, double* g) {
+                    f.gradient(prepared, std::size_t{}, g);
+                  }) {
+      const auto p = static_cast<std::size_t>(parameter_block_sizes()[0]);
+      auto prepared = functor_.prepare(theta);
+      for (std::size_t i = 0; i < rows_; ++i) {
+        double r = functor_.gradient(prepared, i, gradient);
+        if (loss_.kind != RobustLoss::none) {  // r̃(r): the chain rule through a one-slot Jet
+          const ceres::Jet<double, 1> w = robust_residual(ceres::Jet<double, 1>(r, 0), loss_);
+          r = w.a;
+          for (std::size_t j = 0; j < p; ++j) gradient[j] *= w.v[0];
+        }
+        if (!visit(i, r)) return false;
+      }
+      return true;
+    } else {
+      (void)theta, (void)gradient, (void)visit;
+      return false;
+    }
+  }
+
+  bool evaluate_analytic(const double* theta, double* residuals, double* jacobian) const {
+    const auto p = static_cast<std::size_t>(parameter_block_sizes()[0]);
+    std::vector<double> gradient(p);
+    return analytic_rows(theta, gradient.data(), [&](std::size_t i, double r) {
+      residuals[i] = r;
+      std::copy(gradient.begin(), gradient.end(), jacobian + i * p);
+      return std::isfinite(r);
+    });
+  }
+
   // Flattened: GCC otherwise leaves Eigen's Jet assignments out of line in the row loop (a
   // call per Jet operation); inlined, the 100 k-sample diagnosis's Jet<16> fits run 1.5x faster.
   template <int N>
-  [[gnu::flatten]] bool evaluate_jets(const double* theta, double* residuals, double* jacobian) const {
+  [[gnu::flatten]] bool jet_rows(const double* theta, double* gradient, const auto& visit) const {
     using Jet = ceres::Jet<double, N>;
     const int p = parameter_block_sizes()[0];
     std::array<Jet, N> t;
@@ -103,12 +240,26 @@ class BatchedAutoDiffCostFunction final : public ceres::CostFunction {
     auto prepared = functor_.prepare(t.data());
     for (std::size_t i = 0; i < rows_; ++i) {
       const Jet r = robust_residual(functor_(prepared, i), loss_);
-      residuals[i] = r.a;
-      double* row = jacobian + i * static_cast<std::size_t>(p);
-      for (int j = 0; j < p; ++j) row[j] = r.v[j];
-      if (!std::isfinite(r.a)) return false;
+      for (int j = 0; j < p; ++j) gradient[j] = r.v[j];
+      if (!visit(i, r.a)) return false;
     }
     return true;
+  }
+
+  template <int N>
+  bool evaluate_jets(const double* theta, double* residuals, double* jacobian) const {
+    const auto p = static_cast<std::size_t>(parameter_block_sizes()[0]);
+    std::vector<double> gradient(p);
+    return jet_rows<N>(theta, gradient.data(), [&](std::size_t i, double r) {
+      residuals[i] = r;
+      std::copy(gradient.begin(), gradient.end(), jacobian + i * p);
+      return std::isfinite(r);
+    });
+  }
+
+  std::vector<double> shrink_or_ones() const {
+    if (!shrink_.empty()) return shrink_;
+    return std::vector<double>(*std::max_element(groups_.begin(), groups_.end()) + 1, 1.0);
   }
 
   void centre(double* residuals, double* jacobian) const {

@@ -6,6 +6,7 @@
 // 60 % longer.
 #pragma once
 
+#include <cmath>
 #include <memory>
 #include <vector>
 
@@ -44,6 +45,41 @@ struct FrictionResidual {
       }
     }
     return p;
+  }
+
+  // The published law alone (no effects, no terms) has a closed-form gradient.
+  bool analytic() const { return !kTerms && effect_slots.empty(); }
+
+  // Residual of entry j and its gradient over θ = [k1, k2, μSt, V_St, μv, β, f0] (Eqs. 3-7):
+  // with x = T - T_ref, ν = ν_ref e^{-βx}, E = e^{-V/V_St}, S = μSt pc Lb E / ν (Stribeck),
+  //   ∂F/∂k1 = P/1000, ∂F/∂k2 = -pc P/1000, ∂F/∂μSt = S/μSt, ∂F/∂V_St = S V/V_St²,
+  //   ∂F/∂μv = Lb pc V ν, ∂F/∂β = x (S - μv Lb pc V ν), ∂F/∂f0 = Lb.
+  double gradient(Prepared<double>& p, std::size_t j, double* g) const {
+    const std::size_t entry = rows.empty() ? j : rows[j];
+    const std::size_t i = data->samples[entry];
+    const FrictionLog& log = *data->log;
+    const FrictionConstants<double>& k = p.k;
+    const FrictionConditions<double> c = log.conditions(i);
+    const double x = c.temperature_C - k.T_ref_C;
+    const double nu = log.viscosity40_mm2_s[i] * std::exp(-k.beta_per_K * x);
+    const double E = std::exp(-c.velocity_m_s / k.v_st_m_s);
+    const double pc = c.preload_um, Lb = c.block_length_mm, V = c.velocity_m_s;
+    // The value exactly as friction_breakdown computes it (the residual-only evaluations
+    // must agree to the last bit), then the derivatives.
+    const double coulomb = (k.k1 - k.k2 * pc) * c.load_N * 1e-3;
+    const double viscous = Lb * (k.mu_v * pc * V * nu + k.f0);
+    const double stribeck = k.mu_st * pc * Lb / nu * E;
+    const double force = coulomb + stribeck + viscous;
+    const double viscous_per_mu = Lb * pc * V * nu, stribeck_per_mu = pc * Lb / nu * E;
+    const double w = -data->inv_sigma[entry];  // r = (F_measured - F) / σ
+    g[0] = w * c.load_N * 1e-3;
+    g[1] = -w * pc * c.load_N * 1e-3;
+    g[2] = w * stribeck_per_mu;
+    g[3] = w * k.mu_st * stribeck_per_mu * V / (k.v_st_m_s * k.v_st_m_s);
+    g[4] = w * viscous_per_mu;
+    g[5] = w * x * (k.mu_st * stribeck_per_mu - k.mu_v * viscous_per_mu);
+    g[6] = w * Lb;
+    return (log.friction_N[i] - force) * data->inv_sigma[entry];
   }
 
   template <typename T>

@@ -13,6 +13,7 @@
 #include <numeric>
 #include <optional>
 
+#include "batched_autodiff.hpp"
 #include "lmcal/error.hpp"
 #include "lmcal/fit/statistics.hpp"
 
@@ -35,6 +36,7 @@ namespace detail {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
 // The residual block of `cost` on `theta` with its loss, bounds and held parameters.
 void build_problem(ceres::Problem& problem, const ceres::CostFunction& cost, const std::vector<ParameterSpec>& specs,
@@ -66,11 +68,150 @@ ceres::Problem::Options problem_options() {
 struct Polish {
   std::vector<double> theta;
   ceres::Solver::Summary summary;
+  std::string brief;          // one line: solver, iterations, costs, termination
   Eigen::VectorXd residuals;  // at theta, when known (linear solve)
 };
 
+// The tolerances of every polish (Ceres' and the normal equations' alike).
+constexpr double kFunctionTolerance = 1e-10, kGradientTolerance = 1e-10, kParameterTolerance = 1e-9;
+
+// Levenberg-Marquardt on normal equations accumulated row by row (NormalEquationsCost): no
+// Jacobian is stored, so a 10⁵-row fit stays in cache. The same method and tolerances as the
+// Ceres polish: the step solves (JᵀJ + diag(JᵀJ)/Δ) δ = -Jᵀr (the diagonal of the
+// Jacobi-scaled JᵀJ clamped to [1e-6, 1e32]), the radius Δ grows by 1/max(1/3, 1 - (2ρ - 1)³) after a step whose gain
+// ratio ρ exceeds 1e-3 and halves (then quarters, …) after a failed one; with bounds, the
+// step is projected onto the box and its predicted gain computed for the projected step.
+Polish solve_normal_equations(const NormalEquationsCost& normal, const ceres::CostFunction& cost,
+                              const std::vector<ParameterSpec>& specs, const std::vector<bool>& held,
+                              std::vector<double> theta, bool bounded, int max_iterations) {
+  Polish out;
+  ceres::Solver::Summary& summary = out.summary;
+  std::vector<Eigen::Index> free;
+  for (std::size_t j = 0; j < specs.size(); ++j)
+    if (!held[j]) free.push_back(static_cast<Eigen::Index>(j));
+  const auto m = static_cast<Eigen::Index>(free.size());
+  Eigen::VectorXd r(cost.num_residuals());
+  auto cost_at = [&](const std::vector<double>& x, double& value) {
+    const double* parameters[] = {x.data()};
+    if (!cost.Evaluate(parameters, r.data(), nullptr) || !r.allFinite()) return false;
+    value = 0.5 * r.squaredNorm();
+    return true;
+  };
+  auto clamp_free = [&](std::vector<double>& x) {
+    for (Eigen::Index k = 0; k < m && bounded; ++k) {
+      const auto j = static_cast<std::size_t>(free[static_cast<std::size_t>(k)]);
+      x[j] = std::clamp(x[j], specs[j].lower, specs[j].upper);
+    }
+  };
+  auto finish = [&](ceres::TerminationType type, std::string message, int iterations) {
+    summary.termination_type = type;
+    summary.message = std::move(message);
+    summary.iterations.resize(static_cast<std::size_t>(iterations) + 1);
+    out.brief = fmt::format("Levenberg-Marquardt on the row-by-row normal equations: Iterations: {}, Initial cost: {:e}, "
+                            "Final cost: {:e}, Termination: {}",
+                            iterations, summary.initial_cost, summary.final_cost, ceres::TerminationTypeToString(type));
+    out.theta = std::move(theta);
+    return std::move(out);
+  };
+  Eigen::MatrixXd H;
+  Eigen::VectorXd g;
+  double f = 0;
+  if (!normal.normal_equations(theta.data(), f, H, g)) {
+    summary.initial_cost = summary.final_cost = kNaN;
+    return finish(ceres::FAILURE, "the residuals are not finite at the start", 0);
+  }
+  summary.initial_cost = summary.final_cost = f;
+  if (m == 0) return finish(ceres::CONVERGENCE, "no free parameters", 0);
+  double radius = 1e4, decrease = 2;
+  Eigen::MatrixXd Hf(m, m);
+  Eigen::VectorXd gf(m);
+  auto restrict = [&] {
+    for (Eigen::Index a = 0; a < m; ++a) {
+      gf[a] = g[free[static_cast<std::size_t>(a)]];
+      for (Eigen::Index b = 0; b < m; ++b) Hf(a, b) = H(free[static_cast<std::size_t>(a)], free[static_cast<std::size_t>(b)]);
+    }
+  };
+  // Converged when the projected gradient step is negligible: max |x - Π(x - g)|.
+  auto gradient_small = [&] {
+    double worst = 0;
+    for (Eigen::Index k = 0; k < m; ++k) {
+      const auto j = static_cast<std::size_t>(free[static_cast<std::size_t>(k)]);
+      double moved = theta[j] - gf[k];
+      if (bounded) moved = std::clamp(moved, specs[j].lower, specs[j].upper);
+      worst = std::max(worst, std::abs(theta[j] - moved));
+    }
+    return worst <= kGradientTolerance;
+  };
+  restrict();
+  if (gradient_small()) return finish(ceres::CONVERGENCE, "gradient tolerance reached at the start", 0);
+  // Ceres' Jacobi scaling, fixed at the start: s_j = 1 / (1 + ‖J_j‖); the diagonal's clamp
+  // applies to the scaled columns.
+  Eigen::VectorXd scale(m);
+  for (Eigen::Index k = 0; k < m; ++k) scale[k] = 1.0 / (1.0 + std::sqrt(std::max(Hf(k, k), 0.0)));
+  for (int iteration = 1; iteration <= max_iterations; ++iteration) {
+    Eigen::MatrixXd A = Hf;
+    for (Eigen::Index k = 0; k < m; ++k)
+      A(k, k) += std::clamp(Hf(k, k) * scale[k] * scale[k], 1e-6, 1e32) / (scale[k] * scale[k]) / radius;
+    // A parameter on a bound that the gradient pushes outwards stays there this step (its
+    // row and column decoupled): the others' step is then not spoiled by the projection.
+    Eigen::VectorXd rhs = -gf;
+    for (Eigen::Index k = 0; k < m && bounded; ++k) {
+      const auto j = static_cast<std::size_t>(free[static_cast<std::size_t>(k)]);
+      if ((theta[j] <= specs[j].lower && gf[k] > 0) || (theta[j] >= specs[j].upper && gf[k] < 0)) {
+        const double d = A(k, k);
+        A.row(k).setZero();
+        A.col(k).setZero();
+        A(k, k) = d;
+        rhs[k] = 0;
+      }
+    }
+    const Eigen::LDLT<Eigen::MatrixXd> ldlt(A);
+    Eigen::VectorXd step = ldlt.solve(rhs);
+    std::vector<double> candidate = theta;
+    for (Eigen::Index k = 0; k < m; ++k) candidate[static_cast<std::size_t>(free[static_cast<std::size_t>(k)])] += step[k];
+    clamp_free(candidate);
+    double step_norm = 0, x_norm = 0;
+    for (Eigen::Index k = 0; k < m; ++k) {
+      const auto j = static_cast<std::size_t>(free[static_cast<std::size_t>(k)]);
+      step[k] = candidate[j] - theta[j];  // as projected
+      step_norm += step[k] * step[k];
+      x_norm += theta[j] * theta[j];
+    }
+    if (ldlt.info() == Eigen::Success && std::sqrt(step_norm) <= kParameterTolerance * (std::sqrt(x_norm) + kParameterTolerance))
+      return finish(ceres::CONVERGENCE, "parameter tolerance reached", iteration);
+    const double predicted = -(gf.dot(step) + 0.5 * step.dot(Hf * step));
+    double f_new = 0;
+    const bool finite = ldlt.info() == Eigen::Success && step.allFinite() && cost_at(candidate, f_new);
+    const double gain = finite ? f - f_new : -kInfinity;
+    if (finite && std::abs(gain) <= kFunctionTolerance * f) {
+      if (gain > 0) theta = std::move(candidate), summary.final_cost = f_new;
+      return finish(ceres::CONVERGENCE, "function tolerance reached", iteration);
+    }
+    const double rho = predicted > 0 ? gain / predicted : -1;
+    if (finite && rho > 1e-3) {
+      theta = std::move(candidate);
+      f = f_new;
+      summary.final_cost = f;
+      radius = std::min(radius / std::max(1.0 / 3.0, 1.0 - std::pow(2 * rho - 1, 3)), 1e16);
+      decrease = 2;
+      if (!normal.normal_equations(theta.data(), f, H, g)) return finish(ceres::FAILURE, "the Jacobian is not finite", iteration);
+      summary.final_cost = f;
+      restrict();
+      if (gradient_small()) return finish(ceres::CONVERGENCE, "gradient tolerance reached", iteration);
+    } else {
+      radius /= decrease;
+      decrease *= 2;
+      if (radius < 1e-32) return finish(ceres::CONVERGENCE, "the trust region shrank below 1e-32", iteration);
+    }
+  }
+  return finish(ceres::NO_CONVERGENCE, fmt::format("maximum number of iterations reached ({})", max_iterations),
+                max_iterations);
+}
+
 Polish solve(const ceres::CostFunction& cost, const std::vector<ParameterSpec>& specs, const std::vector<bool>& held,
              std::vector<double> theta, bool bounded, int max_iterations) {
+  if (const auto* normal = dynamic_cast<const NormalEquationsCost*>(&cost))
+    return solve_normal_equations(*normal, cost, specs, held, std::move(theta), bounded, max_iterations);
   Polish out;
   ceres::Problem problem(problem_options());
   build_problem(problem, cost, specs, held, theta.data(), bounded);
@@ -81,12 +222,13 @@ Polish solve(const ceres::CostFunction& cost, const std::vector<ParameterSpec>& 
   // than a QR of J, and identifiability is settled before the covariance is trusted.
   solver.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
   solver.max_num_iterations = max_iterations;
-  solver.function_tolerance = 1e-10;
-  solver.gradient_tolerance = 1e-10;
-  solver.parameter_tolerance = 1e-9;
+  solver.function_tolerance = kFunctionTolerance;
+  solver.gradient_tolerance = kGradientTolerance;
+  solver.parameter_tolerance = kParameterTolerance;
   solver.num_threads = 1;
   solver.logging_type = ceres::SILENT;
   ceres::Solve(solver, &problem, &out.summary);
+  out.brief = out.summary.BriefReport();
   out.theta = std::move(theta);
   return out;
 }
@@ -141,6 +283,9 @@ Polish linear_solve(const LeastSquaresModel& model, const ceres::CostFunction& c
       out.summary.final_cost = 0.5 * r.squaredNorm();
       out.summary.iterations.resize(2);
       out.summary.message = "linear in the free parameters: exact in one Gauss-Newton step";
+      out.brief = fmt::format("linear in the free parameters: one Gauss-Newton step, exact (rank-revealing QR): "
+                              "Initial cost: {:e}, Final cost: {:e}, Termination: CONVERGENCE",
+                              out.summary.initial_cost, out.summary.final_cost);
       return out;
     }
   }
@@ -482,7 +627,7 @@ void report_solver(const Estimate& e, const FitOptions& options, FitResult& resu
   s.usable = summary.IsSolutionUsable();
   s.iterations = static_cast<int>(summary.iterations.size()) - 1;
   s.termination = ceres::TerminationTypeToString(summary.termination_type);
-  s.brief = summary.BriefReport();
+  s.brief = e.fit.brief;
   s.initial_cost = summary.initial_cost;
   s.final_cost = summary.final_cost;
   s.covariance_ok = e.state.covariance_ok;
