@@ -34,6 +34,39 @@ void BM_FrictionFit100k(benchmark::State& state) {
 
 BENCHMARK(BM_FrictionFit100k)->Unit(benchmark::kMillisecond)->MinTime(2.0);
 
+// Issue 16's figures: the fit with its covariance and nothing else (no bootstrap, no
+// profiles, no per-run fits; the multi-start kept), at 100 k and at 1 M samples (linear in
+// the samples: normal equations accumulated row by row, no stored Jacobian in the polish).
+void plain_fit(benchmark::State& state, const FrictionLog& log) {
+  FrictionFitOptions options;
+  options.per_run_fits = false;
+  options.fit.bootstrap = 0;
+  options.fit.profile = ProfileMode::none;
+  for (auto _ : state) {
+    const auto result = fit_friction(log, options);
+    benchmark::DoNotOptimize(result.fit.parameters.data());
+    if (!result.fit.solver.covariance_ok) state.SkipWithError("covariance failed");
+  }
+  state.counters["samples"] = static_cast<double>(log.size());
+}
+
+void BM_FrictionFit100kNoExtras(benchmark::State& state) {
+  static const FrictionLog log = hundred_thousand_samples();
+  plain_fit(state, log);
+}
+BENCHMARK(BM_FrictionFit100kNoExtras)->Unit(benchmark::kMillisecond)->MinTime(2.0);
+
+void BM_FrictionFit1MNoExtras(benchmark::State& state) {
+  static const FrictionLog log = [] {
+    FrictionRigConfig rig;
+    rig.runs = 470;  // ~2150 samples per run, 1 M in all
+    rig.run_offset_N = 0;
+    return generate_friction_log(rig, {}).log;
+  }();
+  plain_fit(state, log);
+}
+BENCHMARK(BM_FrictionFit1MNoExtras)->Unit(benchmark::kMillisecond)->Iterations(3);
+
 }  // namespace
 
 namespace {

@@ -6,6 +6,8 @@
 
 #include <Eigen/Dense>
 #include <cmath>
+#include <cstdlib>
+#include <string>
 #include <memory>
 #include <vector>
 
@@ -124,6 +126,34 @@ TEST(NormalEquations, AccumulatedRowByRowEqualTheStoredJacobians) {
             << variant << ": " << a << "," << b;
     }
     if (variant == 1) EXPECT_EQ(JtJ(0, 0), 0.0) << "k1 is constant within every run: centred away exactly";
+  }
+}
+
+// The covariance from the information matrix (a well-conditioned J) equals the one from a QR
+// of J to 1e-8 (CovarianceEqualsCeresCovariance checks the rank-deficient QR path).
+TEST(NormalEquations, CovarianceFromTheInformationMatrixEqualsTheQr) {
+  auto from_qr = [](const Eigen::MatrixXd& J) {
+    const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(J);
+    const auto m = J.cols();
+    const Eigen::MatrixXd R = qr.matrixR().topLeftCorner(m, m).triangularView<Eigen::Upper>();
+    const Eigen::MatrixXd Rinv = R.triangularView<Eigen::Upper>().solve(Eigen::MatrixXd::Identity(m, m));
+    return Eigen::MatrixXd(qr.colsPermutation() * (Rinv * Rinv.transpose()) * qr.colsPermutation().transpose());
+  };
+  const FrictionLog log = small_log(2, 0);
+  const detail::FrictionData data = all_samples(log);
+  const detail::FrictionModel model(data, {});
+  Eigen::MatrixXd friction;
+  detail::evaluate_residuals(model, kTheta, {}, &friction);
+  std::srand(3);
+  for (const Eigen::MatrixXd& J : {friction, Eigen::MatrixXd(Eigen::MatrixXd::Random(5000, 6))}) {
+    Eigen::MatrixXd ours;
+    std::string message;
+    ASSERT_TRUE(detail::covariance_from_jacobian(J, std::vector<bool>(static_cast<std::size_t>(J.cols()), false), ours, message))
+        << message;
+    const Eigen::MatrixXd reference = from_qr(J);
+    for (Eigen::Index a = 0; a < J.cols(); ++a)
+      for (Eigen::Index b = 0; b < J.cols(); ++b)
+        EXPECT_NEAR(ours(a, b), reference(a, b), 1e-8 * std::sqrt(reference(a, a) * reference(b, b))) << a << "," << b;
   }
 }
 

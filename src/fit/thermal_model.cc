@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <exception>
 #include <cctype>
 #include <cmath>
 #include <limits>
@@ -398,10 +399,29 @@ void ThermalModel::explain(IdentifiabilityIssue& issue) const {
   }
 }
 
+// f(r) for every run, one thread each (OpenMP; the runs are independent simulations, as in
+// the cost function); the first exception a run throws is rethrown here.
+template <class F>
+void for_each_run(std::size_t count, const F& f) {
+  std::exception_ptr failure;
+  const auto runs = static_cast<long>(count);
+#pragma omp parallel for schedule(dynamic)
+  for (long i = 0; i < runs; ++i) {
+    try {
+      f(static_cast<std::size_t>(i));
+    } catch (...) {
+#pragma omp critical(lmcal_for_each_run)
+      if (!failure) failure = std::current_exception();
+    }
+  }
+  if (failure) std::rethrow_exception(failure);
+}
+
 std::vector<std::vector<std::vector<double>>> ThermalModel::simulate(const std::vector<double>& theta) const {
-  std::vector<std::vector<std::vector<double>>> out;
-  for (std::size_t r = 0; r < runs_.size(); ++r)
-    out.push_back(simulate_run<double>(runs_[r], numerics_, layout_, r, [&](int g) { return theta[g]; }));
+  std::vector<std::vector<std::vector<double>>> out(runs_.size());
+  for_each_run(runs_.size(), [&](std::size_t r) {
+    out[r] = simulate_run<double>(runs_[r], numerics_, layout_, r, [&](int g) { return theta[g]; });
+  });
   return out;
 }
 
@@ -425,8 +445,9 @@ std::vector<std::vector<std::vector<double>>> ThermalModel::term_sums(
 
 std::vector<RailProfile> ThermalModel::end_profiles(const std::vector<double>& theta) const {
   std::vector<RailProfile> out(runs_.size());
-  for (std::size_t r = 0; r < runs_.size(); ++r)
+  for_each_run(runs_.size(), [&](std::size_t r) {
     simulate_run<double>(runs_[r], numerics_, layout_, r, [&](int g) { return theta[g]; }, &out[r]);
+  });
   return out;
 }
 
