@@ -65,41 +65,41 @@ class NormalEquationsCost {
  public:
   virtual ~NormalEquationsCost() = default;
   virtual bool normal_equations(const double* theta, double& cost, Eigen::MatrixXd& JtJ, Eigen::VectorXd& Jtr) const = 0;
+  // r(θ) and J(θ) stored column-major (the layout the engine keeps), without Ceres' row-major
+  // detour.
+  virtual bool residuals_and_jacobian(const double* theta, Eigen::VectorXd& r, Eigen::MatrixXd& J) const = 0;
 };
 
 // Sums of x xᵀ over rows x = [J_i, r_i], centred within groups the way
 // BatchedAutoDiffCostFunction centres its residuals (x_i - c_g · mean_g(x)), accumulated in
-// chunks of consecutive rows of one group (Welford: a chunk's co-moment about its own mean,
-// then its mean's share once the group's mean is known): exact where a column is constant
-// within a group, as a run's load is (the raw sums would cancel to rounding noise there).
+// chunks of consecutive rows of one group: each chunk's co-moment about its own mean, built
+// from blocks of rows (a block's co-moment by one rank-k update, merged by Chan's formula),
+// then the chunk mean's share once the group's mean is known. Exact where a column is
+// constant within a group, as a run's load is (the raw sums would cancel to rounding noise
+// there), and fast: per row only a copy into the block.
 class CentredSums {
  public:
-  explicit CentredSums(Eigen::Index size) : size_(size), total_(Eigen::MatrixXd::Zero(size, size)) {}
+  explicit CentredSums(Eigen::Index size)
+      : size_(size), total_(Eigen::MatrixXd::Zero(size, size)), block_(kBlock, size) {}
 
   void add(std::size_t group, const double* x) {
     if (chunks_.empty() || chunks_.back().group != group) {
+      flush();
       chunks_.push_back({group, 0, Eigen::VectorXd::Zero(size_)});
       if (group >= group_count_.size()) group_count_.resize(group + 1, 0.0), group_sum_.resize(group + 1, Eigen::VectorXd::Zero(size_));
     }
-    Chunk& c = chunks_.back();
-    c.n += 1;
-    const Eigen::Map<const Eigen::VectorXd> v(x, size_);
-    delta_ = v - c.mean;
-    c.mean += delta_ / c.n;
-    // The co-moment's upper triangle: δ (x - mean_new)ᵀ.
-    for (Eigen::Index b = 0; b < size_; ++b) {
-      const double after = x[b] - c.mean[b];
-      for (Eigen::Index a = 0; a <= b; ++a) total_(a, b) += delta_[a] * after;
-    }
+    for (Eigen::Index k = 0; k < size_; ++k) block_(rows_, k) = x[k];
+    if (++rows_ == kBlock) flush();
   }
 
   // Σ (x - c_g m_g)(x - c_g m_g)ᵀ, `shrink` c_g per group (empty: no centring, c = 0).
   Eigen::MatrixXd finish(const std::vector<double>& shrink) {
+    flush();
     for (const Chunk& c : chunks_) {
       group_count_[c.group] += c.n;
       group_sum_[c.group] += c.n * c.mean;
     }
-    Eigen::MatrixXd out = total_.selfadjointView<Eigen::Upper>();
+    Eigen::MatrixXd out = total_.selfadjointView<Eigen::Lower>();
     for (const Chunk& c : chunks_) {
       const double share = shrink.empty() ? 0.0 : shrink[c.group];
       const Eigen::VectorXd d = c.mean - share * group_sum_[c.group] / group_count_[c.group];
@@ -109,14 +109,37 @@ class CentredSums {
   }
 
  private:
+  static constexpr Eigen::Index kBlock = 256;
+
+  // The block's rows into the current chunk: M += M_b + n n_b / (n + n_b) (m_b - m)(m_b - m)ᵀ.
+  void flush() {
+    if (rows_ == 0) return;
+    Chunk& c = chunks_.back();
+    const auto n_b = static_cast<double>(rows_);
+    auto rows = block_.topRows(rows_);
+    // Shifted by the first row before the mean is taken: a column constant in the block is
+    // then exactly 0 (a mean of equal values need not round back to the value).
+    const Eigen::RowVectorXd shift = rows.row(0);
+    rows.rowwise() -= shift;
+    const Eigen::RowVectorXd m_shifted = rows.colwise().mean();
+    rows.rowwise() -= m_shifted;
+    total_.selfadjointView<Eigen::Lower>().rankUpdate(rows.transpose());
+    const Eigen::VectorXd d = (shift + m_shifted).transpose() - c.mean;
+    total_.selfadjointView<Eigen::Lower>().rankUpdate(d, c.n * n_b / (c.n + n_b));
+    c.mean += d * (n_b / (c.n + n_b));
+    c.n += n_b;
+    rows_ = 0;
+  }
+
   struct Chunk {
     std::size_t group;
     double n;
     Eigen::VectorXd mean;
   };
   Eigen::Index size_;
-  Eigen::MatrixXd total_;
-  Eigen::VectorXd delta_;
+  Eigen::MatrixXd total_;  // lower triangle
+  Eigen::MatrixXd block_;
+  Eigen::Index rows_ = 0;
   std::vector<Chunk> chunks_;
   std::vector<double> group_count_;
   std::vector<Eigen::VectorXd> group_sum_;
@@ -163,6 +186,24 @@ class BatchedAutoDiffCostFunction final : public ceres::CostFunction, public Nor
     Jtr = S.col(p).head(p);
     cost = 0.5 * S(p, p);
     return std::isfinite(cost);
+  }
+
+  bool residuals_and_jacobian(const double* theta, Eigen::VectorXd& r, Eigen::MatrixXd& J) const override {
+    const int p = parameter_block_sizes()[0];
+    r.resize(static_cast<Eigen::Index>(rows_));
+    J.resize(static_cast<Eigen::Index>(rows_), p);
+    std::vector<double> gradient(static_cast<std::size_t>(p));
+    auto store = [&](std::size_t i, double value) {
+      const auto row = static_cast<Eigen::Index>(i);
+      r[row] = value;
+      for (int j = 0; j < p; ++j) J(row, j) = gradient[static_cast<std::size_t>(j)];
+      return std::isfinite(value);
+    };
+    const bool ok = analytic() ? analytic_rows(theta, gradient.data(), store)
+                    : p <= 8   ? jet_rows<8>(theta, gradient.data(), store)
+                               : jet_rows<16>(theta, gradient.data(), store);
+    if (ok && !groups_.empty()) centre_columns(r, J);
+    return ok;
   }
 
   bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
@@ -278,6 +319,21 @@ class BatchedAutoDiffCostFunction final : public ceres::CostFunction, public Nor
       residuals[i] -= c * s[0];
       for (std::size_t j = 0; jacobian && j < p; ++j) jacobian[i * p + j] -= c * s[j + 1];
     }
+  }
+
+  // centre() for a column-major J.
+  void centre_columns(Eigen::VectorXd& r, Eigen::MatrixXd& J) const {
+    const std::size_t groups = *std::max_element(groups_.begin(), groups_.end()) + 1;
+    std::vector<double> count(groups, 0.0), sum(groups);
+    for (std::size_t g : groups_) count[g] += 1;
+    auto centre_one = [&](double* x) {
+      std::fill(sum.begin(), sum.end(), 0.0);
+      for (std::size_t i = 0; i < rows_; ++i) sum[groups_[i]] += x[i];
+      for (std::size_t g = 0; g < groups; ++g) sum[g] *= (shrink_.empty() ? 1.0 : shrink_[g]) / count[g];
+      for (std::size_t i = 0; i < rows_; ++i) x[i] -= sum[groups_[i]];
+    };
+    centre_one(r.data());
+    for (Eigen::Index j = 0; j < J.cols(); ++j) centre_one(J.col(j).data());
   }
 
   RowFunctor functor_;

@@ -3,6 +3,8 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <bit>
+#include <cstdint>
 #include <cmath>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -35,7 +37,13 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 struct ConditionKeyHash {
   std::size_t operator()(const ConditionKey& k) const {
     std::size_t h = std::get<0>(k);
-    auto mix = [&](double v) { h = h * 1000003u ^ std::hash<double>{}(v); };
+    // A value's bits, multiplied and folded (std::hash<double> hashes its bytes, a tenth of
+    // a 10⁵-sample fit); 0.0 and -0.0 are one key.
+    auto mix = [&](double v) {
+      const auto bits = v == 0 ? std::uint64_t{0} : std::bit_cast<std::uint64_t>(v);
+      h = (h ^ bits) * 0x9e3779b97f4a7c15ULL;
+      h ^= h >> 29;
+    };
     mix(std::get<1>(k)), mix(std::get<2>(k)), mix(std::get<3>(k)), mix(std::get<4>(k)), mix(std::get<5>(k));
     return h;
   }
@@ -53,14 +61,20 @@ ConditionGroups group_conditions(const FrictionLog& log) {
   std::unordered_map<ConditionKey, std::size_t, ConditionKeyHash> index;
   ConditionGroups g;
   std::vector<std::size_t> first_group(log.size());
+  std::size_t group = 0;
   for (std::size_t i = 0; i < log.size(); ++i) {
-    const auto [it, inserted] = index.try_emplace(condition_key(log, i), g.keys.size());
-    if (inserted) {
-      g.keys.push_back(it->first);
-      g.members.emplace_back();
+    // A log holds each condition for a stretch of samples: look up only where it changes.
+    const ConditionKey key = condition_key(log, i);
+    if (i == 0 || !(key == g.keys[group])) {
+      const auto [it, inserted] = index.try_emplace(key, g.keys.size());
+      if (inserted) {
+        g.keys.push_back(it->first);
+        g.members.emplace_back();
+      }
+      group = it->second;
     }
-    g.members[it->second].push_back(i);
-    first_group[i] = it->second;
+    g.members[group].push_back(i);
+    first_group[i] = group;
   }
   // Key order, so that outputs do not depend on the hash.
   std::vector<std::size_t> order(g.keys.size());

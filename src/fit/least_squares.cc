@@ -310,23 +310,26 @@ bool covariance_from_jacobian(const Eigen::MatrixXd& J, const std::vector<bool>&
     if (!held[static_cast<std::size_t>(j)]) free.push_back(j);
   if (free.empty()) return true;
   const auto m = static_cast<Eigen::Index>(free.size());
-  Eigen::MatrixXd Jf(J.rows(), m);
-  for (Eigen::Index k = 0; k < m; ++k) Jf.col(k) = J.col(free[k]);
   // Column scaling keeps the rank decision about directions, not about units.
-  const Eigen::VectorXd norms = Jf.colwise().norm().transpose();
-  for (Eigen::Index k = 0; k < m; ++k) {
-    if (!(norms[k] > 0)) {
+  Eigen::MatrixXd all = Eigen::MatrixXd::Zero(p, p);
+  all.selfadjointView<Eigen::Lower>().rankUpdate(J.transpose());
+  Eigen::VectorXd norms(m);
+  Eigen::MatrixXd information(m, m);
+  for (Eigen::Index a = 0; a < m; ++a) {
+    norms[a] = std::sqrt(all(free[a], free[a]));
+    if (!(norms[a] > 0)) {
       message = "the Jacobian is rank deficient at the solution: a parameter has no effect on any residual";
       return false;
     }
-    Jf.col(k) /= norms[k];
   }
+  for (Eigen::Index a = 0; a < m; ++a)
+    for (Eigen::Index b = 0; b < m; ++b) {
+      const Eigen::Index i = std::max(free[a], free[b]), j = std::min(free[a], free[b]);
+      information(a, b) = all(i, j) / (norms[a] * norms[b]);
+    }
   // Well conditioned (the scaled JᵀJ's condition number below 1e8, J's below 1e4): the
   // inverse of the small information matrix, accurate to about 1e-8 and far cheaper than a QR
   // of a 10⁵-row J. Otherwise the QR, whose rank decision sees directions JᵀJ would lose.
-  Eigen::MatrixXd information = Eigen::MatrixXd::Zero(m, m);
-  information.selfadjointView<Eigen::Lower>().rankUpdate(Jf.transpose());
-  information = information.selfadjointView<Eigen::Lower>();
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> spectrum(information);
   const Eigen::VectorXd eigenvalues = spectrum.eigenvalues();
   if (spectrum.info() == Eigen::Success && eigenvalues[0] > 1e-8 * eigenvalues[m - 1]) {
@@ -336,6 +339,8 @@ bool covariance_from_jacobian(const Eigen::MatrixXd& J, const std::vector<bool>&
       for (Eigen::Index b = 0; b < m; ++b) covariance(free[a], free[b]) = scaled(a, b) / (norms[a] * norms[b]);
     return true;
   }
+  Eigen::MatrixXd Jf(J.rows(), m);
+  for (Eigen::Index k = 0; k < m; ++k) Jf.col(k) = J.col(free[k]) / norms[k];
   Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(Jf);
   qr.setThreshold(1e-10);
   if (qr.rank() < m) {
@@ -482,6 +487,10 @@ Eigen::VectorXd evaluate_residuals(const LeastSquaresModel& model, const std::ve
   const auto cost = model.cost_function(rows, loss);
   const std::size_t n = rows.empty() ? model.num_residuals() : rows.size();
   Eigen::VectorXd r(static_cast<Eigen::Index>(n));
+  if (const auto* columns = dynamic_cast<const NormalEquationsCost*>(cost.get()); columns && jacobian) {
+    LMCAL_ASSERT(columns->residuals_and_jacobian(theta.data(), r, *jacobian), "residual evaluation failed");
+    return r;
+  }
   Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> J(static_cast<Eigen::Index>(n),
                                                                            static_cast<Eigen::Index>(theta.size()));
   const double* parameters[] = {theta.data()};

@@ -26,10 +26,12 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-// The free parameters' part of the final state.
+// The free parameters' part of the final state (the Jacobian copied only when a parameter
+// is held: a 10⁵-row copy is a good share of a fit's time).
 struct FreeView {
   std::vector<Eigen::Index> free;
-  Eigen::MatrixXd jacobian, bread;
+  Eigen::MatrixXd own_jacobian, bread;
+  const Eigen::MatrixXd* jacobian = nullptr;
 };
 
 FreeView free_view(const FinalState& state) {
@@ -37,12 +39,14 @@ FreeView free_view(const FinalState& state) {
   for (std::size_t j = 0; j < state.held.size(); ++j)
     if (!state.held[j]) v.free.push_back(static_cast<Eigen::Index>(j));
   const auto m = static_cast<Eigen::Index>(v.free.size());
-  v.jacobian.resize(state.jacobian.rows(), m);
   v.bread.resize(m, m);
+  const bool all_free = m == state.jacobian.cols();
+  if (!all_free) v.own_jacobian.resize(state.jacobian.rows(), m);
   for (Eigen::Index a = 0; a < m; ++a) {
-    v.jacobian.col(a) = state.jacobian.col(v.free[a]);
+    if (!all_free) v.own_jacobian.col(a) = state.jacobian.col(v.free[a]);
     for (Eigen::Index b = 0; b < m; ++b) v.bread(a, b) = state.bread(v.free[a], v.free[b]);
   }
+  v.jacobian = all_free ? &state.jacobian : &v.own_jacobian;
   return v;
 }
 
@@ -223,7 +227,7 @@ void assess_uncertainty(const RowStructure& rows, const FitOptions& o, const Fin
                   std::vector<double>(p, kNaN), o.confidence);
     return;
   }
-  const ScoreInputs in{v.jacobian, state.residuals, v.bread, rows};
+  const ScoreInputs in{*v.jacobian, state.residuals, v.bread, rows};
   const CovarianceEstimate iid = iid_covariance(in);
   u.methods.push_back(summary_of(iid, v, p));
   std::optional<CovarianceEstimate> hac, cluster;
@@ -261,7 +265,7 @@ void add_input_uncertainty(const RowStructure& rows, const FitOptions& o, const 
   const std::size_t p = result.parameters.size();
   const FreeView v = free_view(state);
   if (v.free.empty() || !state.covariance_ok || !result.covariance.allFinite()) return;
-  const Eigen::MatrixXd D = -v.bread * (v.jacobian.transpose() * input_jacobian);  // m × q
+  const Eigen::MatrixXd D = -v.bread * (v.jacobian->transpose() * input_jacobian);  // m × q
   const Eigen::MatrixXd added = D * input_covariance * D.transpose();
   const Eigen::MatrixXd before = restrict_to_free(result.covariance, v);
   const Eigen::MatrixXd total = before + added;
@@ -298,7 +302,7 @@ void add_input_uncertainty(const RowStructure& rows, const FitOptions& o, const 
       for (auto& z : own) z = L * z;
       draws = &own;
     }
-    const ScoreInputs in{v.jacobian, state.residuals, v.bread, rows};
+    const ScoreInputs in{*v.jacobian, state.residuals, v.bread, rows};
     BootstrapResult both = cluster_bootstrap(in, o.bootstrap, o.seed, &input_jacobian, draws);
     both.estimate.description += fmt::format(" (both stages: the {} redrawn in every replicate)", label);
     replace_method(u, summary_of(both.estimate, v, p));

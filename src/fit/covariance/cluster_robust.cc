@@ -11,14 +11,21 @@ namespace lmcal::detail {
 
 namespace {
 
-// B (Σ_c S_c S_cᵀ) B with S_c run c's whole score; no small-sample factor.
+// B (Σ_c S_c S_cᵀ) B with S_c run c's whole score (priors included); no small-sample factor.
 Eigen::MatrixXd raw_cluster_covariance(const ScoreInputs& in) {
   const auto m = in.jacobian.cols();
-  Eigen::MatrixXd meat = Eigen::MatrixXd::Zero(m, m);
-  for (const auto& s : run_score_series(in)) {
-    const Eigen::VectorXd total = s.colwise().sum().transpose();
-    meat += total * total.transpose();
+  Eigen::MatrixXd totals = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(in.rows.clusters), m);
+  // By stretches of rows of one run, each a dot product of a column of J with the residuals.
+  const std::vector<std::size_t>& cluster = in.rows.cluster;
+  for (std::size_t first = 0; first < cluster.size();) {
+    std::size_t last = first + 1;
+    while (last < cluster.size() && cluster[last] == cluster[first]) ++last;
+    const auto start = static_cast<Eigen::Index>(first), length = static_cast<Eigen::Index>(last - first);
+    const auto c = static_cast<Eigen::Index>(cluster[first]);
+    totals.row(c) += in.residuals.segment(start, length).transpose() * in.jacobian.middleRows(start, length);
+    first = last;
   }
+  const Eigen::MatrixXd meat = totals.transpose() * totals;
   return in.bread * meat * in.bread;
 }
 

@@ -23,11 +23,35 @@ std::vector<Eigen::MatrixXd> run_score_series(const ScoreInputs& in, bool with_p
     steps[rows.cluster[i]] = std::max(steps[rows.cluster[i]], rows.is_prior(i) ? std::size_t{1} : rows.time[i] + 1);
   std::vector<Eigen::MatrixXd> series(rows.clusters);
   for (std::size_t c = 0; c < rows.clusters; ++c) series[c] = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(steps[c]), m);
-  for (std::size_t i = 0; i < rows.cluster.size(); ++i) {
-    if (rows.is_prior(i) && !with_priors) continue;
-    const auto row = static_cast<Eigen::Index>(i);
-    const auto step = static_cast<Eigen::Index>(rows.is_prior(i) ? 0 : rows.time[i]);
-    series[rows.cluster[i]].row(step) += in.residuals[row] * in.jacobian.row(row);
+  const std::size_t n = rows.cluster.size();
+  // Rows already in series order (each run's rows together, time 0, 1, 2, …; no priors): each
+  // run's series is a block of J scaled by its residuals.
+  bool blocks = true;
+  for (std::size_t i = 0; i < n && blocks; ++i)
+    blocks = !rows.is_prior(i) &&
+             (rows.time[i] == 0 ? i == 0 || rows.cluster[i] != rows.cluster[i - 1]
+                                : i > 0 && rows.cluster[i] == rows.cluster[i - 1] && rows.time[i] == rows.time[i - 1] + 1);
+  if (blocks) {
+    for (std::size_t first = 0; first < n;) {
+      const std::size_t c = rows.cluster[first];
+      const auto count = series[c].rows();
+      if (!series[c].isZero(0.0)) break;  // a run in two blocks: not this layout after all
+      series[c] = in.jacobian.middleRows(static_cast<Eigen::Index>(first), count).array().colwise() *
+                  in.residuals.segment(static_cast<Eigen::Index>(first), count).array();
+      first += static_cast<std::size_t>(count);
+      if (first == n) return series;
+    }
+    for (auto& s : series) s.setZero();
+  }
+  // Column by column: J is stored by columns, and so are the series.
+  std::vector<Eigen::Index> step(n);
+  for (std::size_t i = 0; i < n; ++i)
+    step[i] = rows.is_prior(i) ? (with_priors ? 0 : -1) : static_cast<Eigen::Index>(rows.time[i]);
+  const double* r = in.residuals.data();
+  for (Eigen::Index a = 0; a < m; ++a) {
+    const double* J = in.jacobian.col(a).data();
+    for (std::size_t i = 0; i < n; ++i)
+      if (step[i] >= 0) series[rows.cluster[i]](step[i], a) += r[i] * J[i];
   }
   return series;
 }

@@ -2,6 +2,8 @@
 // run's score series, Bartlett weights, bandwidth by Andrews' (1991) AR(1) plug-in.
 #include <algorithm>
 #include <cmath>
+#include <iterator>
+#include <vector>
 #include <fmt/format.h>
 
 #include "covariance.hpp"
@@ -15,12 +17,18 @@ namespace lmcal::detail {
 Eigen::MatrixXd bartlett_meat(const Eigen::MatrixXd& series, std::size_t lags) {
   const auto T = series.rows(), m = series.cols();
   const auto L = static_cast<Eigen::Index>(lags);
-  Eigen::MatrixXd prefix = Eigen::MatrixXd::Zero(T + 1, m);
-  for (Eigen::Index t = 0; t < T; ++t) prefix.row(t + 1) = prefix.row(t) + series.row(t);
+  std::vector<double> prefix(static_cast<std::size_t>(T) + 1);
   Eigen::MatrixXd windows(T + L, m);
-  for (Eigen::Index j = -L; j < T; ++j)
-    windows.row(j + L) = prefix.row(std::min(T, j + L + 1)) - prefix.row(std::max<Eigen::Index>(0, j));
-  return windows.transpose() * windows / static_cast<double>(L + 1);
+  for (Eigen::Index a = 0; a < m; ++a) {  // column by column, as both are stored
+    const double* s = series.col(a).data();
+    for (Eigen::Index t = 0; t < T; ++t) prefix[static_cast<std::size_t>(t) + 1] = prefix[static_cast<std::size_t>(t)] + s[t];
+    double* w = windows.col(a).data();
+    for (Eigen::Index j = -L; j < T; ++j)
+      w[j + L] = prefix[static_cast<std::size_t>(std::min(T, j + L + 1))] - prefix[static_cast<std::size_t>(std::max<Eigen::Index>(0, j))];
+  }
+  Eigen::MatrixXd meat = Eigen::MatrixXd::Zero(m, m);
+  meat.selfadjointView<Eigen::Lower>().rankUpdate(windows.transpose(), 1.0 / static_cast<double>(L + 1));
+  return meat.selfadjointView<Eigen::Lower>();
 }
 
 // α̂(1) = Σ_a 4ρ_a²/((1−ρ_a)⁶(1+ρ_a)²) / Σ_a 1/(1−ρ_a)⁴ over the score components a (each
@@ -35,12 +43,18 @@ double andrews_bandwidth(const std::vector<Eigen::MatrixXd>& series) {
   double num = 0, den = 0, length = 0;
   for (const auto& s : series) length += static_cast<double>(s.rows());
   length /= static_cast<double>(series.size());
+  constexpr Eigen::Index kLags[] = {0, 1, 2, 4, 8};
   for (Eigen::Index a = 0; a < m; ++a) {
+    // The five autocovariances in one pass over the component.
+    double sums[std::size(kLags)] = {};
+    for (const auto& s : series) {
+      const double* x = s.col(a).data();
+      for (Eigen::Index t = 0; t < s.rows(); ++t)
+        for (std::size_t k = 0; k < std::size(kLags); ++k)
+          if (t >= kLags[k]) sums[k] += x[t] * x[t - kLags[k]];
+    }
     auto autocovariance = [&](Eigen::Index lag) {
-      double c = 0;
-      for (const auto& s : series)
-        for (Eigen::Index t = lag; t < s.rows(); ++t) c += s(t, a) * s(t - lag, a);
-      return c;
+      return sums[std::find(std::begin(kLags), std::end(kLags), lag) - std::begin(kLags)];
     };
     const double c0 = autocovariance(0);
     if (!(c0 > 0)) continue;
