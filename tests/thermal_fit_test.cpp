@@ -412,3 +412,45 @@ TEST_F(ThermalFitCatalogTest, UserBarFromTheManifestCatalogFits) {
 
 }  // namespace
 }  // namespace lmcal
+
+namespace lmcal {
+namespace {
+
+// The end profiles come from the fit's last evaluation with derivatives (extrapolated exactly
+// where the fit is linear, as for α alone; taken as they are after a nonlinear fit, with h):
+// at each thermocouple the profile equals the model's last reading less the offset.
+TEST(ThermalFit, EndProfilesAgreeWithTheFittedReadings) {
+  ThermalRigConfig rig = clean_rig(2 * 3600.0);
+  rig.noise_K = 0.05;
+  const auto data = generate_thermal_dataset(rig, {}, "end").set;
+  for (const bool fit_h : {false, true}) {
+    ThermalFitOptions o = options_for_rig();
+    o.fit_h = fit_h;
+    o.per_run_fits = false;
+    o.alpha_start = 0.45;  // away from the solution: the extrapolation must carry the whole step
+    const auto result = fit_thermal(data, o);
+    ASSERT_EQ(result.end_states.size(), result.runs.size());
+    for (std::size_t r = 0; r < result.runs.size(); ++r) {
+      const auto& end = result.end_states[r];
+      const auto& x = end.model.position_m;
+      const auto& T = end.model.temperature_C;
+      for (std::size_t s = 0; s < end.sensor_position_m.size(); ++s) {
+        double last = std::numeric_limits<double>::quiet_NaN(), time = -1;
+        for (const auto& sample : result.samples)
+          if (sample.run == r && sample.sensor == s && sample.time_s > time) time = sample.time_s, last = sample.simulated_C;
+        const std::string name = "offset " + result.runs[r].id + " " + result.sensor_names[r][s];
+        double offset = 0;
+        for (const auto& p : result.joint.parameters)
+          if (p.name == name) offset = p.value;
+        const double position = std::abs(end.sensor_position_m[s]);
+        const std::size_t j = static_cast<std::size_t>(std::upper_bound(x.begin(), x.end(), position) - x.begin()) - 1;
+        const double w = j + 1 < x.size() ? (position - x[j]) / (x[j + 1] - x[j]) : 0.0;
+        const double profile = j + 1 < x.size() ? T[j] + w * (T[j + 1] - T[j]) : T[j];
+        EXPECT_NEAR(profile, last - offset, 1e-7) << (fit_h ? "with h, " : "alpha alone, ") << result.runs[r].id << " " << s;
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace lmcal

@@ -85,7 +85,7 @@ RailSolution<T> simulate_rail_keeping_mean_heat(const RailGeometry& geometry, co
 template <typename T, typename Param>
 std::vector<std::vector<T>> simulate_run(const PreparedRun& run, const RailNumerics& numerics,
                                          const ThermalLayout& layout, std::size_t r, const Param& param,
-                                         RailProfile* end_profile = nullptr) {
+                                         RailProfile* end_profile = nullptr, std::vector<T>* end_field = nullptr) {
   const bool scaled = !layout.heat_scale.empty() && layout.heat_scale[r] >= 0;
   const T heat_scale = scaled ? param(layout.heat_scale[r]) : T(1.0);
   // A schedule's phase heats carry the run's heat scale too (and with it its derivative).
@@ -117,14 +117,18 @@ std::vector<std::vector<T>> simulate_run(const PreparedRun& run, const RailNumer
   const RailOutputs outputs{.duration_s = run.times_s.back(),
                             .sensor_positions_m = run.sensor_positions_m,
                             .output_times_s = run.times_s,
-                            .profile_times_s = end_profile ? std::vector<double>{run.times_s.back()} : std::vector<double>{}};
+                            .profile_times_s = end_profile || end_field ? std::vector<double>{run.times_s.back()}
+                                                                        : std::vector<double>{}};
   const RailSolution<T> sol =
       setup.heat_rate && setup.heat_rate_is_run_mean
           ? simulate_rail_keeping_mean_heat(run.geometry, numerics, outputs, setup.params, run.ambient, setup.heat_rate)
           : simulate_rail(run.geometry, numerics, outputs, setup.params, run.ambient, setup.heat_rate);
-  if constexpr (std::is_same_v<T, double>) {
-    if (end_profile) *end_profile = {run.times_s.back(), sol.node_positions_m, sol.profiles_C.front()};
+  if (end_profile) {
+    std::vector<double> values;
+    for (const T& x : sol.profiles_C.front()) values.push_back(value_of(x));
+    *end_profile = {run.times_s.back(), sol.node_positions_m, std::move(values)};
   }
+  if (end_field) *end_field = sol.profiles_C.front();
   std::vector<std::vector<T>> out(run.times_s.size(), std::vector<T>(run.sensor_positions_m.size()));
   for (std::size_t s = 0; s < run.sensor_positions_m.size(); ++s) {
     std::vector<T> series(run.times_s.size());
@@ -230,12 +234,11 @@ class ThermalCost final : public ceres::CostFunction {
   }
 
  private:
+  // θ_global as a T: a Jet carrying the derivative in its slot when the parameter is one of
+  // the run's `local` ones.
   template <typename T>
-  bool evaluate_run(std::size_t run, const double* theta, const std::vector<int>& local, double* r, double* J,
-                    std::size_t& row) const {
-    const ThermalLayout& layout = model_.layout();
-    const auto P = static_cast<std::size_t>(layout.size);
-    auto param = [&](int global) {
+  static auto parameter(const double* theta, const std::vector<int>& local) {
+    return [theta, &local](int global) {
       if constexpr (std::is_same_v<T, double>) {
         return theta[global];
       } else {
@@ -244,8 +247,35 @@ class ThermalCost final : public ceres::CostFunction {
         return T(theta[global]);
       }
     };
+  }
+
+  template <typename T>
+  bool evaluate_run(std::size_t run, const double* theta, const std::vector<int>& local, double* r, double* J,
+                    std::size_t& row) const {
+    const ThermalLayout& layout = model_.layout();
+    const auto param = parameter<T>(theta, local);
     const PreparedRun& pr = model_.runs()[run];
-    const auto simulated = simulate_run<T>(pr, model_.numerics(), layout, run, param);
+    if constexpr (std::is_same_v<T, double>) {
+      return evaluate_rows(run, theta, local, r, J, row, simulate_run<T>(pr, model_.numerics(), layout, run, param));
+    } else {  // with the end profile and its slopes, for end_profiles()
+      RailProfile end;
+      std::vector<T> end_field;
+      auto simulated = simulate_run<T>(pr, model_.numerics(), layout, run, param, &end, &end_field);
+      std::vector<std::vector<double>> slope(local.size(), std::vector<double>(end_field.size()));
+      for (std::size_t j = 0; j < local.size(); ++j)
+        for (std::size_t i = 0; i < end_field.size(); ++i) slope[j][i] = end_field[i].v[static_cast<Eigen::Index>(j)];
+      model_.remember_end_profile(run, theta, local, std::move(end), std::move(slope));
+      return evaluate_rows(run, theta, local, r, J, row, simulated);
+    }
+  }
+
+  template <typename T>
+  bool evaluate_rows(std::size_t run, const double* theta, const std::vector<int>& local, double* r, double* J,
+                     std::size_t& row, const std::vector<std::vector<T>>& simulated) const {
+    const ThermalLayout& layout = model_.layout();
+    const auto P = static_cast<std::size_t>(layout.size);
+    const auto param = parameter<T>(theta, local);
+    const PreparedRun& pr = model_.runs()[run];
     const RunTerms terms = run_terms(pr, layout, theta, J != nullptr);
     const T T0 = layout.initial[run] >= 0 ? param(layout.initial[run]) : T(pr.params.initial_temperature_C);
     const auto& rows = model_.rows();
@@ -291,7 +321,7 @@ class ThermalCost final : public ceres::CostFunction {
 }  // namespace
 
 ThermalModel::ThermalModel(const std::vector<PreparedRun>& runs, ThermalLayout layout, RailNumerics numerics)
-    : runs_(runs), layout_(std::move(layout)), numerics_(numerics) {
+    : runs_(runs), layout_(std::move(layout)), numerics_(numerics), end_memo_(runs.size()) {
   for (std::size_t r = 0; r < runs_.size(); ++r) {
     first_row_.push_back(rows_.size());
     for (std::size_t t = 0; t < runs_[r].times_s.size(); ++t)
@@ -443,9 +473,38 @@ std::vector<std::vector<std::vector<double>>> ThermalModel::term_sums(
   return out;
 }
 
+void ThermalModel::remember_end_profile(std::size_t r, const double* theta, const std::vector<int>& local,
+                                        RailProfile profile, std::vector<std::vector<double>> slope) const {
+  EndProfileMemo& m = end_memo_[r];
+  m.theta.assign(theta, theta + layout_.size);
+  m.local = local;
+  m.profile = std::move(profile);
+  m.slope = std::move(slope);
+}
+
 std::vector<RailProfile> ThermalModel::end_profiles(const std::vector<double>& theta) const {
   std::vector<RailProfile> out(runs_.size());
   for_each_run(runs_.size(), [&](std::size_t r) {
+    const EndProfileMemo& m = end_memo_[r];
+    // Only without a mechanism that is not linear even when held (a coupling makes the heat
+    // follow the temperature, so the field is not affine in α whatever its parameter).
+    const bool plain = std::all_of(layout_.extensions.begin(), layout_.extensions.end(),
+                                   [](const ThermalExtension* e) { return e->linear; });
+    if (m.theta.size() == theta.size()) {
+      std::vector<bool> unchanged(theta.size());
+      for (std::size_t k = 0; k < theta.size(); ++k) unchanged[k] = theta[k] == m.theta[k];
+      const bool same = std::find(unchanged.begin(), unchanged.end(), false) == unchanged.end();
+      if (same || (plain && linear(unchanged))) {  // exact: T(θ) = T(θ_m) + Σ ∂T/∂θ_k (θ_k - θ_m,k)
+        out[r] = m.profile;
+        for (std::size_t j = 0; j < m.local.size(); ++j) {
+          const auto k = static_cast<std::size_t>(m.local[j]);
+          if (unchanged[k]) continue;
+          for (std::size_t i = 0; i < out[r].temperature_C.size(); ++i)
+            out[r].temperature_C[i] += m.slope[j][i] * (theta[k] - m.theta[k]);
+        }
+        return;
+      }
+    }
     simulate_run<double>(runs_[r], numerics_, layout_, r, [&](int g) { return theta[g]; }, &out[r]);
   });
   return out;

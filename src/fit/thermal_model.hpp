@@ -72,8 +72,14 @@ class ThermalModel : public LeastSquaresModel {
   // temperatures `simulated` (simulate(θ); rise_time needs them).
   std::vector<std::vector<std::vector<double>>> term_sums(const std::vector<double>& theta,
                                                           const std::vector<std::vector<std::vector<double>>>& simulated) const;
-  // Each run's temperature along the rail at its last record, for parameters θ.
+  // Each run's temperature along the rail at its last record, for parameters θ: from the last
+  // evaluation with derivatives where the model is linear in every parameter that changed
+  // since (exact; a linear fit never simulates at its solution), else simulated.
   std::vector<RailProfile> end_profiles(const std::vector<double>& theta) const;
+  // Run r's end profile at θ with its slopes over the parameters `local` (slope[j][node]), kept
+  // for end_profiles(). Called by the cost function, for each run from one thread.
+  void remember_end_profile(std::size_t r, const double* theta, const std::vector<int>& local, RailProfile profile,
+                            std::vector<std::vector<double>> slope) const;
 
   struct Row {
     std::size_t run, time, sensor;
@@ -92,6 +98,13 @@ class ThermalModel : public LeastSquaresModel {
   std::vector<Row> rows_;                     // measured (not NaN) samples, run by run
   std::vector<std::size_t> first_row_;        // per run, into rows_
   std::vector<std::size_t> priors_;
+  struct EndProfileMemo {
+    std::vector<double> theta;  // empty: none yet
+    std::vector<int> local;
+    RailProfile profile;
+    std::vector<std::vector<double>> slope;
+  };
+  mutable std::vector<EndProfileMemo> end_memo_;  // per run, sized at construction
 };
 
 }  // namespace lmcal::detail

@@ -9,6 +9,7 @@
 #include <deque>
 #include <memory>
 #include <mutex>
+#include <type_traits>
 #include <optional>
 #include <string>
 
@@ -265,17 +266,20 @@ class TridiagonalFactor {
     inv_[twist_] = T(1.0) / pivot;
   }
 
-  void solve(std::vector<T>& r) const {
+  // The right-hand side may carry derivatives the matrix does not (V a Jet, T double): each
+  // operation is then a Jet times a number, not a Jet times a Jet.
+  template <typename V>
+  void solve(std::vector<V>& r) const {
     LMCAL_ASSERT(r.size() == n_, "right-hand side of the wrong size");
-    T* x = r.data();
+    V* x = r.data();
     const T* inv = inv_.data();
     const T* m = m_.data();
     const std::size_t k = twist_, last = n_ - 1;
     const std::size_t top = k, bottom = last - k;  // rows eliminated from each end
     // The running values live in locals: reloading x[i - 1] from memory would put a
     // store-to-load round trip on the dependency chain.
-    T up = top > 0 ? x[0] * inv[0] : T(0.0);
-    T down = bottom > 0 ? x[last] * inv[last] : T(0.0);
+    V up = top > 0 ? V(x[0] * inv[0]) : V(0.0);
+    V down = bottom > 0 ? V(x[last] * inv[last]) : V(0.0);
     if (top > 0) x[0] = up;
     if (bottom > 0) x[last] = down;
     const std::size_t both = std::min(top, bottom);
@@ -288,7 +292,7 @@ class TridiagonalFactor {
     for (std::size_t j = std::max<std::size_t>(both, 1); j < top; ++j) x[j] = up = x[j] * inv[j] - m[j] * up;
     for (std::size_t j = std::max<std::size_t>(both, 1); j < bottom; ++j)
       x[last - j] = down = x[last - j] * inv[last - j] - m[last - j] * down;
-    T centre = x[k];
+    V centre = x[k];
     if (k > 0) centre -= off_ * x[k - 1];
     if (k < last) centre -= off_ * x[k + 1];
     centre *= inv[k];
@@ -458,8 +462,10 @@ class ThetaStepper {
   double dt() const { return dt_; }
 
   // current (at t0) -> next (at t0 + Δt). Accumulates the energy terms when `energy` is given.
-  void advance(const std::vector<T>& current, std::vector<T>& next, double t0, const AmbientTrace& ambient,
-               SourceTerm<T>& source, RailEnergy<T>* energy) const {
+  // V, the field's scalar, may carry derivatives the operator (T) does not.
+  template <typename V>
+  void advance(const std::vector<V>& current, std::vector<V>& next, double t0, const AmbientTrace& ambient,
+               SourceTerm<V>& source, RailEnergy<V>* energy) const {
     const std::size_t n = current.size();
     const double t1 = t0 + dt_;
     const double ambient_theta = theta_ * ambient.at(t1) + (1.0 - theta_) * ambient.at(t0);
@@ -469,14 +475,14 @@ class ThetaStepper {
       for (std::size_t i = 1; i + 1 < n; ++i) next[i] += explicit_link_ * (current[i - 1] + current[i + 1]);
       next[n - 1] += explicit_link_ * current[n - 2];
     }
-    const T injected = source.add(t0, t1, next);
+    const V injected = source.add(t0, t1, next);
     factor_.solve(next);
     if (energy == nullptr) return;
     // The scheme's own quadrature of the losses, so the balance closes to round-off.
     auto excess = [&](std::size_t i) { return theta_ * next[i] + (1.0 - theta_) * current[i] - ambient_theta; };
     energy->injected_J += injected;
     for (std::size_t i = 0; i < n; ++i) {
-      const T e = excess(i) * dt_;
+      const V e = excess(i) * dt_;
       energy->convected_side_J += op_.side[i] * e;
       energy->base_J += op_.base[i] * e;
     }
@@ -501,28 +507,33 @@ class ThetaStepper {
 
 }  // namespace
 
-template <typename T>
-RailSolution<T> simulate_rail(const RailGeometry& geometry, const RailNumerics& numerics,
-                              const RailOutputs& outputs, const RailParams<T>& params,
-                              const AmbientTrace& ambient, const HeatRateModel<T>& heat_rate) {
-  require_positive("duration_s", outputs.duration_s);
-  validate(ambient, outputs.duration_s);
-  validate_times("output_times_s", outputs.output_times_s, outputs.duration_s);
-  validate_times("profile_times_s", outputs.profile_times_s, outputs.duration_s);
-  const Prepared<T> prep = prepare(geometry, numerics, outputs.sensor_positions_m, params);
+// True when x carries a derivative.
+bool varies(double) { return false; }
+template <int N>
+bool varies(const ceres::Jet<double, N>& x) {
+  return !x.v.isZero();
+}
+
+// The time stepping of simulate_rail, on an operator of scalar O: T where a fitted parameter
+// changes the operator (h, k, ρ, c, base loss), double where none does — the factorisation
+// and every product with the operator then cost a number, not a Jet (α and the heat enter only
+// the right-hand side: their derivatives are further right-hand sides through one factorisation).
+template <typename O, typename T>
+RailSolution<T> simulate_on(const Operator<O>& op, const Prepared<T>& prep, const RailNumerics& numerics,
+                            const RailOutputs& outputs, const RailParams<T>& params, const AmbientTrace& ambient,
+                            const HeatRateModel<T>& heat_rate) {
   const Grid& grid = prep.grid;
-  const Operator<T>& op = prep.op;
   const std::size_t n = grid.size();
 
   const int steps = static_cast<int>(std::ceil(outputs.duration_s / numerics.time_step_s - 1e-9));
   const double dt = outputs.duration_s / steps;
   const bool crank_nicolson = numerics.scheme == TimeScheme::crank_nicolson;
-  const ThetaStepper<T> stepper(op, n, crank_nicolson ? 0.5 : 1.0, dt);
+  const ThetaStepper<O> stepper(op, n, crank_nicolson ? 0.5 : 1.0, dt);
   // Rannacher start-up: Crank-Nicolson's first step is taken as kStartupSubsteps backward-Euler
   // substeps, which damp the stiff modes that switching the heat on excites (CN alone would let
   // them ring for hours) while keeping second order.
   constexpr int kStartupSubsteps = 4;
-  const ThetaStepper<T> startup(op, n, 1.0, dt / kStartupSubsteps);
+  const ThetaStepper<O> startup(op, n, 1.0, dt / kStartupSubsteps);
 
   const HeatRateSchedule<T>& schedule = params.heat_schedule;
   validate(schedule);
@@ -531,7 +542,7 @@ RailSolution<T> simulate_rail(const RailGeometry& geometry, const RailNumerics& 
   // The steps, in order: (start, the stepper), the last ending exactly at the duration.
   struct Step {
     double t0, t_next;
-    const ThetaStepper<T>* stepper;
+    const ThetaStepper<O>* stepper;
     bool last;
   };
   std::vector<Step> plan;
@@ -539,7 +550,7 @@ RailSolution<T> simulate_rail(const RailGeometry& geometry, const RailNumerics& 
     double t = 0.0;
     for (int step = 0; step < steps; ++step) {
       const bool substeps = crank_nicolson && step == 0;
-      const ThetaStepper<T>& s = substeps ? startup : stepper;
+      const ThetaStepper<O>& s = substeps ? startup : stepper;
       for (int k = 0; k < (substeps ? kStartupSubsteps : 1); ++k) {
         const bool last = step + 1 == steps && (!substeps || k + 1 == kStartupSubsteps);
         const double t_next = last ? outputs.duration_s : t + s.dt();
@@ -627,6 +638,24 @@ RailSolution<T> simulate_rail(const RailGeometry& geometry, const RailNumerics& 
                   f * energy.base_J};
   }
   return sol;
+}
+
+template <typename T>
+RailSolution<T> simulate_rail(const RailGeometry& geometry, const RailNumerics& numerics,
+                              const RailOutputs& outputs, const RailParams<T>& params,
+                              const AmbientTrace& ambient, const HeatRateModel<T>& heat_rate) {
+  require_positive("duration_s", outputs.duration_s);
+  validate(ambient, outputs.duration_s);
+  validate_times("output_times_s", outputs.output_times_s, outputs.duration_s);
+  validate_times("profile_times_s", outputs.profile_times_s, outputs.duration_s);
+  const Prepared<T> prep = prepare(geometry, numerics, outputs.sensor_positions_m, params);
+  if constexpr (!std::is_same_v<T, double>) {
+    if (!varies(params.h_W_m2K) && !varies(params.conductivity_W_mK) && !varies(params.density_kg_m3) &&
+        !varies(params.specific_heat_J_kgK) && !varies(params.base_loss_W_mK))
+      return simulate_on(make_operator(prep.grid, geometry, values_of(params)), prep, numerics, outputs, params, ambient,
+                         heat_rate);
+  }
+  return simulate_on(prep.op, prep, numerics, outputs, params, ambient, heat_rate);
 }
 
 template <typename T>
