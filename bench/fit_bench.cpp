@@ -79,13 +79,18 @@ lmcal::ThermalDataSet four_runs() {
   return lmcal::generate_thermal_dataset(rig, {}, "bench").set;
 }
 
-void BM_ThermalAlpha4Runs(benchmark::State& state) {
+void alpha_fit(benchmark::State& state, bool extras) {
   static const lmcal::ThermalDataSet data = four_runs();
   lmcal::ThermalFitOptions options;
   options.half_rail_segments = 499;  // 500 nodes
   options.time_step_s = 5;
   options.per_run_fits = false;
   options.compare_sources = false;
+  if (!extras) {  // the fit and its covariance: no bootstrap, no profile, no α error curve
+    options.fit.bootstrap = 0;
+    options.fit.profile = lmcal::ProfileMode::none;
+    options.curve_points = 0;
+  }
   for (auto _ : state) {
     const auto result = lmcal::fit_thermal(data, options);
     benchmark::DoNotOptimize(result.joint.parameters.data());
@@ -93,7 +98,11 @@ void BM_ThermalAlpha4Runs(benchmark::State& state) {
   state.counters["records"] = static_cast<double>(data.runs[0].trace.size());
 }
 
+void BM_ThermalAlpha4Runs(benchmark::State& state) { alpha_fit(state, true); }
 BENCHMARK(BM_ThermalAlpha4Runs)->Unit(benchmark::kMillisecond)->MinTime(2.0);
+
+void BM_ThermalAlpha4RunsNoExtras(benchmark::State& state) { alpha_fit(state, false); }
+BENCHMARK(BM_ThermalAlpha4RunsNoExtras)->Unit(benchmark::kMillisecond)->MinTime(2.0);
 
 }  // namespace
 

@@ -9,7 +9,7 @@
 //   template <typename T> T operator()(Prepared<T>& prepared, std::size_t row) const;
 // `prepare` turns θ into the model's parameter structs once, so the row loop does not
 // rebuild them (for Jets that copying is a large part of the cost).
-// Up to 8 parameters use Jet<double, 8>, up to 16 Jet<double, 16>.
+// Up to 8 parameters use Jet<double, 8>, up to 12 Jet<double, 12>, up to 16 Jet<double, 16>.
 #pragma once
 
 #include <ceres/cost_function.h>
@@ -172,15 +172,7 @@ class BatchedAutoDiffCostFunction final : public ceres::CostFunction, public Nor
       sums.add(groups_.empty() ? 0 : groups_[i], x.data());
       return std::isfinite(r);
     };
-    bool ok = true;
-    if (analytic()) {
-      ok = analytic_rows(theta, x.data(), add);
-    } else if (p <= 8) {
-      ok = jet_rows<8>(theta, x.data(), add);
-    } else {
-      ok = jet_rows<16>(theta, x.data(), add);
-    }
-    if (!ok) return false;
+    if (!rows_with_gradient(theta, x.data(), add)) return false;
     const Eigen::MatrixXd S = sums.finish(groups_.empty() ? std::vector<double>{} : shrink_or_ones());
     JtJ = S.topLeftCorner(p, p);
     Jtr = S.col(p).head(p);
@@ -199,9 +191,7 @@ class BatchedAutoDiffCostFunction final : public ceres::CostFunction, public Nor
       for (int j = 0; j < p; ++j) J(row, j) = gradient[static_cast<std::size_t>(j)];
       return std::isfinite(value);
     };
-    const bool ok = analytic() ? analytic_rows(theta, gradient.data(), store)
-                    : p <= 8   ? jet_rows<8>(theta, gradient.data(), store)
-                               : jet_rows<16>(theta, gradient.data(), store);
+    const bool ok = rows_with_gradient(theta, gradient.data(), store);
     if (ok && !groups_.empty()) centre_columns(r, J);
     return ok;
   }
@@ -215,11 +205,14 @@ class BatchedAutoDiffCostFunction final : public ceres::CostFunction, public Nor
         residuals[i] = robust_residual(functor_(prepared, i), loss_);
         ok = std::isfinite(residuals[i]);
       }
-    } else if (analytic()) {
-      ok = evaluate_analytic(theta, residuals, jacobians[0]);
     } else {
-      ok = parameter_block_sizes()[0] <= 8 ? evaluate_jets<8>(theta, residuals, jacobians[0])
-                                           : evaluate_jets<16>(theta, residuals, jacobians[0]);
+      const auto p = static_cast<std::size_t>(parameter_block_sizes()[0]);
+      std::vector<double> gradient(p);
+      ok = rows_with_gradient(theta, gradient.data(), [&](std::size_t i, double r) {
+        residuals[i] = r;
+        std::copy(gradient.begin(), gradient.end(), jacobians[0] + i * p);
+        return std::isfinite(r);
+      });
     }
     if (ok && !groups_.empty()) centre(residuals, jacobians ? jacobians[0] : nullptr);
     return ok;
@@ -260,14 +253,15 @@ class BatchedAutoDiffCostFunction final : public ceres::CostFunction, public Nor
     }
   }
 
-  bool evaluate_analytic(const double* theta, double* residuals, double* jacobian) const {
-    const auto p = static_cast<std::size_t>(parameter_block_sizes()[0]);
-    std::vector<double> gradient(p);
-    return analytic_rows(theta, gradient.data(), [&](std::size_t i, double r) {
-      residuals[i] = r;
-      std::copy(gradient.begin(), gradient.end(), jacobian + i * p);
-      return std::isfinite(r);
-    });
+  // Each row's gradient into `gradient`, then visit(row, residual), by the closed form where
+  // the functor has one, else by the smallest Jet that holds the parameters (8, 12 or 16).
+  template <typename Visit>
+  bool rows_with_gradient(const double* theta, double* gradient, const Visit& visit) const {
+    const int p = parameter_block_sizes()[0];
+    if (analytic()) return analytic_rows(theta, gradient, visit);
+    if (p <= 8) return jet_rows<8>(theta, gradient, visit);
+    if (p <= 12) return jet_rows<12>(theta, gradient, visit);
+    return jet_rows<16>(theta, gradient, visit);
   }
 
   // Flattened: GCC otherwise leaves Eigen's Jet assignments out of line in the row loop (a
@@ -285,17 +279,6 @@ class BatchedAutoDiffCostFunction final : public ceres::CostFunction, public Nor
       if (!visit(i, r.a)) return false;
     }
     return true;
-  }
-
-  template <int N>
-  bool evaluate_jets(const double* theta, double* residuals, double* jacobian) const {
-    const auto p = static_cast<std::size_t>(parameter_block_sizes()[0]);
-    std::vector<double> gradient(p);
-    return jet_rows<N>(theta, gradient.data(), [&](std::size_t i, double r) {
-      residuals[i] = r;
-      std::copy(gradient.begin(), gradient.end(), jacobian + i * p);
-      return std::isfinite(r);
-    });
   }
 
   std::vector<double> shrink_or_ones() const {

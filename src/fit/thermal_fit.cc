@@ -809,8 +809,8 @@ ThermalFitResult fit_thermal(const ThermalDataSet& data, const ThermalFitOptions
     for (std::size_t s = 0; s < pr.sensor_names.size(); ++s) {
       SensorGoodness g{pr.id, pr.sensor_names[s], pr.sensor_positions_m[s], 0, 0, 0, 0};
       double ss = 0;
-      for (std::size_t k = 0; k < rows.size(); ++k) {
-        if (rows[k].run != r || rows[k].sensor != s) continue;
+      for (std::size_t k = model.first_row(r); k < rows.size() && rows[k].run == r; ++k) {  // the run's rows
+        if (rows[k].sensor != s) continue;
         const double measured = pr.measured[rows[k].time][s];
         ss += error[k] * error[k];
         g.max_error_K = std::max(g.max_error_K, std::abs(error[k]));
@@ -864,12 +864,14 @@ ThermalFitResult fit_thermal(const ThermalDataSet& data, const ThermalFitOptions
   }
   const double alpha_hat = theta[static_cast<std::size_t>(layout.alpha)];
   for (std::size_t r = 0; r < runs.size(); ++r) {
+    std::vector<std::size_t> first_sensor;  // the run's rows of its first thermocouple
+    for (std::size_t k = model.first_row(r); k < rows.size() && rows[k].run == r; ++k)
+      if (rows[k].sensor == 0) first_sensor.push_back(k);
     for (int c = 0; c < o.curve_points; ++c) {
       const double alpha = o.curve_from + (o.curve_to - o.curve_from) * c / std::max(1, o.curve_points - 1);
       double ss = 0, worst = 0;
       std::size_t n = 0;
-      for (std::size_t k = 0; k < rows.size(); ++k) {
-        if (rows[k].run != r || rows[k].sensor != 0) continue;
+      for (std::size_t k : first_sensor) {
         const double e = error[k] + d_alpha[k] * (alpha - alpha_hat);
         ss += e * e;
         worst = std::max(worst, std::abs(e));

@@ -118,7 +118,8 @@ std::vector<std::vector<T>> simulate_run(const PreparedRun& run, const RailNumer
                             .sensor_positions_m = run.sensor_positions_m,
                             .output_times_s = run.times_s,
                             .profile_times_s = end_profile || end_field ? std::vector<double>{run.times_s.back()}
-                                                                        : std::vector<double>{}};
+                                                                        : std::vector<double>{},
+                            .source_temperature = false};  // only the sensors are compared
   const RailSolution<T> sol =
       setup.heat_rate && setup.heat_rate_is_run_mean
           ? simulate_rail_keeping_mean_heat(run.geometry, numerics, outputs, setup.params, run.ambient, setup.heat_rate)

@@ -595,7 +595,8 @@ RailSolution<T> simulate_on(const Operator<O>& op, const Prepared<T>& prep, cons
     };
     // The temperature under the block at both ends, once per interval with outputs (the start's
     // carried over from the previous interval when it was computed there).
-    const bool any = next_output < outputs.output_times_s.size() && within(outputs.output_times_s[next_output]);
+    const bool any = outputs.source_temperature && next_output < outputs.output_times_s.size() &&
+                     within(outputs.output_times_s[next_output]);
     std::optional<T> ts_before, ts_after;
     if (any) {
       ts_before = carried_source_temperature ? *carried_source_temperature : source.source_temperature(before);
@@ -605,7 +606,7 @@ RailSolution<T> simulate_on(const Operator<O>& op, const Prepared<T>& prep, cons
     for (; next_output < outputs.output_times_s.size() && within(outputs.output_times_s[next_output]); ++next_output) {
       const double s = share(outputs.output_times_s[next_output]);
       record_sensors(prep.probes, before, after, s, sol.sensor_temperature_C);
-      sol.source_temperature_C.push_back(*ts_before + s * (*ts_after - *ts_before));
+      if (outputs.source_temperature) sol.source_temperature_C.push_back(*ts_before + s * (*ts_after - *ts_before));
       sol.heat_rate_W.push_back(schedule.empty() ? q_before + s * (q_after - q_before)
                                                  : schedule.at(outputs.output_times_s[next_output]));
     }

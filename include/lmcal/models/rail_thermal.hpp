@@ -78,6 +78,9 @@ struct RailOutputs {
   std::vector<double> output_times_s;      // ascending, within [0, duration]
   std::vector<double> profile_times_s;     // ascending; whole temperature profile at these times
   bool energy_balance = false;             // account injected / stored / convected energy
+  // RailSolution::source_temperature_C at every output (false: left empty — a fit that needs
+  // only the sensors saves a weighted sum over the rail per record).
+  bool source_temperature = true;
 };
 
 // Q_f(t) for a heat that changes during the run (a heater switched off, a block that stops, a
