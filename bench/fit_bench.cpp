@@ -56,6 +56,25 @@ void BM_FrictionFit100kNoExtras(benchmark::State& state) {
 }
 BENCHMARK(BM_FrictionFit100kNoExtras)->Unit(benchmark::kMillisecond)->MinTime(2.0);
 
+// Writing a fit's samples CSV (100 k rows, 13 columns): the text, not the disk.
+void BM_WriteFrictionSamplesCsv(benchmark::State& state) {
+  static const FrictionLog log = hundred_thousand_samples();
+  static const FrictionFitResult result = [] {
+    FrictionFitOptions options;
+    options.per_run_fits = false;
+    options.fit.bootstrap = 0;
+    return fit_friction(log, options);
+  }();
+  std::size_t bytes = 0;
+  for (auto _ : state) {
+    const std::string text = friction_fit_samples_csv(result, log);
+    bytes = text.size();
+    benchmark::DoNotOptimize(text.data());
+  }
+  state.SetBytesProcessed(state.iterations() * static_cast<std::int64_t>(bytes));
+}
+BENCHMARK(BM_WriteFrictionSamplesCsv)->Unit(benchmark::kMillisecond)->MinTime(2.0);
+
 void BM_FrictionFit1MNoExtras(benchmark::State& state) {
   static const FrictionLog log = [] {
     FrictionRigConfig rig;

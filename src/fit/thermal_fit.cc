@@ -1023,6 +1023,7 @@ std::string thermal_fit_json(const ThermalFitResult& r, const ThermalFitOptions&
 
 std::string thermal_fit_samples_csv(const ThermalFitResult& r) {
   CsvText csv({"run", "sensor", "time_s", "measured_C", "simulated_C", "residual_K"});
+  csv.expect_rows(r.samples.size());
   for (const auto& s : r.samples) {
     csv.cell(r.runs[s.run].id).cell(r.sensor_names[s.run][s.sensor]).cell(s.time_s).cell(s.measured_C);
     csv.cell(s.simulated_C).cell(s.measured_C - s.simulated_C).end_row();

@@ -21,11 +21,21 @@ class CsvText {
   CsvText& cell(std::string_view text);
   CsvText& cell(const char* text) { return cell(std::string_view(text)); }
   CsvText& end_row();
+  // About how many rows will follow (the text is then allocated once, after the first row).
+  CsvText& expect_rows(std::size_t rows) {
+    rows_expected_ = rows;
+    return *this;
+  }
   const std::string& str() const { return text_; }
 
  private:
-  std::size_t columns_, in_row_ = 0;
+  std::size_t columns_, in_row_ = 0, header_bytes_ = 0, rows_expected_ = 0, rows_written_ = 0;
   std::string text_;
+  struct LastCell {
+    double value = 0;
+    std::string text;  // empty: none yet
+  };
+  std::vector<LastCell> last_;  // per column: the last number written, and its text
 };
 
 }  // namespace lmcal
