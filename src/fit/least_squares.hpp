@@ -110,6 +110,18 @@ FitResult solve_least_squares(const LeastSquaresModel& model, const std::vector<
 Eigen::VectorXd leave_group_out_residuals(const FinalState& state, const std::vector<std::size_t>& group_of_row,
                                           const std::vector<bool>& held);
 
+// The same in parts, for callers that hold out each group with its own parameters held:
+// J_gᵀJ_g and J_gᵀr_g per group over all parameters (computed once, by blocks of consecutive
+// rows), and the held-out step of one group.
+struct GroupNormalEquations {
+  std::vector<Eigen::MatrixXd> H;  // per group, all parameters
+  std::vector<Eigen::VectorXd> b;
+  Eigen::MatrixXd total;           // Σ_g H_g
+};
+GroupNormalEquations group_normal_equations(const FinalState& state, const std::vector<std::size_t>& group_of_row);
+// Δθ with group g left out and `held` parameters kept (zero in the result).
+Eigen::VectorXd leave_group_out_step(const GroupNormalEquations& sums, std::size_t g, const std::vector<bool>& held);
+
 // (JᵀJ)⁻¹ over the parameters not held (rows/columns of held ones zero); false with a message
 // when J is rank deficient.
 bool covariance_from_jacobian(const Eigen::MatrixXd& J, const std::vector<bool>& held, Eigen::MatrixXd& covariance,

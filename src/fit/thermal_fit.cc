@@ -419,6 +419,7 @@ double leave_one_run_out_rmse(const ThermalModel& model, const FitResult& joint,
   // loss that the data push below 0 to a negative value, scoring a physics the fit refused.
   std::vector<bool> held;
   for (const auto& p : joint.parameters) held.push_back(!p.free || p.held_unidentifiable || p.at_bound);
+  const detail::GroupNormalEquations sums = detail::group_normal_equations(state, group);
   double ss = 0;
   for (std::size_t r = 0; r < runs; ++r) {
     std::vector<int> own;
@@ -428,18 +429,18 @@ double leave_one_run_out_rmse(const ThermalModel& model, const FitResult& joint,
     std::erase_if(own, [&](int i) { return i < 0 || held[static_cast<std::size_t>(i)]; });
     std::vector<bool> held_r = held;
     for (int i : own) held_r[static_cast<std::size_t>(i)] = true;
-    const Eigen::VectorXd predicted = detail::leave_group_out_residuals(state, group, held_r);
+    const Eigen::VectorXd step = detail::leave_group_out_step(sums, r, held_r);
     // The run's rows (and its heat-scale prior row), and its own parameters re-estimated.
     std::vector<Eigen::Index> mine;
-    for (std::size_t k = 0; k < rows.size(); ++k)
-      if (rows[k].run == r) mine.push_back(static_cast<Eigen::Index>(k));
+    for (std::size_t k = model.first_row(r); k < rows.size() && rows[k].run == r; ++k) mine.push_back(static_cast<Eigen::Index>(k));
     const std::size_t data_rows = mine.size();
     for (std::size_t k = 0; k < model.prior_runs().size(); ++k)
       if (model.prior_runs()[k] == r) mine.push_back(static_cast<Eigen::Index>(rows.size() + k));
     Eigen::VectorXd e(static_cast<Eigen::Index>(mine.size()));
     Eigen::MatrixXd N(static_cast<Eigen::Index>(mine.size()), static_cast<Eigen::Index>(own.size()));
     for (std::size_t i = 0; i < mine.size(); ++i) {
-      e[static_cast<Eigen::Index>(i)] = i < data_rows ? predicted[mine[i]] : state.residuals[mine[i]];
+      e[static_cast<Eigen::Index>(i)] =
+          i < data_rows ? state.residuals[mine[i]] + state.jacobian.row(mine[i]).dot(step) : state.residuals[mine[i]];
       for (std::size_t j = 0; j < own.size(); ++j)
         N(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = state.jacobian(mine[i], own[j]);
     }
