@@ -330,16 +330,19 @@ check "a raw log of the user's guide loads with its block length" "$LMCAL" check
 check "a bar missing its material is refused at load, naming where to add it" refused "add conductivity_W_mK to its entry there" check thermal heater/bar.toml --catalog thin.toml
 
 # Deterministic: the same outputs with one thread or two (timings aside).
-OMP_NUM_THREADS=1 "$LMCAL" calibrate "$SOURCE/measurements/rig" -o threads1 >/dev/null 2>&1
-OMP_NUM_THREADS=2 "$LMCAL" calibrate "$SOURCE/measurements/rig" -o threads2 >/dev/null 2>&1
-same_with_threads() {
+# Both bundled sets: the diagnoses fit their candidates one per thread.
+same_with_threads() {  # same_with_threads SET
+  rm -rf threads1 threads2
+  OMP_NUM_THREADS=1 "$LMCAL" calibrate "$1" -o threads1 >/dev/null 2>&1
+  OMP_NUM_THREADS=2 "$LMCAL" calibrate "$1" -o threads2 >/dev/null 2>&1
   local f
   for f in threads1/*; do
     cmp -s <(grep -v '"seconds"' "$f") <(grep -v '"seconds"' "threads2/${f#threads1/}") || { echo "  $f differs"; return 1; }
   done
   test -s threads1/report.html
 }
-check "calibrate gives the same outputs with 1 and 2 threads" same_with_threads
+check "calibrate gives the same outputs with 1 and 2 threads (rig-shaped set)" same_with_threads "$SOURCE/measurements/rig"
+check "calibrate gives the same outputs with 1 and 2 threads (Cheng 2017 set)" same_with_threads "$SOURCE/measurements/cheng2017"
 
 # The bundled set is exactly what the recorded commands make (the command lines aside).
 LMCAL="$LMCAL" bash "$SOURCE/scripts/make-bundled-data.sh" "$work/bundled" "$work/bundled-rig" >/dev/null
