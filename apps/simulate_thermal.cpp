@@ -161,6 +161,40 @@ RailSolution<double> simulate_case(const Case& c, const RailNumerics& numerics, 
                                        c.conditions, rail.mechanisms, rail.values);
 }
 
+// Every case's transient. Cases on one rail whose source is static (the block's speed does
+// not enter) and whose heat is constant run together, four in SIMD lanes (simulate_rails:
+// the same numbers as one by one); the rest one by one.
+std::vector<RailSolution<double>> simulate_cases(const std::vector<Case>& cases, const RailNumerics& numerics,
+                                                 const RailOutputs& outputs, const AmbientTrace& ambient,
+                                                 const RailModel& rail, const FrictionLaw& law) {
+  std::vector<RailSolution<double>> out(cases.size());
+  const bool lanes = rail.mechanisms.empty() && numerics.source != SourceModel::moving && !outputs.energy_balance;
+  auto same_rail = [](const RailGeometry& a, const RailGeometry& b) {
+    return a.rail_length_m == b.rail_length_m && a.area_m2 == b.area_m2 && a.perimeter_m == b.perimeter_m &&
+           a.stroke_m == b.stroke_m && a.contact_length_m == b.contact_length_m;
+  };
+  std::vector<bool> done(cases.size(), false);
+  for (std::size_t k = 0; k < cases.size() && lanes; ++k) {
+    if (done[k] || !cases[k].params.heat_schedule.empty()) continue;
+    std::vector<std::size_t> group;
+    for (std::size_t j = k; j < cases.size(); ++j)
+      if (!done[j] && cases[j].params.heat_schedule.empty() && same_rail(cases[j].geometry, cases[k].geometry))
+        group.push_back(j);
+    if (group.size() < 2) continue;
+    std::vector<RailParams<double>> params;
+    for (std::size_t j : group) params.push_back(cases[j].params);
+    auto solutions = simulate_rails(cases[k].geometry, numerics, outputs, params,
+                                    std::vector<AmbientTrace>(group.size(), ambient));
+    for (std::size_t i = 0; i < group.size(); ++i) {
+      out[group[i]] = std::move(solutions[i]);
+      done[group[i]] = true;
+    }
+  }
+  for (std::size_t k = 0; k < cases.size(); ++k)
+    if (!done[k]) out[k] = simulate_case(cases[k], numerics, outputs, cases[k].params, ambient, rail, law);
+  return out;
+}
+
 // The steady state under the ambient at the end, along the rail, with its heat rate.
 struct SteadyState {
   std::vector<double> x_m, temperature_C;
@@ -272,13 +306,16 @@ void run_simulate_thermal(const ThermalSweepOptions& o, const std::vector<std::s
   const std::vector<Case> cases = enumerate_cases(o, initial_C, rail, law);
   nlohmann::json errors = nlohmann::json::array(), steady_changes = nlohmann::json::array();
   TerminalProgress progress;
+  progress.step(0, 2, "simulating " + std::to_string(cases.size()) + " cases");
+  const std::vector<RailSolution<double>> solutions = simulate_cases(cases, numerics, outputs, ambient, rail, law);
+  const std::vector<RailSolution<double>> references =
+      o.reference ? simulate_cases(cases, converged(numerics), outputs, ambient, rail, law) : std::vector<RailSolution<double>>{};
+  progress.step(1, 2, "steady states and outputs");
   for (std::size_t k = 0; k < cases.size(); ++k) {
     const Case& c = cases[k];
-    progress.step(k, cases.size(), "simulating case " + std::to_string(k));
-    const auto sol = simulate_case(c, numerics, outputs, c.params, ambient, rail, law);
+    const RailSolution<double>& sol = solutions[k];
     const SteadyState steady = steady_state(c, numerics, ambient.at(o.duration_s), rail, law);
-    RailSolution<double> ref;
-    if (o.reference) ref = simulate_case(c, converged(numerics), outputs, c.params, ambient, rail, law);
+    const RailSolution<double> ref = o.reference ? references[k] : RailSolution<double>{};
 
     // heat_rate_W: Q_f at that time (it follows the rail with a coupled heat rate).
     auto case_cells = [&](CsvText& csv, double heat_rate_W) {

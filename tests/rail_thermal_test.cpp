@@ -482,3 +482,52 @@ TEST(RailThermal, RefusesABadScheduleAndScheduleWithCoupling) {
 
 }  // namespace
 }  // namespace lmcal
+
+namespace lmcal {
+namespace {
+
+// Runs in SIMD lanes give exactly what each run gives alone: six runs (a full sweep of four
+// and a partial one), each with its own α, heat, h, k, T0, base loss and ambient trace, for
+// both schemes and both static sources; profiles too. And what lanes cannot take is refused.
+TEST(RailThermal, RunsInLanesEqualRunsAlone) {
+  const RailGeometry g = test::srn35c_geometry(0.066);
+  RailOutputs out{.duration_s = 3 * 3600.0, .sensor_positions_m = {0.0, 0.07, 0.2}, .profile_times_s = {1800.0, 3 * 3600.0}};
+  for (double t = 0; t <= out.duration_s; t += 300) out.output_times_s.push_back(t);
+  std::vector<RailParams<double>> params;
+  std::vector<AmbientTrace> ambients;
+  for (int r = 0; r < 6; ++r) {
+    RailParams<double> p = test::srn35c_params();
+    p.heat_partition = 0.5 + 0.05 * r;
+    p.heat_rate_W = 8.0 + 2.0 * r;
+    p.h_W_m2K = 4.0 + 0.5 * r;
+    p.conductivity_W_mK = 17.0 + r;
+    p.initial_temperature_C = 24.0 + 0.3 * r;
+    p.base_loss_W_mK = 0.1 * r;
+    params.push_back(p);
+    ambients.push_back({{0.0, 5000.0, out.duration_s}, {24.0 + 0.2 * r, 25.0 - 0.1 * r, 24.5}});
+  }
+  for (const SourceModel source : {SourceModel::paper, SourceModel::averaged})
+    for (const TimeScheme scheme : {TimeScheme::backward_euler, TimeScheme::crank_nicolson}) {
+      const RailNumerics n = numerics(source, scheme, 60, 20);
+      const auto lanes = simulate_rails(g, n, out, params, ambients);
+      ASSERT_EQ(lanes.size(), params.size());
+      for (std::size_t r = 0; r < params.size(); ++r) {
+        const auto alone = simulate_rail(g, n, out, params[r], ambients[r]);
+        EXPECT_EQ(lanes[r].sensor_temperature_C, alone.sensor_temperature_C) << "run " << r;
+        EXPECT_EQ(lanes[r].profiles_C, alone.profiles_C) << "run " << r;
+        EXPECT_EQ(lanes[r].source_temperature_C, alone.source_temperature_C) << "run " << r;
+        EXPECT_EQ(lanes[r].steps, alone.steps);
+      }
+    }
+  EXPECT_THROW(simulate_rails(g, numerics(SourceModel::moving, TimeScheme::crank_nicolson, 60, 20), out, params, ambients),
+               InvalidParameter);
+  EXPECT_THROW(simulate_rails(g, numerics(SourceModel::averaged, TimeScheme::crank_nicolson, 60, 20), out, params,
+                              std::vector<AmbientTrace>(2, AmbientTrace::constant(25.0))),
+               InvalidParameter);
+  params[3].heat_partition = 1.5;  // every lane is checked, not only the first
+  EXPECT_THROW(simulate_rails(g, numerics(SourceModel::averaged, TimeScheme::crank_nicolson, 60, 20), out, params, ambients),
+               InvalidParameter);
+}
+
+}  // namespace
+}  // namespace lmcal

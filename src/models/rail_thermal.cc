@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <deque>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <type_traits>
@@ -111,6 +112,56 @@ RailParams<double> values_of(const RailParams<T>& p) {
   return {value_of(p.heat_partition),      value_of(p.heat_rate_W),         value_of(p.h_W_m2K),
           value_of(p.conductivity_W_mK),   value_of(p.density_kg_m3),       value_of(p.specific_heat_J_kgK),
           value_of(p.initial_temperature_C), value_of(p.base_loss_W_mK)};
+}
+
+// Several runs' numbers side by side (SIMD lanes): the solver's arithmetic lane by lane, so
+// one sweep advances L runs (simulate_rails). The loops over a fixed L vectorise, and the L
+// elimination chains of a tridiagonal solve run interleaved.
+template <int L>
+struct Lanes {
+  double v[L];
+  Lanes() : v{} {}
+  Lanes(double x) {  // NOLINT(google-explicit-constructor): a number in every lane, as a Jet takes one
+    for (int l = 0; l < L; ++l) v[l] = x;
+  }
+  template <typename F>
+  Lanes& apply(const Lanes& b, F f) {
+    for (int l = 0; l < L; ++l) v[l] = f(v[l], b.v[l]);
+    return *this;
+  }
+  Lanes& operator+=(const Lanes& b) { return apply(b, std::plus<>()); }
+  Lanes& operator-=(const Lanes& b) { return apply(b, std::minus<>()); }
+  Lanes& operator*=(const Lanes& b) { return apply(b, std::multiplies<>()); }
+  Lanes& operator/=(const Lanes& b) { return apply(b, std::divides<>()); }
+  friend Lanes operator+(Lanes a, const Lanes& b) { return a += b; }
+  friend Lanes operator-(Lanes a, const Lanes& b) { return a -= b; }
+  friend Lanes operator*(Lanes a, const Lanes& b) { return a *= b; }
+  friend Lanes operator/(Lanes a, const Lanes& b) { return a /= b; }
+  // With a number (the operator's coefficients when they are shared, weights, Δt).
+  friend Lanes operator+(Lanes a, double b) { return a += Lanes(b); }
+  friend Lanes operator-(Lanes a, double b) { return a -= Lanes(b); }
+  friend Lanes operator*(Lanes a, double b) { return a *= Lanes(b); }
+  friend Lanes operator/(Lanes a, double b) { return a /= Lanes(b); }
+  friend Lanes operator+(double a, const Lanes& b) { return Lanes(a) += b; }
+  friend Lanes operator-(double a, const Lanes& b) { return Lanes(a) -= b; }
+  friend Lanes operator*(double a, const Lanes& b) { return Lanes(a) *= b; }
+  friend Lanes operator/(double a, const Lanes& b) { return Lanes(a) /= b; }
+};
+
+// L ambient traces, read at once.
+template <int L>
+struct LaneAmbient {
+  const AmbientTrace* traces[L];
+  Lanes<L> at(double t) const {
+    Lanes<L> out;
+    for (int l = 0; l < L; ++l) out.v[l] = traces[l]->at(t);
+    return out;
+  }
+};
+
+template <int L>
+double value_of(const Lanes<L>& x) {
+  return x.v[0];
 }
 
 void validate(const AmbientTrace& ambient, double duration_s) {
@@ -404,6 +455,10 @@ class SourceTerm {
       : model_(model), power_(power), weights_(static_source_weights(static_shape(model), motion, grid.faces)),
         sweeps_(std::move(sweeps)) {
     for (double w : weights_) weight_total_ += w;
+    // The nodes the block heats (the weights are 0 elsewhere: adding nothing there is skipped).
+    while (heated_begin_ < weights_.size() && weights_[heated_begin_] == 0.0) ++heated_begin_;
+    heated_end_ = weights_.size();
+    while (heated_end_ > heated_begin_ && weights_[heated_end_ - 1] == 0.0) --heated_end_;
     LMCAL_ASSERT(model != SourceModel::moving || sweeps_, "the moving source needs its sweeps");
   }
 
@@ -413,7 +468,7 @@ class SourceTerm {
   // average for the moving block).
   T source_temperature(const std::vector<T>& field) const {
     T sum{};
-    for (std::size_t i = 0; i < field.size(); ++i)
+    for (std::size_t i = heated_begin_; i < heated_end_; ++i)
       if (weights_[i] != 0.0) sum += weights_[i] * field[i];
     return sum / weight_total_;
   }
@@ -432,7 +487,7 @@ class SourceTerm {
       }
       return power_ * total_s;
     }
-    for (std::size_t i = 0; i < rhs.size(); ++i) rhs[i] += power_ * weights_[i];
+    for (std::size_t i = heated_begin_; i < heated_end_; ++i) rhs[i] += power_ * weights_[i];
     return power_ * (weight_total_ * dt);
   }
 
@@ -441,6 +496,7 @@ class SourceTerm {
   T power_;
   std::vector<double> weights_;  // share of P per volume (the averaged shape for `moving`)
   double weight_total_ = 0;
+  std::size_t heated_begin_ = 0, heated_end_ = 0;  // the nodes with a weight
   std::shared_ptr<const StepSweeps> sweeps_;
   std::size_t next_sweep_ = 0;
 };
@@ -463,12 +519,12 @@ class ThetaStepper {
 
   // current (at t0) -> next (at t0 + Δt). Accumulates the energy terms when `energy` is given.
   // V, the field's scalar, may carry derivatives the operator (T) does not.
-  template <typename V>
-  void advance(const std::vector<V>& current, std::vector<V>& next, double t0, const AmbientTrace& ambient,
+  template <typename V, typename Ambient>
+  void advance(const std::vector<V>& current, std::vector<V>& next, double t0, const Ambient& ambient,
                SourceTerm<V>& source, RailEnergy<V>* energy) const {
     const std::size_t n = current.size();
     const double t1 = t0 + dt_;
-    const double ambient_theta = theta_ * ambient.at(t1) + (1.0 - theta_) * ambient.at(t0);
+    const auto ambient_theta = theta_ * ambient.at(t1) + (1.0 - theta_) * ambient.at(t0);
     for (std::size_t i = 0; i < n; ++i) next[i] = explicit_diagonal_[i] * current[i] + convective_[i] * ambient_theta;
     if (theta_ < 1.0) {
       next[0] += explicit_link_ * current[1];
@@ -518,9 +574,9 @@ bool varies(const ceres::Jet<double, N>& x) {
 // changes the operator (h, k, ρ, c, base loss), double where none does — the factorisation
 // and every product with the operator then cost a number, not a Jet (α and the heat enter only
 // the right-hand side: their derivatives are further right-hand sides through one factorisation).
-template <typename O, typename T>
+template <typename O, typename T, typename Ambient>
 RailSolution<T> simulate_on(const Operator<O>& op, const Prepared<T>& prep, const RailNumerics& numerics,
-                            const RailOutputs& outputs, const RailParams<T>& params, const AmbientTrace& ambient,
+                            const RailOutputs& outputs, const RailParams<T>& params, const Ambient& ambient,
                             const HeatRateModel<T>& heat_rate) {
   const Grid& grid = prep.grid;
   const std::size_t n = grid.size();
@@ -657,6 +713,82 @@ RailSolution<T> simulate_rail(const RailGeometry& geometry, const RailNumerics& 
                          heat_rate);
   }
   return simulate_on(prep.op, prep, numerics, outputs, params, ambient, heat_rate);
+}
+
+std::vector<RailSolution<double>> simulate_rails(const RailGeometry& geometry, const RailNumerics& numerics,
+                                                 const RailOutputs& outputs, const std::vector<RailParams<double>>& params,
+                                                 const std::vector<AmbientTrace>& ambients) {
+  constexpr int L = 4;
+  if (ambients.size() != params.size())
+    throw InvalidParameter("ambients", "one ambient trace per run (" + std::to_string(params.size()) + " runs, " +
+                                           std::to_string(ambients.size()) + " traces)");
+  if (numerics.source == SourceModel::moving)
+    throw InvalidParameter("source", "runs in lanes take a static source (paper or averaged); simulate_rail takes the moving block");
+  if (outputs.energy_balance) throw InvalidParameter("energy_balance", "runs in lanes keep no energy balance; simulate_rail does");
+  require_positive("duration_s", outputs.duration_s);
+  validate_times("output_times_s", outputs.output_times_s, outputs.duration_s);
+  validate_times("profile_times_s", outputs.profile_times_s, outputs.duration_s);
+  for (std::size_t r = 0; r < params.size(); ++r) {
+    validate(params[r]);
+    validate(ambients[r], outputs.duration_s);
+    if (!params[r].heat_schedule.empty())
+      throw InvalidParameter("heat_schedule", "runs in lanes take a constant heat rate; simulate_rail takes a schedule");
+  }
+  std::vector<RailSolution<double>> out;
+  for (std::size_t first = 0; first < params.size(); first += L) {
+    // Lane l holds run first + l; a last, partial sweep repeats its last run in the spare lanes.
+    auto run_of = [&](int l) { return std::min(first + static_cast<std::size_t>(l), params.size() - 1); };
+    auto lanes = [&](double RailParams<double>::*field) {
+      Lanes<L> x;
+      for (int l = 0; l < L; ++l) x.v[l] = params[run_of(l)].*field;
+      return x;
+    };
+    RailParams<Lanes<L>> p{.heat_partition = lanes(&RailParams<double>::heat_partition),
+                           .heat_rate_W = lanes(&RailParams<double>::heat_rate_W),
+                           .h_W_m2K = lanes(&RailParams<double>::h_W_m2K),
+                           .conductivity_W_mK = lanes(&RailParams<double>::conductivity_W_mK),
+                           .density_kg_m3 = lanes(&RailParams<double>::density_kg_m3),
+                           .specific_heat_J_kgK = lanes(&RailParams<double>::specific_heat_J_kgK),
+                           .initial_temperature_C = lanes(&RailParams<double>::initial_temperature_C),
+                           .base_loss_W_mK = lanes(&RailParams<double>::base_loss_W_mK),
+                           .heat_schedule = {}};
+    LaneAmbient<L> ambient{};
+    for (int l = 0; l < L; ++l) ambient.traces[l] = &ambients[run_of(l)];
+    const Prepared<Lanes<L>> prep = prepare(geometry, numerics, outputs.sensor_positions_m, p);
+    // Runs on one rail usually share its operator (h, k, ρ, c, base loss): then it is one set
+    // of numbers for every lane, and the sweep's arrays stay in the first-level cache.
+    auto shared = [&](double RailParams<double>::*field) {
+      for (int l = 1; l < L; ++l)
+        if (params[run_of(l)].*field != params[run_of(0)].*field) return false;
+      return true;
+    };
+    const bool one_operator = shared(&RailParams<double>::h_W_m2K) && shared(&RailParams<double>::conductivity_W_mK) &&
+                              shared(&RailParams<double>::density_kg_m3) &&
+                              shared(&RailParams<double>::specific_heat_J_kgK) && shared(&RailParams<double>::base_loss_W_mK);
+    const RailSolution<Lanes<L>> sol =
+        one_operator ? simulate_on(make_operator(prep.grid, geometry, params[run_of(0)]), prep, numerics, outputs, p, ambient,
+                                   HeatRateModel<Lanes<L>>{})
+                     : simulate_on(prep.op, prep, numerics, outputs, p, ambient, HeatRateModel<Lanes<L>>{});
+    for (int l = 0; l < L && first + static_cast<std::size_t>(l) < params.size(); ++l) {
+      RailSolution<double> one;
+      one.output_times_s = sol.output_times_s;
+      one.sensor_positions_m = sol.sensor_positions_m;
+      one.node_positions_m = sol.node_positions_m;
+      one.time_step_s = sol.time_step_s;
+      one.steps = sol.steps;
+      auto lane = [&](const std::vector<Lanes<L>>& xs) {
+        std::vector<double> values(xs.size());
+        for (std::size_t k = 0; k < xs.size(); ++k) values[k] = xs[k].v[l];
+        return values;
+      };
+      one.sensor_temperature_C = lane(sol.sensor_temperature_C);
+      one.heat_rate_W = lane(sol.heat_rate_W);
+      one.source_temperature_C = lane(sol.source_temperature_C);
+      for (const auto& profile : sol.profiles_C) one.profiles_C.push_back(lane(profile));
+      out.push_back(std::move(one));
+    }
+  }
+  return out;
 }
 
 template <typename T>

@@ -185,6 +185,15 @@ RailSolution<T> simulate_rail(const RailGeometry& geometry, const RailNumerics& 
                               const RailOutputs& outputs, const RailParams<T>& params,
                               const AmbientTrace& ambient, const HeatRateModel<T>& heat_rate = {});
 
+// Several runs at once, in SIMD lanes (four per sweep): runs on one rail, grid, time plan and
+// outputs (`geometry`, `numerics`, `outputs` shared), each with its own parameters (α, heat
+// rate, h, k, ρ, c, T0, base loss) and ambient trace. A static source (paper or averaged);
+// no heat schedule, coupling or energy balance (simulate_rail, run by run, has them).
+// The same numbers as simulate_rail run by run: every lane does the same arithmetic.
+std::vector<RailSolution<double>> simulate_rails(const RailGeometry& geometry, const RailNumerics& numerics,
+                                                 const RailOutputs& outputs, const std::vector<RailParams<double>>& params,
+                                                 const std::vector<AmbientTrace>& ambients);
+
 // Steady state under a constant ambient and the constant RailParams::heat_rate_W, at the
 // nodes of the model's grid (`moving` gives the cycle-averaged steady state, i.e. that of
 // `averaged` on the full rail).
