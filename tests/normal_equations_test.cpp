@@ -79,7 +79,9 @@ TEST(NormalEquations, ClosedFormGradientEqualsJetsAndFiniteDifferences) {
     evaluate(jets, kTheta, r2, J2);
     const double* parameters[] = {kTheta.data()};
     ASSERT_TRUE(closed->Evaluate(parameters, r0.data(), nullptr));
-    if (loss.kind == RobustLoss::none) EXPECT_EQ(r1, r0) << "the residuals agree to the last bit with the residual-only evaluation";
+    if (loss.kind == RobustLoss::none) {
+      EXPECT_EQ(r1, r0) << "the residuals agree to the last bit with the residual-only evaluation";
+    }
     EXPECT_LE((r1 - r0).norm(), 1e-15 * r0.norm());
     EXPECT_LE((r1 - r2).norm(), 1e-14 * r2.norm());
     for (Eigen::Index j = 0; j < 7; ++j)
@@ -125,7 +127,9 @@ TEST(NormalEquations, AccumulatedRowByRowEqualTheStoredJacobians) {
                     1e-10 * std::sqrt(expected(a, a) * expected(b, b)) + 1e-14 * expected.diagonal().maxCoeff())
             << variant << ": " << a << "," << b;
     }
-    if (variant == 1) EXPECT_EQ(JtJ(0, 0), 0.0) << "k1 is constant within every run: centred away exactly";
+    if (variant == 1) {
+      EXPECT_EQ(JtJ(0, 0), 0.0) << "k1 is constant within every run: centred away exactly";
+    }
   }
 }
 

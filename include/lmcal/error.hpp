@@ -7,10 +7,12 @@
 // exceptions: they are reported in the result structs.
 #pragma once
 
+#include "lmcal/export.hpp"
+
 #include <stdexcept>
 #include <string>
 
-namespace lmcal {
+namespace LMCAL_API lmcal {
 
 class InputError : public std::runtime_error {
  public:

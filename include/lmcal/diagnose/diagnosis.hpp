@@ -2,6 +2,8 @@
 // the score of a candidate cause, and the shift of the baseline's parameters.
 #pragma once
 
+#include "lmcal/export.hpp"
+
 #include <cstddef>
 #include <functional>
 #include <limits>
@@ -10,7 +12,7 @@
 
 #include "lmcal/fit/fit_result.hpp"
 
-namespace lmcal {
+namespace LMCAL_API lmcal {
 
 // A diagnosis holds one run out at a time and scores it from the others.
 inline constexpr std::size_t kMinDiagnosisRuns = 3;

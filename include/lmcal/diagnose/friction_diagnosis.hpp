@@ -21,13 +21,15 @@
 //      they follow. Otherwise "no significant discrepancy".
 #pragma once
 
+#include "lmcal/export.hpp"
+
 #include <string>
 #include <vector>
 
 #include "lmcal/diagnose/diagnosis.hpp"
 #include "lmcal/fit/friction_fit.hpp"
 
-namespace lmcal {
+namespace LMCAL_API lmcal {
 
 struct ResidualDiagnostics {
   double rmse_N = 0;

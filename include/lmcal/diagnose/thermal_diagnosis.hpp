@@ -51,13 +51,15 @@
 //   friction of the cold rail is known instead.
 #pragma once
 
+#include "lmcal/export.hpp"
+
 #include <string>
 #include <vector>
 
 #include "lmcal/diagnose/diagnosis.hpp"
 #include "lmcal/fit/thermal_fit.hpp"
 
-namespace lmcal {
+namespace LMCAL_API lmcal {
 
 struct SensorResiduals {
   std::string run, sensor;

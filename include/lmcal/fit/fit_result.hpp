@@ -22,6 +22,8 @@
 // says which one to quote.
 #pragma once
 
+#include "lmcal/export.hpp"
+
 #include <Eigen/Core>
 
 #include <cstddef>
@@ -30,7 +32,7 @@
 #include <utility>
 #include <vector>
 
-namespace lmcal {
+namespace LMCAL_API lmcal {
 
 enum class RobustLoss { none, huber, cauchy };
 enum class ProfileMode { none, automatic, all };

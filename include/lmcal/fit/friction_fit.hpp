@@ -19,6 +19,8 @@
 // k2 at its start value, says so in fit.identifiability, and k1 is conditional on it.
 #pragma once
 
+#include "lmcal/export.hpp"
+
 #include <array>
 #include <limits>
 #include <string>
@@ -31,7 +33,7 @@
 #include "lmcal/models/friction_effects.hpp"
 #include "lmcal/models/friction_terms.hpp"
 
-namespace lmcal {
+namespace LMCAL_API lmcal {
 
 enum class FrictionWeighting {
   none,           // σ_i = 1; the covariance is scaled by the residual variance

@@ -19,6 +19,8 @@
 // returns it: simulate with that source).
 #pragma once
 
+#include "lmcal/export.hpp"
+
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -28,7 +30,7 @@
 #include "lmcal/fit/friction_fit.hpp"
 #include "lmcal/fit/thermal_fit.hpp"
 
-namespace lmcal {
+namespace LMCAL_API lmcal {
 
 struct ModelParameter {
   std::string name, unit;

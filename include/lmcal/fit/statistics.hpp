@@ -10,10 +10,12 @@
 // Trap: Eq. 2 is undefined when E1 + E2 = 0; it returns NaN there.
 #pragma once
 
+#include "lmcal/export.hpp"
+
 #include <cstddef>
 #include <span>
 
-namespace lmcal {
+namespace LMCAL_API lmcal {
 
 double sample_standard_deviation(std::span<const double> values);  // Eq. 1; NaN for N < 2
 double percent_difference(double e1, double e2);                    // Eq. 2

@@ -23,6 +23,8 @@
 // power into the rail, so its α is about Lb1/L1 times the `averaged` one).
 #pragma once
 
+#include "lmcal/export.hpp"
+
 #include <limits>
 #include <optional>
 #include <string>
@@ -35,7 +37,7 @@
 #include "lmcal/models/friction_effects.hpp"
 #include "lmcal/models/rail_thermal.hpp"
 
-namespace lmcal {
+namespace LMCAL_API lmcal {
 
 // Thermocouple offsets: fitted where the data determine them, or as asked.
 enum class ThermalOffsets {

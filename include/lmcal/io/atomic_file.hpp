@@ -13,12 +13,14 @@
 // Trap: nothing reaches disk before commit(); build all contents first.
 #pragma once
 
+#include "lmcal/export.hpp"
+
 #include <filesystem>
 #include <string>
 #include <utility>
 #include <vector>
 
-namespace lmcal {
+namespace LMCAL_API lmcal {
 
 class OutputSet {
  public:

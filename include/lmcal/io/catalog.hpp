@@ -26,6 +26,8 @@
 // Trap: `find` matches model names ignoring case and spaces ("srn35c" finds "SRN 35C").
 #pragma once
 
+#include "lmcal/export.hpp"
+
 #include <filesystem>
 #include <map>
 #include <optional>
@@ -33,7 +35,7 @@
 #include <string_view>
 #include <vector>
 
-namespace lmcal {
+namespace LMCAL_API lmcal {
 
 struct GuideSpec {
   std::string model;                              // e.g. "SRN 35C"; a bar's name

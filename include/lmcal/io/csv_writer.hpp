@@ -8,11 +8,13 @@
 // Trap: end_row() checks the cell count against the header and aborts on a mismatch.
 #pragma once
 
+#include "lmcal/export.hpp"
+
 #include <string>
 #include <string_view>
 #include <vector>
 
-namespace lmcal {
+namespace LMCAL_API lmcal {
 
 class CsvText {
  public:

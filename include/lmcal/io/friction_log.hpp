@@ -33,6 +33,8 @@
 //   for (std::size_t i = 0; i < log.size(); ++i) use(log.conditions(i), log.friction_N[i]);
 #pragma once
 
+#include "lmcal/export.hpp"
+
 #include <cstdint>
 #include <filesystem>
 #include <map>
@@ -44,7 +46,7 @@
 #include "lmcal/io/load_report.hpp"
 #include "lmcal/models/friction.hpp"
 
-namespace lmcal {
+namespace LMCAL_API lmcal {
 
 // How a raw log's signed force relates to friction. `follows_motion`: the force is positive
 // while the block moves towards +x (the drive's pull, what an in-line load cell reads);

@@ -2,10 +2,12 @@
 // bytes it came from.
 #pragma once
 
+#include "lmcal/export.hpp"
+
 #include <filesystem>
 #include <string>
 
-namespace lmcal {
+namespace LMCAL_API lmcal {
 
 // Lower-case hex digest; InputError if the file cannot be read.
 std::string sha256_file(const std::filesystem::path& file);

@@ -2,12 +2,14 @@
 // ignored, unit conversions applied, gaps found. Part of every loaded result.
 #pragma once
 
+#include "lmcal/export.hpp"
+
 #include <cstddef>
 #include <map>
 #include <string>
 #include <vector>
 
-namespace lmcal {
+namespace LMCAL_API lmcal {
 
 struct LoadReport {
   std::string file;

@@ -6,12 +6,14 @@
 // no valid sample stays NaN); a trailing partial block is averaged as it is.
 #pragma once
 
+#include "lmcal/export.hpp"
+
 #include <cstddef>
 
 #include "lmcal/io/friction_log.hpp"
 #include "lmcal/io/thermal_run.hpp"
 
-namespace lmcal {
+namespace LMCAL_API lmcal {
 
 ThermalTrace decimate(const ThermalTrace& trace, std::size_t every);
 ThermalTrace block_average(const ThermalTrace& trace, std::size_t block);

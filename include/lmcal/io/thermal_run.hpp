@@ -61,6 +61,8 @@
 // for the manifest alike, before anything is returned.
 #pragma once
 
+#include "lmcal/export.hpp"
+
 #include <filesystem>
 #include <map>
 #include <optional>
@@ -70,7 +72,7 @@
 #include "lmcal/io/catalog.hpp"
 #include "lmcal/io/load_report.hpp"
 
-namespace lmcal {
+namespace LMCAL_API lmcal {
 
 struct TemperatureChannel {
   std::string name;            // the header as written, e.g. "tc1_C"

@@ -17,12 +17,14 @@
 // Trap: temperature conversions have an offset; always call Conversion::apply.
 #pragma once
 
+#include "lmcal/export.hpp"
+
 #include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
 
-namespace lmcal {
+namespace LMCAL_API lmcal {
 
 enum class Quantity { time, velocity, force, preload, length_mm, distance_m, temperature, viscosity };
 

@@ -27,12 +27,14 @@
 // a negative V here makes the viscous term negative and the Stribeck term blow up.
 #pragma once
 
+#include "lmcal/export.hpp"
+
 #include <array>
 #include <cmath>
 #include <cstddef>
 #include <utility>
 
-namespace lmcal {
+namespace LMCAL_API lmcal {
 
 // The seven friction constants of Eq. 8 plus the viscosity reference point of Eq. 6.
 template <typename T>

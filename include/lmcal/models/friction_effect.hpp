@@ -22,7 +22,9 @@
 // test checks it for the whole library), or a fit of another effect would carry it along.
 #pragma once
 
-namespace lmcal {
+#include "lmcal/export.hpp"
+
+namespace LMCAL_API lmcal {
 
 struct FrictionEffectInfo {
   const char* name;         // the parameter's name in fits, truth files and on the command line

@@ -10,6 +10,8 @@
 // place in the library), by type (`e.of<SealDrag>()`) or by name (friction_effect_slot).
 #pragma once
 
+#include "lmcal/export.hpp"
+
 #include <array>
 #include <cstddef>
 #include <optional>
@@ -27,7 +29,7 @@
 #include "lmcal/models/friction_effects/stribeck_exponent.hpp"
 #include "lmcal/models/friction_effects/viscous_load.hpp"
 
-namespace lmcal {
+namespace LMCAL_API lmcal {
 
 template <class... Effects>
 struct FrictionEffectList {

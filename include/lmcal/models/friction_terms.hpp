@@ -30,6 +30,8 @@
 // term, N/(K·m/s) for temperature × speed); a term in F_law is relative (1 = 100 %).
 #pragma once
 
+#include "lmcal/export.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
@@ -41,7 +43,7 @@
 #include "lmcal/io/friction_log.hpp"
 #include "lmcal/models/friction_effects.hpp"
 
-namespace lmcal {
+namespace LMCAL_API lmcal {
 
 enum class TermCovariate {
   velocity_m_s,

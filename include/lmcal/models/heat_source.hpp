@@ -20,11 +20,13 @@
 // is ≈ w/L1 times α from `averaged`.
 #pragma once
 
+#include "lmcal/export.hpp"
+
 #include <cstddef>
 #include <string_view>
 #include <vector>
 
-namespace lmcal {
+namespace LMCAL_API lmcal {
 
 enum class SourceModel { paper, averaged, moving };
 

@@ -41,6 +41,8 @@
 // so give such traces backward Euler or a step near the jump's time scale.
 #pragma once
 
+#include "lmcal/export.hpp"
+
 #include <cstddef>
 #include <functional>
 #include <string_view>
@@ -48,7 +50,7 @@
 
 #include "lmcal/models/heat_source.hpp"
 
-namespace lmcal {
+namespace LMCAL_API lmcal {
 
 enum class TimeScheme { backward_euler, crank_nicolson };
 std::string_view to_string(TimeScheme scheme);

@@ -8,11 +8,13 @@
 //   thermocouple lag    τ dy/dt = x - y                (exact for x linear between samples)
 #pragma once
 
+#include "lmcal/export.hpp"
+
 #include <cmath>
 #include <cstddef>
 #include <vector>
 
-namespace lmcal {
+namespace LMCAL_API lmcal {
 
 inline constexpr double kAlphaReferenceVelocity_m_s = 0.1;
 

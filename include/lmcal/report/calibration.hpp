@@ -28,6 +28,8 @@
 // fields that differ between runs.
 #pragma once
 
+#include "lmcal/export.hpp"
+
 #include <cstddef>
 #include <filesystem>
 #include <functional>
@@ -43,7 +45,7 @@
 #include "lmcal/io/friction_log.hpp"
 #include "lmcal/io/thermal_run.hpp"
 
-namespace lmcal {
+namespace LMCAL_API lmcal {
 
 struct CalibrationSet {
   std::filesystem::path dir;

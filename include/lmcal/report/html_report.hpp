@@ -27,12 +27,14 @@
 // plots that did not draw (a browser test reads it; the page needs no script to be read).
 #pragma once
 
+#include "lmcal/export.hpp"
+
 #include <string>
 #include <vector>
 
 #include "lmcal/report/calibration.hpp"
 
-namespace lmcal {
+namespace LMCAL_API lmcal {
 
 std::string calibration_report_html(const Calibration& c);
 

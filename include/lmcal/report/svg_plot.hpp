@@ -28,12 +28,15 @@
 // and '_') clip one plot's data to the other's frame.
 #pragma once
 
+#include "lmcal/export.hpp"
+
 #include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
 
-namespace lmcal::report {
+namespace LMCAL_API lmcal {
+namespace report {
 
 enum class Mark { line, points, line_points };
 
@@ -81,4 +84,5 @@ std::string escape_xml(std::string_view text);
 // steps a double tells apart (a step below 1e-14 of the magnitude) {lo, hi}; non-finite gives {}.
 std::vector<double> nice_ticks(double lo, double hi, int target_count);
 
-}  // namespace lmcal::report
+}  // namespace report
+}  // namespace lmcal

@@ -43,6 +43,8 @@
 // the same white draws as before; heat_factor and g come from a stream of their own.
 #pragma once
 
+#include "lmcal/export.hpp"
+
 #include <cstdint>
 #include <map>
 #include <string>
@@ -53,7 +55,7 @@
 #include "lmcal/io/thermal_run.hpp"
 #include "lmcal/models/friction_effects.hpp"
 
-namespace lmcal {
+namespace LMCAL_API lmcal {
 
 struct ThermalRigEffects {
   double convection_velocity = 0;  // c_V in h = h0 + c_V sqrt(V), W/m²K per sqrt(m/s)

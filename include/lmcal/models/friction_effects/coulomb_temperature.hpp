@@ -4,10 +4,12 @@
 // offset that moves with the logged temperature.
 #pragma once
 
+#include "lmcal/export.hpp"
+
 #include "lmcal/models/friction.hpp"
 #include "lmcal/models/friction_effect.hpp"
 
-namespace lmcal {
+namespace LMCAL_API lmcal {
 
 struct CoulombTemperature {
   static constexpr FrictionEffectInfo info{"coulomb_temperature", "1/K", "Coulomb term (1 + c (T - T_i))", 0.0, -0.1, 0.1,

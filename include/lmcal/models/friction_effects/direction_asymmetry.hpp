@@ -3,10 +3,12 @@
 // every other effect applied; shows as forward and backward strokes that differ in proportion.
 #pragma once
 
+#include "lmcal/export.hpp"
+
 #include "lmcal/models/friction.hpp"
 #include "lmcal/models/friction_effect.hpp"
 
-namespace lmcal {
+namespace LMCAL_API lmcal {
 
 struct DirectionAsymmetry {
   static constexpr FrictionEffectInfo info{"direction_asymmetry", "1", "friction (1 + a) forward, (1 - a) backward",

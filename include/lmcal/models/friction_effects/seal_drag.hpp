@@ -2,10 +2,12 @@
 // faster than the lubricant's linear viscous term; shows at the highest speeds. A drag: c_s >= 0.
 #pragma once
 
+#include "lmcal/export.hpp"
+
 #include "lmcal/models/friction.hpp"
 #include "lmcal/models/friction_effect.hpp"
 
-namespace lmcal {
+namespace LMCAL_API lmcal {
 
 struct SealDrag {
   static constexpr FrictionEffectInfo info{"seal_drag", "N s2/m2", "quadratic seal drag c V²", 0.0, 0.0, 5000.0, 100.0,

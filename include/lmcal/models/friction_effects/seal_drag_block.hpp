@@ -4,10 +4,12 @@
 // different block length. A drag: c_b >= 0.
 #pragma once
 
+#include "lmcal/export.hpp"
+
 #include "lmcal/models/friction.hpp"
 #include "lmcal/models/friction_effect.hpp"
 
-namespace lmcal {
+namespace LMCAL_API lmcal {
 
 struct SealDragBlock {
   static constexpr FrictionEffectInfo info{"seal_drag_block", "N s2/m2 per 100 mm", "quadratic seal drag c (L_b/100 mm) V²",

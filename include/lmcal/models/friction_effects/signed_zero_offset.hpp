@@ -4,10 +4,12 @@
 // A per-run zero that is the same in both directions is the run offset of the fit instead.
 #pragma once
 
+#include "lmcal/export.hpp"
+
 #include "lmcal/models/friction.hpp"
 #include "lmcal/models/friction_effect.hpp"
 
-namespace lmcal {
+namespace LMCAL_API lmcal {
 
 struct SignedZeroOffset {
   static constexpr FrictionEffectInfo info{"signed_zero_offset", "N", "load-cell zero o in the signed force: + direction o",

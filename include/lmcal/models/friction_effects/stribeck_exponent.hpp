@@ -4,12 +4,14 @@
 // at V = 0 the correction is exactly 0 and so is its derivative with respect to δ.
 #pragma once
 
+#include "lmcal/export.hpp"
+
 #include <cmath>
 
 #include "lmcal/models/friction.hpp"
 #include "lmcal/models/friction_effect.hpp"
 
-namespace lmcal {
+namespace LMCAL_API lmcal {
 
 struct StribeckExponent {
   static constexpr FrictionEffectInfo info{"stribeck_exponent", "1", "exponent δ of the Stribeck decay exp(-(V/V_St)^δ)",

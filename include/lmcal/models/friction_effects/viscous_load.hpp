@@ -3,10 +3,12 @@
 // thins under load; shows as a speed slope that grows with load.
 #pragma once
 
+#include "lmcal/export.hpp"
+
 #include "lmcal/models/friction.hpp"
 #include "lmcal/models/friction_effect.hpp"
 
-namespace lmcal {
+namespace LMCAL_API lmcal {
 
 struct ViscousLoad {
   static constexpr FrictionEffectInfo info{"viscous_load", "1/kN", "viscous coefficient grows with load: μv (1 + c P/kN)",
