@@ -16,7 +16,9 @@
 
 #include "lmcal/error.hpp"
 
-namespace lmcal {
+// The templates the public header declares are defined and instantiated here: in the
+// exported namespace, or a shared liblmcal would hide the instantiations.
+namespace LMCAL_API lmcal {
 
 std::string_view to_string(TimeScheme scheme) {
   return scheme == TimeScheme::backward_euler ? "backward-euler" : "crank-nicolson";
