@@ -58,19 +58,15 @@ struct FrictionResidual {
     const std::size_t entry = rows.empty() ? j : rows[j];
     const std::size_t i = data->samples[entry];
     const FrictionLog& log = *data->log;
+    p.k.nu_ref_mm2_s = log.viscosity40_mm2_s[i];
     const FrictionConstants<double>& k = p.k;
     const FrictionConditions<double> c = log.conditions(i);
-    const double x = c.temperature_C - k.T_ref_C;
-    const double nu = log.viscosity40_mm2_s[i] * std::exp(-k.beta_per_K * x);
-    const double E = std::exp(-c.velocity_m_s / k.v_st_m_s);
+    // The law's value from its one definition (the residual-only evaluation computes the
+    // same, to the last bit), the derivatives from its pieces.
+    const FrictionBreakdown<double> b = friction_breakdown(k, c);
+    const double x = c.temperature_C - k.T_ref_C, nu = b.viscosity_mm2_s;
     const double pc = c.preload_um, Lb = c.block_length_mm, V = c.velocity_m_s;
-    // The value exactly as friction_breakdown computes it (the residual-only evaluations
-    // must agree to the last bit), then the derivatives.
-    const double coulomb = (k.k1 - k.k2 * pc) * c.load_N * 1e-3;
-    const double viscous = Lb * (k.mu_v * pc * V * nu + k.f0);
-    const double stribeck = k.mu_st * pc * Lb / nu * E;
-    const double force = coulomb + stribeck + viscous;
-    const double viscous_per_mu = Lb * pc * V * nu, stribeck_per_mu = pc * Lb / nu * E;
+    const double viscous_per_mu = Lb * pc * V * nu, stribeck_per_mu = pc * Lb / nu * b.stribeck_decay;
     const double w = -data->inv_sigma[entry];  // r = (F_measured - F) / σ
     g[0] = w * c.load_N * 1e-3;
     g[1] = -w * pc * c.load_N * 1e-3;
@@ -79,7 +75,7 @@ struct FrictionResidual {
     g[4] = w * viscous_per_mu;
     g[5] = w * x * (k.mu_st * stribeck_per_mu - k.mu_v * viscous_per_mu);
     g[6] = w * Lb;
-    return (log.friction_N[i] - force) * data->inv_sigma[entry];
+    return (log.friction_N[i] - b.total_N()) * data->inv_sigma[entry];
   }
 
   template <typename T>

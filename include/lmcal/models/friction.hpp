@@ -107,6 +107,7 @@ struct FrictionConditions {
 template <typename T>
 struct FrictionBreakdown {
   T viscosity_mm2_s;
+  T stribeck_decay;  // exp(-V / V_St)
   T coulomb_N;
   T stribeck_N;
   T viscous_N;
@@ -128,9 +129,10 @@ auto friction_breakdown(const FrictionConstants<P>& k, const FrictionConditions<
   using R = decltype(std::declval<P>() * std::declval<C>());
   FrictionBreakdown<R> out;
   out.viscosity_mm2_s = nu;
+  out.stribeck_decay = exp(-c.velocity_m_s / k.v_st_m_s);
   out.coulomb_N = (k.k1 - k.k2 * c.preload_um) * c.load_N * 1e-3;
   out.viscous_N = c.block_length_mm * (k.mu_v * c.preload_um * c.velocity_m_s * nu + k.f0);
-  out.stribeck_N = k.mu_st * c.preload_um * c.block_length_mm / nu * exp(-c.velocity_m_s / k.v_st_m_s);
+  out.stribeck_N = k.mu_st * c.preload_um * c.block_length_mm / nu * out.stribeck_decay;
   return out;
 }
 
