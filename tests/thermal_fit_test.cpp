@@ -175,6 +175,13 @@ TEST(ThermalFit, RunMeanCoupledHeatHasTheModelsDerivatives) {
   const detail::ThermalModel started(at_start, layout, {.half_rail_segments = 40, .time_step_s = 60});
   const auto mean = model.simulate({0.55, 0.8, 24.3}), start = started.simulate({0.55, 0.8, 24.3});
   EXPECT_GT(mean[1].back()[0] - start[1].back()[0], 0.05);  // the same mean is more heat than the warming start's
+  // A coupled heat follows the rail, so the field is not affine in α even with κ held: the
+  // model must not be called linear (a linear solve, or an end profile extrapolated in α,
+  // would be wrong). The curvature it would miss is there:
+  const auto low = started.simulate({0.3, 0.8, 24.3}), mid = started.simulate({0.6, 0.8, 24.3}),
+             high = started.simulate({0.9, 0.8, 24.3});
+  EXPECT_GT(std::abs(mid[1].back()[0] - 0.5 * (low[1].back()[0] + high[1].back()[0])), 1e-4);
+  EXPECT_FALSE(started.linear({false, true, true}));
 }
 
 // A load cell's mean over a run that warms is below the friction of the cold rail. With the

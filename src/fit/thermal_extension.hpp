@@ -7,6 +7,9 @@
 //
 //   static constexpr const char* name, *description, *measure;   // measure: what to log to see it
 //   static constexpr bool linear;     // temperatures stay linear in α, offsets and its parameters
+//   static constexpr bool heat_follows_rail;  // optional (default false): Q_f follows the rail
+//                                             // temperature, so the field is not affine in α
+//                                             // whatever the mechanism's parameters
 //   static std::vector<ExtensionParameter> parameters();          // none for a switch
 //   static std::optional<SourceModel> source();                   // a source-model switch, or none
 //   template <typename T> static void apply(ThermalRunSetup<T>& run, const T* values);
@@ -61,6 +64,7 @@ class ThermalExtension {
     e.description = Mechanism::description;
     e.measure = Mechanism::measure;
     e.linear = Mechanism::linear;
+    if constexpr (requires { Mechanism::heat_follows_rail; }) e.heat_follows_rail = Mechanism::heat_follows_rail;
     e.parameters = Mechanism::parameters();
     e.source = Mechanism::source();
     e.apply_d_ = &Mechanism::template apply<double>;
@@ -82,6 +86,7 @@ class ThermalExtension {
 
   std::string name, description, measure;
   bool linear = false;
+  bool heat_follows_rail = false;
   std::vector<ExtensionParameter> parameters;
   std::optional<SourceModel> source;
 

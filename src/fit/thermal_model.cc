@@ -365,6 +365,8 @@ std::unique_ptr<ceres::CostFunction> ThermalModel::cost_function(const std::vect
 // h enters the operator and is not.
 bool ThermalModel::linear(const std::vector<bool>& held) const {
   for (std::size_t e = 0; e < layout_.extensions.size(); ++e) {
+    // A heat that follows the rail makes α act on the field through the heat: never linear.
+    if (layout_.extensions[e]->heat_follows_rail) return false;
     if (layout_.extensions[e]->linear) continue;
     for (std::size_t j = 0; j < layout_.extensions[e]->parameters.size(); ++j)
       if (!held[static_cast<std::size_t>(layout_.extension_first[e]) + j]) return false;
@@ -487,15 +489,11 @@ std::vector<RailProfile> ThermalModel::end_profiles(const std::vector<double>& t
   std::vector<RailProfile> out(runs_.size());
   for_each_run(runs_.size(), [&](std::size_t r) {
     const EndProfileMemo& m = end_memo_[r];
-    // Only without a mechanism that is not linear even when held (a coupling makes the heat
-    // follow the temperature, so the field is not affine in α whatever its parameter).
-    const bool plain = std::all_of(layout_.extensions.begin(), layout_.extensions.end(),
-                                   [](const ThermalExtension* e) { return e->linear; });
     if (m.theta.size() == theta.size()) {
       std::vector<bool> unchanged(theta.size());
       for (std::size_t k = 0; k < theta.size(); ++k) unchanged[k] = theta[k] == m.theta[k];
       const bool same = std::find(unchanged.begin(), unchanged.end(), false) == unchanged.end();
-      if (same || (plain && linear(unchanged))) {  // exact: T(θ) = T(θ_m) + Σ ∂T/∂θ_k (θ_k - θ_m,k)
+      if (same || linear(unchanged)) {  // exact: T(θ) = T(θ_m) + Σ ∂T/∂θ_k (θ_k - θ_m,k)
         out[r] = m.profile;
         for (std::size_t j = 0; j < m.local.size(); ++j) {
           const auto k = static_cast<std::size_t>(m.local[j]);

@@ -22,6 +22,7 @@ struct Coupling {
       "heat rate from the friction law at the rail temperature under the block (viscosity falls as the rail warms)";
   static constexpr const char* measure = "the friction force logged during the thermal run";
   static constexpr bool linear = false;
+  static constexpr bool heat_follows_rail = true;  // held or not: T(α) is not affine
   static std::vector<ExtensionParameter> parameters() { return {{"coupling", "1", 0.5, -1.0, 3.0, 1.0}}; }
   static std::optional<SourceModel> source() { return std::nullopt; }
   template <typename T>
