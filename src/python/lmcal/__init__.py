@@ -1,0 +1,626 @@
+"""lmcal: calibration of roller linear-motion guides, from Python.
+
+The same library as the `lmcal` command, with the same numbers: a result's ``to_dict()`` is
+the JSON the command writes for the same inputs and options.
+
+    import lmcal
+    log = lmcal.load_friction_log("measurements/cheng2017/friction.csv")   # or a DataFrame
+    fit = lmcal.fit_friction(log)
+    fit                      # the fit report: estimates, standard errors, intervals, correlations
+    fit.params["k1"].ci      # (low, high), 95 %
+    fit.covariance           # NumPy arrays; fit.residual_N, fit.predicted_N, ...
+    cal = lmcal.calibrate("measurements/cheng2017", progress=print)
+    cal.write("fits/cheng2017")   # every file `lmcal calibrate` writes, report.html included
+
+Units are SI except where a name says otherwise (``preload_um``, ``block_length_mm``). Bad input
+raises ``lmcal.InputError`` (a ValueError naming the file, line and column, or for columns the
+column and row) or ``lmcal.InvalidParameterError`` (a ValueError naming the parameter). The
+long calls release the GIL; ``progress(what, done, total)`` is called as they go, and Ctrl-C
+stops them.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import os
+from collections.abc import Mapping
+from typing import Any, Callable, Optional, Sequence
+
+import numpy as np
+
+from . import _lmcal
+from ._lmcal import InputError, InvalidParameterError
+from ._report import fit_report
+
+__version__ = _lmcal.__version__
+__all__ = [
+    "InputError", "InvalidParameterError", "FrictionLog", "ThermalDataSet", "Parameter", "FrictionFit",
+    "ThermalFit", "FrictionDiagnosis", "ThermalDiagnosis", "Calibration", "ThermalSimulation",
+    "load_friction_log", "load_thermal_dataset", "fit_friction", "fit_thermal", "diagnose_friction",
+    "diagnose_thermal", "calibrate", "simulate_friction", "simulate_thermal", "guide", "friction_effect_names",
+]
+
+Progress = Callable[[str, int, int], Any]
+
+# ---- loading ---------------------------------------------------------------------------------
+
+# Columns the loaders keep as text (names); every other column holds numbers.
+_TEXT_COLUMNS = {"run", "guide"}
+
+
+def _column_items(data) -> list:
+    """(name, values) of a mapping of columns or of a pandas DataFrame."""
+    if isinstance(data, Mapping):
+        return [(str(k), v) for k, v in data.items()]
+    if hasattr(data, "columns") and hasattr(data, "__getitem__"):  # a DataFrame, without importing pandas
+        return [(str(k), data[k]) for k in data.columns]
+    raise TypeError(f"expected a dict of columns or a pandas DataFrame, got {type(data).__name__}")
+
+
+def _prepare_columns(data) -> tuple[list, list]:
+    """Names and values for the CSV loader: equal lengths, numbers as float64 without NaN or
+    infinity, text as str. ValueError naming the column otherwise."""
+    items = _column_items(data)
+    if not items:
+        raise ValueError("no columns given")
+    arrays = [(name, np.asarray(values)) for name, values in items]
+    lengths = {name: a.shape[0] for name, a in arrays if a.ndim == 1}
+    rows = max(lengths.values()) if lengths else 1
+    names, columns = [], []
+    for name, a in arrays:
+        if a.ndim == 0:
+            a = np.full(rows, a.item(), dtype=a.dtype)  # a scalar: the same value on every row
+        elif a.ndim != 1:
+            raise ValueError(f"column '{name}': expected one value per row, got an array of shape {a.shape}")
+        if a.shape[0] != rows:
+            longest = max(lengths, key=lengths.get)
+            raise ValueError(f"column '{name}' has {a.shape[0]} rows, column '{longest}' has {rows}: "
+                             "every column needs one value per row")
+        names.append(name)
+        if name in _TEXT_COLUMNS or a.dtype.kind in "OUS":
+            columns.append(["" if v is None else str(v) for v in a.tolist()])
+            continue
+        if a.dtype.kind not in "iuf":
+            raise ValueError(f"column '{name}': expected numbers, got values of dtype {a.dtype}")
+        a = a.astype(np.float64)
+        bad = np.flatnonzero(~np.isfinite(a))
+        if bad.size:
+            raise ValueError(f"column '{name}': {a[bad[0]]} at row {bad[0]} ({bad.size} rows not finite); every "
+                             "value must be a finite number (drop or fill the missing rows first)")
+        columns.append(a)
+    return names, columns
+
+
+class FrictionLog:
+    """Load-cell samples, one per row: run, velocity_m_s, load_N, preload_um, block_length_mm,
+    temperature_C, friction_N (and time_s, viscosity40_mm2_s, direction, guide)."""
+
+    def __init__(self, handle):
+        self._h = handle
+
+    @classmethod
+    def from_columns(cls, data, **raw) -> "FrictionLog":
+        """A log from a dict of columns or a pandas DataFrame, named as in a CSV log (any
+        accepted unit: ``load_kN``, ``temperature_K``, ...) and checked by the same rules."""
+        names, columns = _prepare_columns(data)
+        return cls(_lmcal.friction_log_from_columns(names, columns, raw))
+
+    def __len__(self) -> int:
+        return len(self._h)
+
+    @property
+    def run_names(self) -> list:
+        return self._h.run_names
+
+    @property
+    def inputs(self) -> list:
+        """(file, sha256) of every file read."""
+        return self._h.inputs
+
+    @property
+    def load_reports(self) -> list:
+        """Per file: rows read and kept, rows skipped and why, unit conversions, warnings."""
+        return self._h.load_reports()
+
+    def columns(self) -> dict:
+        """The samples in SI and the log's units, as NumPy arrays; ``run`` and ``guide`` as names."""
+        c = self._h.columns()
+        c["run"] = np.asarray(self.run_names, dtype=object)[c["run"]]
+        c["guide"] = np.asarray(self._h.guide_names, dtype=object)[c["guide"]]
+        return c
+
+    def to_dataframe(self):
+        import pandas as pd
+        return pd.DataFrame(self.columns())
+
+    def to_csv(self) -> str:
+        return self._h.csv()
+
+    def __repr__(self) -> str:
+        files = ", ".join(os.path.basename(f) for f, _ in self.inputs) or "columns"
+        return f"<lmcal.FrictionLog: {len(self)} samples in {len(self.run_names)} runs from {files}>"
+
+
+def load_friction_log(source, *, catalog: Optional[str] = None, **raw) -> FrictionLog:
+    """A friction log from a CSV file, several CSV files (one log), a friction manifest
+    (``.toml``), or columns (a dict or a pandas DataFrame). ``raw`` settings segment raw
+    load-cell logs: force_sign, moving_mass_kg, max_acceleration_m_s2, settling_s, ..."""
+    if isinstance(source, FrictionLog):
+        return source
+    if isinstance(source, (str, os.PathLike)):
+        path = os.fspath(source)
+        if path.endswith(".toml"):
+            return FrictionLog(_lmcal.load_friction_manifest(path, catalog, raw))
+        return FrictionLog(_lmcal.load_friction_files([path], raw))
+    if isinstance(source, Sequence) and all(isinstance(s, (str, os.PathLike)) for s in source):
+        return FrictionLog(_lmcal.load_friction_files([os.fspath(s) for s in source], raw))
+    return FrictionLog.from_columns(source, **raw)
+
+
+class ThermalDataSet:
+    """Thermal runs of a manifest: each run's conditions and its temperature trace."""
+
+    def __init__(self, handle):
+        self._h = handle
+
+    @property
+    def name(self) -> str:
+        return self._h.name
+
+    @property
+    def runs(self) -> list:
+        """Per run a dict: id, guide, velocity_m_s, load_N, stroke_m, rail_length_m,
+        sensor_position_m, and ``trace`` (time_s and every temperature column, NumPy)."""
+        return self._h.runs()
+
+    @property
+    def inputs(self) -> list:
+        return self._h.inputs
+
+    def with_trace(self, run: str, columns) -> "ThermalDataSet":
+        """A copy with run ``run``'s trace taken from columns (a dict or a DataFrame with the
+        columns of its file: time_s, the ambient and tc… columns) instead of its file."""
+        names, values = _prepare_columns(columns)
+        return ThermalDataSet(_lmcal.thermal_with_trace(self._h, run, names, values))
+
+    def __repr__(self) -> str:
+        return f"<lmcal.ThermalDataSet '{self.name}': {len(self.runs)} runs>"
+
+
+def load_thermal_dataset(manifest, *, catalog: Optional[str] = None) -> ThermalDataSet:
+    """The runs of a thermal manifest (TOML) with their traces."""
+    if isinstance(manifest, ThermalDataSet):
+        return manifest
+    return ThermalDataSet(_lmcal.load_thermal_manifest(os.fspath(manifest), catalog))
+
+
+# ---- results ---------------------------------------------------------------------------------
+
+@dataclasses.dataclass(frozen=True)
+class Parameter:
+    """One estimate, as lmcal reports it. ``ci`` is the interval to quote (``interval`` says
+    which: linear t interval with the chosen covariance, or profile likelihood)."""
+    name: str
+    value: float
+    stderr: float
+    unit: str
+    ci: tuple
+    interval: str
+    free: bool
+    held: bool        # asked to be fitted, held at its start because the data cannot determine it
+    at_bound: bool
+    init: float
+    bounds: tuple
+
+    @classmethod
+    def from_json(cls, p: dict) -> "Parameter":
+        def num(v):
+            return math.nan if v is None else float(v)
+        ci = p.get("profile_ci95") if p.get("interval") == "profile" else p.get("ci95")
+        return cls(p["name"], num(p.get("value")), num(p.get("se")), p.get("unit", ""),
+                   tuple(num(v) for v in (ci or (None, None))), p.get("interval", "linear"), bool(p.get("free")),
+                   bool(p.get("held_unidentifiable")), bool(p.get("at_bound")), num(p.get("start")),
+                   tuple(num(v) for v in p.get("bounds", (None, None))))
+
+
+class _Result:
+    """A result handle with its JSON (``to_dict``), its summary and, for fits, its arrays."""
+
+    def __init__(self, handle):
+        self._h = handle
+        self._json = None
+        self._arrays = None
+
+    def to_dict(self) -> dict:
+        """The result as the `lmcal` command writes it (its JSON file), as plain Python types."""
+        if self._json is None:
+            self._json = self._h.json()
+        return json.loads(self._json)
+
+    def summary(self) -> str:
+        """The few lines the `lmcal` command prints."""
+        return self._h.summary()
+
+    def _array(self, key):
+        if self._arrays is None:
+            self._arrays = self._h.arrays()
+        return self._arrays[key]
+
+
+class _Fit(_Result):
+    _fit_key = None  # where the fit's parameters are in to_dict() (None: at the top)
+
+    def _fit_dict(self) -> dict:
+        d = self.to_dict()
+        return d[self._fit_key] if self._fit_key else d
+
+    @property
+    def params(self) -> dict:
+        """Name -> Parameter, every parameter of the fit (per-run nuisance ones included)."""
+        return {p["name"]: Parameter.from_json(p) for p in self._fit_dict()["parameters"]}
+
+    @property
+    def parameter_names(self) -> list:
+        return list(self._array("names"))
+
+    @property
+    def values(self) -> np.ndarray:
+        return self._array("values")
+
+    @property
+    def stderr(self) -> np.ndarray:
+        return self._array("se")
+
+    @property
+    def covariance(self) -> np.ndarray:
+        """The quoted covariance of every parameter (rows and columns of held ones zero)."""
+        return self._array("covariance")
+
+    @property
+    def correlation(self) -> np.ndarray:
+        return self._array("correlation")
+
+    @property
+    def converged(self) -> bool:
+        return bool(self._fit_dict()["solver"]["converged"])
+
+    @property
+    def warnings(self) -> list:
+        return list(self._fit_dict().get("warnings", []))
+
+    def write(self, folder) -> None:
+        """The files `lmcal fit` writes, into ``folder``, all or none."""
+        self._h.write(os.fspath(folder))
+
+
+class FrictionFit(_Fit):
+    """A friction fit: the seven constants (and effects) with uncertainty, per-sample
+    predictions and residuals, the spread across runs."""
+
+    @property
+    def measured_N(self) -> np.ndarray:
+        return self._array("measured_N")
+
+    @property
+    def predicted_N(self) -> np.ndarray:
+        return self._array("predicted_N")
+
+    @property
+    def residual_N(self) -> np.ndarray:
+        """measured - predicted, per sample."""
+        return self.measured_N - self.predicted_N
+
+    @property
+    def sigma_N(self) -> np.ndarray:
+        return self._array("sigma_N")
+
+    @property
+    def rmse_N(self) -> float:
+        return float(self.to_dict()["goodness"]["rmse_N"])
+
+    @property
+    def run_offset_N(self) -> dict:
+        return dict(zip(self._array("run_names"), self._array("run_offset_N").tolist()))
+
+    @property
+    def constants(self) -> dict:
+        """The fitted law's seven constants by name (held ones at their values)."""
+        return self._h.constants()
+
+    @property
+    def effects(self) -> dict:
+        return self._h.effects()
+
+    def __repr__(self) -> str:
+        d = self.to_dict()
+        return fit_report(f"friction fit '{d['name']}'", d, [("RMSE", f"{d['goodness']['rmse_N']:.6g} N"),
+                                                              ("runs", len(d.get("runs", [])))])
+
+
+class ThermalFit(_Fit):
+    """A thermal fit: α (and h, mechanisms) over all runs, per-run fits, simulated vs measured
+    temperature at every fitted record (``samples``)."""
+    _fit_key = "joint"
+
+    @property
+    def alpha(self) -> Parameter:
+        return self.params["alpha"]
+
+    @property
+    def samples(self) -> dict:
+        """Columns run (index into run_names), sensor, time_s, measured_C, simulated_C."""
+        return dict(self._array("samples"))
+
+    @property
+    def run_names(self) -> list:
+        return list(self._array("run_names"))
+
+    @property
+    def sensor_names(self) -> list:
+        return list(self._array("sensor_names"))
+
+    def __repr__(self) -> str:
+        d = self.to_dict()
+        runs = d.get("alpha_across_runs") or {}
+        stats = [("max error", f"{d.get('max_error_percent', math.nan):.4g} %"), ("runs", len(d.get("runs", [])))]
+        if runs.get("n"):
+            stats.append(("alpha across runs", f"{runs['mean']:.4g} +/- {runs['sd_eq1']:.2g} (Eq. 1 sd)"))
+        return fit_report(f"thermal fit '{d['name']}'", d["joint"], stats)
+
+
+class _Diagnosis(_Result):
+    _what = ""
+
+    @property
+    def verdict(self) -> str:
+        return self.to_dict()["verdict"]
+
+    @property
+    def causes(self) -> list:
+        """The accepted causes: name, value, interval, held-out gain."""
+        return [c for c in self.to_dict()["causes"] if c.get("accepted")]
+
+    def __repr__(self) -> str:
+        return f"[[{self._what} diagnosis]] {self.verdict}\n{self.summary()}"
+
+
+class FrictionDiagnosis(_Diagnosis):
+    _what = "friction"
+
+
+class ThermalDiagnosis(_Diagnosis):
+    _what = "thermal"
+
+
+class Calibration(_Result):
+    """A whole calibration of a measurement folder (`lmcal calibrate`)."""
+
+    def _optional(self, wrap, value):
+        return None if value is None else wrap(value)
+
+    @property
+    def friction(self) -> Optional[FrictionFit]:
+        """The published law's fit (friction.json)."""
+        return self._optional(FrictionFit, self._h.friction(False))
+
+    @property
+    def thermal(self) -> Optional[ThermalFit]:
+        return self._optional(ThermalFit, self._h.thermal(False))
+
+    @property
+    def calibrated_friction(self) -> Optional[FrictionFit]:
+        """The law with the accepted causes, refitted (calibrated_friction.json)."""
+        return self._optional(FrictionFit, self._h.friction(True))
+
+    @property
+    def calibrated_thermal(self) -> Optional[ThermalFit]:
+        return self._optional(ThermalFit, self._h.thermal(True))
+
+    @property
+    def friction_diagnosis(self) -> Optional[FrictionDiagnosis]:
+        return self._optional(FrictionDiagnosis, self._h.friction_diagnosis())
+
+    @property
+    def thermal_diagnosis(self) -> Optional[ThermalDiagnosis]:
+        return self._optional(ThermalDiagnosis, self._h.thermal_diagnosis())
+
+    def report_html(self) -> str:
+        """report.html, one self-contained page."""
+        return self._h.report_html()
+
+    def write(self, folder) -> None:
+        """Every file `lmcal calibrate` writes (model.toml, the fits, the diagnoses,
+        calibration.json, report.html) into ``folder``, all or none."""
+        self._h.write(os.fspath(folder))
+
+    def __repr__(self) -> str:
+        return "[[calibration]]\n" + self.summary()
+
+
+# ---- fitting ---------------------------------------------------------------------------------
+
+def _given(**options) -> dict:
+    """The options the caller gave (None: lmcal's default, as on the command line)."""
+    return {k: (list(v) if isinstance(v, (tuple, set)) else v) for k, v in options.items() if v is not None}
+
+
+def _command(function: str, options: dict) -> list:
+    shown = ", ".join(f"{k}={v!r}" for k, v in options.items() if not callable(v))
+    return [f"lmcal.{function}({shown})"]
+
+
+def fit_friction(log, *, free: Optional[Sequence[str]] = None, fixed: Optional[Mapping[str, float]] = None,
+                 start: Optional[Mapping[str, float]] = None, bounds: Optional[Mapping[str, tuple]] = None,
+                 effects: Optional[Sequence[str]] = None, run_offsets: Optional[str] = None,
+                 loss: Optional[str] = None, loss_scale: Optional[float] = None, weights: Optional[str] = None,
+                 starts: Optional[int] = None, seed: Optional[int] = None, profile: Optional[str] = None,
+                 covariance: Optional[str] = None, bootstrap: Optional[int] = None, run_fits: Optional[bool] = None,
+                 cross_validate: Optional[bool] = None, name: str = "friction") -> FrictionFit:
+    """Fits the friction constants (``lmcal fit friction``). ``log``: a FrictionLog, a file,
+    files, a manifest, or columns. Options as the command's flags (None: its default):
+    free (constants to fit; default all seven), fixed/start (name -> value), bounds
+    (name -> (low, high)), effects (named effects on top of the law), run_offsets
+    ('none', 'fixed', 'random'), loss ('none', 'huber', 'cauchy') and loss_scale, weights
+    ('none', 'per-run', 'per-condition'), starts and seed (multi-start), profile ('auto',
+    'all', 'none'), covariance ('auto', 'iid', 'hac', 'cluster', 'bootstrap'), bootstrap
+    (replicates), run_fits (per-run fits for the spread across runs), cross_validate."""
+    log = load_friction_log(log)
+    options = _given(free=free, fixed=fixed, start=start, bounds=bounds, effects=effects, run_offsets=run_offsets,
+                     loss=loss, loss_scale=loss_scale, weights=weights, starts=starts, seed=seed, profile=profile,
+                     covariance=covariance, bootstrap=bootstrap, run_fits=run_fits, cross_validate=cross_validate)
+    return FrictionFit(_lmcal.fit_friction(log._h, options, name, _command("fit_friction", options)))
+
+
+def _thermal_options(friction, heat, source, scheme, half_rail_segments, time_step_s, every, ambient, alpha_start,
+                     fit_h, h_W_m2K, offsets, fit_initial, extensions, covariance, bootstrap, run_fits,
+                     cross_validate) -> dict:
+    if isinstance(friction, FrictionFit):
+        friction = friction._h
+    elif friction is not None:
+        friction = os.fspath(friction)
+    return _given(friction=friction, heat=heat, source=source, scheme=scheme, half_rail_segments=half_rail_segments,
+                  time_step_s=time_step_s, every=every, ambient=ambient, alpha_start=alpha_start, fit_h=fit_h,
+                  h_W_m2K=h_W_m2K, offsets=offsets, fit_initial=fit_initial, extensions=extensions,
+                  covariance=covariance, bootstrap=bootstrap, run_fits=run_fits, cross_validate=cross_validate)
+
+
+def fit_thermal(data, *, friction=None, heat: Optional[str] = None, source: Optional[str] = None,
+                scheme: Optional[str] = None, half_rail_segments: Optional[int] = None,
+                time_step_s: Optional[float] = None, every: Optional[int] = None, ambient: Optional[str] = None,
+                alpha_start: Optional[float] = None, fit_h: Optional[bool] = None, h_W_m2K: Optional[float] = None,
+                offsets: Optional[str] = None, fit_initial: Optional[bool] = None,
+                extensions: Optional[Sequence[str]] = None, covariance: Optional[str] = None,
+                bootstrap: Optional[int] = None, run_fits: Optional[bool] = None,
+                cross_validate: Optional[bool] = None, name: str = "thermal") -> ThermalFit:
+    """Fits α (and h, offsets, mechanisms) to thermal runs (``lmcal fit thermal``). ``data``:
+    a ThermalDataSet or a manifest. ``friction``: a FrictionFit or a friction fit JSON file for
+    the heat rate (its covariance carries into α's interval). Other options as the command's
+    flags: heat ('auto', 'friction', 'measured'), source ('paper', 'averaged', 'moving'), scheme,
+    half_rail_segments, time_step_s, every, ambient, alpha_start, fit_h, h_W_m2K, offsets
+    ('auto', 'fit', 'hold'), fit_initial, extensions, covariance, bootstrap, run_fits."""
+    data = load_thermal_dataset(data)
+    options = _thermal_options(friction, heat, source, scheme, half_rail_segments, time_step_s, every, ambient,
+                               alpha_start, fit_h, h_W_m2K, offsets, fit_initial, extensions, covariance, bootstrap,
+                               run_fits, cross_validate)
+    return ThermalFit(_lmcal.fit_thermal(data._h, options, name, _command("fit_thermal", options)))
+
+
+def diagnose_friction(log, *, progress: Optional[Progress] = None, lrt_p: Optional[float] = None,
+                      min_gain_percent: Optional[float] = None, **fit_options) -> FrictionDiagnosis:
+    """What the published friction law misses, named and measured on held-out runs
+    (``lmcal diagnose friction``). ``fit_options``: those of fit_friction for the baseline
+    (run_offsets defaults to 'random' here)."""
+    log = load_friction_log(log)
+    options = _given(lrt_p=lrt_p, min_gain_percent=min_gain_percent, **fit_options)
+    return FrictionDiagnosis(_lmcal.diagnose_friction(log._h, options, progress))
+
+
+def diagnose_thermal(data, *, friction=None, progress: Optional[Progress] = None, lrt_p: Optional[float] = None,
+                     min_gain_percent: Optional[float] = None, heat: Optional[str] = None,
+                     source: Optional[str] = None, time_step_s: Optional[float] = None) -> ThermalDiagnosis:
+    """What the rail model misses (``lmcal diagnose thermal``); ``friction`` as in fit_thermal."""
+    data = load_thermal_dataset(data)
+    options = _thermal_options(friction, heat, source, None, None, time_step_s, None, None, None, None, None, None,
+                               None, None, None, None, None, None)
+    options.update(_given(lrt_p=lrt_p, min_gain_percent=min_gain_percent))
+    return ThermalDiagnosis(_lmcal.diagnose_thermal(data._h, options, progress))
+
+
+def calibrate(folder, *, output_dir=None, diagnose: Optional[bool] = None, catalog: Optional[str] = None,
+              progress: Optional[Progress] = None, covariance: Optional[str] = None, bootstrap: Optional[int] = None,
+              starts: Optional[int] = None, seed: Optional[int] = None, free: Optional[Sequence[str]] = None,
+              fixed: Optional[Mapping[str, float]] = None, start: Optional[Mapping[str, float]] = None,
+              bounds: Optional[Mapping[str, tuple]] = None, run_offsets: Optional[str] = None,
+              raw: Optional[Mapping[str, Any]] = None) -> Calibration:
+    """The whole calibration of a measurement folder (``lmcal calibrate``): fits, spread,
+    diagnoses, the calibrated model and the report. With ``output_dir`` its files are written
+    there too. ``progress(step_or_detail, done, total)`` is called as it goes."""
+    options = _given(diagnose=diagnose, catalog=catalog, raw=raw)
+    options["uncertainty"] = _given(covariance=covariance, bootstrap=bootstrap)
+    options["friction"] = _given(starts=starts, seed=seed, free=free, fixed=fixed, start=start, bounds=bounds,
+                                 run_offsets=run_offsets)
+    result = Calibration(_lmcal.calibrate(os.fspath(folder), options, progress))
+    if output_dir is not None:
+        result.write(output_dir)
+    return result
+
+
+# ---- simulation ------------------------------------------------------------------------------
+
+def _law(constants, effects) -> tuple[dict, dict]:
+    if isinstance(constants, FrictionFit):
+        return constants.constants, dict(constants.effects, **(effects or {}))
+    return dict(constants or {}), dict(effects or {})
+
+
+def simulate_friction(constants=None, effects: Optional[Mapping[str, float]] = None, *, velocity_m_s, load_N,
+                      preload_um, block_length_mm, temperature_C, viscosity40_mm2_s=99.0,
+                      direction=1.0) -> np.ndarray:
+    """Friction force (N) of the law at each operating point; the conditions broadcast like
+    NumPy arrays. ``constants``: a FrictionFit, or name -> value over the paper's Eq. 8
+    (default: the paper's constants); ``effects``: name -> value of named effects."""
+    k, e = _law(constants, effects)
+    arrays = np.broadcast_arrays(*(np.asarray(a, dtype=np.float64) for a in (
+        velocity_m_s, load_N, preload_um, block_length_mm, temperature_C, viscosity40_mm2_s, direction)))
+    shape = arrays[0].shape
+    names = ("velocity_m_s", "load_N", "preload_um", "block_length_mm", "temperature_C", "viscosity40_mm2_s",
+             "direction")
+    columns = {n: np.ascontiguousarray(a).ravel() for n, a in zip(names, arrays)}
+    return _lmcal.friction_law(k, e, columns).reshape(shape)
+
+
+@dataclasses.dataclass
+class ThermalSimulation:
+    """The rail's temperature: ``temperature_C[time, sensor]`` at ``time_s`` and ``sensor_x_m``
+    (from the rail centre), and the profile along the rail at the end (``x_m``, ``profile_C``)."""
+    time_s: np.ndarray
+    sensor_x_m: np.ndarray
+    temperature_C: np.ndarray
+    x_m: np.ndarray
+    profile_C: np.ndarray
+    heat_rate_W: float
+    time_step_s: float
+
+    def to_dict(self) -> dict:
+        return {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in dataclasses.asdict(self).items()}
+
+
+def simulate_thermal(*, guide: str = "SRN 35C", velocity_m_s: float = 0.11, load_N: float = 3000,
+                     preload_um: Optional[float] = None, block_length_mm: Optional[float] = None,
+                     contact_length_mm: Optional[float] = None, stroke_m: float = 0.2, rail_length_m: float = 0.6,
+                     heat_rate_W: Optional[float] = None, constants=None, effects=None, alpha: float = 0.6,
+                     h_W_m2K: float = 5.3, ambient_C=26.0, initial_C: Optional[float] = None,
+                     sensors_m: Sequence[float] = (0.0, 0.05, 0.1), duration_s: float = 21600,
+                     output_every_s: float = 300, time_step_s: float = 60, segments: int = 100,
+                     source: str = "averaged", scheme: str = "crank-nicolson") -> ThermalSimulation:
+    """One case of ``lmcal simulate thermal`` (same defaults): a catalog guide's rail heated by
+    its block. The heat is the friction law's at the start temperature (``constants``: a
+    FrictionFit or name -> value) unless ``heat_rate_W`` is given. ``ambient_C``: a number, or
+    (times_s, temperatures_C) of an ambient trace."""
+    k, e = _law(constants, effects)
+    if not isinstance(ambient_C, (int, float)):
+        times, temperatures = ambient_C
+        ambient_C = (list(map(float, times)), list(map(float, temperatures)))
+    else:
+        ambient_C = float(ambient_C)
+    d = _lmcal.simulate_thermal(dict(
+        guide=guide, velocity_m_s=velocity_m_s, load_N=load_N, preload_um=preload_um,
+        block_length_mm=block_length_mm, contact_length_mm=contact_length_mm, stroke_m=stroke_m,
+        rail_length_m=rail_length_m, heat_rate_W=heat_rate_W, constants=k, effects=e, alpha=alpha,
+        h_W_m2K=h_W_m2K, ambient_C=ambient_C, initial_C=initial_C, sensors_m=list(sensors_m),
+        duration_s=duration_s, output_every_s=output_every_s, time_step_s=time_step_s, segments=segments,
+        source=source, scheme=scheme))
+    return ThermalSimulation(**d)
+
+
+def guide(model: str, *, catalog: Optional[str] = None) -> dict:
+    """A guide's catalog entry (built-in, or from ``catalog``): block and contact lengths,
+    rail section, material."""
+    return _lmcal.guide(model, catalog)
+
+
+def friction_effect_names() -> list:
+    """The named friction effects a fit may add."""
+    return _lmcal.friction_effect_names()

@@ -1,0 +1,844 @@
+// The compiled half of the Python package `lmcal` (src/python/lmcal/__init__.py is the
+// other): loaders, fits, diagnoses, calibration and simulation over the C++ library, each
+// result held in a handle that gives its JSON (the CLI's, byte for byte the same numbers),
+// its one-screen summary, its output files and its arrays as NumPy arrays.
+//
+// Threads: every long call releases the GIL; a progress callback takes it back to call into
+// Python (and checks for Ctrl-C, which ends the call with KeyboardInterrupt). Errors: the
+// library's InputError and InvalidParameter arrive as lmcal.InputError and
+// lmcal.InvalidParameterError, both ValueErrors, with their file/line/column or parameter.
+#include <pybind11/eigen.h>
+#include <pybind11/functional.h>
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
+
+#include <fmt/format.h>
+
+#include <atomic>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <random>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "lmcal/diagnose/friction_diagnosis.hpp"
+#include "lmcal/diagnose/thermal_diagnosis.hpp"
+#include "lmcal/error.hpp"
+#include "lmcal/fit/friction_fit.hpp"
+#include "lmcal/fit/thermal_fit.hpp"
+#include "lmcal/io/atomic_file.hpp"
+#include "lmcal/io/catalog.hpp"
+#include "lmcal/io/friction_log.hpp"
+#include "lmcal/io/hash.hpp"
+#include "lmcal/io/thermal_run.hpp"
+#include "lmcal/models/friction_effects.hpp"
+#include "lmcal/models/heat_source.hpp"
+#include "lmcal/models/rail_thermal.hpp"
+#include "lmcal/report/calibration.hpp"
+#include "lmcal/report/html_report.hpp"
+
+namespace py = pybind11;
+namespace fs = std::filesystem;
+
+namespace lmcal::python {
+
+namespace {
+
+using Inputs = std::vector<std::pair<std::string, std::string>>;  // file -> sha256
+using Files = std::vector<std::pair<std::string, std::string>>;   // output name -> contents
+
+// ---- values in and out ------------------------------------------------------------------------
+
+template <class T>
+py::array_t<T> array(const std::vector<T>& v) {
+  return py::array_t<T>(static_cast<py::ssize_t>(v.size()), v.data());
+}
+
+// `name` of the choices, or InvalidParameter listing them.
+template <class E>
+E choose(const char* parameter, const std::string& name, std::initializer_list<std::pair<const char*, E>> choices) {
+  std::string accepted;
+  for (const auto& [text, value] : choices) {
+    if (name == text) return value;
+    accepted += (accepted.empty() ? "" : ", ") + std::string(text);
+  }
+  throw InvalidParameter(parameter, fmt::format("unknown value '{}'; expected one of {}", name, accepted));
+}
+
+std::size_t constant_index(const char* parameter, const std::string& name) {
+  for (std::size_t j = 0; j < kFrictionConstantNames.size(); ++j)
+    if (name == kFrictionConstantNames[j]) return j;
+  throw InvalidParameter(parameter, fmt::format("unknown constant '{}'; expected one of k1, k2, mu_st, v_st_m_s, mu_v, "
+                                                "beta_per_K, f0",
+                                                name));
+}
+
+// The covariance and the parameters of a fit, for NumPy.
+py::dict fit_arrays(const FitResult& fit) {
+  std::vector<std::string> names;
+  std::vector<double> values, se;
+  std::vector<bool> per_run;
+  for (const auto& p : fit.parameters) {
+    names.push_back(p.name);
+    values.push_back(p.value);
+    se.push_back(p.se);
+    per_run.push_back(p.per_run);
+  }
+  py::dict d;
+  d["names"] = names;
+  d["per_run"] = per_run;
+  d["values"] = array(values);
+  d["se"] = array(se);
+  d["covariance"] = py::cast(Eigen::MatrixXd(fit.covariance));
+  d["correlation"] = py::cast(Eigen::MatrixXd(fit.correlation));
+  return d;
+}
+
+void write_files(const fs::path& dir, const Files& files) {
+  OutputSet out;
+  for (const auto& [name, contents] : files) out.add(dir / name, contents);
+  out.commit();
+}
+
+// ---- progress and interruption ----------------------------------------------------------------
+
+// A Python callable as the library's Progress, callable from any thread; the callable's
+// reference is dropped with the GIL held. Without a callable it still checks for Ctrl-C.
+Progress python_progress(const py::object& callback) {
+  std::shared_ptr<py::object> held(new py::object(callback), [](py::object* o) {
+    py::gil_scoped_acquire gil;
+    delete o;
+  });
+  return [held](const std::string& what, std::size_t done, std::size_t total) {
+    py::gil_scoped_acquire gil;
+    if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+    if (!held->is_none()) (*held)(what, done, total);
+  };
+}
+
+// ---- loaders ----------------------------------------------------------------------------------
+
+// A friction log with the files it came from and their SHA-256 (recorded in a fit's JSON).
+struct FrictionData {
+  std::shared_ptr<const FrictionLog> log;
+  Inputs inputs;
+};
+
+RawFrictionOptions raw_options(const py::dict& given, std::vector<std::string>* names = nullptr) {
+  RawFrictionOptions raw;
+  for (const auto& [key, value] : given) {
+    const auto name = key.cast<std::string>();
+    if (name == "force_sign") raw.force_sign = parse_force_sign(value.cast<std::string>());
+    else if (name == "duplicate_times") raw.duplicate_times = parse_duplicate_times(value.cast<std::string>());
+    else if (name == "max_acceleration_m_s2") raw.max_acceleration_m_s2 = value.cast<double>();
+    else if (name == "settling_s") raw.settling_s = value.cast<double>();
+    else if (name == "min_speed_m_s") raw.min_speed_m_s = value.cast<double>();
+    else if (name == "velocity_tolerance") raw.velocity_tolerance = value.cast<double>();
+    else if (name == "min_plateau_samples") raw.min_plateau_samples = value.cast<std::size_t>();
+    else if (name == "velocity_window") raw.velocity_window = value.cast<std::size_t>();
+    else if (name == "moving_mass_kg") raw.moving_mass_kg = value.cast<double>();
+    else
+      throw InvalidParameter("raw", fmt::format("unknown segmentation setting '{}'; expected force_sign, duplicate_times, "
+                                                "max_acceleration_m_s2, settling_s, min_speed_m_s, velocity_tolerance, "
+                                                "min_plateau_samples, velocity_window or moving_mass_kg",
+                                                name));
+    if (names) names->push_back(name);
+  }
+  raw.validate();
+  return raw;
+}
+
+std::optional<GuideCatalog> user_catalog(const std::optional<std::string>& file) {
+  if (!file) return std::nullopt;
+  return load_catalog(*file);
+}
+
+FrictionData load_friction_files(const std::vector<std::string>& files, const py::dict& raw_given) {
+  const RawFrictionOptions raw = raw_options(raw_given);
+  std::vector<fs::path> paths(files.begin(), files.end());
+  FrictionData data;
+  {
+    py::gil_scoped_release release;
+    data.log = std::make_shared<FrictionLog>(load_friction_logs(paths, raw));
+    for (const auto& f : files) data.inputs.emplace_back(f, sha256_file(f));
+  }
+  return data;
+}
+
+FrictionData load_friction_manifest(const std::string& manifest, const std::optional<std::string>& catalog,
+                                    const py::dict& raw_given) {
+  std::vector<std::string> given;
+  const RawFrictionOptions raw = raw_options(raw_given, &given);
+  FrictionData data;
+  py::gil_scoped_release release;
+  const auto user = user_catalog(catalog);
+  FrictionDataSet set = load_friction_dataset(manifest, user ? &*user : nullptr, raw, given);
+  data.inputs.emplace_back(manifest, sha256_file(manifest));
+  for (const auto& f : set.files) data.inputs.emplace_back(f.string(), sha256_file(f));
+  data.log = std::make_shared<FrictionLog>(std::move(set.log));
+  return data;
+}
+
+// Columns (validated in __init__.py: equal lengths, numbers without NaN, text as str) through
+// the CSV loader, so that they follow every rule of a file: units from the names, ranges,
+// run and guide names. Written to a private temporary file; an InputError about it is told
+// again as "columns, row R (0-based)".
+std::string csv_cell_text(const std::string& text) {
+  if (text.find_first_of(",\"\n\r") == std::string::npos) return text;
+  std::string quoted = "\"";
+  for (char c : text) quoted += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return quoted + "\"";
+}
+
+template <class Load>
+auto load_columns(const std::vector<std::string>& names, const std::vector<py::object>& columns, const char* what,
+                  Load&& load) {
+  LMCAL_ASSERT(names.size() == columns.size(), "one name per column");
+  std::string text;
+  for (std::size_t c = 0; c < names.size(); ++c) text += (c ? "," : "") + csv_cell_text(names[c]);
+  text += '\n';
+  std::vector<std::variant<py::array_t<double>, std::vector<std::string>>> cells;
+  std::size_t rows = 0;
+  for (const auto& column : columns) {
+    if (py::isinstance<py::list>(column)) {
+      cells.emplace_back(column.cast<std::vector<std::string>>());
+      rows = std::get<1>(cells.back()).size();
+    } else {
+      cells.emplace_back(column.cast<py::array_t<double, py::array::c_style | py::array::forcecast>>());
+      rows = static_cast<std::size_t>(std::get<0>(cells.back()).size());
+    }
+  }
+  for (std::size_t r = 0; r < rows; ++r) {
+    for (std::size_t c = 0; c < cells.size(); ++c) {
+      if (c) text += ',';
+      if (const auto* numbers = std::get_if<0>(&cells[c])) text += fmt::format("{}", numbers->at(r));
+      else {
+        const std::string& cell = std::get<1>(cells[c])[r];
+        if (cell.find_first_of("\n\r") != std::string::npos)
+          throw py::value_error(fmt::format("column '{}', row {}: a line break inside a name", names[c], r));
+        text += csv_cell_text(cell);
+      }
+    }
+    text += '\n';
+  }
+  static std::atomic<unsigned> counter{0};
+  const fs::path file = fs::temp_directory_path() /
+                        fmt::format("lmcal-{}-{}-{}.csv", what, std::random_device{}(), counter.fetch_add(1));
+  struct Remove {
+    fs::path file;
+    ~Remove() {
+      std::error_code ec;
+      fs::remove(file, ec);
+    }
+  } remove{file};
+  {
+    std::ofstream out(file, std::ios::binary);
+    out << text;
+    if (!out) throw std::runtime_error("cannot write a temporary file in " + file.parent_path().string());
+  }
+  try {
+    py::gil_scoped_release release;
+    return load(file);
+  } catch (const InputError& e) {
+    if (e.file() != file.string()) throw;
+    const std::string where = e.line() > 0 ? fmt::format("{}:{}", e.file(), e.line()) : e.file();
+    std::string message = e.what();
+    const std::size_t colon = message.find(": ", where.size());
+    message = colon == std::string::npos ? message : message.substr(colon + 2);
+    // Line 1 is the header; line L > 1 is row L - 2.
+    throw InputError("columns", 0, 0, e.line() > 1 ? fmt::format("row {}: {}", e.line() - 2, message) : message);
+  }
+}
+
+FrictionData friction_log_from_columns(const std::vector<std::string>& names, const std::vector<py::object>& columns,
+                                       const py::dict& raw_given) {
+  const RawFrictionOptions raw = raw_options(raw_given);
+  FrictionData data;
+  data.log = std::make_shared<FrictionLog>(
+      load_columns(names, columns, "friction", [&](const fs::path& file) {
+        FrictionLog log = load_friction_log(file, raw);
+        for (auto& report : log.reports) report.file = "columns";
+        return log;
+      }));
+  return data;
+}
+
+struct ThermalData {
+  std::shared_ptr<const ThermalDataSet> set;
+  Inputs inputs;
+};
+
+ThermalData load_thermal(const std::string& manifest, const std::optional<std::string>& catalog) {
+  ThermalData data;
+  py::gil_scoped_release release;
+  const auto user = user_catalog(catalog);
+  auto set = std::make_shared<ThermalDataSet>(load_thermal_dataset(manifest, user ? &*user : nullptr));
+  data.inputs.emplace_back(manifest, sha256_file(manifest));
+  if (!set->catalog_file.empty()) data.inputs.emplace_back(set->catalog_file.string(), sha256_file(set->catalog_file));
+  for (const auto& run : set->runs) data.inputs.emplace_back(run.file.string(), sha256_file(run.file));
+  data.set = std::move(set);
+  return data;
+}
+
+// A copy of `data` with one run's trace replaced by columns (time_s, ambient…, tc…): the same
+// thermocouple and ambient columns as the run's file had, so the manifest's sensor positions
+// still name them.
+ThermalData with_trace(const ThermalData& data, const std::string& run_id, const std::vector<std::string>& names,
+                       const std::vector<py::object>& columns) {
+  auto set = std::make_shared<ThermalDataSet>(*data.set);
+  auto run = std::find_if(set->runs.begin(), set->runs.end(), [&](const ThermalRun& r) { return r.id == run_id; });
+  if (run == set->runs.end()) throw InvalidParameter("run", fmt::format("no run '{}' in the data set", run_id));
+  ThermalTrace trace = load_columns(names, columns, "thermal", [](const fs::path& file) { return load_thermal_trace(file); });
+  const auto channel_names = [](const std::vector<TemperatureChannel>& channels) {
+    std::vector<std::string> out;
+    for (const auto& c : channels) out.push_back(c.name);
+    return out;
+  };
+  if (channel_names(trace.rail) != channel_names(run->trace.rail) ||
+      channel_names(trace.ambient) != channel_names(run->trace.ambient))
+    throw py::value_error(fmt::format("columns of run '{}': expected the columns of its file ({}, {}), in that order",
+                                      run_id, fmt::join(channel_names(run->trace.ambient), ", "),
+                                      fmt::join(channel_names(run->trace.rail), ", ")));
+  for (std::size_t s = 0; s < trace.rail.size(); ++s) trace.rail[s].name = run->trace.rail[s].name;
+  trace.report.file = "columns";
+  run->trace = std::move(trace);
+  ThermalData out{std::move(set), {}};
+  for (const auto& input : data.inputs)
+    if (input.first != run->file.string()) out.inputs.push_back(input);
+  return out;
+}
+
+// ---- fits -------------------------------------------------------------------------------------
+
+struct FrictionFit {
+  std::shared_ptr<const FrictionFitResult> result;
+  std::shared_ptr<const FrictionLog> log;
+  FrictionFitOptions options;
+  FitProvenance provenance;
+
+  std::string json() const { return friction_fit_json(*result, options, provenance); }
+  Files files() const { return friction_fit_files(*result, *log, options, provenance); }
+  py::dict arrays() const {
+    py::dict d = fit_arrays(result->fit);
+    d["measured_N"] = array(log->friction_N);
+    d["predicted_N"] = array(result->predicted_N);
+    d["sigma_N"] = array(result->sigma_N);
+    d["run"] = array(log->run);
+    d["run_names"] = result->runs;
+    d["run_offset_N"] = array(result->run_offset_N);
+    return d;
+  }
+};
+
+void set_fit_options(FitOptions& fit, const py::dict& o) {
+  if (o.contains("loss"))
+    fit.loss = choose<RobustLoss>("loss", o["loss"].cast<std::string>(),
+                                  {{"none", RobustLoss::none}, {"huber", RobustLoss::huber}, {"cauchy", RobustLoss::cauchy}});
+  if (o.contains("loss_scale")) fit.loss_scale = o["loss_scale"].cast<double>();
+  if (o.contains("starts")) fit.starts = o["starts"].cast<int>();
+  if (o.contains("seed")) fit.seed = o["seed"].cast<std::uint64_t>();
+  if (o.contains("profile"))
+    fit.profile = choose<ProfileMode>("profile", o["profile"].cast<std::string>(),
+                                      {{"auto", ProfileMode::automatic}, {"all", ProfileMode::all}, {"none", ProfileMode::none}});
+  if (o.contains("covariance"))
+    fit.covariance = choose<CovarianceMethod>("covariance", o["covariance"].cast<std::string>(),
+                                              {{"auto", CovarianceMethod::automatic},
+                                               {"iid", CovarianceMethod::iid},
+                                               {"hac", CovarianceMethod::hac},
+                                               {"cluster", CovarianceMethod::cluster},
+                                               {"bootstrap", CovarianceMethod::bootstrap}});
+  if (o.contains("bootstrap")) fit.bootstrap = o["bootstrap"].cast<std::size_t>();
+  if (fit.starts < 0) throw InvalidParameter("starts", fit.starts, "at least 0");
+  require_positive("loss_scale", fit.loss_scale);
+}
+
+// The options of `lmcal fit friction`, from the keyword arguments of lmcal.fit_friction.
+void set_friction_options(FrictionFitOptions& f, const py::dict& o) {
+  set_fit_options(f.fit, o);
+  if (o.contains("free") && !o["free"].is_none()) {
+    f.free.fill(false);
+    for (const auto& name : o["free"].cast<std::vector<std::string>>()) f.free[constant_index("free", name)] = true;
+  }
+  if (o.contains("start"))
+    for (const auto& [name, value] : o["start"].cast<std::map<std::string, double>>())
+      fittable_constant(f.start, constant_index("start", name)) = value;
+  if (o.contains("fixed"))
+    for (const auto& [name, value] : o["fixed"].cast<std::map<std::string, double>>()) {
+      const std::size_t j = constant_index("fixed", name);
+      fittable_constant(f.start, j) = value;
+      f.free[j] = false;
+    }
+  if (o.contains("bounds"))
+    for (const auto& [name, range] : o["bounds"].cast<std::map<std::string, std::pair<double, double>>>())
+      f.bounds[constant_index("bounds", name)] = range;
+  if (o.contains("effects")) f.effects = o["effects"].cast<std::vector<std::string>>();
+  if (o.contains("run_offsets"))
+    f.run_offsets = choose<RunOffsets>("run_offsets", o["run_offsets"].cast<std::string>(),
+                                       {{"none", RunOffsets::none}, {"fixed", RunOffsets::fixed}, {"random", RunOffsets::random}});
+  if (o.contains("weights"))
+    f.weighting = choose<FrictionWeighting>("weights", o["weights"].cast<std::string>(),
+                                            {{"none", FrictionWeighting::none},
+                                             {"per-run", FrictionWeighting::per_run},
+                                             {"per-condition", FrictionWeighting::per_condition}});
+  if (o.contains("run_fits")) f.per_run_fits = o["run_fits"].cast<bool>();
+  if (o.contains("cross_validate")) f.cross_validate = o["cross_validate"].cast<bool>();
+}
+
+FrictionFit fit_friction_py(const FrictionData& data, const py::dict& o, const std::string& name,
+                            const std::vector<std::string>& command) {
+  FrictionFitOptions options;
+  set_friction_options(options, o);
+  FrictionFit fit{nullptr, data.log, options, {name, data.inputs, command}};
+  py::gil_scoped_release release;
+  fit.result = std::make_shared<FrictionFitResult>(fit_friction(*data.log, options));
+  return fit;
+}
+
+struct ThermalFit {
+  std::shared_ptr<const ThermalFitResult> result;
+  std::shared_ptr<const ThermalDataSet> data;
+  ThermalFitOptions options;
+  Inputs inputs;
+  std::vector<std::string> command;
+  std::string name;
+
+  std::string json() const { return thermal_fit_json(*result, options, inputs, command, name); }
+  Files files() const { return thermal_fit_files(*result, options, inputs, command, name); }
+  py::dict arrays() const {
+    py::dict d = fit_arrays(result->joint);
+    std::vector<double> run, sensor, time, measured, simulated;
+    for (const auto& s : result->samples) {
+      run.push_back(static_cast<double>(s.run));
+      sensor.push_back(static_cast<double>(s.sensor));
+      time.push_back(s.time_s);
+      measured.push_back(s.measured_C);
+      simulated.push_back(s.simulated_C);
+    }
+    py::dict samples;
+    samples["run"] = array(run).attr("astype")("int64");
+    samples["sensor"] = array(sensor).attr("astype")("int64");
+    samples["time_s"] = array(time);
+    samples["measured_C"] = array(measured);
+    samples["simulated_C"] = array(simulated);
+    d["samples"] = samples;
+    std::vector<std::string> runs;
+    for (const auto& r : result->runs) runs.push_back(r.id);
+    d["run_names"] = runs;
+    d["sensor_names"] = result->sensor_names;
+    return d;
+  }
+};
+
+// The options of `lmcal fit thermal` (and of a thermal diagnosis' fits).
+void set_thermal_options(ThermalFitOptions& t, const py::dict& o, Inputs& inputs) {
+  set_fit_options(t.fit, o);
+  if (o.contains("heat"))
+    t.heat = choose<HeatInput>("heat", o["heat"].cast<std::string>(),
+                               {{"auto", HeatInput::automatic}, {"friction", HeatInput::friction_law},
+                                {"measured", HeatInput::measured_friction}});
+  if (o.contains("source")) t.source = parse_source_model(o["source"].cast<std::string>());
+  if (o.contains("scheme")) t.scheme = parse_time_scheme(o["scheme"].cast<std::string>());
+  if (o.contains("half_rail_segments")) t.half_rail_segments = o["half_rail_segments"].cast<int>();
+  if (o.contains("time_step_s")) t.time_step_s = o["time_step_s"].cast<double>();
+  if (o.contains("every")) t.every = o["every"].cast<std::size_t>();
+  if (o.contains("ambient")) t.ambient = o["ambient"].cast<std::string>();
+  if (o.contains("alpha_start")) t.alpha_start = o["alpha_start"].cast<double>();
+  if (o.contains("fit_h")) t.fit_h = o["fit_h"].cast<bool>();
+  if (o.contains("h_W_m2K")) t.h_W_m2K = o["h_W_m2K"].cast<double>();
+  if (o.contains("offsets"))
+    t.offsets = choose<ThermalOffsets>("offsets", o["offsets"].cast<std::string>(),
+                                       {{"auto", ThermalOffsets::automatic}, {"fit", ThermalOffsets::fitted},
+                                        {"hold", ThermalOffsets::held}});
+  if (o.contains("fit_initial")) t.fit_initial_temperature = o["fit_initial"].cast<bool>();
+  if (o.contains("extensions")) t.extensions = o["extensions"].cast<std::vector<std::string>>();
+  if (o.contains("run_fits")) t.per_run_fits = o["run_fits"].cast<bool>();
+  if (o.contains("cross_validate")) t.cross_validate = o["cross_validate"].cast<bool>();
+  if (!o.contains("friction") || o["friction"].is_none()) return;
+  const py::object friction = o["friction"];
+  if (py::isinstance<FrictionFit>(friction)) {  // a fit of this session: its constants, effects and covariance
+    const FrictionFit& f = friction.cast<const FrictionFit&>();
+    t.friction = f.result->constants();
+    t.friction_effects = f.result->effects();
+    t.friction_fit = f.result->fit;
+    inputs.insert(inputs.begin(), f.provenance.inputs.begin(), f.provenance.inputs.end());
+  } else {  // a friction fit JSON, as `lmcal fit thermal --friction FILE` reads it
+    const auto file = py::str(friction).cast<std::string>();
+    read_friction_fit(file, t);
+    inputs.insert(inputs.begin(), {file, sha256_file(file)});
+  }
+}
+
+ThermalFit fit_thermal_py(const ThermalData& data, const py::dict& o, const std::string& name,
+                          const std::vector<std::string>& command) {
+  ThermalFit fit{nullptr, data.set, {}, data.inputs, command, name};
+  set_thermal_options(fit.options, o, fit.inputs);
+  py::gil_scoped_release release;
+  fit.result = std::make_shared<ThermalFitResult>(fit_thermal(*data.set, fit.options));
+  return fit;
+}
+
+// ---- diagnoses and calibration ----------------------------------------------------------------
+
+struct FrictionDiagnosisHandle {
+  std::shared_ptr<const FrictionDiagnosis> result;
+  std::string json() const { return friction_diagnosis_json(*result); }
+};
+struct ThermalDiagnosisHandle {
+  std::shared_ptr<const ThermalDiagnosis> result;
+  std::string json() const { return thermal_diagnosis_json(*result); }
+};
+
+FrictionDiagnosisHandle diagnose_friction_py(const FrictionData& data, const py::dict& o, const py::object& progress) {
+  FrictionDiagnosisOptions options;
+  set_friction_options(options.fit, o);
+  if (o.contains("lrt_p")) options.lrt_p = o["lrt_p"].cast<double>();
+  if (o.contains("min_gain_percent")) options.min_cv_gain_percent = o["min_gain_percent"].cast<double>();
+  options.progress = python_progress(progress);
+  py::gil_scoped_release release;
+  return {std::make_shared<FrictionDiagnosis>(diagnose_friction(*data.log, options))};
+}
+
+ThermalDiagnosisHandle diagnose_thermal_py(const ThermalData& data, const py::dict& o, const py::object& progress) {
+  ThermalDiagnosisOptions options;
+  Inputs unused;
+  set_thermal_options(options.fit, o, unused);
+  if (o.contains("lrt_p")) options.lrt_p = o["lrt_p"].cast<double>();
+  if (o.contains("min_gain_percent")) options.min_cv_gain_percent = o["min_gain_percent"].cast<double>();
+  options.progress = python_progress(progress);
+  py::gil_scoped_release release;
+  return {std::make_shared<ThermalDiagnosis>(diagnose_thermal(*data.set, options))};
+}
+
+struct CalibrationHandle {
+  std::shared_ptr<const Calibration> c;
+
+  std::string json() const { return calibration_json(*c); }
+  Files files() const { return calibration_outputs(*c); }
+  // c.inputs: the friction logs first, then the thermal files (as calibration_outputs splits them).
+  Inputs friction_inputs() const { return {c->inputs.begin(), c->inputs.begin() + static_cast<std::ptrdiff_t>(c->set.friction_logs.size())}; }
+  Inputs thermal_inputs() const { return {c->inputs.begin() + static_cast<std::ptrdiff_t>(c->set.friction_logs.size()), c->inputs.end()}; }
+  std::optional<FrictionFit> friction(bool calibrated) const {
+    const auto& result = calibrated ? c->calibrated.friction : c->friction;
+    if (!result || !c->friction_log) return std::nullopt;
+    return FrictionFit{{c, &*result},
+                       {c, &*c->friction_log},
+                       calibrated ? c->calibrated.friction_options : c->friction_options,
+                       {calibrated ? "calibrated_friction" : "friction", friction_inputs(), c->command}};
+  }
+  std::optional<ThermalFit> thermal(bool calibrated) const {
+    const auto& result = calibrated ? c->calibrated.thermal : c->thermal;
+    if (!result || !c->thermal_data) return std::nullopt;
+    return ThermalFit{{c, &*result},
+                      {c, &*c->thermal_data},
+                      calibrated ? c->calibrated.thermal_options : c->thermal_options,
+                      thermal_inputs(),
+                      c->command,
+                      calibrated ? "calibrated_thermal" : "thermal"};
+  }
+};
+
+CalibrationHandle calibrate_py(const std::string& folder, const py::dict& o, const py::object& progress) {
+  const CalibrationSet set = find_calibration_set(folder);
+  CalibrationOptions options;
+  if (o.contains("catalog") && !o["catalog"].is_none()) options.catalog_file = o["catalog"].cast<std::string>();
+  if (o.contains("raw")) options.raw = raw_options(o["raw"].cast<py::dict>(), &options.raw_given);
+  if (o.contains("diagnose")) options.diagnose = o["diagnose"].cast<bool>();
+  // One setting, every step that has it (as `lmcal calibrate` applies its options).
+  py::dict friction = o.contains("friction") ? o["friction"].cast<py::dict>() : py::dict();
+  set_friction_options(options.friction, friction);
+  set_friction_options(options.friction_diagnosis.fit, friction);
+  for (FitOptions* fit : {&options.friction.fit, &options.friction_diagnosis.fit.fit, &options.thermal.fit,
+                          &options.thermal_diagnosis.fit.fit})
+    set_fit_options(*fit, o["uncertainty"].cast<py::dict>());
+  const Progress detail = python_progress(progress);
+  CalibrationProgress callbacks{.step = [detail](std::size_t step, std::size_t steps, const std::string& name) {
+                                  detail(name, step, steps);
+                                },
+                                .detail = detail};
+  py::gil_scoped_release release;
+  return {std::make_shared<Calibration>(calibrate(set, options, callbacks))};
+}
+
+// ---- simulation -------------------------------------------------------------------------------
+
+FrictionConstants<double> constants_from(const std::map<std::string, double>& given) {
+  FrictionConstants<double> k = paper_friction_constants();
+  for (const auto& [name, value] : given) fittable_constant(k, constant_index("constants", name)) = value;
+  validate(k);
+  return k;
+}
+
+FrictionEffects<double> effects_from(const std::map<std::string, double>& given) {
+  FrictionEffects<double> e;
+  for (const auto& [name, value] : given) e[friction_effect_slot(name)] = value;
+  return e;
+}
+
+// The friction law at every row of equally long (broadcast in __init__.py) condition arrays.
+py::array_t<double> friction_law(const std::map<std::string, double>& constants, const std::map<std::string, double>& effects,
+                                 const py::dict& columns) {
+  const FrictionConstants<double> k = constants_from(constants);
+  const FrictionEffects<double> e = effects_from(effects);
+  using Column = py::array_t<double, py::array::c_style | py::array::forcecast>;
+  const auto column = [&](const char* name) { return columns[name].cast<Column>(); };
+  const Column v = column("velocity_m_s"), load = column("load_N"), preload = column("preload_um"),
+               block = column("block_length_mm"), temperature = column("temperature_C"),
+               viscosity = column("viscosity40_mm2_s"), direction = column("direction");
+  const auto n = v.size();
+  py::array_t<double> out(n);
+  auto f = out.mutable_unchecked<1>();
+  for (py::ssize_t i = 0; i < n; ++i) {
+    const FrictionConditions<double> c{.load_N = load.at(i), .preload_um = preload.at(i), .block_length_mm = block.at(i),
+                                       .velocity_m_s = v.at(i), .temperature_C = temperature.at(i), .direction = direction.at(i)};
+    validate(c);
+    FrictionConstants<double> ki = k;
+    ki.nu_ref_mm2_s = viscosity.at(i);
+    f(i) = friction_force_with_effects_N(ki, e, c);
+  }
+  return out;
+}
+
+// One case of `lmcal simulate thermal`: the rail of a catalog guide heated by one block.
+py::dict simulate_thermal_py(const py::dict& o) {
+  const GuideSpec spec = find_guide(o["guide"].cast<std::string>());
+  const auto number = [&](const char* name) { return o[name].cast<double>(); };
+  const auto given_or_catalog = [&](const char* name, std::optional<double> GuideSpec::*field) {
+    return o[name].is_none() ? require(spec, field, name) : number(name);
+  };
+  const AmbientTrace ambient = py::isinstance<py::float_>(o["ambient_C"]) || py::isinstance<py::int_>(o["ambient_C"])
+                                   ? AmbientTrace::constant(number("ambient_C"))
+                                   : [&] {
+                                       const auto [t, T] = o["ambient_C"].cast<std::pair<std::vector<double>, std::vector<double>>>();
+                                       return AmbientTrace{t, T};
+                                     }();
+  const double initial_C = o["initial_C"].is_none() ? ambient.temperature_C.front() : number("initial_C");
+  RailParams<double> params{.heat_partition = number("alpha"),
+                            .h_W_m2K = number("h_W_m2K"),
+                            .conductivity_W_mK = require(spec, &GuideSpec::conductivity_W_mK, "conductivity_W_mK"),
+                            .density_kg_m3 = require(spec, &GuideSpec::density_kg_m3, "density_kg_m3"),
+                            .specific_heat_J_kgK = require(spec, &GuideSpec::specific_heat_J_kgK, "specific_heat_J_kgK"),
+                            .initial_temperature_C = initial_C};
+  const double V = number("velocity_m_s");
+  if (o["heat_rate_W"].is_none()) {
+    FrictionConditions<double> c{.load_N = number("load_N"),
+                                 .preload_um = given_or_catalog("preload_um", &GuideSpec::preload_um),
+                                 .block_length_mm = given_or_catalog("block_length_mm", &GuideSpec::block_length_mm),
+                                 .velocity_m_s = V,
+                                 .temperature_C = initial_C};
+    validate(c);
+    params.heat_rate_W = heat_rate_with_effects_W(constants_from(o["constants"].cast<std::map<std::string, double>>()),
+                                                  effects_from(o["effects"].cast<std::map<std::string, double>>()), c);
+  } else {
+    params.heat_rate_W = number("heat_rate_W");
+  }
+  const RailGeometry geometry{.rail_length_m = number("rail_length_m"),
+                              .area_m2 = require(spec, &GuideSpec::area_m2, "area_m2"),
+                              .perimeter_m = require(spec, &GuideSpec::perimeter_m, "perimeter_m"),
+                              .stroke_m = number("stroke_m"),
+                              .contact_length_m = given_or_catalog("contact_length_mm", &GuideSpec::contact_length_mm) * 1e-3,
+                              .velocity_m_s = V};
+  const RailNumerics numerics{.source = parse_source_model(o["source"].cast<std::string>()),
+                              .scheme = parse_time_scheme(o["scheme"].cast<std::string>()),
+                              .half_rail_segments = o["segments"].cast<int>(),
+                              .time_step_s = number("time_step_s")};
+  const double duration = number("duration_s"), every = number("output_every_s");
+  require_positive("duration_s", duration);
+  require_positive("output_every_s", every);
+  RailOutputs outputs{.duration_s = duration, .sensor_positions_m = o["sensors_m"].cast<std::vector<double>>()};
+  for (double t = 0; t < duration; t += every) outputs.output_times_s.push_back(t);
+  outputs.output_times_s.push_back(duration);
+  outputs.profile_times_s = {duration};
+  RailSolution<double> s;
+  {
+    py::gil_scoped_release release;
+    s = simulate_rail(geometry, numerics, outputs, params, ambient);
+  }
+  py::dict d;
+  d["time_s"] = array(s.output_times_s);
+  d["sensor_x_m"] = array(s.sensor_positions_m);
+  py::array_t<double> temperature({s.output_times_s.size(), s.sensor_positions_m.size()});
+  std::copy(s.sensor_temperature_C.begin(), s.sensor_temperature_C.end(), temperature.mutable_data());
+  d["temperature_C"] = temperature;
+  d["heat_rate_W"] = params.heat_rate_W;
+  d["x_m"] = array(s.node_positions_m);
+  d["profile_C"] = array(s.profiles_C.front());
+  d["time_step_s"] = s.time_step_s;
+  return d;
+}
+
+// ---- errors -----------------------------------------------------------------------------------
+
+void register_errors(py::module_& m) {
+  static py::exception<InputError> input_error(m, "InputError", PyExc_ValueError);
+  static py::exception<InvalidParameter> invalid_parameter(m, "InvalidParameterError", PyExc_ValueError);
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const InputError& e) {
+      py::object error = py::handle(input_error.ptr())(e.what());
+      error.attr("file") = e.file();
+      error.attr("line") = e.line();
+      error.attr("column") = e.column();
+      PyErr_SetObject(input_error.ptr(), error.ptr());
+    } catch (const InvalidParameter& e) {
+      py::object error = py::handle(invalid_parameter.ptr())(e.what());
+      error.attr("parameter") = e.parameter();
+      PyErr_SetObject(invalid_parameter.ptr(), error.ptr());
+    }
+  });
+}
+
+}  // namespace
+
+}  // namespace lmcal::python
+
+PYBIND11_MODULE(_lmcal, m) {
+  using namespace lmcal;
+  using namespace lmcal::python;
+  m.doc() = "lmcal's compiled core; use the package `lmcal`";
+  m.attr("__version__") = LMCAL_VERSION;
+  register_errors(m);
+
+  py::class_<FrictionData>(m, "FrictionData")
+      .def("__len__", [](const FrictionData& d) { return d.log->size(); })
+      .def_property_readonly("inputs", [](const FrictionData& d) { return d.inputs; })
+      .def("columns",
+           [](const FrictionData& d) {
+             const FrictionLog& l = *d.log;
+             py::dict c;
+             c["run"] = array(l.run);
+             c["guide"] = array(l.guide);
+             c["time_s"] = array(l.time_s);
+             c["velocity_m_s"] = array(l.velocity_m_s);
+             c["load_N"] = array(l.load_N);
+             c["preload_um"] = array(l.preload_um);
+             c["block_length_mm"] = array(l.block_length_mm);
+             c["temperature_C"] = array(l.temperature_C);
+             c["viscosity40_mm2_s"] = array(l.viscosity40_mm2_s);
+             c["direction"] = array(l.direction);
+             c["friction_N"] = array(l.friction_N);
+             return c;
+           })
+      .def_property_readonly("run_names", [](const FrictionData& d) { return d.log->run_names; })
+      .def_property_readonly("guide_names", [](const FrictionData& d) { return d.log->guide_names; })
+      .def("load_reports",
+           [](const FrictionData& d) {
+             py::list out;
+             for (const auto& r : d.log->reports) {
+               py::dict report;
+               report["file"] = r.file;
+               report["rows_read"] = r.rows_read;
+               report["rows_kept"] = r.rows_kept;
+               report["skipped"] = r.skipped;
+               report["ignored_columns"] = r.ignored_columns;
+               report["conversions"] = r.conversions;
+               report["warnings"] = r.warnings;
+               out.append(report);
+             }
+             return out;
+           })
+      .def("csv", [](const FrictionData& d) { return friction_log_csv(*d.log); });
+  m.def("load_friction_files", &load_friction_files);
+  m.def("load_friction_manifest", &load_friction_manifest);
+  m.def("friction_log_from_columns", &friction_log_from_columns);
+
+  py::class_<ThermalData>(m, "ThermalData")
+      .def_property_readonly("inputs", [](const ThermalData& d) { return d.inputs; })
+      .def_property_readonly("name", [](const ThermalData& d) { return d.set->name; })
+      .def("runs", [](const ThermalData& d) {
+        py::list runs;
+        for (const ThermalRun& r : d.set->runs) {
+          py::dict run;
+          run["id"] = r.id;
+          run["file"] = r.file.string();
+          run["guide"] = r.guide;
+          run["velocity_m_s"] = r.velocity_m_s;
+          run["load_N"] = r.load_N;
+          run["stroke_m"] = r.stroke_m;
+          run["rail_length_m"] = r.rail_length_m;
+          run["sensor_position_m"] = r.sensor_position_m;
+          py::dict trace;
+          trace["time_s"] = array(r.trace.time_s);
+          for (const auto& c : r.trace.ambient) trace[py::str(c.name)] = array(c.values);
+          for (const auto& c : r.trace.rail) trace[py::str(c.name)] = array(c.values);
+          if (!r.trace.heat_rate_W.empty()) trace["heat_rate_W"] = array(r.trace.heat_rate_W);
+          run["trace"] = trace;
+          runs.append(run);
+        }
+        return runs;
+      });
+  m.def("load_thermal_manifest", &load_thermal);
+  m.def("thermal_with_trace", &with_trace);
+
+  py::class_<FrictionFit>(m, "FrictionFitHandle")
+      .def("json", &FrictionFit::json)
+      .def("summary", [](const FrictionFit& f) { return friction_fit_summary(*f.result); })
+      .def("write", [](const FrictionFit& f, const std::string& dir) { write_files(dir, f.files()); })
+      .def("arrays", &FrictionFit::arrays)
+      .def("constants", [](const FrictionFit& f) {
+        const auto k = f.result->constants();
+        std::map<std::string, double> out;
+        for (std::size_t j = 0; j < kFrictionConstantNames.size(); ++j) out[kFrictionConstantNames[j]] = fittable_constant(k, j);
+        return out;
+      })
+      .def("effects", [](const FrictionFit& f) {
+        std::map<std::string, double> out;
+        for (const auto& name : f.options.effects) out[name] = f.result->fit.parameter(name).value;
+        return out;
+      });
+  m.def("fit_friction", &fit_friction_py);
+
+  py::class_<ThermalFit>(m, "ThermalFitHandle")
+      .def("json", &ThermalFit::json)
+      .def("summary", [](const ThermalFit& f) { return thermal_fit_summary(*f.result); })
+      .def("write", [](const ThermalFit& f, const std::string& dir) { write_files(dir, f.files()); })
+      .def("arrays", &ThermalFit::arrays);
+  m.def("fit_thermal", &fit_thermal_py);
+
+  py::class_<FrictionDiagnosisHandle>(m, "FrictionDiagnosisHandle")
+      .def("json", &FrictionDiagnosisHandle::json)
+      .def("summary", [](const FrictionDiagnosisHandle& d) { return d.result->summary; });
+  py::class_<ThermalDiagnosisHandle>(m, "ThermalDiagnosisHandle")
+      .def("json", &ThermalDiagnosisHandle::json)
+      .def("summary", [](const ThermalDiagnosisHandle& d) { return d.result->summary; });
+  m.def("diagnose_friction", &diagnose_friction_py);
+  m.def("diagnose_thermal", &diagnose_thermal_py);
+
+  py::class_<CalibrationHandle>(m, "CalibrationHandle")
+      .def("json", &CalibrationHandle::json)
+      .def("summary", [](const CalibrationHandle& h) { return calibration_summary(*h.c); })
+      .def("write", [](const CalibrationHandle& h, const std::string& dir) { write_files(dir, h.files()); })
+      .def("report_html", [](const CalibrationHandle& h) { return calibration_report_html(*h.c); })
+      .def("friction", &CalibrationHandle::friction)
+      .def("thermal", &CalibrationHandle::thermal)
+      .def("friction_diagnosis",
+           [](const CalibrationHandle& h) -> std::optional<FrictionDiagnosisHandle> {
+             if (!h.c->friction_diagnosis) return std::nullopt;
+             return FrictionDiagnosisHandle{{h.c, &*h.c->friction_diagnosis}};
+           })
+      .def("thermal_diagnosis", [](const CalibrationHandle& h) -> std::optional<ThermalDiagnosisHandle> {
+        if (!h.c->thermal_diagnosis) return std::nullopt;
+        return ThermalDiagnosisHandle{{h.c, &*h.c->thermal_diagnosis}};
+      });
+  m.def("calibrate", &calibrate_py);
+
+  m.def("friction_law", &friction_law);
+  m.def("simulate_thermal", &simulate_thermal_py);
+  m.def("guide", [](const std::string& model, const std::optional<std::string>& catalog) {
+    const auto user = user_catalog(catalog);
+    const GuideSpec& spec = find_guide(model, user ? &*user : nullptr);
+    py::dict d;
+    d["model"] = spec.model;
+    d["kind"] = spec.kind;
+    d["source"] = spec.source;
+    for (const auto& field : guide_field_names())
+      if (const auto value = field_value(spec, field)) d[py::str(field)] = *value;
+    return d;
+  });
+  m.def("friction_effect_names", &friction_effect_names);
+}

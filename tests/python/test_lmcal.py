@@ -1,0 +1,276 @@
+"""The Python package end to end on the bundled measurements: the same numbers as the `lmcal`
+command for the same inputs (to 1e-10), columns and DataFrames in, errors as Python
+exceptions, progress, the GIL released during the long calls.
+
+Run by ctest (test `python`) with PYTHONPATH at the build's python folder, LMCAL_CLI the
+command and LMCAL_SOURCE the source tree."""
+
+import json
+import math
+import os
+import subprocess
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import lmcal
+
+SOURCE = os.environ.get("LMCAL_SOURCE", os.path.join(os.path.dirname(__file__), "..", ".."))
+CLI = os.environ.get("LMCAL_CLI", "lmcal")
+SET = os.path.join(SOURCE, "measurements", "cheng2017")
+FRICTION_CSV = os.path.join(SET, "friction.csv")
+THERMAL_TOML = os.path.join(SET, "thermal.toml")
+
+# Keys that differ by nature between two runs of the same fit: the command that made it and
+# the wall time.
+VOLATILE = {"command", "seconds"}
+
+
+def assert_same(a, b, path="", rel=1e-10):
+    """Equal JSON values: numbers to `rel` (relative, or absolute below 1), the rest exactly."""
+    if isinstance(a, dict):
+        assert isinstance(b, dict), path
+        assert set(a) - VOLATILE == set(b) - VOLATILE, f"{path}: keys {sorted(set(a) ^ set(b))}"
+        for k in a:
+            if k not in VOLATILE:
+                assert_same(a[k], b[k], f"{path}.{k}", rel)
+    elif isinstance(a, list):
+        assert isinstance(b, list) and len(a) == len(b), f"{path}: lengths"
+        for i, (x, y) in enumerate(zip(a, b)):
+            assert_same(x, y, f"{path}[{i}]", rel)
+    elif isinstance(a, float) or isinstance(b, float):
+        assert isinstance(a, (int, float)) and isinstance(b, (int, float)), f"{path}: {a!r} vs {b!r}"
+        assert abs(a - b) <= rel * max(1.0, abs(a), abs(b)), f"{path}: {a!r} vs {b!r}"
+    else:
+        assert a == b, f"{path}: {a!r} vs {b!r}"
+
+
+def cli(*args, cwd=None):
+    return subprocess.run([CLI, *args], check=True, capture_output=True, text=True, cwd=cwd)
+
+
+@pytest.fixture(scope="module")
+def friction_fit():
+    return lmcal.fit_friction(FRICTION_CSV)
+
+
+@pytest.fixture(scope="module")
+def cli_friction(tmp_path_factory):
+    out = tmp_path_factory.mktemp("cli_friction")
+    cli("fit", "friction", FRICTION_CSV, "-o", str(out))
+    return out
+
+
+def test_friction_fit_equals_the_command(friction_fit, cli_friction):
+    expected = json.loads((cli_friction / "friction.json").read_text())
+    assert_same(friction_fit.to_dict(), expected)
+
+
+def test_friction_fit_writes_the_commands_files(friction_fit, cli_friction, tmp_path):
+    friction_fit.write(tmp_path)
+    for name in ("friction_samples.csv", "friction_conditions.csv"):
+        assert (tmp_path / name).read_text() == (cli_friction / name).read_text(), name
+    assert not list(tmp_path.glob("*.tmp"))
+
+
+def test_friction_fit_fields_are_numpy_and_agree(friction_fit):
+    fit = friction_fit
+    names = fit.parameter_names
+    assert names[:7] == ["k1", "k2", "mu_st", "v_st_m_s", "mu_v", "beta_per_K", "f0"]
+    cov = fit.covariance
+    assert isinstance(cov, np.ndarray) and cov.shape == (len(names), len(names))
+    # The standard errors are the square roots of the covariance's diagonal.
+    np.testing.assert_allclose(np.sqrt(np.diag(cov))[:7], fit.stderr[:7], rtol=1e-12)
+    for name in names[:7]:
+        p = fit.params[name]
+        assert p.ci[0] < p.value < p.ci[1]
+        assert p.stderr > 0
+    np.testing.assert_allclose(fit.residual_N, fit.measured_N - fit.predicted_N)
+    assert math.isclose(fit.rmse_N, float(np.sqrt(np.mean(fit.residual_N ** 2))), rel_tol=1e-9)
+    report = repr(fit)
+    assert "[[Variables]]" in report and "k1:" in report and "[[Correlations]]" in report
+
+
+def test_the_law_reproduces_the_fits_predictions(friction_fit):
+    # Without run offsets the fit's prediction is the law at its constants, sample by sample.
+    c = lmcal.load_friction_log(FRICTION_CSV).columns()
+    predicted = lmcal.simulate_friction(friction_fit, velocity_m_s=c["velocity_m_s"], load_N=c["load_N"],
+                                        preload_um=c["preload_um"], block_length_mm=c["block_length_mm"],
+                                        temperature_C=c["temperature_C"], viscosity40_mm2_s=c["viscosity40_mm2_s"],
+                                        direction=c["direction"])
+    np.testing.assert_allclose(predicted, friction_fit.predicted_N, rtol=1e-12)
+
+
+def test_a_dataframe_gives_the_files_fit(friction_fit):
+    pd = pytest.importorskip("pandas")
+    frame = pd.read_csv(FRICTION_CSV, comment="#", float_precision="round_trip")
+    log = lmcal.load_friction_log(frame)
+    assert len(log) == len(frame)
+    from_frame = lmcal.fit_friction(log).to_dict()
+    from_file = friction_fit.to_dict()
+    from_frame.pop("inputs"), from_file.pop("inputs")
+    assert_same(from_frame, from_file)
+
+
+def test_columns_in_other_units_are_converted():
+    c = lmcal.load_friction_log(FRICTION_CSV).columns()
+    columns = {k: c[k] for k in ("run", "velocity_m_s", "preload_um", "block_length_mm", "temperature_C", "friction_N")}
+    columns["load_kN"] = c["load_N"] / 1000
+    log = lmcal.load_friction_log(columns)
+    np.testing.assert_allclose(log.columns()["load_N"], c["load_N"], rtol=1e-15)
+    assert log.load_reports[0]["conversions"]
+
+
+def test_thermal_fit_equals_the_command(friction_fit, cli_friction, tmp_path):
+    friction_json = str(cli_friction / "friction.json")
+    cli("fit", "thermal", THERMAL_TOML, "--friction", friction_json, "-o", str(tmp_path))
+    expected = json.loads((tmp_path / "thermal.json").read_text())
+    fit = lmcal.fit_thermal(THERMAL_TOML, friction=friction_json)
+    assert_same(fit.to_dict(), expected)
+    alpha = fit.alpha
+    assert 0 < alpha.ci[0] < alpha.value < alpha.ci[1] < 1
+    s = fit.samples
+    assert s["measured_C"].shape == s["simulated_C"].shape == s["time_s"].shape
+    assert "alpha:" in repr(fit)
+    # A FrictionFit object in place of its JSON: the same α.
+    direct = lmcal.fit_thermal(THERMAL_TOML, friction=friction_fit)
+    assert math.isclose(direct.alpha.value, alpha.value, rel_tol=1e-9)
+
+
+def test_calibrate_equals_the_command(tmp_path):
+    cli_out = tmp_path / "cli"
+    cli("calibrate", SET, "-o", str(cli_out))
+    steps = []
+    cal = lmcal.calibrate(SET, progress=lambda what, done, total: steps.append((what, done, total)))
+    assert_same(cal.to_dict(), json.loads((cli_out / "calibration.json").read_text()))
+    for name, fit in (("friction", cal.friction), ("calibrated_friction", cal.calibrated_friction),
+                      ("thermal", cal.thermal), ("calibrated_thermal", cal.calibrated_thermal)):
+        assert_same(fit.to_dict(), json.loads((cli_out / f"{name}.json").read_text()), name)
+    assert_same(cal.friction_diagnosis.to_dict(), json.loads((cli_out / "friction_diagnosis.json").read_text()))
+    assert_same(cal.thermal_diagnosis.to_dict(), json.loads((cli_out / "thermal_diagnosis.json").read_text()))
+    # Progress: every step, in order, from the caller's thread.
+    total = steps[0][2]
+    assert total > 1 and [done for what, done, t in steps if t == total] == list(range(total))
+    assert steps[0][0] == "loading the measurements" and any(what.startswith("round 1") for what, _, _ in steps)
+    py_out = tmp_path / "py"
+    cal.write(py_out)
+    assert sorted(p.name for p in py_out.iterdir()) == sorted(p.name for p in cli_out.iterdir())
+    assert "<html" in cal.report_html()[:200].lower()
+
+
+def test_an_exception_in_the_progress_callback_stops_the_call():
+    class Stop(Exception):
+        pass
+
+    def progress(what, done, total):
+        raise Stop(what)
+
+    with pytest.raises(Stop):
+        lmcal.calibrate(SET, progress=progress)
+
+
+def test_the_gil_is_released_during_a_fit():
+    log = lmcal.load_friction_log(FRICTION_CSV)
+    done = threading.Event()
+    worker_seconds = []
+
+    def work():
+        t = time.perf_counter()
+        lmcal.diagnose_friction(log)
+        worker_seconds.append(time.perf_counter() - t)
+        done.set()
+
+    thread = threading.Thread(target=work)
+    thread.start()
+    ticks = 0
+    while not done.is_set():  # Python work in this thread while the diagnosis runs in C++
+        ticks += 1
+        time.sleep(0.001)
+    thread.join()
+    # Held GIL: this loop could not run while the diagnosis ran (about a second).
+    assert worker_seconds[0] > 0.2
+    assert ticks > 0.2 * worker_seconds[0] / 0.001 * 0.25
+
+
+def test_simulate_thermal_equals_the_command(tmp_path):
+    cli("simulate", "thermal", "-o", str(tmp_path / "sim"))
+    sim = lmcal.simulate_thermal()
+    rows = [line.split(",") for line in (tmp_path / "sim_time.csv").read_text().splitlines() if not line.startswith("#")]
+    header, rows = rows[0], rows[1:]
+    t, x, temp = header.index("time_s"), header.index("sensor_x_m"), header.index("temperature_C")
+    expected = {(float(r[t]), float(r[x])): float(r[temp]) for r in rows}
+    assert len(expected) == sim.temperature_C.size
+    for i, time_s in enumerate(sim.time_s):
+        for j, x_m in enumerate(sim.sensor_x_m):
+            assert math.isclose(sim.temperature_C[i, j], expected[(time_s, x_m)], rel_tol=1e-10)
+    # The rail warms from the ambient, most under the block.
+    assert sim.temperature_C[0, 0] == pytest.approx(26.0)
+    assert sim.temperature_C[-1, 0] > sim.temperature_C[-1, -1] > 26.0
+
+
+# ---- bad input -------------------------------------------------------------------------------
+
+def test_a_bad_file_names_file_line_and_column(tmp_path):
+    bad = tmp_path / "bad.csv"
+    bad.write_text("run,velocity_m_s,load_N,preload_um,block_length_mm,temperature_C,friction_N\n"
+                   "r1,0.1,1000,2.5,100,24,30\n"
+                   "r1,0.1,abc,2.5,100,24,30\n")
+    with pytest.raises(lmcal.InputError) as e:
+        lmcal.load_friction_log(bad)
+    assert isinstance(e.value, ValueError)
+    assert e.value.file == str(bad) and e.value.line == 3 and e.value.column == 8
+    assert f"{bad}:3:8" in str(e.value) and "load_N" in str(e.value)
+
+
+def good_columns(n=4):
+    return {"run": ["r1"] * n, "velocity_m_s": np.full(n, 0.1), "load_N": np.full(n, 1000.0),
+            "preload_um": np.full(n, 2.5), "block_length_mm": np.full(n, 100.0),
+            "temperature_C": np.full(n, 24.0), "friction_N": np.linspace(30, 31, n)}
+
+
+def test_good_columns_load():
+    log = lmcal.load_friction_log(good_columns())
+    assert len(log) == 4 and log.run_names == ["r1"]
+
+
+@pytest.mark.parametrize("change, column, words", [
+    (lambda c: c.update(load_N=np.full(3, 1000.0)), "load_N", "rows"),
+    (lambda c: c["friction_N"].__setitem__(2, np.nan), "friction_N", "nan at row 2"),
+    (lambda c: c["temperature_C"].__setitem__(1, np.inf), "temperature_C", "inf at row 1"),
+    (lambda c: c.update(velocity_m_s=np.array(["2020-01-01"] * 4, dtype="datetime64[D]")), "velocity_m_s", "numbers"),
+    (lambda c: c.update(preload_um=np.full(4, True)), "preload_um", "numbers"),
+    (lambda c: c.update(load_N=np.ones((4, 2))), "load_N", "shape"),
+])
+def test_bad_columns_are_a_value_error_naming_the_column(change, column, words):
+    c = good_columns()
+    change(c)
+    with pytest.raises(ValueError) as e:
+        lmcal.load_friction_log(c)
+    assert f"'{column}'" in str(e.value) and words in str(e.value).lower()
+
+
+def test_a_value_out_of_range_in_columns_names_column_and_row():
+    c = good_columns()
+    c["load_N"][3] = -5.0
+    with pytest.raises(lmcal.InputError) as e:
+        lmcal.load_friction_log(c)
+    assert str(e.value).startswith("columns: row 3: load_N = -5") and e.value.file == "columns"
+    c = good_columns()
+    c["velocity_m_s"] = np.array(["0.1", "fast", "0.1", "0.1"], dtype=object)
+    with pytest.raises(lmcal.InputError, match="row 1: column 'velocity_m_s': expected a number, found 'fast'"):
+        lmcal.load_friction_log(c)
+    with pytest.raises(lmcal.InputError, match="missing"):
+        lmcal.load_friction_log({k: v for k, v in good_columns().items() if k != "load_N"})
+
+
+def test_bad_options_name_the_option():
+    log = lmcal.load_friction_log(good_columns())
+    with pytest.raises(lmcal.InvalidParameterError) as e:
+        lmcal.fit_friction(log, loss="square")
+    assert e.value.parameter == "loss" and "huber" in str(e.value)
+    with pytest.raises(lmcal.InvalidParameterError, match="unknown constant 'k3'"):
+        lmcal.fit_friction(log, free=["k3"])
+    with pytest.raises(lmcal.InputError):
+        lmcal.load_thermal_dataset(os.path.join(SOURCE, "no_such_manifest.toml"))
