@@ -9,7 +9,9 @@ packages=(
   libnlopt-dev libnlopt-cxx-dev  # global and derivative-free search
   libcli11-dev libfmt-dev nlohmann-json3-dev libtomlplusplus-dev libfast-float-dev
   libboost-dev libssl-dev        # Student-t and F quantiles (Boost.Math); SHA-256 of inputs (OpenSSL)
+  pybind11-dev python3-dev python3-numpy  # the Python package lmcal
   libgtest-dev libbenchmark-dev  # tests and benchmarks
+  python3-pytest python3-pandas  # the Python package's tests (a DataFrame goes in)
   chromium chromium-driver       # the report's test in a headless browser
 )
 

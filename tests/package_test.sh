@@ -2,10 +2,14 @@
 # lmcal as a package, as another project uses it: the build installed into a temporary
 # prefix, examples/cpp configured against it with find_package (no hand-written paths),
 # built and run on the bundled friction log; the installed lmcal command runs too.
-# Usage: package_test.sh BUILD_DIR SOURCE_DIR
+# With PYTHON and PYTHON_DIR (the package's folder relative to the prefix), the Python package
+# is imported from the prefix and fits the bundled log.
+# Usage: package_test.sh BUILD_DIR SOURCE_DIR [PYTHON PYTHON_DIR]
 set -euo pipefail
 build=$1
 source=$2
+python=${3:-}
+python_dir=${4:-}
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 cmake --install "$build" --prefix "$work/prefix" >/dev/null
@@ -30,4 +34,15 @@ if cmake -S "$work/wrong" -B "$work/wrong/build" -DCMAKE_PREFIX_PATH="$work/pref
   exit 1
 fi
 "$work/prefix/bin/lmcal" --help >/dev/null
+if [[ -n "$python" ]]; then
+  test -f "$work/prefix/$python_dir/lmcal/__init__.py"
+  (cd "$work" && PYTHONPATH="$work/prefix/$python_dir" "$python" - "$source/measurements/cheng2017/friction.csv" "$work/prefix" <<'PY'
+import sys, lmcal
+assert lmcal.__file__.startswith(sys.argv[2]), lmcal.__file__
+fit = lmcal.fit_friction(sys.argv[1], bootstrap=0)
+k1 = fit.params["k1"]
+assert k1.ci[0] < k1.value < k1.ci[1], k1
+PY
+  )
+fi
 echo "package: installed, found, built against and run"

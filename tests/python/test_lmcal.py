@@ -274,3 +274,14 @@ def test_bad_options_name_the_option():
         lmcal.fit_friction(log, free=["k3"])
     with pytest.raises(lmcal.InputError):
         lmcal.load_thermal_dataset(os.path.join(SOURCE, "no_such_manifest.toml"))
+
+
+def test_the_example_runs(tmp_path):
+    example = os.path.join(SOURCE, "examples", "python", "fit_friction_dataframe.py")
+    env = dict(os.environ, MPLBACKEND="Agg")
+    done = subprocess.run([__import__("sys").executable, example, str(tmp_path)], env=env, capture_output=True,
+                          text=True, cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert "[[Variables]]" in done.stdout and "k1 = " in done.stdout
+    assert (tmp_path / "cheng2017" / "report.html").is_file()
+    assert (tmp_path / "cheng2017" / "calibration.json").is_file()
