@@ -24,6 +24,7 @@
 #include <random>
 #include <string>
 #include <utility>
+#include <variant>
 #include <vector>
 
 #include "lmcal/diagnose/friction_diagnosis.hpp"

@@ -133,10 +133,40 @@ def test_thermal_fit_equals_the_command(friction_fit, cli_friction, tmp_path):
     assert 0 < alpha.ci[0] < alpha.value < alpha.ci[1] < 1
     s = fit.samples
     assert s["measured_C"].shape == s["simulated_C"].shape == s["time_s"].shape
+    # The fit's RMSE per sensor is that of these residuals.
+    r = fit.residual_C
+    for g in expected["goodness"]:
+        run, sensor = fit.run_names.index(g["run"]), None
+        sensor = fit.sensor_names[run].index(g["sensor"])
+        mask = (s["run"] == run) & (s["sensor"] == sensor)
+        assert mask.sum() == g["n"]
+        assert math.isclose(float(np.sqrt(np.mean(r[mask] ** 2))), g["rmse_K"], rel_tol=1e-9)
     assert "alpha:" in repr(fit)
     # A FrictionFit object in place of its JSON: the same α.
     direct = lmcal.fit_thermal(THERMAL_TOML, friction=friction_fit)
     assert math.isclose(direct.alpha.value, alpha.value, rel_tol=1e-9)
+
+
+def test_a_trace_from_columns_gives_the_files_fit():
+    data = lmcal.load_thermal_dataset(THERMAL_TOML)
+    run = data.runs[0]
+    from_columns = data.with_trace(run["id"], run["trace"])
+    assert len(from_columns.inputs) == len(data.inputs) - 1  # the run's file is no longer read
+    fit = lmcal.fit_thermal(data, run_fits=False)
+    a, b = fit.to_dict(), lmcal.fit_thermal(from_columns, run_fits=False).to_dict()
+    a.pop("inputs"), b.pop("inputs")
+    assert_same(a, b)
+    # NaN in a thermocouple column: a missing sample, as an empty cell in a file.
+    trace = {k: np.array(v, dtype=float) for k, v in run["trace"].items()}
+    trace[next(k for k in trace if k.startswith("tc"))][5] = np.nan
+    with_gap = lmcal.fit_thermal(data.with_trace(run["id"], trace), run_fits=False)
+    assert len(with_gap.samples["time_s"]) == len(fit.samples["time_s"]) - 1
+    trace = dict(run["trace"])
+    trace.pop(next(k for k in trace if k.startswith("tc")))
+    with pytest.raises(ValueError, match="expected the columns of its file"):
+        data.with_trace(run["id"], trace)
+    with pytest.raises(lmcal.InvalidParameterError, match="no run 'nope'"):
+        data.with_trace("nope", run["trace"])
 
 
 def test_calibrate_equals_the_command(tmp_path):

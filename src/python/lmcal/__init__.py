@@ -59,9 +59,10 @@ def _column_items(data) -> list:
     raise TypeError(f"expected a dict of columns or a pandas DataFrame, got {type(data).__name__}")
 
 
-def _prepare_columns(data) -> tuple[list, list]:
-    """Names and values for the CSV loader: equal lengths, numbers as float64 without NaN or
-    infinity, text as str. ValueError naming the column otherwise."""
+def _prepare_columns(data, missing_allowed=lambda name: False) -> tuple[list, list]:
+    """Names and values for the CSV loader: equal lengths, numbers as float64 without NaN
+    (except in columns where ``missing_allowed(name)``: a missing sample) or infinity, text as
+    str. ValueError naming the column otherwise."""
     items = _column_items(data)
     if not items:
         raise ValueError("no columns given")
@@ -85,7 +86,7 @@ def _prepare_columns(data) -> tuple[list, list]:
         if a.dtype.kind not in "iuf":
             raise ValueError(f"column '{name}': expected numbers, got values of dtype {a.dtype}")
         a = a.astype(np.float64)
-        bad = np.flatnonzero(~np.isfinite(a))
+        bad = np.flatnonzero(np.isinf(a) if missing_allowed(name) else ~np.isfinite(a))
         if bad.size:
             raise ValueError(f"column '{name}': {a[bad[0]]} at row {bad[0]} ({bad.size} rows not finite); every "
                              "value must be a finite number (drop or fill the missing rows first)")
@@ -181,8 +182,9 @@ class ThermalDataSet:
 
     def with_trace(self, run: str, columns) -> "ThermalDataSet":
         """A copy with run ``run``'s trace taken from columns (a dict or a DataFrame with the
-        columns of its file: time_s, the ambient and tc… columns) instead of its file."""
-        names, values = _prepare_columns(columns)
+        columns of its file: time_s, the ambient and tc… columns) instead of its file. NaN in a
+        temperature column is a missing sample, as an empty cell in the file."""
+        names, values = _prepare_columns(columns, missing_allowed=lambda name: not name.startswith("time"))
         return ThermalDataSet(_lmcal.thermal_with_trace(self._h, run, names, values))
 
     def __repr__(self) -> str:
@@ -352,6 +354,12 @@ class ThermalFit(_Fit):
     def samples(self) -> dict:
         """Columns run (index into run_names), sensor, time_s, measured_C, simulated_C."""
         return dict(self._array("samples"))
+
+    @property
+    def residual_C(self) -> np.ndarray:
+        """measured - simulated, per fitted record (in ``samples`` order)."""
+        s = self._array("samples")
+        return s["measured_C"] - s["simulated_C"]
 
     @property
     def run_names(self) -> list:
