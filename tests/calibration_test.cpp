@@ -169,7 +169,7 @@ TEST_F(CalibrationTest, AFullFolderGoesThroughEveryStepIntoACompleteReport) {
   const Calibration c = calibrate(set, {}, {.step = [&](std::size_t, std::size_t, const std::string& s) { steps.push_back(s); }});
   EXPECT_EQ(steps, (std::vector<std::string>{"loading the measurements", "friction fit", "friction diagnosis",
                                              "calibrated friction model", "thermal fit", "thermal diagnosis",
-                                             "calibrated thermal model"}));
+                                             "calibrated thermal model", "prediction of the runs' cycle"}));
   ASSERT_TRUE(c.friction && c.friction_diagnosis && c.thermal && c.thermal_diagnosis);
   EXPECT_TRUE(c.notes.empty());
   // The hidden seal drag is found, and the thermal heat came from the fitted law.
@@ -184,7 +184,10 @@ TEST_F(CalibrationTest, AFullFolderGoesThroughEveryStepIntoACompleteReport) {
   EXPECT_EQ(names, (std::vector<std::string>{"model.toml", "calibrated_friction.json", "calibrated_thermal.json", "friction.json",
                                              "friction_samples.csv", "friction_conditions.csv", "friction_diagnosis.json",
                                              "thermal.json", "thermal_samples.csv", "thermal_alpha_curve.csv",
-                                             "thermal_diagnosis.json", "calibration.json", "report.html"}));
+                                             "thermal_diagnosis.json", "prediction.json", "prediction_time.csv",
+                                             "calibration.json", "report.html"}));
+  ASSERT_TRUE(c.prediction);  // the runs' cycle: the rail grows while the block runs
+  EXPECT_GT(c.prediction->elongation_um.value[c.prediction->time_s.size() / 2 - 1], 1.0);
   const auto summary = nlohmann::json::parse(outputs[outputs.size() - 2].second);
   EXPECT_EQ(summary["friction_diagnosis"]["verdict"], c.friction_diagnosis->verdict);
   EXPECT_EQ(summary["published_model"]["thermal"]["alpha"]["value"].get<double>(), c.thermal->joint.parameter("alpha").value);
@@ -423,7 +426,12 @@ TEST(BundledCalibration, AFreshRunReproducesTheCommittedResults) {
   EXPECT_EQ(html.find("Beyond the library: an empirical term"), std::string::npos);
   EXPECT_EQ(html.find("class=\"empirical\""), std::string::npos);
   EXPECT_EQ(html.find("not a named cause"), std::string::npos);
-  EXPECT_EQ(html.find("class=\"band\""), std::string::npos);
+  // Bands only in the prediction of the runs' cycle (an empirical term would draw its own).
+  const std::size_t prediction = html.find("id=\"prediction\"");
+  ASSERT_NE(prediction, std::string::npos);
+  const std::string outside_prediction = html.substr(0, prediction) + html.substr(html.find("</section>", prediction));
+  EXPECT_NE(html.find("class=\"band\"", prediction), std::string::npos);
+  EXPECT_EQ(outside_prediction.find("class=\"band\""), std::string::npos);
   for (const auto* e : {&c.friction_diagnosis->empirical, &c.thermal_diagnosis->empirical}) {
     EXPECT_FALSE(e->found) << e->formula;
     if (e->searched) EXPECT_NE(html.find(report::escape_xml(e->reason)), std::string::npos) << e->reason;

@@ -329,6 +329,27 @@ printf '[[guide]]\nmodel = "MY 30"\nblock_length_mm = 100\n' >myguide.toml
 check "a raw log of the user's guide loads with its block length" "$LMCAL" check friction myraw/friction.toml
 check "a bar missing its material is refused at load, naming where to add it" refused "add conductivity_W_mK to its entry there" check thermal heater/bar.toml --catalog thin.toml
 
+# --- predict: the calibrated model over a duty cycle -------------------------------------------
+"$LMCAL" predict "$SOURCE/fits/cheng2017/model.toml" "$SOURCE/examples/duty/two_shifts.toml" -o predout --samples 50 >predict.txt
+check "predict writes the bands and a summary" test -s predout/prediction.json -a -s predout/prediction_time.csv
+check "predict summarises the elongation with its band" grep -q 'rail elongation at the end: .* \[.*\] µm' predict.txt
+cat >badduty.toml <<'EOF_DUTY'
+guide = "SRN 35C"
+rail_length_m = 0.6
+ambient_C = 24
+load_N = 3000
+stroke_m = 0.2
+[[segment]]
+duration_min = -30
+velocity_m_s = 0.1
+EOF_DUTY
+check "a duty with a negative duration is refused, naming the field" \
+  refused "badduty.toml:7:16: duration_min = -30: expected a duration > 0" predict "$SOURCE/fits/cheng2017/model.toml" badduty.toml -o predbad
+check "nothing is written for a refused duty" test ! -e predbad
+sed 's/^lmcal_version = "0\./lmcal_version = "7./' "$SOURCE/fits/cheng2017/model.toml" >model7.toml
+check "a model file of another major version is refused" \
+  refused "written by another major version of lmcal" predict model7.toml "$SOURCE/examples/duty/two_shifts.toml" -o predbad
+
 # Deterministic: the same outputs with one thread or two (timings aside).
 # Both bundled sets: the diagnoses fit their candidates one per thread.
 same_with_threads() {  # same_with_threads SET

@@ -203,6 +203,37 @@ TEST(ModelFile, RoundTripGivesTheSameModelBitForBit) {
   EXPECT_EQ(model_file_toml(r), model_file_toml(m));
 }
 
+TEST(ModelFile, CovarianceRangesAndHeatReferencesRoundTripBitForBit) {
+  ModelFile m = awkward_model();
+  m.friction_covariance_matrix.parameters = {"k1", "mu_st", "seal_drag"};
+  m.friction_covariance_matrix.matrix = (Eigen::MatrixXd(3, 3) << 1.0 / 3e6, 1e-300, -2.5e-7, 1e-300, 4e-6, 0.0, -2.5e-7, 0.0,
+                                         0.2167580233978).finished();
+  m.friction_range = {{"velocity_m_s", 0.002, 0.15}, {"load_N", 1000, 3000}};
+  m.thermal_covariance_matrix.parameters = {"alpha", "coupling"};
+  m.thermal_covariance_matrix.matrix = (Eigen::MatrixXd(2, 2) << 2.4625835536140834e-05, -1.07e-06, -1.07e-06, 3.2e-05).finished();
+  m.thermal_covariance_given_heat = (Eigen::MatrixXd(2, 2) << 2.1e-05, -1.0e-06, -1.0e-06, 3.1e-05).finished();
+  m.thermal_range = {{"temperature_C", 23.885, 33.1}};
+  m.alpha_between_run_sd = 0.0123456789;
+  m.heat_references = {{{.load_N = 3000, .preload_um = 4, .block_length_mm = 120.2, .velocity_m_s = 0.083,
+                         .temperature_C = 23.884999999999998},
+                        98.7,
+                        3.420264166634061}};
+  const TempFile file(model_file_toml(m));
+  const ModelFile r = read_model_file(file.path());
+  EXPECT_EQ(r.friction_covariance_matrix.parameters, m.friction_covariance_matrix.parameters);
+  EXPECT_EQ(r.friction_covariance_matrix.matrix, m.friction_covariance_matrix.matrix);
+  EXPECT_EQ(r.thermal_covariance_matrix.matrix, m.thermal_covariance_matrix.matrix);
+  EXPECT_EQ(r.thermal_covariance_given_heat, m.thermal_covariance_given_heat);
+  ASSERT_EQ(r.friction_range.size(), 2u);
+  EXPECT_EQ(r.friction_range_of("load_N")->high, 3000);
+  EXPECT_EQ(bits(r.thermal_range_of("temperature_C")->low), bits(23.885));
+  EXPECT_EQ(bits(r.alpha_between_run_sd), bits(m.alpha_between_run_sd));
+  ASSERT_EQ(r.heat_references.size(), 1u);
+  EXPECT_EQ(bits(r.heat_references[0].conditions.temperature_C), bits(23.884999999999998));
+  EXPECT_EQ(bits(r.heat_references[0].heat_rate_W), bits(3.420264166634061));
+  EXPECT_EQ(model_file_toml(r), model_file_toml(m));
+}
+
 TEST(ModelFile, OneHalfAloneRoundTrips) {
   ModelFile m = awkward_model();
   m.has_thermal = false;

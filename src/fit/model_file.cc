@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "lmcal/error.hpp"
+#include "lmcal/fit/statistics.hpp"
 
 namespace lmcal {
 
@@ -20,6 +21,70 @@ const ModelParameter* ModelFile::find(const std::string& name) const {
 }
 
 namespace {
+
+const CalibratedRange* range_in(const std::vector<CalibratedRange>& ranges, std::string_view quantity) {
+  for (const auto& r : ranges)
+    if (r.quantity == quantity) return &r;
+  return nullptr;
+}
+
+}  // namespace
+
+const CalibratedRange* ModelFile::friction_range_of(std::string_view q) const { return range_in(friction_range, q); }
+const CalibratedRange* ModelFile::thermal_range_of(std::string_view q) const { return range_in(thermal_range, q); }
+
+namespace {
+
+// The covariance of the model's free parameters (`parameters`, held ones left out), from a
+// fit's full matrix (`full`, in the order of fit.parameters).
+ModelCovariance covariance_of(const FitResult& fit, const std::vector<ModelParameter>& parameters, const Eigen::MatrixXd& full) {
+  ModelCovariance c;
+  std::vector<Eigen::Index> index;
+  for (const auto& p : parameters) {
+    if (p.held) continue;
+    const auto at = std::find_if(fit.parameters.begin(), fit.parameters.end(), [&](auto& q) { return q.name == p.name; });
+    if (at == fit.parameters.end()) continue;
+    c.parameters.push_back(p.name);
+    index.push_back(at - fit.parameters.begin());
+  }
+  const auto n = static_cast<Eigen::Index>(index.size());
+  c.matrix.resize(n, n);
+  for (Eigen::Index a = 0; a < n; ++a)
+    for (Eigen::Index b = 0; b < n; ++b) c.matrix(a, b) = full(index[a], index[b]);
+  if (!c.matrix.allFinite()) c = {};  // a failed covariance: none
+  return c;
+}
+
+template <class Rows, class Get>
+void add_range(std::vector<CalibratedRange>& out, const char* quantity, const Rows& rows, Get&& get) {
+  double lo = INFINITY, hi = -INFINITY;
+  for (const auto& row : rows) {
+    const double v = get(row);
+    if (!std::isfinite(v)) continue;
+    lo = std::min(lo, v);
+    hi = std::max(hi, v);
+  }
+  if (lo <= hi) out.push_back({quantity, lo, hi});
+}
+
+// τ of α from run to run: the per-run estimates' spread beyond their own SEs, when the runs'
+// heterogeneity test found them to disagree (0 otherwise).
+double alpha_between_run_sd(const ThermalFitResult& thermal) {
+  const auto& het = thermal.joint.uncertainty.heterogeneity;
+  const bool differ = std::any_of(het.begin(), het.end(), [](auto& h) { return h.parameter == "alpha" && h.significant; });
+  if (!differ || thermal.per_run.size() < 2) return 0;
+  std::vector<double> alphas;
+  double se2 = 0;
+  for (const auto& run : thermal.per_run) {
+    const ParameterEstimate& a = run.parameter("alpha");
+    if (!std::isfinite(a.value) || !std::isfinite(a.se)) continue;
+    alphas.push_back(a.value);
+    se2 += a.se * a.se;
+  }
+  if (alphas.size() < 2) return 0;
+  const double sd = sample_standard_deviation(alphas);
+  return std::sqrt(std::max(0.0, sd * sd - se2 / static_cast<double>(alphas.size())));
+}
 
 std::vector<ModelParameter> parameters_of(const FitResult& fit) {
   std::vector<ModelParameter> out;
@@ -62,6 +127,38 @@ void write_parameters(std::string& out, const char* table, const std::vector<Mod
     out += fmt::format("[[{}.parameter]]\nname = {}\nunit = {}\nvalue = {}\nse = {}\nci95 = [{}, {}]\nheld = {}\n\n", table,
                        quoted(p.name), quoted(p.unit), number(p.value), number(p.se), number(p.ci_low), number(p.ci_high),
                        p.held);
+}
+
+void write_matrix(std::string& out, const char* key, const Eigen::MatrixXd& m) {
+  out += fmt::format("{} = [\n", key);
+  for (Eigen::Index i = 0; i < m.rows(); ++i) {
+    std::vector<std::string> row;
+    for (Eigen::Index j = 0; j < m.cols(); ++j) row.push_back(number(m(i, j)));
+    out += fmt::format("  [{}],\n", fmt::join(row, ", "));
+  }
+  out += "]\n";
+}
+
+void write_covariance(std::string& out, const char* table, const ModelCovariance& c, const Eigen::MatrixXd* given_heat) {
+  if (c.empty()) return;
+  out += fmt::format("[{}.covariance_matrix]\n# the quoted covariance of the free parameters (lmcal predict draws from it)\n"
+                     "parameters = {}\n",
+                     table, string_list(c.parameters));
+  write_matrix(out, "matrix", c.matrix);
+  if (given_heat && given_heat->size() > 0) {
+    out += "# the same before the heat's uncertainty was added (for a prediction that draws the friction constants)\n";
+    write_matrix(out, "given_heat", *given_heat);
+  }
+  out += "\n";
+}
+
+// In the order of the quantities' names, the order a TOML table reads back in.
+void write_ranges(std::string& out, const char* table, std::vector<CalibratedRange> ranges) {
+  if (ranges.empty()) return;
+  std::sort(ranges.begin(), ranges.end(), [](auto& a, auto& b) { return a.quantity < b.quantity; });
+  out += fmt::format("[{}.range]\n# the calibration data's span: a prediction beyond it extrapolates\n", table);
+  for (const auto& r : ranges) out += fmt::format("{} = [{}, {}]\n", r.quantity, number(r.low), number(r.high));
+  out += "\n";
 }
 
 [[noreturn]] void fail(const std::string& file, const toml::source_region& where, const std::string& what) {
@@ -173,6 +270,83 @@ std::vector<ReadParameter> read_parameters(const std::string& file, const toml::
   return out;
 }
 
+// The tables of the array of tables `key` of `t` ([[name]] in messages); none when absent.
+std::vector<const toml::table*> tables_at(const std::string& file, const toml::table& t, const char* key,
+                                          const std::string& name) {
+  std::vector<const toml::table*> out;
+  const toml::node* n = t.get(key);
+  if (!n) return out;
+  const auto* list = n->as_array();
+  if (!list) fail(file, n->source(), fmt::format("expected [[{}]] tables", name));
+  for (const auto& item : *list) {
+    const auto* table = item.as_table();
+    if (!table) fail(file, item.source(), fmt::format("expected a [[{}]] table", name));
+    out.push_back(table);
+  }
+  return out;
+}
+
+// A square matrix of finite numbers, n × n.
+Eigen::MatrixXd read_matrix(const std::string& file, const toml::table& t, const char* key, std::size_t n,
+                            const std::string& table) {
+  const toml::node* node = t.get(key);
+  const auto* rows = node ? node->as_array() : nullptr;
+  if (!rows || rows->size() != n)
+    fail(file, node ? node->source() : t.source(), fmt::format("[{}]: expected {} = [[...], ...], {} rows", table, key, n));
+  Eigen::MatrixXd m(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto* row = (*rows)[i].as_array();
+    if (!row || row->size() != n) fail(file, (*rows)[i].source(), fmt::format("[{}] {}: expected a row of {} numbers", table, key, n));
+    for (std::size_t j = 0; j < n; ++j) {
+      const double v = number_of(file, (*row)[j], fmt::format("[{}] {}", table, key));
+      if (!std::isfinite(v)) fail(file, (*row)[j].source(), fmt::format("[{}] {}: expected a finite number", table, key));
+      m(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = v;
+    }
+  }
+  const double scale = m.diagonal().cwiseAbs().maxCoeff();
+  if ((m - m.transpose()).cwiseAbs().maxCoeff() > 1e-9 * scale || (m.diagonal().array() < 0).any())
+    fail(file, node->source(), fmt::format("[{}] {}: expected a covariance (symmetric, variances >= 0)", table, key));
+  return m;
+}
+
+// [<table>.covariance_matrix]: the covariance of named parameters of the table.
+ModelCovariance read_covariance(const std::string& file, const toml::table& parent, const char* table,
+                                const std::vector<ModelParameter>& parameters, Eigen::MatrixXd* given_heat) {
+  ModelCovariance c;
+  const toml::node* n = parent.get("covariance_matrix");
+  if (!n) return c;
+  const std::string name = fmt::format("{}.covariance_matrix", table);
+  const auto* t = n->as_table();
+  if (!t) fail(file, n->source(), fmt::format("expected a [{}] table", name));
+  only_keys(file, *t, ("[" + name + "]").c_str(), given_heat ? std::vector<std::string>{"parameters", "matrix", "given_heat"}
+                                                   : std::vector<std::string>{"parameters", "matrix"});
+  for (const auto& [p, where] : strings_at(file, *t, "parameters")) {
+    if (std::none_of(parameters.begin(), parameters.end(), [&](auto& q) { return q.name == p; }))
+      fail(file, where, fmt::format("[{}]: '{}' is not a parameter of [{}]", name, p, table));
+    c.parameters.push_back(p);
+  }
+  c.matrix = read_matrix(file, *t, "matrix", c.parameters.size(), name);
+  if (given_heat && t->get("given_heat")) *given_heat = read_matrix(file, *t, "given_heat", c.parameters.size(), name);
+  return c;
+}
+
+// [<table>.range]: quantity = [low, high].
+std::vector<CalibratedRange> read_ranges(const std::string& file, const toml::table& parent, const char* table) {
+  std::vector<CalibratedRange> out;
+  const toml::node* n = parent.get("range");
+  if (!n) return out;
+  const auto* t = n->as_table();
+  if (!t) fail(file, n->source(), fmt::format("expected a [{}.range] table", table));
+  for (const auto& [key, value] : *t) {
+    const auto* a = value.as_array();
+    if (!a || a->size() != 2) fail(file, value.source(), fmt::format("[{}.range] {}: expected [low, high]", table, key.str()));
+    CalibratedRange r{std::string(key.str()), number_of(file, (*a)[0], std::string(key.str())), number_of(file, (*a)[1], std::string(key.str()))};
+    if (!(r.low <= r.high)) fail(file, value.source(), fmt::format("[{}.range] {}: expected low <= high", table, key.str()));
+    out.push_back(std::move(r));
+  }
+  return out;
+}
+
 const ReadParameter* find_read(const std::vector<ReadParameter>& list, std::string_view name) {
   for (const auto& r : list)
     if (r.p.name == name) return &r;
@@ -238,7 +412,8 @@ void set_term_parameter(std::vector<FrictionTerm>& terms, const std::string& nam
 // [friction]: the seven constants, the viscosity's reference point and the effects of the causes.
 void read_friction(const std::string& file, const toml::table& f, ModelFile& m) {
   only_keys(file, f, "[friction]",
-            {"causes", "covariance", "reference_temperature_C", "viscosity40_mm2_s", "parameter", "term"});
+            {"causes", "covariance", "reference_temperature_C", "viscosity40_mm2_s", "parameter", "term",
+             "covariance_matrix", "range"});
   m.has_friction = true;
   const auto causes = strings_at(file, f, "causes");
   std::vector<std::string> effects;
@@ -278,11 +453,15 @@ void read_friction(const std::string& file, const toml::table& f, ModelFile& m) 
     fail(file, r ? r->value_at : f.get(key) ? f.get(key)->source() : f.source(), e.what());
   }
   for (auto& r : parameters) m.friction_parameters.push_back(std::move(r.p));
+  m.friction_covariance_matrix = read_covariance(file, f, "friction", m.friction_parameters, nullptr);
+  m.friction_range = read_ranges(file, f, "friction");
 }
 
 // [thermal]: α, h (optional), the source model and the mechanisms with their parameters.
 void read_thermal(const std::string& file, const toml::table& t, ModelFile& m) {
-  only_keys(file, t, "[thermal]", {"source", "mechanisms", "covariance", "heat_uncertainty", "reading_terms", "parameter"});
+  only_keys(file, t, "[thermal]",
+            {"source", "mechanisms", "covariance", "heat_uncertainty", "reading_terms", "parameter", "covariance_matrix",
+             "range", "between_runs", "heat_reference"});
   m.reading_terms = names_of(strings_at(file, t, "reading_terms", false));
   m.has_thermal = true;
   try {
@@ -327,6 +506,33 @@ void read_thermal(const std::string& file, const toml::table& t, ModelFile& m) {
     if (name != "h_W_m2K" && !find_read(parameters, name))
       fail(file, t.source(), fmt::format("expected a parameter '{}' in [thermal]", name));
   for (auto& r : parameters) m.thermal_parameters.push_back(std::move(r.p));
+  m.thermal_covariance_matrix = read_covariance(file, t, "thermal", m.thermal_parameters, &m.thermal_covariance_given_heat);
+  m.thermal_range = read_ranges(file, t, "thermal");
+  if (const toml::node* n = t.get("between_runs")) {
+    const auto* b = n->as_table();
+    if (!b) fail(file, n->source(), "expected a [thermal.between_runs] table");
+    only_keys(file, *b, "[thermal.between_runs]", {"alpha_sd"});
+    m.alpha_between_run_sd = finite_at(file, *b, "alpha_sd");
+    if (m.alpha_between_run_sd < 0) fail(file, b->get("alpha_sd")->source(), "alpha_sd: expected a value >= 0");
+  }
+  for (const toml::table* r : tables_at(file, t, "heat_reference", "thermal.heat_reference")) {
+    only_keys(file, *r, "[[thermal.heat_reference]]",
+              {"velocity_m_s", "load_N", "preload_um", "block_length_mm", "temperature_C", "viscosity40_mm2_s", "heat_rate_W"});
+    HeatReference h;
+    h.conditions = {.load_N = finite_at(file, *r, "load_N"),
+                    .preload_um = finite_at(file, *r, "preload_um"),
+                    .block_length_mm = finite_at(file, *r, "block_length_mm"),
+                    .velocity_m_s = finite_at(file, *r, "velocity_m_s"),
+                    .temperature_C = finite_at(file, *r, "temperature_C")};
+    h.viscosity40_mm2_s = finite_at(file, *r, "viscosity40_mm2_s");
+    h.heat_rate_W = finite_at(file, *r, "heat_rate_W");
+    try {
+      validate(h.conditions);
+    } catch (const InvalidParameter& e) {
+      fail(file, r->source(), std::string("[[thermal.heat_reference]]: ") + e.what());
+    }
+    m.heat_references.push_back(h);
+  }
 }
 
 }  // namespace
@@ -345,6 +551,11 @@ ModelFile model_file_of(const FrictionFitResult* friction, const FrictionFitOpti
     m.friction_terms = friction->terms;
     m.friction_parameters = parameters_of(friction->fit);
     m.friction_covariance = friction->fit.uncertainty.method;
+    m.friction_covariance_matrix = covariance_of(friction->fit, m.friction_parameters, friction->fit.covariance);
+    add_range(m.friction_range, "velocity_m_s", friction->conditions, [](auto& c) { return c.velocity_m_s; });
+    add_range(m.friction_range, "load_N", friction->conditions, [](auto& c) { return c.load_N; });
+    add_range(m.friction_range, "temperature_C", friction->conditions, [](auto& c) { return c.temperature_C; });
+    add_range(m.friction_range, "preload_um", friction->conditions, [](auto& c) { return c.preload_um; });
   }
   if (thermal) {
     m.has_thermal = true;
@@ -373,6 +584,16 @@ ModelFile model_file_of(const FrictionFitResult* friction, const FrictionFitOpti
       else if (p.name != "alpha") m.mechanism_parameters.emplace_back(p.name, p.value);
     m.thermal_covariance = thermal->joint.uncertainty.method;
     m.heat_uncertainty = thermal->heat_uncertainty;
+    m.thermal_covariance_matrix = covariance_of(thermal->joint, m.thermal_parameters, thermal->joint.covariance);
+    const Eigen::MatrixXd& given = thermal->joint.uncertainty.covariance_given_input;
+    if (given.size() > 0 && !m.thermal_covariance_matrix.empty())
+      m.thermal_covariance_given_heat = covariance_of(thermal->joint, m.thermal_parameters, given).matrix;
+    m.alpha_between_run_sd = alpha_between_run_sd(*thermal);
+    if (std::all_of(thermal->runs.begin(), thermal->runs.end(), [](auto& r) { return r.heat_conditions.has_value(); }))
+      for (const auto& r : thermal->runs) m.heat_references.push_back({*r.heat_conditions, r.heat_viscosity40_mm2_s, r.heat_rate_W});
+    add_range(m.thermal_range, "velocity_m_s", thermal->runs, [](auto& r) { return r.velocity_m_s; });
+    add_range(m.thermal_range, "load_N", thermal->runs, [](auto& r) { return r.load_N; });
+    add_range(m.thermal_range, "temperature_C", thermal->samples, [](auto& s) { return s.measured_C; });
   }
   return m;
 }
@@ -405,6 +626,8 @@ std::string model_file_toml(const ModelFile& m) {
       if (term.has_scale()) out += fmt::format("scale = {}\n", quoted(fmt::format("term{}_scale", t + 1)));
       out += fmt::format("seen = [{}]\n\n", fmt::join(seen, ", "));
     }
+    write_covariance(out, "friction", m.friction_covariance_matrix, nullptr);
+    write_ranges(out, "friction", m.friction_range);
   }
   if (m.has_thermal) {
     out += fmt::format("[thermal]\n# the rail model (Eqs. 11-15) with these mechanisms added; alpha belongs to this source model\n"
@@ -417,6 +640,18 @@ std::string model_file_toml(const ModelFile& m) {
              "reading_terms = " + string_list(m.reading_terms) + "\n";
     out += "\n";
     write_parameters(out, "thermal", m.thermal_parameters);
+    write_covariance(out, "thermal", m.thermal_covariance_matrix, &m.thermal_covariance_given_heat);
+    write_ranges(out, "thermal", m.thermal_range);
+    out += fmt::format("[thermal.between_runs]\n# the spread of alpha from run to run beyond the runs' own noise (0: none found)\n"
+                       "alpha_sd = {}\n\n",
+                       number(m.alpha_between_run_sd));
+    for (const auto& r : m.heat_references)
+      out += fmt::format("[[thermal.heat_reference]]\n# a calibration run's heat: the friction law at these conditions\n"
+                         "velocity_m_s = {}\nload_N = {}\npreload_um = {}\nblock_length_mm = {}\ntemperature_C = {}\n"
+                         "viscosity40_mm2_s = {}\nheat_rate_W = {}\n\n",
+                         number(r.conditions.velocity_m_s), number(r.conditions.load_N), number(r.conditions.preload_um),
+                         number(r.conditions.block_length_mm), number(r.conditions.temperature_C),
+                         number(r.viscosity40_mm2_s), number(r.heat_rate_W));
   }
   return out;
 }
@@ -441,17 +676,18 @@ ModelFile read_model_file(const std::filesystem::path& path) {
   only_keys(file, root, "the model file", {"kind", "lmcal_version", "set", "command", "input", "friction", "thermal"});
   ModelFile m;
   m.lmcal_version = root.get("lmcal_version") ? string_at(file, root, "lmcal_version") : "";
+  // Another major version may mean other parameters or units: refused, not misread.
+  const auto major = [](std::string_view version) { return version.substr(0, version.find('.')); };
+  if (!m.lmcal_version.empty() && major(m.lmcal_version) != major(LMCAL_VERSION))
+    fail(file, root.get("lmcal_version")->source(),
+         fmt::format("lmcal_version = \"{}\": written by another major version of lmcal (this is {}); recalibrate with "
+                     "this version",
+                     m.lmcal_version, LMCAL_VERSION));
   m.set = root.get("set") ? string_at(file, root, "set") : "";
   m.command = names_of(strings_at(file, root, "command", false));
-  if (const toml::node* inputs = root.get("input")) {
-    const auto* list = inputs->as_array();
-    if (!list) fail(file, inputs->source(), "expected [[input]] tables");
-    for (const auto& item : *list) {
-      const auto* i = item.as_table();
-      if (!i) fail(file, item.source(), "expected an [[input]] table");
-      only_keys(file, *i, "[[input]]", {"file", "sha256"});
-      m.inputs.emplace_back(string_at(file, *i, "file"), string_at(file, *i, "sha256"));
-    }
+  for (const toml::table* i : tables_at(file, root, "input", "input")) {
+    only_keys(file, *i, "[[input]]", {"file", "sha256"});
+    m.inputs.emplace_back(string_at(file, *i, "file"), string_at(file, *i, "sha256"));
   }
   for (const char* table : {"friction", "thermal"}) {
     const toml::node* n = root.get(table);

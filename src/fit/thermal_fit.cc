@@ -241,8 +241,13 @@ Prepared prepare_run(const ThermalRun& run, const ThermalFitOptions& o) {
     pr.friction = k;
     pr.friction_effects = o.friction_effects;
     pr.conditions = c;  // the coupling extension scales Q_f by the law's change from here
-    if (heat != HeatInput::measured_friction)
+    if (heat != HeatInput::measured_friction) {
       out.info.heat_source = o.friction ? "friction law (fitted constants)" : "friction law (the paper's constants)";
+      if (run.schedule.empty() && !run.heat_rate_W) {
+        out.info.heat_conditions = c;
+        out.info.heat_viscosity40_mm2_s = k.nu_ref_mm2_s;
+      }
+    }
   } else {
     out.info.heat_source = kGivenHeat;
   }

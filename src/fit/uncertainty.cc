@@ -271,6 +271,7 @@ void add_input_uncertainty(const RowStructure& rows, const FitOptions& o, const 
   const Eigen::MatrixXd total = before + added;
   Uncertainty& u = result.uncertainty;
   u.input = label;
+  u.covariance_given_input = expand(before, v, p);
   u.input_variance_share.assign(p, kNaN);
   std::vector<double> dof(p, kNaN);
   CovarianceSummary alone{label, fmt::format("the {}'s own uncertainty carried into the estimates (delta method)", label),

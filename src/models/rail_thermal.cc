@@ -101,9 +101,28 @@ void validate(const RailParams<double>& p) {
   require_positive("specific_heat_J_kgK", p.specific_heat_J_kgK);
   require_in_range("initial_temperature_C", p.initial_temperature_C, -273.15, 1000.0);
   require_non_negative("base_loss_W_mK", p.base_loss_W_mK);
+  if (p.initial_profile_x_m.size() != p.initial_profile_C.size())
+    throw InvalidParameter("initial_profile_C", "needs one temperature per position of initial_profile_x_m");
+  for (std::size_t i = 0; i < p.initial_profile_C.size(); ++i) {
+    require_in_range("initial_profile_C", p.initial_profile_C[i], -273.15, 1000.0);
+    require_finite("initial_profile_x_m", p.initial_profile_x_m[i]);
+    if (i > 0 && !(p.initial_profile_x_m[i] > p.initial_profile_x_m[i - 1]))
+      throw InvalidParameter("initial_profile_x_m", p.initial_profile_x_m[i], "ascending positions");
+  }
 }
 
 namespace {
+
+// RailParams::initial_profile_C at x (validated: ascending positions, one temperature each).
+double initial_profile_at(const std::vector<double>& xs, const std::vector<double>& temperatures, double x) {
+  if (xs.front() >= 0 && x < 0) x = -x;  // a half-rail profile, mirrored
+  if (x <= xs.front()) return temperatures.front();
+  if (x >= xs.back()) return temperatures.back();
+  const auto hi = static_cast<std::size_t>(std::upper_bound(xs.begin(), xs.end(), x) - xs.begin());
+  const double s = (x - xs[hi - 1]) / (xs[hi] - xs[hi - 1]);
+  return temperatures[hi - 1] + s * (temperatures[hi] - temperatures[hi - 1]);
+}
+
 
 double value_of(double x) { return x; }
 template <int N>
@@ -111,9 +130,12 @@ double value_of(const ceres::Jet<double, N>& x) { return x.a; }
 
 template <typename T>
 RailParams<double> values_of(const RailParams<T>& p) {
-  return {value_of(p.heat_partition),      value_of(p.heat_rate_W),         value_of(p.h_W_m2K),
-          value_of(p.conductivity_W_mK),   value_of(p.density_kg_m3),       value_of(p.specific_heat_J_kgK),
-          value_of(p.initial_temperature_C), value_of(p.base_loss_W_mK)};
+  RailParams<double> v{value_of(p.heat_partition),      value_of(p.heat_rate_W),         value_of(p.h_W_m2K),
+                       value_of(p.conductivity_W_mK),   value_of(p.density_kg_m3),       value_of(p.specific_heat_J_kgK),
+                       value_of(p.initial_temperature_C), value_of(p.base_loss_W_mK)};
+  v.initial_profile_x_m = p.initial_profile_x_m;
+  v.initial_profile_C = p.initial_profile_C;
+  return v;
 }
 
 // Several runs' numbers side by side (SIMD lanes): the solver's arithmetic lane by lane, so
@@ -642,6 +664,10 @@ RailSolution<T> simulate_on(const Operator<O>& op, const Prepared<T>& prep, cons
   sol.sensor_temperature_C.reserve(outputs.output_times_s.size() * outputs.sensor_positions_m.size());
 
   std::vector<T> current(n, params.initial_temperature_C), next(n);
+  if (!params.initial_profile_C.empty())
+    for (std::size_t i = 0; i < n; ++i)
+      current[i] = T(initial_profile_at(params.initial_profile_x_m, params.initial_profile_C, grid.x[i]));
+  const std::vector<T> initial = outputs.energy_balance ? current : std::vector<T>();
   std::size_t next_output = 0, next_profile = 0;
   std::optional<T> carried_source_temperature;  // of the last interval's end, when computed
   // Records the outputs that fall in (t_before, t_after], interpolating linearly in time.
@@ -691,7 +717,7 @@ RailSolution<T> simulate_on(const Operator<O>& op, const Prepared<T>& prep, cons
   }
 
   if (tally) {
-    for (std::size_t i = 0; i < n; ++i) energy.stored_J += op.capacity[i] * (current[i] - params.initial_temperature_C);
+    for (std::size_t i = 0; i < n; ++i) energy.stored_J += op.capacity[i] * (current[i] - initial[i]);
     const double f = grid.symmetry_factor();
     sol.energy = {f * energy.injected_J, f * energy.stored_J, f * energy.convected_side_J, f * energy.convected_end_J,
                   f * energy.base_J};
@@ -727,6 +753,9 @@ std::vector<RailSolution<double>> simulate_rails(const RailGeometry& geometry, c
   if (numerics.source == SourceModel::moving)
     throw InvalidParameter("source", "runs in lanes take a static source (paper or averaged); simulate_rail takes the moving block");
   if (outputs.energy_balance) throw InvalidParameter("energy_balance", "runs in lanes keep no energy balance; simulate_rail does");
+  for (const auto& p : params)
+    if (!p.initial_profile_C.empty())
+      throw InvalidParameter("initial_profile_C", "runs in lanes start uniform; simulate_rail continues from a profile");
   require_positive("duration_s", outputs.duration_s);
   validate_times("output_times_s", outputs.output_times_s, outputs.duration_s);
   validate_times("profile_times_s", outputs.profile_times_s, outputs.duration_s);

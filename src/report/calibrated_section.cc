@@ -98,6 +98,48 @@ void thermal_model(Page& page, const Calibration& c) {
   caveats(page, t.joint);
 }
 
+// Hours, for the plots' time axes.
+std::vector<double> hours(const std::vector<double>& seconds) {
+  std::vector<double> h;
+  for (double s : seconds) h.push_back(s / 3600);
+  return h;
+}
+
+// What the calibrated model predicts for the runs' own cycle: the rail's elongation and its
+// temperature at the sensors, each with its band, and where the cycle leaves the calibration.
+void prediction_part(Page& page, const Calibration& c) {
+  if (!c.prediction || !c.duty) return;
+  const Prediction& p = *c.prediction;
+  const DutyCycle& d = *c.duty;
+  const DutySegment& run = d.segments.front();
+  page.heading(3, "Prediction: the runs' cycle", "prediction");
+  page.paragraph(fmt::format("The calibrated model run over the calibration runs' own cycle: {} m/s under {} N for {} h, "
+                             "then {} h at rest, ambient {} °C. A linear scale along the whole rail, fixed at its end "
+                             "(x = {} m), is off by the rail's elongation at its far end. 95 % bands: {}.",
+                             num(run.velocity_m_s), num(run.load_N), num(run.duration_s / 3600), num(d.segments.back().duration_s / 3600),
+                             num(d.ambient.temperature_C.front()), num(d.scale.fixed_point_m()), p.method));
+  const std::vector<double> t = hours(p.time_s);
+  Plot elongation{.id = "prediction-elongation", .title = "Rail elongation = scale error at its far end", .x_label = "time (h)",
+                  .y_label = "elongation (µm)"};
+  elongation.series.push_back({.label = "model (95 % band)", .x = t, .y = p.elongation_um.value,
+                               .band_low = p.elongation_um.low, .band_high = p.elongation_um.high});
+  Plot temperature{.id = "prediction-temperature", .title = "Rail temperature at the runs' sensors", .x_label = "time (h)",
+                   .y_label = "temperature (°C)"};
+  for (std::size_t q = 0; q < p.positions_m.size(); ++q)
+    temperature.series.push_back({.label = fmt::format("x = {} m (95 % band)", num(p.positions_m[q])), .x = t,
+                                  .y = p.temperature_C[q].value, .band_low = p.temperature_C[q].low,
+                                  .band_high = p.temperature_C[q].high});
+  page.figures({elongation, temperature});
+  for (const auto& f : p.outside)
+    page.paragraph(fmt::format("Outside the calibrated range: {} {} = {} (the {} calibration saw {} to {}): an extrapolation.",
+                               f.segment, f.quantity, num(f.value), f.what, num(f.low), num(f.high)),
+                   "warning");
+  for (const auto& note : p.notes) page.paragraph("Note: " + note);
+  page << "<p>Written to <code>prediction.json</code> and <code>prediction_time.csv</code>. Another duty: "
+          "<code>lmcal predict model.toml DUTY.toml</code> (segments of speed, load, stroke and duration; "
+          "<code>examples/duty/two_shifts.toml</code> is one).</p>\n";
+}
+
 }  // namespace
 
 void calibrated_section(Page& page, const Calibration& c) {
@@ -111,6 +153,7 @@ void calibrated_section(Page& page, const Calibration& c) {
           "model.toml</code>, <code>lmcal simulate thermal --model model.toml</code>.</p>\n";
   if (m.friction) friction_model(page, c);
   if (m.thermal) thermal_model(page, c);
+  prediction_part(page, c);
   page << "</section>\n";
 }
 

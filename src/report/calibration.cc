@@ -21,8 +21,8 @@ const std::vector<std::string>& calibration_output_names() {
   static const std::vector<std::string> names = {
       "model.toml",         "calibrated_friction.json", "calibrated_thermal.json", "friction.json",
       "friction_samples.csv", "friction_conditions.csv", "friction_diagnosis.json", "thermal.json",
-      "thermal_samples.csv",  "thermal_alpha_curve.csv", "thermal_diagnosis.json", "calibration.json",
-      "report.html"};
+      "thermal_samples.csv",  "thermal_alpha_curve.csv", "thermal_diagnosis.json", "prediction.json",
+      "prediction_time.csv",  "calibration.json",        "report.html"};
   return names;
 }
 
@@ -133,6 +133,33 @@ void calibrate_thermal_model(Calibration& c, const CalibrationOptions& options) 
   m.thermal = fit_thermal(*c.thermal_data, t);
 }
 
+// model.toml: the calibrated model with the set's provenance.
+ModelFile calibrated_model_file(const Calibration& c) {
+  const CalibratedModel& m = c.calibrated;
+  ModelFile file = model_file_of(m.friction ? &*m.friction : nullptr, m.friction_options, m.thermal ? &*m.thermal : nullptr,
+                                 m.thermal_options);
+  file.set = c.set.name;
+  file.command = c.command;
+  file.inputs = c.inputs;
+  return file;
+}
+
+// The calibrated model over the runs' own cycle, with bands; a note says why not when it cannot.
+void predict_runs_cycle(Calibration& c) {
+  if (!c.calibrated.friction || !c.calibrated.thermal || !c.thermal) {
+    c.notes.push_back("prediction of the runs' cycle skipped: it needs both calibrated models");
+    return;
+  }
+  try {
+    const double ambient_C = c.thermal->runs.front().initial_temperature_C;
+    DutyCycle duty = duty_of_runs(*c.thermal_data, ambient_C);
+    c.prediction = predict(calibrated_model_file(c), duty, {});
+    c.duty = std::move(duty);
+  } catch (const std::exception& e) {  // a catalog without the rail's section, a model without covariance, …
+    c.notes.push_back(std::string("prediction of the runs' cycle skipped: ") + e.what());
+  }
+}
+
 }  // namespace
 
 Calibration calibrate(const CalibrationSet& set, const CalibrationOptions& options, const CalibrationProgress& progress) {
@@ -145,6 +172,7 @@ Calibration calibrate(const CalibrationSet& set, const CalibrationOptions& optio
   if (friction) steps.insert(steps.end(), {"friction fit", "friction diagnosis"});
   if (friction) steps.insert(steps.end(), {"calibrated friction model"});
   if (thermal) steps.insert(steps.end(), {"thermal fit", "thermal diagnosis", "calibrated thermal model"});
+  if (friction && thermal) steps.emplace_back("prediction of the runs' cycle");
   if (!options.diagnose) std::erase_if(steps, [](const std::string& s) { return s.ends_with("diagnosis"); });
   std::size_t step = 0;
   auto start = [&](const char* name) {
@@ -229,19 +257,14 @@ Calibration calibrate(const CalibrationSet& set, const CalibrationOptions& optio
   } else {
     c.notes.push_back("no thermal manifest (thermal*.toml): the thermal steps were skipped");
   }
+  if (friction && thermal) {
+    start("prediction of the runs' cycle");
+    predict_runs_cycle(c);
+  }
   c.warnings = detail::calibration_warnings(c);
   return c;
 }
 
-ModelFile calibrated_model_file(const Calibration& c) {
-  const CalibratedModel& m = c.calibrated;
-  ModelFile file = model_file_of(m.friction ? &*m.friction : nullptr, m.friction_options, m.thermal ? &*m.thermal : nullptr,
-                                 m.thermal_options);
-  file.set = c.set.name;
-  file.command = c.command;
-  file.inputs = c.inputs;
-  return file;
-}
 
 std::vector<std::pair<std::string, std::string>> calibration_outputs(const Calibration& c) {
   std::vector<std::pair<std::string, std::string>> out;
@@ -264,6 +287,10 @@ std::vector<std::pair<std::string, std::string>> calibration_outputs(const Calib
   if (c.friction_diagnosis) out.emplace_back("friction_diagnosis.json", friction_diagnosis_json(*c.friction_diagnosis));
   if (c.thermal) append(thermal_fit_files(*c.thermal, c.thermal_options, {thermal_inputs, c.inputs.end()}, c.command, "thermal"));
   if (c.thermal_diagnosis) out.emplace_back("thermal_diagnosis.json", thermal_diagnosis_json(*c.thermal_diagnosis));
+  if (c.prediction) {
+    out.emplace_back("prediction.json", prediction_json(*c.prediction, *c.duty, calibrated_model_file(c), c.command));
+    out.emplace_back("prediction_time.csv", prediction_time_csv(*c.prediction));
+  }
   out.emplace_back("calibration.json", calibration_json(c));
   out.emplace_back("report.html", calibration_report_html(c));
   for (const auto& [name, text] : out) LMCAL_ASSERT(is_calibration_output(name), "every output is in calibration_output_names()");

@@ -114,6 +114,10 @@ struct Uncertainty {
   // variance that comes from that input's uncertainty (NaN where none was added).
   std::string input;
   std::vector<double> input_variance_share;
+  // The quoted covariance before the input's uncertainty was added (all parameters; empty
+  // without an input): the parameters' uncertainty for a given input, which a prediction that
+  // draws the input itself (the friction constants behind the heat) needs.
+  Eigen::MatrixXd covariance_given_input;
   Eigen::MatrixXd bootstrap_draws;      // replicates × parameters: θ* − θ̂ (NaN: held/undetermined)
 
   const CovarianceSummary* find(const std::string& method) const;

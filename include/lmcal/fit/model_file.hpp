@@ -14,6 +14,15 @@
 //   [thermal]    source = "averaged", mechanisms = [...], covariance = "...", heat_uncertainty
 //   [[thermal.parameter]]   name, unit, value, se, ci95, held      (alpha, h_W_m2K, mechanisms')
 //   reading_terms = [...]   in [thermal]: empirical terms fitted on the readings (not the rail's)
+//   [friction.covariance_matrix], [thermal.covariance_matrix]   parameters = [...], matrix = [[...]]
+//                           (the quoted covariance of the free parameters; thermal also
+//                           given_heat = [[...]], the same before the heat's uncertainty was added)
+//   [friction.range], [thermal.range]   quantity = [min, max] of the calibration data
+//   [thermal.between_runs]  alpha_sd: the spread of α from run to run beyond the runs' noise
+//   [[thermal.heat_reference]]  each calibration run's friction-law conditions and heat rate
+//
+// The covariance, ranges and references are what `lmcal predict` propagates and checks; a
+// file of another major version of lmcal is refused.
 //
 // Trap: α belongs to the source model it was fitted with (the file records it, and the reader
 // returns it: simulate with that source).
@@ -38,6 +47,26 @@ struct ModelParameter {
   bool held = false;
 };
 
+// The covariance of a model's free parameters, in the order of `parameters`.
+struct ModelCovariance {
+  std::vector<std::string> parameters;
+  Eigen::MatrixXd matrix;
+  bool empty() const { return parameters.empty(); }
+};
+
+// The span of a quantity in the calibration data ("velocity_m_s", "load_N", "temperature_C", …).
+struct CalibratedRange {
+  std::string quantity;
+  double low = 0, high = 0;
+};
+
+// A calibration run's heat: the friction law's conditions it was evaluated at and the heat rate.
+struct HeatReference {
+  FrictionConditions<double> conditions;
+  double viscosity40_mm2_s = 99;
+  double heat_rate_W = 0;
+};
+
 struct ModelFile {
   std::string set, lmcal_version;
   std::vector<std::string> command;
@@ -52,6 +81,8 @@ struct ModelFile {
   std::vector<FrictionTerm> friction_terms;
   std::vector<ModelParameter> friction_parameters;
   std::string friction_covariance;
+  ModelCovariance friction_covariance_matrix;
+  std::vector<CalibratedRange> friction_range;
 
   bool has_thermal = false;
   double alpha = 0;
@@ -65,6 +96,14 @@ struct ModelFile {
   // when the rail is simulated. Their symbols only.
   std::vector<std::string> reading_terms;
   std::string thermal_covariance, heat_uncertainty;
+  ModelCovariance thermal_covariance_matrix;
+  Eigen::MatrixXd thermal_covariance_given_heat;  // empty when the heat's uncertainty was not added
+  double alpha_between_run_sd = 0;  // > 0 when the runs disagree about α beyond their noise
+  std::vector<HeatReference> heat_references;  // empty unless the heat came from the friction law
+  std::vector<CalibratedRange> thermal_range;
+
+  const CalibratedRange* friction_range_of(std::string_view quantity) const;
+  const CalibratedRange* thermal_range_of(std::string_view quantity) const;
 
   const ModelParameter* find(const std::string& name) const;
 };

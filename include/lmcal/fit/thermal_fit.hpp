@@ -169,6 +169,10 @@ struct RunInfo {
   bool offsets_fitted = false;
   std::string offsets_note;     // why the offsets were held, when they were
   double ambient_difference_percent = 0;  // Eq. 2 between the first two ambient sensors' rise
+  // The friction law's conditions behind heat_rate_W when it came from the law (the temperature:
+  // the ambient at the start), and the oil's ν40 it used: a prediction redraws the heat there.
+  std::optional<FrictionConditions<double>> heat_conditions;
+  double heat_viscosity40_mm2_s = 0;
 };
 
 struct ThermalFitResult {

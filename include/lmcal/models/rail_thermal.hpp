@@ -127,6 +127,11 @@ struct RailParams {
   T initial_temperature_C{26.0};    // uniform T(x, 0)
   T base_loss_W_mK{0.0};            // b, conductance to the ambient through the base, W/K per m of rail
   HeatRateSchedule<T> heat_schedule;  // Q_f(t); when given it replaces heat_rate_W (which is then unused)
+  // A non-uniform T(x, 0), to continue an earlier simulation from its end (a duty cycle's next
+  // segment): temperatures at ascending positions from the rail centre, linear between them
+  // onto the solver's nodes, the end values beyond; a profile of x >= 0 only is mirrored (the
+  // half-rail models'). Empty: the uniform initial_temperature_C. Not in simulate_rails.
+  std::vector<double> initial_profile_x_m, initial_profile_C;
 };
 
 // Two-way coupling: Q_f as a function of the rail temperature under the block (the source-

@@ -44,6 +44,7 @@
 #include "lmcal/fit/thermal_fit.hpp"
 #include "lmcal/io/friction_log.hpp"
 #include "lmcal/io/thermal_run.hpp"
+#include "lmcal/predict/prediction.hpp"
 
 namespace LMCAL_API lmcal {
 
@@ -109,6 +110,10 @@ struct Calibration {
   std::optional<ThermalFitResult> thermal;
   std::optional<ThermalDiagnosis> thermal_diagnosis;
   CalibratedModel calibrated;
+  // The calibrated model over the runs' own cycle (duty_of_runs), with bands: what the model
+  // predicts, in the report and prediction.json (both halves calibrated; else a note says why not).
+  std::optional<DutyCycle> duty;
+  std::optional<Prediction> prediction;
 };
 
 Calibration calibrate(const CalibrationSet& set, const CalibrationOptions& options,
@@ -118,7 +123,8 @@ Calibration calibrate(const CalibrationSet& set, const CalibrationOptions& optio
 // calibrated_friction.json, calibrated_thermal.json (its fits in full), friction.json,
 // friction_samples.csv, friction_conditions.csv, friction_diagnosis.json, thermal.json,
 // thermal_samples.csv, thermal_alpha_curve.csv, thermal_diagnosis.json (the published models
-// and the diagnoses; those of the steps that ran), calibration.json and report.html.
+// and the diagnoses; those of the steps that ran), prediction.json and prediction_time.csv (the
+// runs' cycle predicted), calibration.json and report.html.
 std::vector<std::pair<std::string, std::string>> calibration_outputs(const Calibration& c);
 
 // calibration.json: the set, its inputs and their hashes, the steps, the headline numbers and

@@ -1,0 +1,522 @@
+// `lmcal predict`: the calibrated model over a duty cycle, with bands (prediction.hpp).
+#include "lmcal/predict/prediction.hpp"
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <Eigen/Eigenvalues>
+
+#include <algorithm>
+#include <cmath>
+#include <exception>
+#include <map>
+
+#include "fit/covariance/covariance.hpp"
+#include "lmcal/io/csv_writer.hpp"
+#include "lmcal/error.hpp"
+#include "lmcal/fit/thermal_fit.hpp"
+#include "lmcal/models/friction_effects.hpp"
+
+namespace lmcal {
+
+namespace {
+
+// w with ∫_a^b rise dx = Σ w_i rise_i for the rise linear between the nodes x (a <= b), the
+// end values beyond them, and a half-rail profile (x >= 0 only) mirrored: the integral is
+// linear in the nodes' values, so one set of weights serves every time of a segment.
+std::vector<double> elongation_weights(const std::vector<double>& x, double a, double b) {
+  LMCAL_ASSERT(!x.empty() && a <= b, "nodes, and a <= b");
+  const bool half = x.front() >= 0;
+  std::vector<double> w(x.size(), 0.0);
+  // Adds `share` of the rise at `at` to the weights (the interpolation's two nodes).
+  const auto add = [&](double at, double share) {
+    if (half) at = std::abs(at);
+    if (at <= x.front()) {
+      w.front() += share;
+      return;
+    }
+    if (at >= x.back()) {
+      w.back() += share;
+      return;
+    }
+    const auto hi = static_cast<std::size_t>(std::upper_bound(x.begin(), x.end(), at) - x.begin());
+    const double s = (at - x[hi - 1]) / (x[hi] - x[hi - 1]);
+    w[hi - 1] += (1 - s) * share;
+    w[hi] += s * share;
+  };
+  // The rise is linear between nodes (and their mirror images): the trapezoid rule over those
+  // break points is exact for it.
+  std::vector<double> points{a, b};
+  for (double xi : x)
+    for (double p : {xi, -xi})
+      if (p > a && p < b && (half || p == xi)) points.push_back(p);
+  std::sort(points.begin(), points.end());
+  for (std::size_t i = 1; i < points.size(); ++i) {
+    const double half_width = 0.5 * (points[i] - points[i - 1]);
+    add(points[i - 1], half_width);
+    add(points[i], half_width);
+  }
+  return w;
+}
+
+// Σ w_i (T_i − ref_i) α_th.
+double weighted_rise(const std::vector<double>& w, const std::vector<double>& T, const std::vector<double>& ref,
+                     double expansion_per_K) {
+  double sum = 0;
+  for (std::size_t i = 0; i < w.size(); ++i) sum += w[i] * (T[i] - ref[i]);
+  return expansion_per_K * sum;
+}
+
+}  // namespace
+
+double thermal_elongation_m(const std::vector<double>& x, const std::vector<double>& T, const std::vector<double>& ref,
+                            double expansion_per_K, double a, double b) {
+  LMCAL_ASSERT(x.size() == T.size() && x.size() == ref.size() && !x.empty(), "one temperature per node");
+  if (b < a) return -thermal_elongation_m(x, T, ref, expansion_per_K, b, a);
+  return weighted_rise(elongation_weights(x, a, b), T, ref, expansion_per_K);
+}
+
+namespace {
+
+// One set of the model's parameters.
+struct Draw {
+  FrictionConstants<double> constants;
+  FrictionEffects<double> effects;
+  double alpha = 0, h_W_m2K = 0;
+  std::vector<std::pair<std::string, double>> mechanism_values;
+};
+
+// What one simulated duty gives.
+struct Trajectory {
+  std::vector<std::vector<double>> temperature_C;  // [position][time]
+  std::vector<double> elongation_um;
+  std::vector<std::vector<double>> scale_error_um;  // [scale position][time]
+  std::vector<double> friction_N, heat_rate_W;
+  std::vector<double> profile_x_m, profile_C;  // at the end
+  double max_rail_C = -INFINITY;
+};
+
+Draw point_draw(const ModelFile& m) {
+  Draw d{m.constants, m.effects, m.alpha, m.h_W_m2K.value_or(5.3), m.mechanism_parameters};
+  return d;
+}
+
+// Sets the parameter called `name` of `d` (a friction constant, an effect, α, h or a mechanism's).
+void set_parameter(Draw& d, const std::string& name, double value) {
+  for (std::size_t j = 0; j < kFrictionConstantNames.size(); ++j)
+    if (name == kFrictionConstantNames[j]) {
+      fittable_constant(d.constants, j) = value;
+      return;
+    }
+  if (const auto slot = find_friction_effect(name)) d.effects[*slot] = value;
+  else if (name == "alpha") d.alpha = value;
+  else if (name == "h_W_m2K") d.h_W_m2K = value;
+  else
+    for (auto& [n, v] : d.mechanism_values)
+      if (n == name) v = value;
+}
+
+double value_of(const Draw& d, const std::string& name) {
+  for (std::size_t j = 0; j < kFrictionConstantNames.size(); ++j)
+    if (name == kFrictionConstantNames[j]) return fittable_constant(d.constants, j);
+  if (const auto slot = find_friction_effect(name)) return d.effects[*slot];
+  if (name == "alpha") return d.alpha;
+  if (name == "h_W_m2K") return d.h_W_m2K;
+  for (const auto& [n, v] : d.mechanism_values)
+    if (n == name) return v;
+  LMCAL_ASSERT(false, "a covariance names the model's parameters");
+  return 0;
+}
+
+// A square root of a covariance that also serves a singular one: V diag(√λ₊).
+Eigen::MatrixXd square_root(const Eigen::MatrixXd& c) {
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(c);
+  return eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal();
+}
+
+// The heat the calibration runs put in with the friction law of `d`, summed.
+double reference_heat_W(const ModelFile& m, const Draw& d) {
+  double q = 0;
+  for (const HeatReference& r : m.heat_references) {
+    FrictionConstants<double> k = d.constants;
+    k.nu_ref_mm2_s = r.viscosity40_mm2_s;
+    q += heat_rate_with_effects_W(k, d.effects, r.conditions);
+  }
+  return q;
+}
+
+// The draws (the first is the model at its estimates), and how they were made.
+struct DrawSet {
+  std::vector<Draw> draws;
+  std::string method;
+  std::vector<std::string> notes;
+};
+
+DrawSet make_draws(const ModelFile& m, const PredictionOptions& o) {
+  DrawSet s;
+  const Draw point = point_draw(m);
+  s.draws.push_back(point);
+  const ModelCovariance& f = m.friction_covariance_matrix;
+  const ModelCovariance& t = m.thermal_covariance_matrix;
+  const bool rescale = !f.empty() && !m.heat_references.empty() && m.thermal_covariance_given_heat.size() > 0;
+  const Eigen::MatrixXd Lf = f.empty() ? Eigen::MatrixXd() : square_root(f.matrix);
+  const Eigen::MatrixXd Lt = t.empty() ? Eigen::MatrixXd() : square_root(rescale ? m.thermal_covariance_given_heat : t.matrix);
+  const double q_point = rescale ? reference_heat_W(m, point) : 0;
+  const auto nf = static_cast<Eigen::Index>(f.parameters.size()), nt = static_cast<Eigen::Index>(t.parameters.size());
+  const auto z = detail::standard_normal_draws(o.samples, nf + nt + 1, o.seed);
+  for (std::size_t i = 0; i < o.samples; ++i) {
+    Draw d = point;
+    if (nf > 0) {
+      const Eigen::VectorXd delta = Lf * z[i].head(nf);
+      for (Eigen::Index j = 0; j < nf; ++j) set_parameter(d, f.parameters[j], value_of(point, f.parameters[j]) + delta(j));
+    }
+    if (nt > 0) {
+      const Eigen::VectorXd delta = Lt * z[i].segment(nf, nt);
+      for (Eigen::Index j = 0; j < nt; ++j) set_parameter(d, t.parameters[j], value_of(point, t.parameters[j]) + delta(j));
+    }
+    // The rail saw α·Q: with this draw's heat at the calibration runs, α is the one that gives the same.
+    if (rescale) d.alpha *= q_point / reference_heat_W(m, d);
+    d.alpha = std::clamp(d.alpha + m.alpha_between_run_sd * z[i](nf + nt), 0.0, 1.0);
+    d.h_W_m2K = std::max(d.h_W_m2K, 1e-3);
+    s.draws.push_back(std::move(d));
+  }
+  std::string thermal_part = t.empty() ? "none in the model file"
+                             : rescale ? fmt::format("the '{}' covariance less the heat's share, α rescaled with each "
+                                                     "draw's heat at the {} calibration runs so that α·Q stays as fitted",
+                                                     m.thermal_covariance, m.heat_references.size())
+                                       : fmt::format("'{}'", m.thermal_covariance);
+  s.method = fmt::format(
+      "{} draws of the model's parameters from a multivariate normal with their covariance (friction: {}; thermal: {}){}; "
+      "the duty simulated for each; the band is the {:g} % central interval of the draws",
+      o.samples, f.empty() ? "none in the model file" : "'" + m.friction_covariance + "'", thermal_part,
+      m.alpha_between_run_sd > 0 ? fmt::format(", plus α's run-to-run spread (sd {:.3g})", m.alpha_between_run_sd) : "",
+      100 * o.confidence);
+  if (f.empty() || t.empty())
+    s.notes.push_back("the model file has no covariance for some parameters: their uncertainty is not in the band");
+  if (!f.empty() && !rescale)
+    s.notes.push_back("the heat of the calibration is not known as the friction law's (measured or given): the "
+                      "friction constants' and α's draws are independent, which may widen the band");
+  if (!m.friction_terms.empty())
+    s.notes.push_back("the friction model's empirical terms describe the load cell's log and are not applied to the heat");
+  s.notes.push_back("not in the band: the thermocouples' noise and lag, model error beyond the calibrated mechanisms, "
+                    "and the duty's own uncertainty (ambient, load)");
+  return s;
+}
+
+// The global output times: every output_every_s from 0, and the end.
+std::vector<double> output_times(const DutyCycle& duty) {
+  std::vector<double> t;
+  const double end = duty.duration_s();
+  for (std::size_t i = 0;; ++i) {
+    const double ti = static_cast<double>(i) * duty.output_every_s;
+    if (ti >= end - 1e-9 * end) break;
+    t.push_back(ti);
+  }
+  t.push_back(end);
+  return t;
+}
+
+// The ambient over [t0, t1] of the duty, from t0.
+AmbientTrace segment_ambient(const AmbientTrace& a, double t0, double t1) {
+  if (a.time_s.size() == 1) return a;
+  AmbientTrace out;
+  out.time_s.push_back(0);
+  out.temperature_C.push_back(a.at(t0));
+  for (std::size_t i = 0; i < a.time_s.size(); ++i)
+    if (a.time_s[i] > t0 && a.time_s[i] < t1) {
+      out.time_s.push_back(a.time_s[i] - t0);
+      out.temperature_C.push_back(a.temperature_C[i]);
+    }
+  out.time_s.push_back(t1 - t0);
+  out.temperature_C.push_back(a.at(t1));
+  return out;
+}
+
+Trajectory simulate_duty(const ModelFile& m, const DutyCycle& duty, const Draw& d, const PredictionOptions& o,
+                         const std::vector<double>& times, std::vector<std::string>* segment_at) {
+  const GuideSpec& g = duty.guide;
+  const double initial_C = duty.initial_C.value_or(duty.ambient.at(0.0));
+  Trajectory tr;
+  tr.temperature_C.assign(duty.positions_m.size(), {});
+  tr.scale_error_um.assign(duty.scale.positions_m.size(), {});
+  std::vector<double> carried_x, carried_C;  // the rail at the end of the last segment
+  double source_C = initial_C;               // the rail under the block at the segment's start
+  double t0 = 0;
+  std::size_t next = 0;  // index into times
+  for (std::size_t k = 0; k < duty.segments.size(); ++k) {
+    const DutySegment& s = duty.segments[k];
+    const double t1 = t0 + s.duration_s;
+    const bool last = k + 1 == duty.segments.size();
+    RailOutputs outputs{.duration_s = s.duration_s, .sensor_positions_m = duty.positions_m};
+    const std::size_t first = next;
+    for (; next < times.size() && (times[next] <= t1 + 1e-9 * std::max(1.0, t1) || last); ++next) {
+      outputs.output_times_s.push_back(std::clamp(times[next] - t0, 0.0, s.duration_s));
+      if (segment_at) segment_at->push_back(s.name);
+    }
+    outputs.profile_times_s = outputs.output_times_s;
+    if (outputs.profile_times_s.empty() || outputs.profile_times_s.back() < s.duration_s) outputs.profile_times_s.push_back(s.duration_s);
+    const RailGeometry geometry{.rail_length_m = duty.rail_length_m,
+                                .area_m2 = *g.area_m2,
+                                .perimeter_m = *g.perimeter_m,
+                                .stroke_m = s.stroke_m,
+                                .contact_length_m = *g.contact_length_mm * 1e-3,
+                                .velocity_m_s = s.velocity_m_s};
+    RailNumerics numerics{.source = s.velocity_m_s > 0 ? m.source : SourceModel::averaged,
+                          .scheme = TimeScheme::crank_nicolson,
+                          .half_rail_segments = o.half_rail_segments,
+                          .time_step_s = o.time_step_s};
+    RailParams<double> params{.heat_partition = d.alpha,
+                              .heat_rate_W = 0,
+                              .h_W_m2K = d.h_W_m2K,
+                              .conductivity_W_mK = *g.conductivity_W_mK,
+                              .density_kg_m3 = *g.density_kg_m3,
+                              .specific_heat_J_kgK = *g.specific_heat_J_kgK,
+                              .initial_temperature_C = initial_C};
+    params.initial_profile_x_m = carried_x;
+    params.initial_profile_C = carried_C;
+    FrictionConstants<double> constants = d.constants;
+    constants.nu_ref_mm2_s = s.viscosity40_mm2_s;
+    const FrictionConditions<double> conditions{.load_N = s.load_N,
+                                                .preload_um = s.preload_um,
+                                                .block_length_mm = s.block_length_mm,
+                                                .velocity_m_s = s.velocity_m_s,
+                                                .temperature_C = source_C};
+    const double law_heat_W = heat_rate_with_effects_W(constants, d.effects, conditions);
+    const AmbientTrace ambient = segment_ambient(duty.ambient, t0, t1);
+    RailSolution<double> sol;
+    if (m.mechanisms.empty() || s.velocity_m_s == 0) {
+      params.heat_rate_W = law_heat_W;
+      sol = simulate_rail(geometry, numerics, outputs, params, ambient);
+    } else {
+      sol = simulate_rail_with_mechanisms(geometry, numerics, outputs, params, ambient, constants, d.effects, conditions,
+                                          m.mechanisms, d.mechanism_values);
+    }
+    // The reference of the elongation: the rail at the duty's start (uniform). The integrals'
+    // weights on this segment's grid, once (a scale position before the fixed point: negative).
+    const std::vector<double> reference(sol.node_positions_m.size(), initial_C);
+    const std::vector<double>& x = sol.node_positions_m;
+    const std::vector<double> whole = elongation_weights(x, -0.5 * duty.rail_length_m, 0.5 * duty.rail_length_m);
+    std::vector<std::vector<double>> to_scale;
+    std::vector<double> sense;
+    const double fixed = duty.scale.fixed_point_m();
+    for (double at : duty.scale.positions_m) {
+      to_scale.push_back(elongation_weights(x, std::min(fixed, at), std::max(fixed, at)));
+      sense.push_back(at < fixed ? -1.0 : 1.0);
+    }
+    const std::size_t n_out = outputs.output_times_s.size();
+    for (std::size_t i = 0; i < n_out; ++i) {
+      for (std::size_t p = 0; p < duty.positions_m.size(); ++p) tr.temperature_C[p].push_back(sol.temperature_C(i, p));
+      const std::vector<double>& profile = sol.profiles_C[i];
+      tr.elongation_um.push_back(1e6 * weighted_rise(whole, profile, reference, duty.scale.expansion_per_K));
+      for (std::size_t q = 0; q < duty.scale.positions_m.size(); ++q)
+        tr.scale_error_um[q].push_back(1e6 * sense[q] * weighted_rise(to_scale[q], profile, reference, duty.scale.expansion_per_K));
+      const double heat = s.velocity_m_s > 0 ? sol.heat_rate_W[i] : 0.0;
+      tr.heat_rate_W.push_back(heat);
+      tr.friction_N.push_back(s.velocity_m_s > 0 ? heat / s.velocity_m_s : 0.0);
+      for (double T : profile) tr.max_rail_C = std::max(tr.max_rail_C, T);
+    }
+    (void)first;
+    carried_x = sol.node_positions_m;
+    carried_C = sol.profiles_C.back();
+    for (double T : carried_C) tr.max_rail_C = std::max(tr.max_rail_C, T);
+    if (!sol.source_temperature_C.empty()) source_C = sol.source_temperature_C.back();
+    else source_C = carried_C[carried_C.size() / 2];
+    t0 = t1;
+  }
+  tr.profile_x_m = carried_x;
+  tr.profile_C = carried_C;
+  return tr;
+}
+
+// The q-quantile of `v` (sorted in place), linear between order statistics.
+double quantile(std::vector<double>& v, double q) {
+  std::sort(v.begin(), v.end());
+  const double at = q * static_cast<double>(v.size() - 1);
+  const auto lo = static_cast<std::size_t>(std::floor(at));
+  const std::size_t hi = std::min(lo + 1, v.size() - 1);
+  return v[lo] + (at - static_cast<double>(lo)) * (v[hi] - v[lo]);
+}
+
+// The band of one quantity: `get(trajectory)` is its series over time.
+template <class Get>
+Band band_of(const Trajectory& point, const std::vector<Trajectory>& draws, double confidence, Get&& get) {
+  Band b;
+  b.value = get(point);
+  const std::size_t n = b.value.size();
+  b.low.resize(n);
+  b.high.resize(n);
+  std::vector<double> column(draws.size());
+  for (std::size_t t = 0; t < n; ++t) {
+    for (std::size_t i = 0; i < draws.size(); ++i) column[i] = get(draws[i])[t];
+    b.low[t] = quantile(column, 0.5 * (1 - confidence));
+    b.high[t] = quantile(column, 0.5 * (1 + confidence));
+  }
+  return b;
+}
+
+void flag_ranges(const ModelFile& m, const DutyCycle& duty, double max_rail_C, Prediction& p) {
+  const auto check = [&](const CalibratedRange* r, const std::string& segment, const char* quantity, double value,
+                         const char* what) {
+    const double slack = 1e-9 * std::max(1.0, std::abs(value));
+    if (r && (value < r->low - slack || value > r->high + slack)) p.outside.push_back({segment, quantity, value, r->low, r->high, what});
+  };
+  for (const DutySegment& s : duty.segments) {
+    if (s.velocity_m_s <= 0) continue;
+    if (std::any_of(p.outside.begin(), p.outside.end(), [&](auto& f) { return f.segment == s.name; })) continue;
+    check(m.friction_range_of("velocity_m_s"), s.name, "velocity_m_s", s.velocity_m_s, "friction");
+    check(m.friction_range_of("load_N"), s.name, "load_N", s.load_N, "friction");
+    check(m.thermal_range_of("velocity_m_s"), s.name, "velocity_m_s", s.velocity_m_s, "thermal");
+    check(m.thermal_range_of("load_N"), s.name, "load_N", s.load_N, "thermal");
+  }
+  check(m.thermal_range_of("temperature_C"), "the duty", "temperature_C", max_rail_C, "thermal");
+  check(m.friction_range_of("temperature_C"), "the duty", "temperature_C", max_rail_C, "friction");
+}
+
+}  // namespace
+
+Prediction predict(const ModelFile& m, const DutyCycle& duty, const PredictionOptions& o) {
+  if (!m.has_thermal) throw InvalidParameter("model", "has no [thermal] part: a prediction needs the calibrated rail model");
+  if (!m.has_friction) throw InvalidParameter("model", "has no [friction] part: a prediction needs the friction law for the heat");
+  if (m.friction_covariance_matrix.empty() && m.thermal_covariance_matrix.empty())
+    throw InvalidParameter("model", "has no covariance matrix (written by lmcal before 0.2?): recalibrate to get bands");
+  if (o.samples < 20) throw InvalidParameter("samples", static_cast<double>(o.samples), "at least 20 draws for a band");
+  require_in_range("confidence", o.confidence, 0.5, 0.999);
+  if (o.half_rail_segments < 4) throw InvalidParameter("half_rail_segments", o.half_rail_segments, "at least 4");
+  require_positive("time_step_s", o.time_step_s);
+
+  const DrawSet set = make_draws(m, o);
+  const std::vector<double> times = output_times(duty);
+  Prediction p;
+  p.time_s = times;
+  p.positions_m = duty.positions_m;
+  p.scale_positions_m = duty.scale.positions_m;
+  const Trajectory point = simulate_duty(m, duty, set.draws[0], o, times, &p.segment);
+
+  std::vector<Trajectory> draws(set.draws.size() - 1);
+  std::vector<std::string> failed(draws.size());
+#pragma omp parallel for schedule(dynamic)
+  for (std::size_t i = 0; i < draws.size(); ++i) {
+    try {
+      draws[i] = simulate_duty(m, duty, set.draws[i + 1], o, times, nullptr);
+    } catch (const std::exception& e) {
+      failed[i] = e.what();
+    }
+  }
+  std::vector<Trajectory> ran;
+  std::size_t n_failed = 0;
+  std::string first_failure;
+  for (std::size_t i = 0; i < draws.size(); ++i) {
+    if (failed[i].empty()) ran.push_back(std::move(draws[i]));
+    else if (n_failed++ == 0) first_failure = failed[i];
+  }
+  if (ran.size() < 20) throw InvalidParameter("model", "too few parameter draws could be simulated: " + first_failure);
+  p.samples = ran.size();
+  p.method = set.method;
+  p.notes = set.notes;
+  if (n_failed > 0)
+    p.notes.push_back(fmt::format("{} of {} draws were not physical and were left out (first: {})", n_failed, draws.size(), first_failure));
+
+  for (std::size_t q = 0; q < duty.positions_m.size(); ++q)
+    p.temperature_C.push_back(band_of(point, ran, o.confidence, [q](const Trajectory& t) -> const std::vector<double>& { return t.temperature_C[q]; }));
+  p.elongation_um = band_of(point, ran, o.confidence, [](const Trajectory& t) -> const std::vector<double>& { return t.elongation_um; });
+  for (std::size_t q = 0; q < duty.scale.positions_m.size(); ++q)
+    p.scale_error_um.push_back(band_of(point, ran, o.confidence, [q](const Trajectory& t) -> const std::vector<double>& { return t.scale_error_um[q]; }));
+  p.friction_N = band_of(point, ran, o.confidence, [](const Trajectory& t) -> const std::vector<double>& { return t.friction_N; });
+  p.heat_rate_W = band_of(point, ran, o.confidence, [](const Trajectory& t) -> const std::vector<double>& { return t.heat_rate_W; });
+  p.profile_x_m = point.profile_x_m;
+  p.profile_C = band_of(point, ran, o.confidence, [](const Trajectory& t) -> const std::vector<double>& { return t.profile_C; });
+  flag_ranges(m, duty, point.max_rail_C, p);
+  return p;
+}
+
+namespace {
+
+nlohmann::json band_json(const Band& b) { return {{"value", b.value}, {"low", b.low}, {"high", b.high}}; }
+
+}  // namespace
+
+std::string prediction_json(const Prediction& p, const DutyCycle& duty, const ModelFile& model,
+                            const std::vector<std::string>& command) {
+  nlohmann::json segments = nlohmann::json::array();
+  for (const auto& s : duty.segments)
+    segments.push_back({{"name", s.name}, {"duration_s", s.duration_s}, {"velocity_m_s", s.velocity_m_s}, {"load_N", s.load_N},
+                        {"stroke_m", s.stroke_m}, {"preload_um", s.preload_um}, {"block_length_mm", s.block_length_mm},
+                        {"viscosity40_mm2_s", s.viscosity40_mm2_s}});
+  nlohmann::json temperatures = nlohmann::json::array();
+  for (std::size_t q = 0; q < p.positions_m.size(); ++q)
+    temperatures.push_back({{"position_m", p.positions_m[q]}, {"band", band_json(p.temperature_C[q])}});
+  nlohmann::json scale = nlohmann::json::array();
+  for (std::size_t q = 0; q < p.scale_positions_m.size(); ++q)
+    scale.push_back({{"position_m", p.scale_positions_m[q]}, {"band", band_json(p.scale_error_um[q])}});
+  nlohmann::json outside = nlohmann::json::array();
+  for (const auto& f : p.outside)
+    outside.push_back({{"segment", f.segment}, {"quantity", f.quantity}, {"value", f.value}, {"calibrated", {f.low, f.high}},
+                       {"calibration", f.what}});
+  const nlohmann::json j = {
+      {"kind", "prediction"},
+      {"lmcal_version", LMCAL_VERSION},
+      {"command", command},
+      {"model", {{"set", model.set}, {"lmcal_version", model.lmcal_version}, {"command", model.command}}},
+      {"duty",
+       {{"file", duty.file},
+        {"guide", duty.guide.model},
+        {"rail_length_m", duty.rail_length_m},
+        {"duration_s", duty.duration_s()},
+        {"segments", segments},
+        {"scale",
+         {{"from_m", duty.scale.from_m},
+          {"to_m", duty.scale.to_m},
+          {"mounting", duty.scale.mounting == ScaleMounting::end ? "end" : "centre"},
+          {"fixed_point_m", duty.scale.fixed_point_m()},
+          {"expansion_per_K", duty.scale.expansion_per_K}}}}},
+      {"band", {{"method", p.method}, {"draws", p.samples}, {"notes", p.notes}}},
+      {"outside_calibrated_range", outside},
+      {"time_s", p.time_s},
+      {"segment", p.segment},
+      {"temperature_C", temperatures},
+      {"elongation_um", band_json(p.elongation_um)},
+      {"scale_error_um", scale},
+      {"friction_N", band_json(p.friction_N)},
+      {"heat_rate_W", band_json(p.heat_rate_W)},
+      {"end_profile", {{"x_m", p.profile_x_m}, {"temperature_C", band_json(p.profile_C)}}}};
+  return j.dump(1) + "\n";
+}
+
+std::string prediction_time_csv(const Prediction& p) {
+  CsvText csv({"time_s", "segment", "quantity", "position_m", "value", "low", "high"});
+  const auto rows = [&](const char* quantity, std::optional<double> position, const Band& b) {
+    for (std::size_t t = 0; t < p.time_s.size(); ++t) {
+      csv.cell(p.time_s[t]).cell(p.segment[t]).cell(quantity);
+      if (position) csv.cell(*position);
+      else csv.cell("");
+      csv.cell(b.value[t]).cell(b.low[t]).cell(b.high[t]).end_row();
+    }
+  };
+  for (std::size_t q = 0; q < p.positions_m.size(); ++q) rows("temperature_C", p.positions_m[q], p.temperature_C[q]);
+  rows("elongation_um", std::nullopt, p.elongation_um);
+  for (std::size_t q = 0; q < p.scale_positions_m.size(); ++q) rows("scale_error_um", p.scale_positions_m[q], p.scale_error_um[q]);
+  rows("friction_N", std::nullopt, p.friction_N);
+  rows("heat_rate_W", std::nullopt, p.heat_rate_W);
+  return csv.str();
+}
+
+std::string prediction_summary(const Prediction& p) {
+  const std::size_t end = p.time_s.size() - 1;
+  const auto at_end = [&](const Band& b) { return fmt::format("{:.4g} [{:.4g}, {:.4g}]", b.value[end], b.low[end], b.high[end]); };
+  std::size_t peak = 0;
+  for (std::size_t t = 0; t < p.time_s.size(); ++t)
+    if (std::abs(p.elongation_um.value[t]) > std::abs(p.elongation_um.value[peak])) peak = t;
+  std::string out = fmt::format("prediction over {:.4g} h, {} draws (95 % bands):\n", p.time_s.back() / 3600, p.samples);
+  for (std::size_t q = 0; q < p.positions_m.size(); ++q)
+    out += fmt::format("  rail at x = {} m at the end: {} °C\n", p.positions_m[q], at_end(p.temperature_C[q]));
+  out += fmt::format("  rail elongation at the end: {} µm; largest {:.4g} µm at {:.4g} h\n", at_end(p.elongation_um),
+                     p.elongation_um.value[peak], p.time_s[peak] / 3600);
+  for (std::size_t q = 0; q < p.scale_positions_m.size(); ++q)
+    out += fmt::format("  scale error at x = {} m at the end: {} µm\n", p.scale_positions_m[q], at_end(p.scale_error_um[q]));
+  for (const auto& f : p.outside)
+    out += fmt::format("  outside the calibrated range: {} {} = {:.4g} ({} calibration: [{:.4g}, {:.4g}])\n", f.segment,
+                       f.quantity, f.value, f.what, f.low, f.high);
+  return out;
+}
+
+}  // namespace lmcal

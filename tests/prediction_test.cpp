@@ -1,0 +1,293 @@
+// lmcal predict (lmcal/predict/prediction.hpp): the elongation integral against closed forms,
+// the duty's physics (signs, a segment split in two, the uniform end state of an ambient step,
+// the scale's mountings), the bands' coverage on the virtual rig for a duty the calibration
+// never saw, and refusals of bad duties and models.
+#include "lmcal/predict/prediction.hpp"
+
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <iterator>
+#include <string>
+#include <vector>
+
+#include "lmcal/error.hpp"
+#include "lmcal/fit/friction_fit.hpp"
+#include "lmcal/fit/thermal_fit.hpp"
+#include "lmcal/rig/virtual_rig.hpp"
+#include "support/temp_folder.hpp"
+
+namespace lmcal {
+namespace {
+
+namespace fs = std::filesystem;
+
+// --- the elongation integral ------------------------------------------------------------------
+
+TEST(ThermalElongation, UniformRiseGivesAlphaDeltaTLExactly) {
+  const double alpha_th = 11.5e-6, dT = 7.25, L = 0.6;
+  for (const bool half : {true, false}) {
+    std::vector<double> x, T, ref;
+    const int n = 37;
+    for (int i = 0; i <= n; ++i) {
+      x.push_back(half ? 0.5 * L * i / n : -0.5 * L + L * i / n);
+      T.push_back(24 + dT);
+      ref.push_back(24);
+    }
+    EXPECT_NEAR(thermal_elongation_m(x, T, ref, alpha_th, -0.5 * L, 0.5 * L), alpha_th * dT * L, 1e-18) << half;
+    // A part of the rail between nodes, and the reverse direction (negative).
+    EXPECT_NEAR(thermal_elongation_m(x, T, ref, alpha_th, -0.1234, 0.2011), alpha_th * dT * 0.3245, 1e-18) << half;
+    EXPECT_NEAR(thermal_elongation_m(x, T, ref, alpha_th, 0.2011, -0.1234), -alpha_th * dT * 0.3245, 1e-18) << half;
+  }
+}
+
+TEST(ThermalElongation, CoshProfileMatchesItsClosedFormIntegral) {
+  // A fin's steady rise A cosh(m x): ∫_{-L/2}^{L/2} = 2 A sinh(m L/2)/m; the trapezoid rule's
+  // error is (m Δx)²/12 of it.
+  const double A = 3.0, m = 6.0, L = 0.6, alpha_th = 11.5e-6;
+  for (int n : {50, 200}) {
+    std::vector<double> x, T, ref;
+    for (int i = 0; i <= n; ++i) {
+      x.push_back(0.5 * L * i / n);  // a half-rail profile: mirrored
+      T.push_back(20 + A * std::cosh(m * x.back()));
+      ref.push_back(20);
+    }
+    const double exact = alpha_th * 2 * A * std::sinh(m * L / 2) / m;
+    const double dx = 0.5 * L / n;
+    const double e = thermal_elongation_m(x, T, ref, alpha_th, -0.5 * L, 0.5 * L);
+    EXPECT_NEAR(e, exact, exact * (m * dx) * (m * dx) / 12 * 1.5) << n;
+    EXPECT_GT(e, exact) << "the chord of a convex profile lies above it";
+  }
+}
+
+// --- the duty's physics, with the bundled calibrated model -------------------------------------
+
+class PredictTest : public test::TempFolderTest {
+ protected:
+  static ModelFile bundled() { return read_model_file(fs::path(LMCAL_SOURCE_DIR) / "fits/cheng2017/model.toml"); }
+
+  DutyCycle duty(const std::string& segments, const std::string& extra = "") {
+    return load_duty_cycle(write("duty.toml", "guide = \"SRN 35C\"\nrail_length_m = 0.6\nambient_C = 24\n"
+                                              "positions_m = [0, 0.1]\noutput_every_s = 600\nload_N = 3000\n"
+                                              "preload_um = 4\nstroke_m = 0.2\n" +
+                                                  extra + "\n" + segments));
+  }
+  static PredictionOptions quick() { return {.samples = 40, .time_step_s = 60}; }
+};
+
+TEST_F(PredictTest, AnIdleRailAtItsAmbientStaysThere) {
+  const Prediction p = predict(bundled(), duty("[[segment]]\nduration_h = 3\nvelocity_m_s = 0\n"), quick());
+  for (std::size_t t = 0; t < p.time_s.size(); ++t) {
+    EXPECT_NEAR(p.temperature_C[0].value[t], 24, 1e-9);
+    EXPECT_NEAR(p.elongation_um.value[t], 0, 1e-9);
+    EXPECT_NEAR(p.elongation_um.high[t], 0, 1e-9);
+    EXPECT_EQ(p.heat_rate_W.value[t], 0);
+  }
+}
+
+TEST_F(PredictTest, TheRailGrowsWhileTheBlockRunsAndShrinksWhenItStops) {
+  const Prediction p = predict(bundled(), duty("[[segment]]\nduration_h = 3\nvelocity_m_s = 0.11\n"
+                                               "[[segment]]\nduration_h = 3\nvelocity_m_s = 0\n"),
+                               quick());
+  const std::size_t stop = 18;  // 3 h at 600 s
+  ASSERT_EQ(p.time_s[stop], 3 * 3600.0);
+  for (std::size_t t = 1; t <= stop; ++t) EXPECT_GT(p.elongation_um.value[t], p.elongation_um.value[t - 1]) << t;
+  for (std::size_t t = stop + 2; t < p.time_s.size(); ++t) EXPECT_LT(p.elongation_um.value[t], p.elongation_um.value[t - 1]) << t;
+  EXPECT_GT(p.heat_rate_W.value[stop - 1], 0);
+  EXPECT_EQ(p.heat_rate_W.value.back(), 0);
+  // Friction × speed is the heat, and the warmer rail (thinner oil) rubs less: the coupling.
+  EXPECT_NEAR(p.friction_N.value[5] * 0.11, p.heat_rate_W.value[5], 1e-9);
+  EXPECT_LT(p.friction_N.value[stop - 1], p.friction_N.value[1]);
+  // Every value within its band, and the band of some width.
+  for (std::size_t t = 1; t < p.time_s.size(); ++t) {
+    EXPECT_LE(p.elongation_um.low[t], p.elongation_um.value[t]);
+    EXPECT_GE(p.elongation_um.high[t], p.elongation_um.value[t]);
+    EXPECT_LT(p.elongation_um.low[t], p.elongation_um.high[t]);
+  }
+  // The centre under the block is the warmest place.
+  EXPECT_GT(p.temperature_C[0].value[stop], p.temperature_C[1].value[stop]);
+}
+
+TEST_F(PredictTest, ASegmentSplitInTwoGivesTheSameRail) {
+  // The second half starts from the first's temperature field: the same as one segment, but for
+  // the Rannacher start-up of Crank-Nicolson at the segment's start (backward-Euler substeps,
+  // a local error of millikelvin at most). (With
+  // the coupling at exactly 1 the heat is the law's at the rail's temperature, whatever the
+  // segment's start; the calibrated 1.009 keeps a trace of the start temperature.)
+  ModelFile m = bundled();
+  for (auto& [name, value] : m.mechanism_parameters)
+    if (name == "coupling") value = 1.0;
+  const Prediction one = predict(m, duty("[[segment]]\nduration_h = 4\nvelocity_m_s = 0.083\n"), quick());
+  const Prediction two = predict(m, duty("[[segment]]\nduration_h = 2\nvelocity_m_s = 0.083\n"
+                                                 "[[segment]]\nduration_h = 2\nvelocity_m_s = 0.083\n"),
+                                 quick());
+  ASSERT_EQ(one.time_s, two.time_s);
+  for (std::size_t t = 0; t < one.time_s.size(); ++t) {
+    EXPECT_NEAR(one.temperature_C[0].value[t], two.temperature_C[0].value[t], 1e-4) << t;
+    EXPECT_NEAR(one.elongation_um.value[t], two.elongation_um.value[t], 1e-5 * one.elongation_um.value[t]) << t;
+  }
+  EXPECT_EQ(two.segment[13], "segment 2");
+}
+
+TEST_F(PredictTest, AnAmbientStepEndsInTheUniformElongation) {
+  // No heat, the room 10 K warmer than the rail: after many time constants the rail is at the
+  // room's temperature everywhere, and grows by α_th ΔT L.
+  const Prediction p = predict(bundled(), duty("[[segment]]\nduration_h = 150\nvelocity_m_s = 0\n", "initial_C = 14\n"),
+                               quick());
+  const double expected_um = 1e6 * 11.5e-6 * 10 * 0.6;
+  EXPECT_NEAR(p.elongation_um.value.back(), expected_um, 1e-3 * expected_um);
+  EXPECT_NEAR(p.temperature_C[1].value.back(), 24, 0.01);
+}
+
+TEST_F(PredictTest, TheScaleErrorFollowsItsMounting) {
+  const std::string shift = "[[segment]]\nduration_h = 4\nvelocity_m_s = 0.11\n";
+  // Fixed at the left end, the whole rail long: at the right end the rail's whole elongation.
+  const Prediction end = predict(bundled(), duty(shift, "[scale]\nmounting = \"end\"\npositions_m = [0, 0.3]\n"), quick());
+  EXPECT_NEAR(end.scale_error_um[1].value.back(), end.elongation_um.value.back(), 1e-9);
+  EXPECT_NEAR(end.scale_error_um[0].value.back(), 0.5 * end.elongation_um.value.back(), 1e-6);
+  // Fixed at the centre of a symmetric rail: half each way, in opposite senses.
+  const Prediction centre = predict(bundled(), duty(shift, "[scale]\nmounting = \"centre\"\n"), quick());
+  ASSERT_EQ(centre.scale_positions_m, (std::vector<double>{-0.3, 0.3}));
+  EXPECT_NEAR(centre.scale_error_um[0].value.back(), -0.5 * centre.elongation_um.value.back(), 1e-9);
+  EXPECT_NEAR(centre.scale_error_um[1].value.back(), 0.5 * centre.elongation_um.value.back(), 1e-9);
+}
+
+TEST_F(PredictTest, ADutyBeyondTheCalibrationIsFlagged) {
+  const Prediction p = predict(bundled(), duty("[[segment]]\nduration_h = 1\nvelocity_m_s = 0.5\nload_N = 5000\n"), quick());
+  std::vector<std::string> flagged;
+  for (const auto& f : p.outside) flagged.push_back(f.what + " " + f.quantity);
+  EXPECT_NE(std::find(flagged.begin(), flagged.end(), "friction velocity_m_s"), flagged.end());
+  EXPECT_NE(std::find(flagged.begin(), flagged.end(), "thermal load_N"), flagged.end());
+  EXPECT_TRUE(predict(bundled(), duty("[[segment]]\nduration_h = 1\nvelocity_m_s = 0.083\n"), quick()).outside.empty());
+}
+
+TEST_F(PredictTest, TheSameSeedGivesTheSameBands) {
+  const DutyCycle d = duty("[[segment]]\nduration_h = 2\nvelocity_m_s = 0.11\n");
+  const Prediction a = predict(bundled(), d, quick()), b = predict(bundled(), d, quick());
+  EXPECT_EQ(a.elongation_um.low, b.elongation_um.low);
+  EXPECT_EQ(a.elongation_um.high, b.elongation_um.high);
+}
+
+// --- bad input ---------------------------------------------------------------------------------
+
+TEST_F(PredictTest, BadDutiesAreRefusedNamingTheField) {
+  const auto refused = [&](const std::string& text, const std::string& expected) {
+    const fs::path file = write("bad.toml", text);
+    try {
+      load_duty_cycle(file);
+      ADD_FAILURE() << "accepted: " << text;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
+      EXPECT_GT(e.line(), 0) << e.what();
+    }
+  };
+  const std::string head = "guide = \"SRN 35C\"\nrail_length_m = 0.6\nambient_C = 24\nload_N = 3000\nstroke_m = 0.2\n";
+  refused(head + "[[segment]]\nduration_s = -60\nvelocity_m_s = 0.1\n", "duration_s = -60: expected a duration > 0");
+  refused(head + "[[segment]]\nduration_s = 60\nvelocity_m_s = 50\n", "velocity_m_s = 50: expected a speed in [0, 10] m/s");
+  refused(head + "[[segment]]\nduration_s = 60\nvelocity_m_s = 0.1\nload_N = -1\n", "load_N = -1: expected a load");
+  refused(head + "[[segment]]\nduration_s = 60\nvelocity_m_s = 0.1\nspeed = 3\n", "unknown key 'speed' in [[segment]]");
+  refused(head + "[[segment]]\nvelocity_m_s = 0.1\n", "expected duration_s");
+  refused(head + "[[segment]]\nduration_s = 60\nvelocity_m_s = 0.1\nstroke_m = 0.6\n", "longer than the rail");
+  refused(head + "positions_m = [0.5]\n[[segment]]\nduration_s = 60\n", "positions_m = 0.5 m lies off the rail");
+  refused(head + "[scale]\nmounting = \"middle\"\n[[segment]]\nduration_s = 60\n", "mounting = \"middle\"");
+  refused(head, "expected [[segment]] tables");
+  refused("rail_length_m = 0.6\nambient_C = 24\n[[segment]]\nduration_s = 60\n", "expected guide");
+}
+
+TEST_F(PredictTest, AModelOfAnotherMajorVersionIsRefused) {
+  std::ifstream in(fs::path(LMCAL_SOURCE_DIR) / "fits/cheng2017/model.toml");
+  std::string text((std::istreambuf_iterator<char>(in)), {});
+  text.replace(text.find("lmcal_version = \"0."), 20, "lmcal_version = \"1.");
+  try {
+    read_model_file(write("model.toml", text));
+    ADD_FAILURE() << "a 1.x model file was read";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("lmcal_version = \"1."), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("another major version"), std::string::npos) << e.what();
+  }
+}
+
+TEST_F(PredictTest, AModelWithoutCovarianceIsRefused) {
+  ModelFile m = bundled();
+  m.friction_covariance_matrix = {};
+  m.thermal_covariance_matrix = {};
+  EXPECT_THROW(predict(m, duty("[[segment]]\nduration_h = 1\nvelocity_m_s = 0.1\n"), quick()), InvalidParameter);
+}
+
+// --- coverage ----------------------------------------------------------------------------------
+
+// The whole route on the virtual rig, replicate by replicate: a friction log and six thermal
+// runs as the bundled set has them (three speeds, two repeats; AR(1) thermocouple noise, a
+// drifting and waving room, biased sensors) → the friction fit →
+// the thermal fit with the heat from it → the model file → a prediction of a duty at a speed
+// the thermal runs never had (3 h at 0.09 m/s, then 1 h idle). The truth: the rig's rail model
+// at the true parameters over the same duty. The 95 % bands must hold it in >= 90 % of the
+// replicates (the temperature under the block and the rail's elongation at the end of the run).
+TEST(PredictionCoverage, BandsHoldTheTruthOfAHeldOutDuty) {
+  const int replicates = 20;
+  int covered_T = 0, covered_e = 0;
+  const fs::path dir = fs::temp_directory_path() / fmt::format("lmcal_coverage_{}", ::getpid());
+  fs::create_directories(dir);
+  {
+    std::ofstream(dir / "duty.toml") << "guide = \"SRN 35C\"\nrail_length_m = 0.6\nambient_C = 24\npositions_m = [0]\n"
+                                        "output_every_s = 900\nload_N = 3000\npreload_um = 4\nstroke_m = 0.2\n"
+                                        "[[segment]]\nduration_h = 3\nvelocity_m_s = 0.09\n"
+                                        "[[segment]]\nduration_h = 1\nvelocity_m_s = 0\n";
+  }
+  const DutyCycle duty = load_duty_cycle(dir / "duty.toml");
+  for (int r = 0; r < replicates; ++r) {
+    FrictionRigConfig fc;
+    fc.guides = {"SRN 35C"};
+    fc.runs = 3;
+    fc.noise_ar1 = 0.5;
+    fc.seed = 100 + static_cast<std::uint64_t>(r);
+    const FrictionLog log = generate_friction_log(fc, {}).log;
+    FrictionFitOptions fo;
+    fo.per_run_fits = false;
+    fo.fit.bootstrap = 0;
+    const FrictionFitResult friction = fit_friction(log, fo);
+
+    ThermalRigConfig tc;
+    tc.velocity_m_s = {0.066, 0.083, 0.11};
+    tc.repeats = 2;
+    tc.duration_s = 4 * 3600;
+    tc.record_every_s = 30;
+    tc.noise_ar1 = 0.6;
+    tc.seed = 500 + static_cast<std::uint64_t>(r);
+    ThermalRigOutput data = generate_thermal_dataset(tc, {}, "coverage");
+    ThermalFitOptions to;
+    to.friction = friction.constants();
+    to.friction_effects = friction.effects();
+    to.friction_fit = friction.fit;
+    to.fit.bootstrap = 0;
+    to.per_run_fits = false;
+    to.compare_sources = false;
+    to.curve_points = 2;
+    const ThermalFitResult thermal = fit_thermal(data.set, to);
+    const ModelFile model = model_file_of(&friction, fo, &thermal, to);
+    const Prediction p = predict(model, duty, {.samples = 100, .seed = 7 + static_cast<std::uint64_t>(r), .time_step_s = 60});
+
+    // The truth: the same duty with the rig's parameters (the paper's law, α 0.6, h 5.3).
+    ModelFile truth = model;
+    truth.constants = tc.constants;
+    truth.effects = {};
+    truth.alpha = tc.alpha;
+    truth.h_W_m2K = tc.h_W_m2K;
+    const Prediction t = predict(truth, duty, {.samples = 20, .time_step_s = 60});
+    const std::size_t end_of_run = 12;  // 3 h at 900 s
+    ASSERT_EQ(p.time_s[end_of_run], 3 * 3600.0);
+    const double T = t.temperature_C[0].value[end_of_run], e = t.elongation_um.value[end_of_run];
+    covered_T += p.temperature_C[0].low[end_of_run] <= T && T <= p.temperature_C[0].high[end_of_run];
+    covered_e += p.elongation_um.low[end_of_run] <= e && e <= p.elongation_um.high[end_of_run];
+  }
+  fs::remove_all(dir);
+  EXPECT_GE(covered_T, 18) << "temperature under the block: " << covered_T << " of " << replicates;
+  EXPECT_GE(covered_e, 18) << "elongation: " << covered_e << " of " << replicates;
+}
+
+}  // namespace
+}  // namespace lmcal
