@@ -146,6 +146,7 @@ void setup_fit_thermal(CLI::App& fit, const std::vector<std::string>& argv);
 void setup_diagnose(CLI::App& app);
 void setup_calibrate(CLI::App& app);
 void setup_predict(CLI::App& app, const std::vector<std::string>& argv);
+void setup_plan(CLI::App& app, const std::vector<std::string>& argv);
 
 // NAME=VALUE options (repeatable, or comma-separated) collected into `values`.
 void add_assignments(CLI::App& app, const char* name, std::map<std::string, double>& values, const char* help);

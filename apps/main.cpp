@@ -23,6 +23,7 @@ int main(int argc, char** argv) {
   lmcal::cli::setup_diagnose(app);
   lmcal::cli::setup_calibrate(app);
   lmcal::cli::setup_predict(app, args);
+  lmcal::cli::setup_plan(app, args);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -350,6 +350,16 @@ sed 's/^lmcal_version = "0\./lmcal_version = "7./' "$SOURCE/fits/cheng2017/model
 check "a model file of another major version is refused" \
   refused "written by another major version of lmcal" predict model7.toml "$SOURCE/examples/duty/two_shifts.toml" -o predbad
 
+# --- plan: the next friction conditions to log ----------------------------------------------------
+"$LMCAL" plan friction "$SOURCE/measurements/cheng2017/friction.csv" --model "$SOURCE/fits/cheng2017/model.toml" \
+  --velocity 0.001,0.002,0.15,0.3 --parameters v_st_m_s,mu_st -n 3 -o planout >plan.txt
+check "plan writes the plan and a friction log template to fill" test -s planout/plan.json -a -s planout/plan_friction_template.csv
+check "plan says which criterion and what the SEs become" grep -q 'A-optimal for v_st_m_s, mu_st' plan.txt
+check "the template loads as a friction log with nothing yet to fit" \
+  bash -c "'$LMCAL' check friction planout/plan_friction_template.csv 2>&1 | grep -q 'friction_N empty'"
+check "plan refuses a parameter the fit does not have" \
+  refused "'k9' is not a free parameter of the fit" plan friction "$SOURCE/measurements/cheng2017/friction.csv" --parameters k9 -o out
+
 # Deterministic: the same outputs with one thread or two (timings aside).
 # Both bundled sets: the diagnoses fit their candidates one per thread.
 same_with_threads() {  # same_with_threads SET

@@ -140,6 +140,43 @@ void prediction_part(Page& page, const Calibration& c) {
           "<code>examples/duty/two_shifts.toml</code> is one).</p>\n";
 }
 
+// The next friction conditions to log, and what they would do to each constant's SE.
+void plan_part(Page& page, const Calibration& c) {
+  if (!c.plan) return;
+  const FrictionPlan& plan = *c.plan;
+  page.heading(3, "Next measurements: friction", "plan");
+  page.paragraph(fmt::format("The {} conditions, among every combination of the logs' own speeds, loads, preloads, temperatures and "
+                             "directions, that most shrink the calibrated law's uncertainty ({}), each logged as {} samples:",
+                             plan.picks.size(), plan.criterion, plan.samples_per_condition));
+  std::vector<std::vector<std::string>> rows;
+  for (std::size_t k = 0; k < plan.picks.size(); ++k) {
+    const FrictionCandidate& p = plan.picks[k].candidate;
+    rows.push_back({std::to_string(k + 1), p.guide, num(p.conditions.velocity_m_s), num(p.conditions.load_N),
+                    num(p.conditions.preload_um), num(p.conditions.temperature_C), p.conditions.direction > 0 ? "+1" : "-1"});
+  }
+  page.table({"", "guide", "velocity (m/s)", "load (N)", "preload (µm)", "temperature (°C)", "direction"}, rows);
+  std::vector<std::vector<std::string>> ses;
+  for (const auto& p : plan.parameters)
+    ses.push_back({p.name, p.unit, p.determined_before ? num(p.se_before, 3) : "not determined", num(p.se_after, 3),
+                   p.determined_before ? num(100 * (1 - p.se_after / p.se_before), 2) + " %" : "–"});
+  page.table({"parameter", "unit", "standard error now", "expected after", "shrink"}, ses);
+  double largest = 0;
+  bool undetermined = false;
+  for (const auto& p : plan.parameters) {
+    if (p.determined_before) largest = std::max(largest, 1 - p.se_after / p.se_before);
+    undetermined = undetermined || !p.determined_before;
+  }
+  if (!undetermined && largest < 0.05)
+    page.paragraph(fmt::format("The logs already determine the law well at these conditions: the best {} more shrink no "
+                               "standard error by more than {} %. Wider ranges (lower speeds, other preloads or "
+                               "temperatures) would do more: give them as candidates.",
+                               plan.picks.size(), num(100 * largest, 2)));
+  for (const auto& note : plan.notes) page.paragraph("Note: " + note);
+  page << "<p>Written to <code>plan.json</code> and <code>plan_friction_template.csv</code> (a friction log to fill on the rig). "
+          "Other candidates or parameters: <code>lmcal plan friction LOG.csv --model model.toml --velocity 0.001:0.2:0.001 "
+          "--parameters v_st_m_s,mu_st</code>.</p>\n";
+}
+
 }  // namespace
 
 void calibrated_section(Page& page, const Calibration& c) {
@@ -154,6 +191,7 @@ void calibrated_section(Page& page, const Calibration& c) {
   if (m.friction) friction_model(page, c);
   if (m.thermal) thermal_model(page, c);
   prediction_part(page, c);
+  plan_part(page, c);
   page << "</section>\n";
 }
 

@@ -22,7 +22,8 @@ const std::vector<std::string>& calibration_output_names() {
       "model.toml",         "calibrated_friction.json", "calibrated_thermal.json", "friction.json",
       "friction_samples.csv", "friction_conditions.csv", "friction_diagnosis.json", "thermal.json",
       "thermal_samples.csv",  "thermal_alpha_curve.csv", "thermal_diagnosis.json", "prediction.json",
-      "prediction_time.csv",  "calibration.json",        "report.html"};
+      "prediction_time.csv",  "plan.json",               "plan_friction_template.csv", "calibration.json",
+      "report.html"};
   return names;
 }
 
@@ -144,6 +145,17 @@ ModelFile calibrated_model_file(const Calibration& c) {
   return file;
 }
 
+// The next friction conditions to log for the calibrated law: D-optimal over every combination
+// of the logs' own speeds, loads, preloads, temperatures and directions.
+void plan_next_friction(Calibration& c) {
+  if (!c.calibrated.friction || !c.friction_log) return;
+  try {
+    c.plan = plan_friction(*c.friction_log, *c.calibrated.friction, friction_candidates(*c.friction_log, {}), {});
+  } catch (const std::exception& e) {  // too many combinations, no noise, …
+    c.notes.push_back(std::string("plan of the next friction conditions skipped: ") + e.what());
+  }
+}
+
 // The calibrated model over the runs' own cycle, with bands; a note says why not when it cannot.
 void predict_runs_cycle(Calibration& c) {
   if (!c.calibrated.friction || !c.calibrated.thermal || !c.thermal) {
@@ -170,7 +182,7 @@ Calibration calibrate(const CalibrationSet& set, const CalibrationOptions& optio
   const bool friction = !set.friction_logs.empty() || set.friction_manifest, thermal = set.thermal_manifest.has_value();
   std::vector<std::string> steps = {"loading the measurements"};
   if (friction) steps.insert(steps.end(), {"friction fit", "friction diagnosis"});
-  if (friction) steps.insert(steps.end(), {"calibrated friction model"});
+  if (friction) steps.insert(steps.end(), {"calibrated friction model", "plan of the next friction conditions"});
   if (thermal) steps.insert(steps.end(), {"thermal fit", "thermal diagnosis", "calibrated thermal model"});
   if (friction && thermal) steps.emplace_back("prediction of the runs' cycle");
   if (!options.diagnose) std::erase_if(steps, [](const std::string& s) { return s.ends_with("diagnosis"); });
@@ -226,6 +238,8 @@ Calibration calibrate(const CalibrationSet& set, const CalibrationOptions& optio
     }
     start("calibrated friction model");
     calibrate_friction_model(c);
+    start("plan of the next friction conditions");
+    plan_next_friction(c);
   } else {
     c.notes.push_back("no friction logs (friction*.csv): the friction steps were skipped");
   }
@@ -290,6 +304,10 @@ std::vector<std::pair<std::string, std::string>> calibration_outputs(const Calib
   if (c.prediction) {
     out.emplace_back("prediction.json", prediction_json(*c.prediction, *c.duty, calibrated_model_file(c), c.command));
     out.emplace_back("prediction_time.csv", prediction_time_csv(*c.prediction));
+  }
+  if (c.plan) {
+    out.emplace_back("plan.json", friction_plan_json(*c.plan, c.command));
+    out.emplace_back("plan_friction_template.csv", friction_plan_template_csv(*c.plan));
   }
   out.emplace_back("calibration.json", calibration_json(c));
   out.emplace_back("report.html", calibration_report_html(c));

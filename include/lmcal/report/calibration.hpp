@@ -44,6 +44,7 @@
 #include "lmcal/fit/thermal_fit.hpp"
 #include "lmcal/io/friction_log.hpp"
 #include "lmcal/io/thermal_run.hpp"
+#include "lmcal/predict/plan.hpp"
 #include "lmcal/predict/prediction.hpp"
 
 namespace LMCAL_API lmcal {
@@ -114,6 +115,9 @@ struct Calibration {
   // predicts, in the report and prediction.json (both halves calibrated; else a note says why not).
   std::optional<DutyCycle> duty;
   std::optional<Prediction> prediction;
+  // The next friction conditions to log (D-optimal over the logs' own values, 5 conditions), for
+  // the calibrated law: in the report, plan.json and plan_friction_template.csv.
+  std::optional<FrictionPlan> plan;
 };
 
 Calibration calibrate(const CalibrationSet& set, const CalibrationOptions& options,
@@ -124,7 +128,8 @@ Calibration calibrate(const CalibrationSet& set, const CalibrationOptions& optio
 // friction_samples.csv, friction_conditions.csv, friction_diagnosis.json, thermal.json,
 // thermal_samples.csv, thermal_alpha_curve.csv, thermal_diagnosis.json (the published models
 // and the diagnoses; those of the steps that ran), prediction.json and prediction_time.csv (the
-// runs' cycle predicted), calibration.json and report.html.
+// runs' cycle predicted), plan.json and plan_friction_template.csv (the next friction conditions
+// to log), calibration.json and report.html.
 std::vector<std::pair<std::string, std::string>> calibration_outputs(const Calibration& c);
 
 // calibration.json: the set, its inputs and their hashes, the steps, the headline numbers and
