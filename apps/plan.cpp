@@ -48,6 +48,29 @@ void run_plan_friction(const PlanFrictionOptions& o, const std::vector<std::stri
   std::cout << friction_plan_summary(plan) << "wrote " << written << "\n";
 }
 
+struct PlanThermalOptions {
+  std::string manifest, catalog_file, output_dir = "fits/plan";
+  ModelOptions model;
+  ThermalCandidateGrid grid;
+  std::vector<double> duration_h;
+  ThermalPlanOptions plan;
+};
+
+void run_plan_thermal(const PlanThermalOptions& o, const std::vector<std::string>& argv) {
+  const auto model = LoadedModel::read(o.model, "thermal");
+  if (!model) throw InvalidParameter("--model", "a thermal plan needs the calibrated model (model.toml of lmcal calibrate)");
+  const auto catalog = user_catalog(o.catalog_file);
+  const ThermalDataSet data = load_thermal_dataset(o.manifest, catalog ? &*catalog : nullptr);
+  ThermalCandidateGrid grid = o.grid;
+  for (double h : o.duration_h) grid.duration_s.push_back(3600 * h);
+  const ThermalPlan plan = with_progress("thermal plan", [&](const Progress&) {
+    return plan_thermal(model->model, data, thermal_candidates(data, grid), o.plan);
+  });
+  const std::string written = write_outputs(o.output_dir, {{"plan.json", thermal_plan_json(plan, argv)},
+                                                           {"plan_thermal_manifest.toml", thermal_plan_manifest_toml(plan, data)}});
+  std::cout << thermal_plan_summary(plan) << "wrote " << written << "\n";
+}
+
 }  // namespace
 
 void setup_plan(CLI::App& app, const std::vector<std::string>& argv) {
@@ -72,6 +95,25 @@ void setup_plan(CLI::App& app, const std::vector<std::string>& argv) {
   add_list(*friction, "--direction", o->grid.directions, "Candidate directions, +1/-1 (default: the logs')");
   friction->add_option("-o,--output-dir", o->output_dir, "Output folder")->capture_default_str();
   friction->callback([o, &argv] { run_plan_friction(*o, argv); });
+
+  auto t = std::make_shared<PlanThermalOptions>();
+  CLI::App* thermal = plan->add_subcommand("thermal", "The next thermal runs for a calibrated rail model (sequential optimal design)");
+  thermal->add_option("manifest", t->manifest, "The thermal manifest of the runs logged so far")->required();
+  t->model.add_to(*thermal, "The calibrated model (model.toml): its rail model and friction law (required)");
+  thermal->add_option("--catalog", t->catalog_file, kCatalogHelp);
+  thermal->add_option("-n,--runs", t->plan.runs, "How many runs to plan")->capture_default_str();
+  thermal->add_option("--parameters", t->plan.parameters, "The parameters to determine better (A-optimal); default: all")
+      ->delimiter(',');
+  thermal->add_option("--separate", t->plan.separate,
+                      "Two mechanisms to tell apart (a tie of the diagnosis), e.g. base_loss,convection_velocity")
+      ->delimiter(',');
+  add_list(*thermal, "--velocity", t->grid.velocity_m_s, "Candidate speeds, m/s (default: the runs')");
+  add_list(*thermal, "--load", t->grid.load_N, "Candidate loads, N (default: the runs')");
+  add_list(*thermal, "--duration-h", t->duration_h, "Candidate durations, h (default: the longest run's)");
+  thermal->add_option("--record-every", t->plan.record_every_s, "Seconds between the readings the design counts")->capture_default_str();
+  thermal->add_option("--noise", t->plan.noise_K, "Thermocouple noise, K (default: from the runs' traces)");
+  thermal->add_option("-o,--output-dir", t->output_dir, "Output folder")->capture_default_str();
+  thermal->callback([t, &argv] { run_plan_thermal(*t, argv); });
 }
 
 }  // namespace lmcal::cli

@@ -169,7 +169,8 @@ TEST_F(CalibrationTest, AFullFolderGoesThroughEveryStepIntoACompleteReport) {
   const Calibration c = calibrate(set, {}, {.step = [&](std::size_t, std::size_t, const std::string& s) { steps.push_back(s); }});
   EXPECT_EQ(steps, (std::vector<std::string>{"loading the measurements", "friction fit", "friction diagnosis",
                                              "calibrated friction model", "plan of the next friction conditions", "thermal fit", "thermal diagnosis",
-                                             "calibrated thermal model", "prediction of the runs' cycle"}));
+                                             "calibrated thermal model", "plan of the next thermal runs",
+                                             "prediction of the runs' cycle"}));
   ASSERT_TRUE(c.friction && c.friction_diagnosis && c.thermal && c.thermal_diagnosis);
   EXPECT_TRUE(c.notes.empty());
   // The hidden seal drag is found, and the thermal heat came from the fitted law.
@@ -184,8 +185,9 @@ TEST_F(CalibrationTest, AFullFolderGoesThroughEveryStepIntoACompleteReport) {
   EXPECT_EQ(names, (std::vector<std::string>{"model.toml", "calibrated_friction.json", "calibrated_thermal.json", "friction.json",
                                              "friction_samples.csv", "friction_conditions.csv", "friction_diagnosis.json",
                                              "thermal.json", "thermal_samples.csv", "thermal_alpha_curve.csv",
-                                             "thermal_diagnosis.json", "prediction.json", "prediction_time.csv", "plan.json",
-                                             "plan_friction_template.csv", "calibration.json", "report.html"}));
+                                             "thermal_diagnosis.json", "prediction.json", "prediction_time.csv", "plan_friction.json",
+                                             "plan_friction_template.csv", "plan_thermal.json", "plan_thermal_manifest.toml",
+                                             "calibration.json", "report.html"}));
   ASSERT_TRUE(c.prediction);  // the runs' cycle: the rail grows while the block runs
   EXPECT_GT(c.prediction->elongation_um.value[c.prediction->time_s.size() / 2 - 1], 1.0);
   const auto summary = nlohmann::json::parse(outputs[outputs.size() - 2].second);

@@ -357,6 +357,12 @@ check "plan writes the plan and a friction log template to fill" test -s planout
 check "plan says which criterion and what the SEs become" grep -q 'A-optimal for v_st_m_s, mu_st' plan.txt
 check "the template loads as a friction log with nothing yet to fit" \
   bash -c "'$LMCAL' check friction planout/plan_friction_template.csv 2>&1 | grep -q 'friction_N empty'"
+"$LMCAL" plan thermal "$SOURCE/measurements/cheng2017/thermal.toml" --model "$SOURCE/fits/cheng2017/model.toml" \
+  --velocity 0.03,0.083,0.2 --separate coupling,base_loss -n 1 -o tplanout >tplan.txt
+check "plan thermal writes the runs to log as a manifest to complete" grep -q '^velocity_m_s = ' tplanout/plan_thermal_manifest.toml
+check "plan thermal reports how far the planned runs separate a tie" grep -q 'correlation of their estimates' tplan.txt
+check "plan thermal needs the calibrated model" \
+  refused "a thermal plan needs the calibrated model" plan thermal "$SOURCE/measurements/cheng2017/thermal.toml" -o out
 check "plan refuses a parameter the fit does not have" \
   refused "'k9' is not a free parameter of the fit" plan friction "$SOURCE/measurements/cheng2017/friction.csv" --parameters k9 -o out
 

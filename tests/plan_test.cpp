@@ -137,3 +137,45 @@ TEST(FrictionPlan, TheTemplateIsAFrictionLogToFill) {
 
 }  // namespace
 }  // namespace lmcal
+
+namespace lmcal {
+namespace {
+
+// Runs at one speed cannot tell a heat loss through the base (the same at every speed) from a
+// forced convection (growing with √V): the plan to separate them is runs at other speeds.
+TEST(ThermalPlan, ATieBetweenBaseLossAndForcedConvectionGetsOtherSpeeds) {
+  ThermalRigConfig tc;
+  tc.velocity_m_s = {0.083};
+  tc.repeats = 3;
+  tc.duration_s = 4 * 3600;
+  tc.record_every_s = 30;
+  RigEffects effects;
+  effects.thermal.base_loss = 0.5;
+  const ThermalDataSet data = generate_thermal_dataset(tc, effects, "one speed").set;
+  ThermalFitOptions to;
+  to.friction = tc.constants;
+  to.extensions = {"base_loss"};
+  to.per_run_fits = false;
+  to.compare_sources = false;
+  to.fit.bootstrap = 0;
+  to.curve_points = 2;
+  const ThermalFitResult thermal = fit_thermal(data, to);
+  ModelFile model = model_file_of(nullptr, {}, &thermal, to);
+  model.has_friction = true;  // the law the rig used: the paper's constants
+  model.constants = tc.constants;
+  const auto candidates = thermal_candidates(data, {.velocity_m_s = {0.05, 0.066, 0.083, 0.11, 0.15}});
+  ASSERT_EQ(candidates.size(), 5u);
+  const ThermalPlan plan = plan_thermal(model, data, candidates, {.runs = 2, .separate = {"base_loss", "convection_velocity"}});
+  for (const auto& run : plan.picks) EXPECT_NE(run.candidate.velocity_m_s, 0.083) << thermal_plan_summary(plan);
+  EXPECT_GT(std::abs(plan.correlation_before), 0.9) << thermal_plan_summary(plan);
+  EXPECT_LT(std::abs(plan.correlation_after), std::abs(plan.correlation_before)) << thermal_plan_summary(plan);
+  // Without a tie to break: the D-optimal runs shrink α's SE.
+  const ThermalPlan d = plan_thermal(model, data, candidates, {.runs = 2});
+  const auto& alpha = *std::find_if(d.parameters.begin(), d.parameters.end(), [](auto& p) { return p.name == "alpha"; });
+  EXPECT_LT(alpha.se_after, alpha.se_before) << thermal_plan_summary(d);
+  EXPECT_THROW(plan_thermal(model, data, candidates, {.separate = {"base_loss"}}), InvalidParameter);
+  EXPECT_NE(thermal_plan_manifest_toml(plan, data).find("[[run]]\nid = \"plan1\""), std::string::npos);
+}
+
+}  // namespace
+}  // namespace lmcal

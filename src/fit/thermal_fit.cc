@@ -651,8 +651,12 @@ const char* term_coefficient_unit(ThermalTermKind kind) {
 std::vector<ThermalExtensionInfo> thermal_extension_library() {
   std::vector<ThermalExtensionInfo> library;
   for (const auto& e : detail::thermal_extensions()) {
-    ThermalExtensionInfo info{e.name, e.description, e.measure, {}, e.source};
-    for (const auto& p : e.parameters) info.parameters.push_back(p.name);
+    ThermalExtensionInfo info{e.name, e.description, e.measure, {}, e.source, {}, {}};
+    for (const auto& p : e.parameters) {
+      info.parameters.push_back(p.name);
+      info.parameter_scale.push_back(p.scale);
+      info.parameter_bounds.emplace_back(p.lower, p.upper);
+    }
     library.push_back(std::move(info));
   }
   return library;

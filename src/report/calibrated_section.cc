@@ -172,9 +172,33 @@ void plan_part(Page& page, const Calibration& c) {
                                "temperatures) would do more: give them as candidates.",
                                plan.picks.size(), num(100 * largest, 2)));
   for (const auto& note : plan.notes) page.paragraph("Note: " + note);
-  page << "<p>Written to <code>plan.json</code> and <code>plan_friction_template.csv</code> (a friction log to fill on the rig). "
+  page << "<p>Written to <code>plan_friction.json</code> and <code>plan_friction_template.csv</code> (a friction log to fill on the rig). "
           "Other candidates or parameters: <code>lmcal plan friction LOG.csv --model model.toml --velocity 0.001:0.2:0.001 "
           "--parameters v_st_m_s,mu_st</code>.</p>\n";
+}
+
+// The next thermal runs, and what they would do to the rail model's SEs (or to a tie).
+void thermal_plan_part(Page& page, const Calibration& c) {
+  if (!c.thermal_plan) return;
+  const ThermalPlan& plan = *c.thermal_plan;
+  page.heading(3, "Next measurements: thermal runs", "plan-thermal");
+  page.paragraph(fmt::format("The {} runs, at the runs' speeds and from half the slowest to 1.5 times the fastest, that most "
+                             "shrink the calibrated rail model's uncertainty ({}):",
+                             plan.picks.size(), plan.criterion));
+  std::vector<std::vector<std::string>> rows;
+  for (std::size_t r = 0; r < plan.picks.size(); ++r) {
+    const ThermalCandidate& run = plan.picks[r].candidate;
+    rows.push_back({std::to_string(r + 1), num(run.velocity_m_s), num(run.load_N), num(run.duration_s / 3600)});
+  }
+  page.table({"", "velocity (m/s)", "load (N)", "duration (h)"}, rows);
+  std::vector<std::vector<std::string>> ses;
+  for (const auto& p : plan.parameters)
+    ses.push_back({p.name + (p.determined_before ? "" : " (not in the model)"), p.unit, num(p.se_before, 3), num(p.se_after, 3)});
+  page.table({"parameter", "unit", "standard error now", "expected after"}, ses);
+  for (const auto& note : plan.notes) page.paragraph("Note: " + note);
+  page << "<p>Written to <code>plan_thermal.json</code> and <code>plan_thermal_manifest.toml</code> (the runs to log, a thermal "
+          "manifest to complete). Other candidates: <code>lmcal plan thermal thermal.toml --model model.toml --velocity "
+          "0.03:0.2:0.01 --separate base_loss,convection_velocity</code>.</p>\n";
 }
 
 }  // namespace
@@ -192,6 +216,7 @@ void calibrated_section(Page& page, const Calibration& c) {
   if (m.thermal) thermal_model(page, c);
   prediction_part(page, c);
   plan_part(page, c);
+  thermal_plan_part(page, c);
   page << "</section>\n";
 }
 

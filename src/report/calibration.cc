@@ -22,8 +22,8 @@ const std::vector<std::string>& calibration_output_names() {
       "model.toml",         "calibrated_friction.json", "calibrated_thermal.json", "friction.json",
       "friction_samples.csv", "friction_conditions.csv", "friction_diagnosis.json", "thermal.json",
       "thermal_samples.csv",  "thermal_alpha_curve.csv", "thermal_diagnosis.json", "prediction.json",
-      "prediction_time.csv",  "plan.json",               "plan_friction_template.csv", "calibration.json",
-      "report.html"};
+      "prediction_time.csv",  "plan_friction.json",      "plan_friction_template.csv", "plan_thermal.json",
+      "plan_thermal_manifest.toml", "calibration.json",  "report.html"};
   return names;
 }
 
@@ -156,6 +156,34 @@ void plan_next_friction(Calibration& c) {
   }
 }
 
+// The next thermal runs for the calibrated rail model: to separate the first tie of the thermal
+// diagnosis's accepted causes, else D-optimal; speeds from half the slowest run's to 1.5 times
+// the fastest's.
+void plan_next_thermal(Calibration& c) {
+  if (!c.calibrated.thermal || !c.calibrated.friction) return;
+  std::vector<std::string> separate;
+  const auto library = thermal_extension_library();
+  const auto with_parameter = [&](const std::string& name) {
+    return std::any_of(library.begin(), library.end(), [&](auto& e) { return e.name == name && !e.parameters.empty(); });
+  };
+  if (c.thermal_diagnosis)
+    for (const auto& cause : c.thermal_diagnosis->accepted)
+      for (const auto& tie : cause.tied_with)
+        if (separate.empty() && with_parameter(cause.effect) && with_parameter(tie)) separate = {cause.effect, tie};
+  try {
+    ThermalCandidateGrid grid;
+    for (const auto& run : c.thermal_data->runs) grid.velocity_m_s.push_back(run.velocity_m_s);
+    const auto [lo, hi] = std::minmax_element(grid.velocity_m_s.begin(), grid.velocity_m_s.end());
+    const double slow = 0.5 * *lo, fast = 1.5 * *hi;
+    grid.velocity_m_s.push_back(slow);
+    grid.velocity_m_s.push_back(fast);
+    c.thermal_plan = plan_thermal(calibrated_model_file(c), *c.thermal_data, thermal_candidates(*c.thermal_data, grid),
+                                  {.separate = separate});
+  } catch (const std::exception& e) {
+    c.notes.push_back(std::string("plan of the next thermal runs skipped: ") + e.what());
+  }
+}
+
 // The calibrated model over the runs' own cycle, with bands; a note says why not when it cannot.
 void predict_runs_cycle(Calibration& c) {
   if (!c.calibrated.friction || !c.calibrated.thermal || !c.thermal) {
@@ -184,7 +212,7 @@ Calibration calibrate(const CalibrationSet& set, const CalibrationOptions& optio
   if (friction) steps.insert(steps.end(), {"friction fit", "friction diagnosis"});
   if (friction) steps.insert(steps.end(), {"calibrated friction model", "plan of the next friction conditions"});
   if (thermal) steps.insert(steps.end(), {"thermal fit", "thermal diagnosis", "calibrated thermal model"});
-  if (friction && thermal) steps.emplace_back("prediction of the runs' cycle");
+  if (friction && thermal) steps.insert(steps.end(), {"plan of the next thermal runs", "prediction of the runs' cycle"});
   if (!options.diagnose) std::erase_if(steps, [](const std::string& s) { return s.ends_with("diagnosis"); });
   std::size_t step = 0;
   auto start = [&](const char* name) {
@@ -272,6 +300,8 @@ Calibration calibrate(const CalibrationSet& set, const CalibrationOptions& optio
     c.notes.push_back("no thermal manifest (thermal*.toml): the thermal steps were skipped");
   }
   if (friction && thermal) {
+    start("plan of the next thermal runs");
+    plan_next_thermal(c);
     start("prediction of the runs' cycle");
     predict_runs_cycle(c);
   }
@@ -306,8 +336,12 @@ std::vector<std::pair<std::string, std::string>> calibration_outputs(const Calib
     out.emplace_back("prediction_time.csv", prediction_time_csv(*c.prediction));
   }
   if (c.plan) {
-    out.emplace_back("plan.json", friction_plan_json(*c.plan, c.command));
+    out.emplace_back("plan_friction.json", friction_plan_json(*c.plan, c.command));
     out.emplace_back("plan_friction_template.csv", friction_plan_template_csv(*c.plan));
+  }
+  if (c.thermal_plan) {
+    out.emplace_back("plan_thermal.json", thermal_plan_json(*c.thermal_plan, c.command));
+    out.emplace_back("plan_thermal_manifest.toml", thermal_plan_manifest_toml(*c.thermal_plan, *c.thermal_data));
   }
   out.emplace_back("calibration.json", calibration_json(c));
   out.emplace_back("report.html", calibration_report_html(c));

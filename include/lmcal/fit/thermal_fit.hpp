@@ -240,6 +240,8 @@ struct ThermalExtensionInfo {
   std::string measure;                       // what to log to see it
   std::vector<std::string> parameters;       // their names in FitResult; none for a switch
   std::optional<SourceModel> source;         // the source model a switch selects
+  std::vector<double> parameter_scale;       // each parameter's typical size
+  std::vector<std::pair<double, double>> parameter_bounds;  // each parameter's fit bounds
 };
 std::vector<ThermalExtensionInfo> thermal_extension_library();
 

@@ -22,6 +22,8 @@
 #include <vector>
 
 #include "lmcal/fit/friction_fit.hpp"
+#include "lmcal/fit/model_file.hpp"
+#include "lmcal/io/thermal_run.hpp"
 
 namespace LMCAL_API lmcal {
 
@@ -75,5 +77,55 @@ FrictionPlan plan_friction(const FrictionLog& log, const FrictionFitResult& fit,
 std::string friction_plan_json(const FrictionPlan& plan, const std::vector<std::string>& command);
 std::string friction_plan_template_csv(const FrictionPlan& plan);
 std::string friction_plan_summary(const FrictionPlan& plan);
+
+// ---- thermal runs (`lmcal plan thermal`) ----------------------------------------------------------
+//
+// The same design for the next thermal runs of a calibrated model: each run's sensitivity,
+// ∂ reading/∂θ at the run's sensors every record_every_s (forward differences of the rail model
+// with the model's mechanisms), with each sensor's mean taken out (a new run's thermocouple
+// offsets are fitted too); the information of the data set's runs as they were logged (their
+// speed, load, duration, sensors) plus that of the candidates. With `separate` (two mechanisms
+// the diagnosis could not tell apart, a tie), both are in θ — the one not in the model at its
+// neutral value — and the runs chosen are those that most shrink the determinant of their 2×2
+// covariance (Ds-optimal): the conditions under which their effects differ.
+
+struct ThermalCandidate {
+  double velocity_m_s = 0, load_N = 0, duration_s = 0;
+};
+// Every combination (an empty list: the data set's own values; the duration: its longest run's).
+struct ThermalCandidateGrid {
+  std::vector<double> velocity_m_s, load_N, duration_s;
+};
+std::vector<ThermalCandidate> thermal_candidates(const ThermalDataSet& data, const ThermalCandidateGrid& grid);
+
+struct ThermalPlanOptions {
+  std::size_t runs = 2;
+  std::vector<std::string> parameters;  // empty: all (D-optimal), unless `separate`
+  std::vector<std::string> separate;    // two mechanisms of the library to tell apart
+  double record_every_s = 60;
+  double noise_K = 0;                   // 0: the runs' thermocouple noise (second differences)
+};
+
+struct PlannedRun {
+  ThermalCandidate candidate;
+  double gain = 0;
+};
+
+struct ThermalPlan {
+  std::string criterion;
+  double noise_K = 0;
+  std::vector<PlannedRun> picks;
+  std::vector<PlannedParameter> parameters;
+  double correlation_before = 0, correlation_after = 0;  // of the two separated mechanisms (NaN without)
+  std::vector<std::string> notes;
+};
+
+ThermalPlan plan_thermal(const ModelFile& model, const ThermalDataSet& data, const std::vector<ThermalCandidate>& candidates,
+                         const ThermalPlanOptions& options);
+
+// plan.json; a thermal manifest template of the planned runs (each run's file to log); the table.
+std::string thermal_plan_json(const ThermalPlan& plan, const std::vector<std::string>& command);
+std::string thermal_plan_manifest_toml(const ThermalPlan& plan, const ThermalDataSet& data);
+std::string thermal_plan_summary(const ThermalPlan& plan);
 
 }  // namespace lmcal

@@ -118,6 +118,10 @@ struct Calibration {
   // The next friction conditions to log (D-optimal over the logs' own values, 5 conditions), for
   // the calibrated law: in the report, plan.json and plan_friction_template.csv.
   std::optional<FrictionPlan> plan;
+  // The next 2 thermal runs for the calibrated rail model (speeds from half the slowest run's to
+  // 1.5 times the fastest's): D-optimal, or Ds-optimal to separate the first tie the thermal
+  // diagnosis reported; in the report, plan_thermal.json and plan_thermal_manifest.toml.
+  std::optional<ThermalPlan> thermal_plan;
 };
 
 Calibration calibrate(const CalibrationSet& set, const CalibrationOptions& options,
@@ -128,8 +132,9 @@ Calibration calibrate(const CalibrationSet& set, const CalibrationOptions& optio
 // friction_samples.csv, friction_conditions.csv, friction_diagnosis.json, thermal.json,
 // thermal_samples.csv, thermal_alpha_curve.csv, thermal_diagnosis.json (the published models
 // and the diagnoses; those of the steps that ran), prediction.json and prediction_time.csv (the
-// runs' cycle predicted), plan.json and plan_friction_template.csv (the next friction conditions
-// to log), calibration.json and report.html.
+// runs' cycle predicted), plan_friction.json and plan_friction_template.csv (the next friction
+// conditions to log), plan_thermal.json and plan_thermal_manifest.toml (the next thermal runs),
+// calibration.json and report.html.
 std::vector<std::pair<std::string, std::string>> calibration_outputs(const Calibration& c);
 
 // calibration.json: the set, its inputs and their hashes, the steps, the headline numbers and
