@@ -64,6 +64,26 @@ TEST(ThermalElongation, CoshProfileMatchesItsClosedFormIntegral) {
   }
 }
 
+TEST(ThermalElongation, IsTheStoredHeatOverTheRailsHeatCapacityPerLength) {
+  // Energy: the rail's sensible heat E = ∫ ρ c A ΔT dx, so the free elongation α_th ∫ ΔT dx is
+  // α_th E / (ρ c A), whatever the profile; checked against the solver's own energy account (the
+  // trapezoid's weights are the solver's control volumes: equal to round-off).
+  const RailGeometry g{.rail_length_m = 0.6, .area_m2 = 8.88e-4, .perimeter_m = 0.14, .stroke_m = 0.2,
+                       .contact_length_m = 0.0822, .velocity_m_s = 0.11};
+  const RailParams<double> params{.heat_partition = 0.6, .heat_rate_W = 4.86, .h_W_m2K = 5.3, .conductivity_W_mK = 18,
+                                  .density_kg_m3 = 7800, .specific_heat_J_kgK = 461, .initial_temperature_C = 26};
+  RailOutputs outputs{.duration_s = 7200, .sensor_positions_m = {0.0}, .output_times_s = {7200}, .profile_times_s = {7200},
+                      .energy_balance = true};
+  const RailSolution<double> s = simulate_rail(g, {.half_rail_segments = 200, .time_step_s = 30}, outputs, params,
+                                               AmbientTrace::constant(26));
+  const std::vector<double> reference(s.node_positions_m.size(), 26.0);
+  const double alpha_th = 11.5e-6;
+  const double from_energy = alpha_th * s.energy.stored_J / (7800 * 461 * 8.88e-4);
+  const double integrated = thermal_elongation_m(s.node_positions_m, s.profiles_C[0], reference, alpha_th, -0.3, 0.3);
+  EXPECT_GT(integrated, 1e-6);  // microns: the rail warmed
+  EXPECT_NEAR(integrated, from_energy, 1e-9 * from_energy);
+}
+
 // --- the duty's physics, with the bundled calibrated model -------------------------------------
 
 class PredictTest : public test::TempFolderTest {
