@@ -40,6 +40,7 @@
 #include "lmcal/models/friction_effects.hpp"
 #include "lmcal/models/heat_source.hpp"
 #include "lmcal/models/rail_thermal.hpp"
+#include "lmcal/predict/prediction.hpp"
 #include "lmcal/report/calibration.hpp"
 #include "lmcal/report/html_report.hpp"
 
@@ -672,6 +673,45 @@ py::dict simulate_thermal_py(const py::dict& o) {
   return d;
 }
 
+// ---- prediction -------------------------------------------------------------------------------
+
+// `lmcal predict MODEL DUTY`: prediction.json's text, the summary, and the bands as arrays.
+py::dict predict_py(const std::string& model_file, const std::string& duty_file, std::size_t samples, std::uint64_t seed,
+                    const std::vector<std::string>& command) {
+  std::string json, summary;
+  Prediction p;
+  {
+    py::gil_scoped_release release;
+    const ModelFile model = read_model_file(model_file);
+    const DutyCycle duty = load_duty_cycle(duty_file);
+    p = predict(model, duty, {.samples = samples, .seed = seed});
+    json = prediction_json(p, duty, model, command);
+    summary = prediction_summary(p);
+  }
+  const auto band = [](const Band& b) {
+    py::dict d;
+    d["value"] = array(b.value);
+    d["low"] = array(b.low);
+    d["high"] = array(b.high);
+    return d;
+  };
+  py::dict d;
+  d["json"] = json;
+  d["summary"] = summary;
+  d["time_s"] = array(p.time_s);
+  d["elongation_um"] = band(p.elongation_um);
+  py::list temperatures, scale;
+  for (const auto& b : p.temperature_C) temperatures.append(band(b));
+  for (const auto& b : p.scale_error_um) scale.append(band(b));
+  d["temperature_C"] = temperatures;
+  d["scale_error_um"] = scale;
+  d["positions_m"] = array(p.positions_m);
+  d["scale_positions_m"] = array(p.scale_positions_m);
+  d["friction_N"] = band(p.friction_N);
+  d["heat_rate_W"] = band(p.heat_rate_W);
+  return d;
+}
+
 // ---- errors -----------------------------------------------------------------------------------
 
 void register_errors(py::module_& m) {
@@ -828,6 +868,7 @@ PYBIND11_MODULE(_lmcal, m) {
       });
   m.def("calibrate", &calibrate_py);
 
+  m.def("predict", &predict_py);
   m.def("friction_law", &friction_law);
   m.def("simulate_thermal", &simulate_thermal_py);
   m.def("guide", [](const std::string& model, const std::optional<std::string>& catalog) {

@@ -315,3 +315,14 @@ def test_the_example_runs(tmp_path):
     assert "[[Variables]]" in done.stdout and "k1 = " in done.stdout
     assert (tmp_path / "cheng2017" / "report.html").is_file()
     assert (tmp_path / "cheng2017" / "calibration.json").is_file()
+
+
+def test_predict_equals_the_command(tmp_path):
+    model = os.path.join(SOURCE, "fits", "cheng2017", "model.toml")
+    duty = os.path.join(SOURCE, "examples", "duty", "two_shifts.toml")
+    cli("predict", model, duty, "-o", str(tmp_path), "--samples", "50")
+    p = lmcal.predict(model, duty, samples=50)
+    assert_same(p.to_dict(), json.loads((tmp_path / "prediction.json").read_text()))
+    e = p.elongation_um
+    assert np.all(e["low"] <= e["value"] + 1e-12) and np.all(e["value"] <= e["high"] + 1e-12)
+    assert e["value"].max() > 10  # microns: the rail grows in the shifts

@@ -38,7 +38,7 @@ __version__ = _lmcal.__version__
 __all__ = [
     "InputError", "InvalidParameterError", "FrictionLog", "ThermalDataSet", "Parameter", "FrictionFit",
     "ThermalFit", "FrictionDiagnosis", "ThermalDiagnosis", "Calibration", "ThermalSimulation",
-    "load_friction_log", "load_thermal_dataset", "fit_friction", "fit_thermal", "diagnose_friction",
+    "Prediction", "predict", "load_friction_log", "load_thermal_dataset", "fit_friction", "fit_thermal", "diagnose_friction",
     "diagnose_thermal", "calibrate", "simulate_friction", "simulate_thermal", "guide", "friction_effect_names",
 ]
 
@@ -553,6 +553,41 @@ def calibrate(folder, *, output_dir=None, diagnose: Optional[bool] = None, catal
     if output_dir is not None:
         result.write(output_dir)
     return result
+
+
+# ---- prediction ------------------------------------------------------------------------------
+
+class Prediction:
+    """The calibrated model over a duty cycle (``lmcal predict``): each quantity a dict of
+    NumPy arrays ``value``, ``low``, ``high`` (the 95 % band) over ``time_s``."""
+
+    def __init__(self, d: dict):
+        self._json = d["json"]
+        self._summary = d["summary"]
+        self.time_s = d["time_s"]
+        self.positions_m = d["positions_m"]
+        self.temperature_C = d["temperature_C"]        # one band per position
+        self.elongation_um = d["elongation_um"]
+        self.scale_positions_m = d["scale_positions_m"]
+        self.scale_error_um = d["scale_error_um"]      # one band per scale position
+        self.friction_N = d["friction_N"]
+        self.heat_rate_W = d["heat_rate_W"]
+
+    def to_dict(self) -> dict:
+        """prediction.json as `lmcal predict` writes it."""
+        return json.loads(self._json)
+
+    def summary(self) -> str:
+        return self._summary
+
+    def __repr__(self) -> str:
+        return "[[prediction]]\n" + self._summary
+
+
+def predict(model, duty, *, samples: int = 200, seed: int = 1) -> Prediction:
+    """The calibrated model (model.toml of calibrate) over a duty cycle (TOML), with bands."""
+    options = {"samples": samples, "seed": seed}
+    return Prediction(_lmcal.predict(os.fspath(model), os.fspath(duty), samples, seed, _command("predict", options)))
 
 
 # ---- simulation ------------------------------------------------------------------------------
