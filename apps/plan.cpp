@@ -4,6 +4,7 @@
 //
 // Writes DIR/plan.json and DIR/plan_friction_template.csv (to fill on the rig), all or none,
 // and the table on stdout.
+#include <algorithm>
 #include <iostream>
 
 #include "cli_common.hpp"
@@ -36,12 +37,18 @@ void run_plan_friction(const PlanFrictionOptions& o, const std::vector<std::stri
     fit_options.effects = model->model.friction_causes;
     if (o.constants.run_offsets.empty()) fit_options.run_offsets = RunOffsets::random;  // as the calibrated model was fitted
   }
+  for (const auto& effect : o.plan.separate)  // a tie: both effects in the fit
+    if (std::find(fit_options.effects.begin(), fit_options.effects.end(), effect) == fit_options.effects.end())
+      fit_options.effects.push_back(effect);
   fit_options.per_run_fits = false;
   fit_options.fit.bootstrap = 0;
   const FrictionInput input = load_friction_input(o.files, o.input);
+  const auto catalog = user_catalog(o.input.catalog_file);
+  FrictionCandidateGrid grid = o.grid;
+  grid.catalog = catalog ? &*catalog : nullptr;
   const FrictionPlan plan = with_progress("friction plan", [&](const Progress&) {
     const FrictionFitResult fit = fit_friction(input.log, fit_options);
-    return plan_friction(input.log, fit, friction_candidates(input.log, o.grid), o.plan);
+    return plan_friction(input.log, fit, friction_candidates(input.log, grid), o.plan);
   });
   const std::string written = write_outputs(o.output_dir, {{"plan.json", friction_plan_json(plan, argv)},
                                                            {"plan_friction_template.csv", friction_plan_template_csv(plan)}});
@@ -93,6 +100,10 @@ void setup_plan(CLI::App& app, const std::vector<std::string>& argv) {
   add_list(*friction, "--preload", o->grid.preload_um, "Candidate preloads, um (default: the logs')");
   add_list(*friction, "--temperature", o->grid.temperature_C, "Candidate temperatures, C (default: the logs')");
   add_list(*friction, "--direction", o->grid.directions, "Candidate directions, +1/-1 (default: the logs')");
+  friction->add_option("--guide", o->grid.guides, "Candidate guides of the catalog (default: the logs')")->delimiter(',');
+  friction->add_option("--separate", o->plan.separate,
+                       "Two effects to tell apart (a tie of the diagnosis), e.g. seal_drag,seal_drag_block")
+      ->delimiter(',');
   friction->add_option("-o,--output-dir", o->output_dir, "Output folder")->capture_default_str();
   friction->callback([o, &argv] { run_plan_friction(*o, argv); });
 

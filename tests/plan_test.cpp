@@ -123,6 +123,25 @@ TEST(FrictionPlan, AConstantTheDataCannotDetermineGetsTheConditionsThatDetermine
   EXPECT_NE(friction_plan_summary(stuck).find("k2 is not determined by the data, nor by these candidates"), std::string::npos);
 }
 
+TEST(FrictionPlan, ATieBetweenSealDragAndItsBlockSizeFormGetsAnotherBlock) {
+  // One guide: a seal drag c V² and one growing with the block, c_b (L_b/100 mm) V², are the
+  // same curve; only a guide with another block length tells them apart.
+  FrictionRigConfig c = rig(kAllSpeeds, {2.5, 4.0}, 15);
+  RigEffects effects;
+  effects.friction[*find_friction_effect("seal_drag")] = 150;
+  const FrictionLog log = generate_friction_log(c, effects).log;
+  FrictionFitOptions o = iid_fit();
+  o.effects = {"seal_drag", "seal_drag_block"};
+  const FrictionFitResult fit = fit_friction(log, o);
+  const FrictionPlan plan = plan_friction(log, fit, friction_candidates(log, {.guides = {"SRN 35C", "SRG 25C", "SRG 45C"}}),
+                                          {.conditions = 2, .separate = {"seal_drag", "seal_drag_block"}});
+  EXPECT_GT(std::abs(plan.correlation_before), 0.99) << friction_plan_summary(plan);
+  for (const auto& pick : plan.picks) EXPECT_NE(pick.candidate.guide, "SRN 35C") << friction_plan_summary(plan);
+  EXPECT_LT(std::abs(plan.correlation_after), 0.98) << friction_plan_summary(plan);  // 2 samples each, beside 640
+  EXPECT_GT(plan.picks.front().candidate.conditions.velocity_m_s, 0.1);  // where V² is large
+  EXPECT_THROW(plan_friction(log, fit, friction_candidates(log, {}), {.separate = {"seal_drag"}}), InvalidParameter);
+}
+
 TEST(FrictionPlan, TheTemplateIsAFrictionLogToFill) {
   const FrictionLog log = generate_friction_log(rig(kHighSpeeds, {2.5, 4.0}, 14), {}).log;
   const FrictionFitResult fit = fit_friction(log, iid_fit());

@@ -106,6 +106,12 @@ std::vector<FrictionCandidate> friction_candidates(const FrictionLog& log, const
     guides.try_emplace(log.guide_names.empty() ? std::string() : log.guide_names[log.guide[i]], log.block_length_mm[i],
                        log.viscosity40_mm2_s[i]);
   }
+  if (!grid.guides.empty()) {  // the catalog's block lengths, the log's oil
+    const double oil = log.viscosity40_mm2_s.front();
+    guides.clear();
+    for (const auto& model : grid.guides)
+      guides.try_emplace(model, require(find_guide(model, grid.catalog), &GuideSpec::block_length_mm, "block_length_mm"), oil);
+  }
   const auto given_or = [](const std::vector<double>& given, std::vector<double> own) { return given.empty() ? distinct(std::move(own)) : distinct(given); };
   const std::vector<double> vs = given_or(grid.velocity_m_s, v), Ps = given_or(grid.load_N, P), pcs = given_or(grid.preload_um, pc),
                             Ts = given_or(grid.temperature_C, T), ds = given_or(grid.directions, d);
@@ -139,8 +145,17 @@ FrictionPlan plan_friction(const FrictionLog& log, const FrictionFitResult& fit,
     if (at == p.index.end()) throw InvalidParameter("parameters", fmt::format("'{}' is not a free parameter of the fit", name));
     named.push_back(at - p.index.begin());
   }
+  std::vector<Eigen::Index> pair;
+  for (const auto& name : o.separate) {
+    const auto at = std::find_if(p.index.begin(), p.index.end(), [&](std::size_t j) { return fit.fit.parameters[j].name == name; });
+    if (at == p.index.end()) throw InvalidParameter("separate", fmt::format("'{}' is not an effect of the fit", name));
+    pair.push_back(at - p.index.begin());
+  }
+  if (!pair.empty() && pair.size() != 2) throw InvalidParameter("separate", "two effects to tell apart, e.g. seal_drag,seal_drag_block");
   FrictionPlan plan;
-  plan.criterion = named.empty() ? "D-optimal (all parameters)" : fmt::format("A-optimal for {}", fmt::join(o.parameters, ", "));
+  plan.criterion = !pair.empty()   ? fmt::format("Ds-optimal: separate {} from {}", o.separate[0], o.separate[1])
+                   : named.empty() ? "D-optimal (all parameters)"
+                                   : fmt::format("A-optimal for {}", fmt::join(o.parameters, ", "));
   plan.sigma_N = fit.rmse_N;
   if (!(plan.sigma_N > 0)) throw InvalidParameter("fit", "a residual RMSE of 0: no noise to plan against");
   std::vector<double> per_condition;
@@ -182,6 +197,10 @@ FrictionPlan plan_friction(const FrictionLog& log, const FrictionFitResult& fit,
   std::vector<Eigen::VectorXd> grads(candidates.size());
   for (std::size_t c = 0; c < candidates.size(); ++c) grads[c] = gradient.at(candidates[c].conditions, candidates[c].viscosity40_mm2_s);
   const double a = static_cast<double>(plan.samples_per_condition) / (plan.sigma_N * plan.sigma_N);
+  const auto pair_correlation = [&] {
+    return pair.empty() ? NAN : cov(pair[0], pair[1]) / std::sqrt(cov(pair[0], pair[0]) * cov(pair[1], pair[1]));
+  };
+  plan.correlation_before = pair_correlation();
   std::vector<bool> taken(candidates.size(), false);
   for (std::size_t k = 0; k < std::min(o.conditions, candidates.size()); ++k) {
     double best = -1;
@@ -191,9 +210,16 @@ FrictionPlan plan_friction(const FrictionLog& log, const FrictionFitResult& fit,
       const Eigen::VectorXd v = cov * grads[c];
       const double q = grads[c].dot(v);
       double gain = 0;
-      if (named.empty()) gain = std::log1p(a * q);
-      else
+      if (!pair.empty()) {  // log det of the pair's covariance: −log(1 − c v_Pᵀ Σ_PP⁻¹ v_P)
+        Eigen::Matrix2d spp;
+        spp << cov(pair[0], pair[0]), cov(pair[0], pair[1]), cov(pair[1], pair[0]), cov(pair[1], pair[1]);
+        const Eigen::Vector2d vp(v(pair[0]), v(pair[1]));
+        gain = -std::log1p(-(a / (1 + a * q)) * vp.dot(spp.ldlt().solve(vp)));
+      } else if (named.empty()) {
+        gain = std::log1p(a * q);
+      } else {
         for (Eigen::Index j : named) gain += a * v(j) * v(j) / (1 + a * q) / before(j);
+      }
       if (gain > best) {
         best = gain;
         best_c = c;
@@ -222,6 +248,11 @@ FrictionPlan plan_friction(const FrictionLog& log, const FrictionFitResult& fit,
                                : fmt::format("{} is not determined by the data, nor by these candidates: widen the grid", e.name));
     plan.parameters.push_back(r);
   }
+  plan.correlation_after = pair_correlation();
+  if (!pair.empty())
+    plan.notes.push_back(fmt::format("{} and {}: correlation of their estimates {:.3f} with the logs, {:.3f} with the planned "
+                                     "conditions too",
+                                     o.separate[0], o.separate[1], plan.correlation_before, plan.correlation_after));
   for (const auto& issue : fit.fit.identifiability.issues)
     if (!issue.measure.empty()) plan.notes.push_back("the fit's identifiability issue: " + issue.why + "; it says: " + issue.measure);
   plan.notes.push_back(fmt::format("each planned condition logged as {} samples with the fit's noise ({:.3g} N); the expected SEs keep "
@@ -271,6 +302,8 @@ std::string friction_plan_json(const FrictionPlan& plan, const std::vector<std::
                             {"noise_N", plan.sigma_N},
                             {"conditions", picks},
                             {"parameters", parameters},
+                            {"correlation_before", std::isfinite(plan.correlation_before) ? nlohmann::json(plan.correlation_before) : nlohmann::json(nullptr)},
+                            {"correlation_after", std::isfinite(plan.correlation_after) ? nlohmann::json(plan.correlation_after) : nlohmann::json(nullptr)},
                             {"notes", plan.notes}};
   return j.dump(1) + "\n";
 }

@@ -150,7 +150,20 @@ ModelFile calibrated_model_file(const Calibration& c) {
 void plan_next_friction(Calibration& c) {
   if (!c.calibrated.friction || !c.friction_log) return;
   try {
-    c.plan = plan_friction(*c.friction_log, *c.calibrated.friction, friction_candidates(*c.friction_log, {}), {});
+    // A tie the diagnosis reported among the accepted causes: the conditions that separate it,
+    // from a fit with both.
+    if (c.friction_diagnosis)
+      for (const auto& cause : c.friction_diagnosis->accepted)
+        for (const auto& tie : cause.tied_with) {
+          if (!find_friction_effect(cause.effect) || !find_friction_effect(tie) || c.plan) continue;
+          FrictionFitOptions both = c.calibrated.friction_options;
+          if (std::find(both.effects.begin(), both.effects.end(), tie) == both.effects.end()) both.effects.push_back(tie);
+          both.per_run_fits = false;
+          both.fit.bootstrap = 0;
+          const FrictionFitResult fit = fit_friction(*c.friction_log, both);
+          c.plan = plan_friction(*c.friction_log, fit, friction_candidates(*c.friction_log, {}), {.separate = {cause.effect, tie}});
+        }
+    if (!c.plan) c.plan = plan_friction(*c.friction_log, *c.calibrated.friction, friction_candidates(*c.friction_log, {}), {});
   } catch (const std::exception& e) {  // too many combinations, no noise, …
     c.notes.push_back(std::string("plan of the next friction conditions skipped: ") + e.what());
   }

@@ -34,10 +34,12 @@ struct FrictionCandidate {
 };
 
 // Every combination of the values given (an empty list: the log's own values; guides with
-// their block lengths as the log has them).
+// their block lengths as the log has them, or the catalog's for guides given).
 struct FrictionCandidateGrid {
   std::vector<double> velocity_m_s, load_N, preload_um, temperature_C;
   std::vector<double> directions;
+  std::vector<std::string> guides;
+  const GuideCatalog* catalog = nullptr;  // a user catalog searched before the built-in one
 };
 std::vector<FrictionCandidate> friction_candidates(const FrictionLog& log, const FrictionCandidateGrid& grid);
 
@@ -45,6 +47,9 @@ struct PlanOptions {
   std::size_t conditions = 5;           // N
   std::vector<std::string> parameters;  // empty: all (D-optimal); else A-optimal for these
   std::size_t samples_per_condition = 0;  // 0: the log's median per condition
+  // Two effects the diagnosis could not tell apart (a tie), both in the fit: the conditions
+  // that most shrink the determinant of their 2×2 covariance (Ds-optimal).
+  std::vector<std::string> separate;
 };
 
 struct PlannedCondition {
@@ -65,6 +70,7 @@ struct FrictionPlan {
   double sigma_N = 0;
   std::vector<PlannedCondition> picks;
   std::vector<PlannedParameter> parameters;
+  double correlation_before = 0, correlation_after = 0;  // of the separated pair (NaN without)
   std::vector<std::string> notes;
 };
 
