@@ -161,7 +161,8 @@ namespace lmcal {
 namespace {
 
 // Runs at one speed cannot tell a heat loss through the base (the same at every speed) from a
-// forced convection (growing with √V): the plan to separate them is runs at other speeds.
+// forced convection (growing with √V): the plan to separate them is runs at other speeds. From a
+// larger h (a constant factor) no run separates it.
 TEST(ThermalPlan, ATieBetweenBaseLossAndForcedConvectionGetsOtherSpeeds) {
   ThermalRigConfig tc;
   tc.velocity_m_s = {0.083};
@@ -192,6 +193,11 @@ TEST(ThermalPlan, ATieBetweenBaseLossAndForcedConvectionGetsOtherSpeeds) {
   const ThermalPlan d = plan_thermal(model, data, candidates, {.runs = 2});
   const auto& alpha = *std::find_if(d.parameters.begin(), d.parameters.end(), [](auto& p) { return p.name == "alpha"; });
   EXPECT_LT(alpha.se_after, alpha.se_before) << thermal_plan_summary(d);
+  // A base loss and a larger h (a constant factor) have the same shape at every speed: no run of
+  // the grid separates them, and the plan says what would.
+  const ThermalPlan stuck = plan_thermal(model, data, candidates, {.runs = 1, .separate = {"base_loss", "convection_scale"}});
+  EXPECT_GT(std::abs(stuck.correlation_after), 0.99) << thermal_plan_summary(stuck);
+  EXPECT_NE(thermal_plan_summary(stuck).find("no candidate run separates them"), std::string::npos) << thermal_plan_summary(stuck);
   EXPECT_THROW(plan_thermal(model, data, candidates, {.separate = {"base_loss"}}), InvalidParameter);
   EXPECT_NE(thermal_plan_manifest_toml(plan, data).find("[[run]]\nid = \"plan1\""), std::string::npos);
 }

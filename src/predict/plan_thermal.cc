@@ -292,7 +292,7 @@ ThermalPlan plan_thermal(const ModelFile& m, const ThermalDataSet& data, const s
   plan.correlation_after = p.separated.empty() ? NAN : correlation(cov, p.separated[0], p.separated[1]);
   for (Eigen::Index j = 0; j < k; ++j) {
     const auto js = static_cast<std::size_t>(j);
-    if (before_cov(j, j) > 1e-3 / ridge) {  // nothing in the rail's temperature depends on it
+    if (!(info(j, j) > 1e-12 * info.diagonal().maxCoeff())) {  // nothing in the rail's temperature depends on it
       plan.notes.push_back(fmt::format("{}: the rail's temperature does not depend on it (a sensor's property): not planned for",
                                        p.names[js]));
       continue;
@@ -311,6 +311,14 @@ ThermalPlan plan_thermal(const ModelFile& m, const ThermalDataSet& data, const s
     plan.notes.push_back(fmt::format("{} and {} (at its neutral value where the model lacks it): correlation of their estimates "
                                      "{:.3f} with the runs logged, {:.3f} with the planned ones too",
                                      o.separate[0], o.separate[1], plan.correlation_before, plan.correlation_after));
+  if (!p.separated.empty() && std::abs(plan.correlation_after) > 0.99) {
+    std::vector<std::string> measures;
+    for (const auto& e : thermal_extension_library())
+      if ((e.name == o.separate[0] || e.name == o.separate[1]) && !e.measure.empty()) measures.push_back(e.name + ": " + e.measure);
+    plan.notes.push_back(fmt::format("no candidate run separates them (their effects have the same shape at every speed, load and "
+                                     "duration given); what would: {}",
+                                     fmt::join(measures, "; ")));
+  }
   plan.notes.push_back(fmt::format("each run's readings every {} s with noise {:.3g} K, its thermocouple offsets fitted; a "
                                    "mechanism not in the model: its SE from that information alone",
                                    o.record_every_s, plan.noise_K));
