@@ -132,6 +132,21 @@ TEST_F(PredictTest, TheRailGrowsWhileTheBlockRunsAndShrinksWhenItStops) {
   EXPECT_GT(p.temperature_C[0].value[stop], p.temperature_C[1].value[stop]);
 }
 
+TEST_F(PredictTest, ARailLossActsAtRestToo) {
+  // A loss through the base cools the rail at rest as well: it loses a larger share of its
+  // warmth over an hour at rest than the same rail without it. (The coupled heat is off then.)
+  const DutyCycle d = duty("[[segment]]\nduration_h = 3\nvelocity_m_s = 0.11\n[[segment]]\nduration_h = 1\nvelocity_m_s = 0\n");
+  ModelFile lossy = bundled();
+  lossy.mechanisms.push_back("base_loss");
+  lossy.mechanism_parameters.emplace_back("base_loss", 2.0);
+  const Prediction without = predict(bundled(), d, quick()), with = predict(lossy, d, quick());
+  const std::size_t stop = 18, end = without.time_s.size() - 1;
+  const double kept_without = without.elongation_um.value[end] / without.elongation_um.value[stop];
+  const double kept_with = with.elongation_um.value[end] / with.elongation_um.value[stop];
+  EXPECT_LT(kept_with, 0.9 * kept_without) << kept_with << " vs " << kept_without;
+  for (std::size_t t = stop + 1; t <= end; ++t) EXPECT_EQ(with.heat_rate_W.value[t], 0);
+}
+
 TEST_F(PredictTest, ASegmentSplitInTwoGivesTheSameRail) {
   // The second half starts from the first's temperature field: the same as one segment, but for
   // the Rannacher start-up of Crank-Nicolson at the segment's start (backward-Euler substeps,

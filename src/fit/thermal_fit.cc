@@ -651,7 +651,7 @@ const char* term_coefficient_unit(ThermalTermKind kind) {
 std::vector<ThermalExtensionInfo> thermal_extension_library() {
   std::vector<ThermalExtensionInfo> library;
   for (const auto& e : detail::thermal_extensions()) {
-    ThermalExtensionInfo info{e.name, e.description, e.measure, {}, e.source, {}, {}};
+    ThermalExtensionInfo info{e.name, e.description, e.measure, {}, e.source, e.heat_follows_rail, {}, {}};
     for (const auto& p : e.parameters) {
       info.parameters.push_back(p.name);
       info.parameter_scale.push_back(p.scale);

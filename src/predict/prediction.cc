@@ -235,6 +235,7 @@ AmbientTrace segment_ambient(const AmbientTrace& a, double t0, double t1) {
 Trajectory simulate_duty(const ModelFile& m, const DutyCycle& duty, const Draw& d, const PredictionOptions& o,
                          const std::vector<double>& times, std::vector<std::string>* segment_at) {
   const GuideSpec& g = duty.guide;
+  const std::vector<ThermalExtensionInfo> library = thermal_extension_library();
   const double initial_C = duty.initial_C.value_or(duty.ambient.at(0.0));
   Trajectory tr;
   tr.temperature_C.assign(duty.positions_m.size(), {});
@@ -283,13 +284,21 @@ Trajectory simulate_duty(const ModelFile& m, const DutyCycle& duty, const Draw& 
                                                 .temperature_C = source_C};
     const double law_heat_W = heat_rate_with_effects_W(constants, d.effects, conditions);
     const AmbientTrace ambient = segment_ambient(duty.ambient, t0, t1);
+    // At rest there is no heat: the mechanisms of the heat (a coupling, a source model) are
+    // idle too; those of the rail (a base loss, the convection) are not.
+    std::vector<std::string> mechanisms = m.mechanisms;
+    if (s.velocity_m_s == 0)
+      std::erase_if(mechanisms, [&](const std::string& name) {
+        return std::any_of(library.begin(), library.end(),
+                           [&](const ThermalExtensionInfo& e) { return e.name == name && (e.source || e.heat_follows_rail); });
+      });
     RailSolution<double> sol;
-    if (m.mechanisms.empty() || s.velocity_m_s == 0) {
+    if (mechanisms.empty()) {
       params.heat_rate_W = law_heat_W;
       sol = simulate_rail(geometry, numerics, outputs, params, ambient);
     } else {
       sol = simulate_rail_with_mechanisms(geometry, numerics, outputs, params, ambient, constants, d.effects, conditions,
-                                          m.mechanisms, d.mechanism_values);
+                                          mechanisms, d.mechanism_values);
     }
     // The reference of the elongation: the rail at the duty's start (uniform). The integrals'
     // weights on this segment's grid, once (a scale position before the fixed point: negative).

@@ -240,6 +240,7 @@ struct ThermalExtensionInfo {
   std::string measure;                       // what to log to see it
   std::vector<std::string> parameters;       // their names in FitResult; none for a switch
   std::optional<SourceModel> source;         // the source model a switch selects
+  bool heat_follows_rail = false;            // Q_f follows the rail temperature (coupling)
   std::vector<double> parameter_scale;       // each parameter's typical size
   std::vector<std::pair<double, double>> parameter_bounds;  // each parameter's fit bounds
 };
