@@ -224,7 +224,8 @@ DutyCycle load_duty_cycle(const std::filesystem::path& path, const GuideCatalog*
   d.initial_C = initial;
   d.output_every_s = every.value_or(60.0);
   d.positions_m = positions_node ? positions_of(m, toml::key("positions_m"), *positions_node) : std::vector<double>{0.0};
-  for (double x : d.positions_m) check_on_rail(m, *positions_node, "positions_m", x, d.rail_length_m);
+  if (positions_node)
+    for (double x : d.positions_m) check_on_rail(m, *positions_node, "positions_m", x, d.rail_length_m);
   if (const toml::node* n = root.get("scale")) d.scale = read_scale(m, manifest::table_of(m, *n, "[scale]"), d.rail_length_m);
   else d.scale = read_scale(m, toml::table{}, d.rail_length_m);
 
