@@ -243,7 +243,7 @@ Prepared prepare_run(const ThermalRun& run, const ThermalFitOptions& o) {
     pr.conditions = c;  // the coupling extension scales Q_f by the law's change from here
     if (heat != HeatInput::measured_friction) {
       out.info.heat_source = o.friction ? "friction law (fitted constants)" : "friction law (the paper's constants)";
-      if (run.schedule.empty() && !run.heat_rate_W) {
+      if (!run.heat_rate_W) {  // with a schedule too: the law at the run's speed (phases at other speeds: approximately)
         out.info.heat_conditions = c;
         out.info.heat_viscosity40_mm2_s = k.nu_ref_mm2_s;
       }
