@@ -365,17 +365,6 @@ void ThermalModelOptions::apply(ThermalFitOptions& fit, std::vector<std::pair<st
   }
 }
 
-namespace {
-
-std::size_t constant_index(const std::string& option, const std::string& name) {
-  for (std::size_t j = 0; j < kFrictionConstantNames.size(); ++j)
-    if (name == kFrictionConstantNames[j]) return j;
-  throw InvalidParameter(option, fmt::format("unknown constant '{}'; expected one of k1, k2, mu_st, v_st_m_s, mu_v, "
-                                             "beta_per_K, f0",
-                                             name));
-}
-
-}  // namespace
 
 void add_friction_constant_options(CLI::App& app, FrictionConstantOptions& o) {
   app.add_option("--free", o.free, "Constants to fit (default all): k1,k2,mu_st,v_st_m_s,mu_v,beta_per_K,f0")->delimiter(',');
@@ -390,11 +379,11 @@ void add_friction_constant_options(CLI::App& app, FrictionConstantOptions& o) {
 void apply_friction_constant_options(const FrictionConstantOptions& o, FrictionFitOptions& f) {
   if (!o.free.empty()) {
     f.free.fill(false);
-    for (const auto& name : o.free) f.free[constant_index("--free", name)] = true;
+    for (const auto& name : o.free) f.free[friction_constant_index("--free", name)] = true;
   }
-  for (const auto& [name, value] : o.start) fittable_constant(f.start, constant_index("--start", name)) = value;
+  for (const auto& [name, value] : o.start) fittable_constant(f.start, friction_constant_index("--start", name)) = value;
   for (const auto& [name, value] : o.fixed) {
-    const std::size_t j = constant_index("--fix", name);
+    const std::size_t j = friction_constant_index("--fix", name);
     fittable_constant(f.start, j) = value;
     f.free[j] = false;
   }
@@ -403,7 +392,7 @@ void apply_friction_constant_options(const FrictionConstantOptions& o, FrictionF
     if (eq == std::string::npos || colon == std::string::npos)
       throw InvalidParameter("--bound", fmt::format("'{}' is not NAME=LOW:HIGH", item));
     const auto range = parse_list("--bound", item.substr(eq + 1, colon - eq - 1) + "," + item.substr(colon + 1));
-    f.bounds[constant_index("--bound", item.substr(0, eq))] = {range[0], range[1]};
+    f.bounds[friction_constant_index("--bound", item.substr(0, eq))] = {range[0], range[1]};
   }
   if (o.run_offsets == "none") f.run_offsets = RunOffsets::none;
   else if (o.run_offsets == "fixed") f.run_offsets = RunOffsets::fixed;

@@ -106,14 +106,10 @@ std::vector<Case> enumerate_cases(const ThermalSweepOptions& o, double initial_C
   std::vector<Case> cases;
   for (const auto& model : o.guide.guides) {
     const GuideSpec spec = o.guide.resolve(model);
-    const double area = require(spec, &GuideSpec::area_m2, "area_m2");
-    const double perimeter = require(spec, &GuideSpec::perimeter_m, "perimeter_m");
-    RailParams<double> params{.heat_partition = rail.alpha,
-                              .h_W_m2K = rail.h_W_m2K,
-                              .conductivity_W_mK = require(spec, &GuideSpec::conductivity_W_mK, "conductivity_W_mK"),
-                              .density_kg_m3 = require(spec, &GuideSpec::density_kg_m3, "density_kg_m3"),
-                              .specific_heat_J_kgK = require(spec, &GuideSpec::specific_heat_J_kgK, "specific_heat_J_kgK"),
-                              .initial_temperature_C = initial_C};
+    RailParams<double> params = rail_material_of(spec);
+    params.heat_partition = rail.alpha;
+    params.h_W_m2K = rail.h_W_m2K;
+    params.initial_temperature_C = initial_C;
     // A given heat rate needs no friction conditions, unless a mechanism makes it follow the law.
     const bool law_needed = std::isnan(o.heat_rate_W) || !rail.mechanisms.empty();
     const auto law_input = [&](const std::vector<double>& given, std::optional<double> GuideSpec::*field, const char* name) {
@@ -135,8 +131,7 @@ std::vector<Case> enumerate_cases(const ThermalSweepOptions& o, double initial_C
                 c.params.heat_rate_W = c.heat_rate_W;
                 if (!std::isnan(o.stop_s))
                   c.params.heat_schedule = HeatRateSchedule<double>::steps({0.0, o.stop_s}, {c.heat_rate_W, 0.0});
-                c.geometry = {.rail_length_m = o.rail_length_m, .area_m2 = area, .perimeter_m = perimeter,
-                              .stroke_m = L1, .contact_length_m = Lb1 * 1e-3, .velocity_m_s = V};
+                c.geometry = rail_geometry_of(spec, o.rail_length_m, L1, Lb1 * 1e-3, V);
                 cases.push_back(c);
               }
   }

@@ -143,12 +143,7 @@ Prepared prepare_run(const ThermalRun& run, const ThermalFitOptions& o) {
   PreparedRun& pr = out.run;
   pr.id = run.id;
   const double Lb1 = run.contact_length_mm ? *run.contact_length_mm : require(spec, &GuideSpec::contact_length_mm, "contact_length_mm");
-  pr.geometry = {.rail_length_m = run.rail_length_m,
-                 .area_m2 = require(spec, &GuideSpec::area_m2, "area_m2"),
-                 .perimeter_m = require(spec, &GuideSpec::perimeter_m, "perimeter_m"),
-                 .stroke_m = run.stroke_m,
-                 .contact_length_m = Lb1 * 1e-3,
-                 .velocity_m_s = run_velocity_m_s(run, source_of(o))};
+  pr.geometry = rail_geometry_of(spec, run.rail_length_m, run.stroke_m, Lb1 * 1e-3, run_velocity_m_s(run, source_of(o)));
 
   // Ambient: the mean of the ambient sensors (NaN left out), or the one named; the manifest's
   // constant ambient_C for a CSV without ambient columns.
@@ -265,14 +260,12 @@ Prepared prepare_run(const ThermalRun& run, const ThermalFitOptions& o) {
                                      : friction_heat_W(pr.geometry.velocity_m_s);
   if (!schedule.empty() && std::find(o.extensions.begin(), o.extensions.end(), "coupling") != o.extensions.end())
     throw InvalidParameter(run.id, "the coupling extension cannot follow a heat schedule or a measured power");
-  pr.params = {.heat_partition = o.alpha_start,
-               .heat_rate_W = Q,
-               .h_W_m2K = run.h_W_m2K ? *run.h_W_m2K : o.h_W_m2K,  // the run's own h wins where h is not fitted
-               .conductivity_W_mK = require(spec, &GuideSpec::conductivity_W_mK, "conductivity_W_mK"),
-               .density_kg_m3 = require(spec, &GuideSpec::density_kg_m3, "density_kg_m3"),
-               .specific_heat_J_kgK = require(spec, &GuideSpec::specific_heat_J_kgK, "specific_heat_J_kgK"),
-               .initial_temperature_C = T0,
-               .heat_schedule = schedule};
+  pr.params = rail_material_of(spec);
+  pr.params.heat_partition = o.alpha_start;
+  pr.params.heat_rate_W = Q;
+  pr.params.h_W_m2K = run.h_W_m2K ? *run.h_W_m2K : o.h_W_m2K;  // the run's own h wins where h is not fitted
+  pr.params.initial_temperature_C = T0;
+  pr.params.heat_schedule = schedule;
   // The heat scale's prior: σ_Q from the temperature Q_f was evaluated at and the law's own
   // uncertainty; σ_T from the thermocouples' second differences (insensitive to the warm-up).
   if (o.fit_heat_scales && given) {  // the stated uncertainty of the given heat, else the law's share
@@ -471,10 +464,7 @@ Eigen::RowVectorXd log_heat_gradient(const PreparedRun& run, const FitResult& fr
   auto log_q = [&](std::size_t j, double value) {
     FrictionConstants<double> k = run.friction;
     FrictionEffects<double> e = run.friction_effects;
-    const std::string& name = friction.parameters[j].name;
-    const auto c = std::find(kFrictionConstantNames.begin(), kFrictionConstantNames.end(), name);
-    if (c != kFrictionConstantNames.end()) fittable_constant(k, static_cast<std::size_t>(c - kFrictionConstantNames.begin())) = value;
-    else if (const auto slot = find_friction_effect(name)) e[*slot] = value;
+    if (double* law = find_law_parameter(k, e, friction.parameters[j].name)) *law = value;
     return std::log(heat_rate_with_effects_W(k, e, run.conditions));
   };
   for (std::size_t j = 0; j < friction.parameters.size(); ++j) {
@@ -941,11 +931,7 @@ void read_friction_fit(const std::string& json_file, ThermalFitOptions& options)
     const std::string name = p.value("name", "");
     if (!p.contains("value") || !p["value"].is_number()) continue;  // null: not estimated
     const double value = p["value"].get<double>();
-    const auto c = std::find(kFrictionConstantNames.begin(), kFrictionConstantNames.end(), name);
-    if (c != kFrictionConstantNames.end())
-      fittable_constant(k, static_cast<std::size_t>(c - kFrictionConstantNames.begin())) = value;
-    else if (const auto slot = find_friction_effect(name))
-      e[*slot] = value;
+    if (double* law = find_law_parameter(k, e, name)) *law = value;
   }
   options.friction = k;
   options.friction_effects = e;

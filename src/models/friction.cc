@@ -31,6 +31,12 @@ void validate(const FrictionConditions<double>& c) {
 
 namespace lmcal {
 
+std::size_t friction_constant_index(const std::string& parameter, std::string_view name) {
+  if (const auto j = find_friction_constant(name)) return *j;
+  throw InvalidParameter(parameter, "unknown constant '" + std::string(name) +
+                                        "'; expected one of k1, k2, mu_st, v_st_m_s, mu_v, beta_per_K, f0");
+}
+
 std::size_t friction_effect_slot(std::string_view name) {
   if (const auto slot = find_friction_effect(name)) return *slot;
   std::string known;

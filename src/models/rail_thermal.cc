@@ -92,6 +92,24 @@ void validate(const RailNumerics& n) {
   require_positive("time_step_s", n.time_step_s);
 }
 
+RailGeometry rail_geometry_of(const GuideSpec& spec, double rail_length_m, double stroke_m, double contact_length_m,
+                              double velocity_m_s) {
+  return {.rail_length_m = rail_length_m,
+          .area_m2 = require(spec, &GuideSpec::area_m2, "area_m2"),
+          .perimeter_m = require(spec, &GuideSpec::perimeter_m, "perimeter_m"),
+          .stroke_m = stroke_m,
+          .contact_length_m = contact_length_m,
+          .velocity_m_s = velocity_m_s};
+}
+
+RailParams<double> rail_material_of(const GuideSpec& spec) {
+  RailParams<double> p;
+  p.conductivity_W_mK = require(spec, &GuideSpec::conductivity_W_mK, "conductivity_W_mK");
+  p.density_kg_m3 = require(spec, &GuideSpec::density_kg_m3, "density_kg_m3");
+  p.specific_heat_J_kgK = require(spec, &GuideSpec::specific_heat_J_kgK, "specific_heat_J_kgK");
+  return p;
+}
+
 void validate(const RailParams<double>& p) {
   require_in_range("heat_partition", p.heat_partition, 0.0, 1.0);
   require_non_negative("heat_rate_W", p.heat_rate_W);

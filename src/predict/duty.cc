@@ -194,9 +194,10 @@ DutyCycle load_duty_cycle(const std::filesystem::path& path, const GuideCatalog*
   try {
     d.guide = find_guide(manifest::string_of(m, toml::key("guide"), *guide_node),
                          user_catalog ? user_catalog : own_catalog ? &*own_catalog : nullptr);
-    for (const auto field : {&GuideSpec::area_m2, &GuideSpec::perimeter_m, &GuideSpec::conductivity_W_mK,
-                             &GuideSpec::density_kg_m3, &GuideSpec::specific_heat_J_kgK, &GuideSpec::contact_length_mm})
-      if (!(d.guide.*field)) throw InvalidParameter("guide", "the catalog lacks the rail's section, material or contact length for it");
+    // The rail the prediction simulates: the catalog must give its section, material and contact.
+    rail_geometry_of(d.guide, 1, 1, 0, 0);
+    rail_material_of(d.guide);
+    require(d.guide, &GuideSpec::contact_length_mm, "contact_length_mm");
   } catch (const InvalidParameter& e) {
     m.fail(guide_node->source(), e.what());
   }

@@ -44,8 +44,7 @@ Parameters parameters_of(const FrictionFitResult& fit) {
   std::vector<double> values, scales;
   for (std::size_t j = 0; j < fit.fit.parameters.size(); ++j) {
     const ParameterEstimate& e = fit.fit.parameters[j];
-    const bool law = std::find(kFrictionConstantNames.begin(), kFrictionConstantNames.end(), e.name) != kFrictionConstantNames.end() ||
-                     find_friction_effect(e.name).has_value();
+    const bool law = find_friction_constant(e.name).has_value() || find_friction_effect(e.name).has_value();
     if (!e.free || e.per_run || !law) continue;
     p.index.push_back(j);
     values.push_back(e.value);
@@ -76,12 +75,7 @@ class Gradient {
     FrictionConstants<double> k = base_;
     FrictionEffects<double> e = effects_;
     k.nu_ref_mm2_s = viscosity40;
-    const std::string& name = fit_.fit.parameters[p_.index[static_cast<std::size_t>(j)]].name;
-    const double v = p_.value(j) + step;
-    if (const auto slot = find_friction_effect(name)) e[*slot] = v;
-    else
-      for (std::size_t i = 0; i < kFrictionConstantNames.size(); ++i)
-        if (name == kFrictionConstantNames[i]) fittable_constant(k, i) = v;
+    *find_law_parameter(k, e, fit_.fit.parameters[p_.index[static_cast<std::size_t>(j)]].name) = p_.value(j) + step;
     return friction_force_with_effects_N(k, e, c);
   }
 

@@ -93,15 +93,12 @@ RunShape shape_of(const ThermalRun& run, const ModelFile& m) {
   }
   s.ambient_C = ambient;
   s.duration_s = run.trace.size() > 1 ? run.trace.time_s.back() - run.trace.time_s.front() : 0;
-  s.geometry = {.rail_length_m = run.rail_length_m, .area_m2 = require(g, &GuideSpec::area_m2, "area_m2"),
-                .perimeter_m = require(g, &GuideSpec::perimeter_m, "perimeter_m"), .stroke_m = run.stroke_m,
-                .contact_length_m = (run.contact_length_mm ? *run.contact_length_mm : require(g, &GuideSpec::contact_length_mm, "contact_length_mm")) * 1e-3,
-                .velocity_m_s = run.velocity_m_s};
-  s.params = {.heat_partition = m.alpha, .heat_rate_W = 0, .h_W_m2K = m.h_W_m2K.value_or(5.3),
-              .conductivity_W_mK = require(g, &GuideSpec::conductivity_W_mK, "conductivity_W_mK"),
-              .density_kg_m3 = require(g, &GuideSpec::density_kg_m3, "density_kg_m3"),
-              .specific_heat_J_kgK = require(g, &GuideSpec::specific_heat_J_kgK, "specific_heat_J_kgK"),
-              .initial_temperature_C = ambient};
+  const double contact_mm = run.contact_length_mm ? *run.contact_length_mm : require(g, &GuideSpec::contact_length_mm, "contact_length_mm");
+  s.geometry = rail_geometry_of(g, run.rail_length_m, run.stroke_m, contact_mm * 1e-3, run.velocity_m_s);
+  s.params = rail_material_of(g);
+  s.params.heat_partition = m.alpha;
+  s.params.h_W_m2K = m.h_W_m2K.value_or(5.3);
+  s.params.initial_temperature_C = ambient;
   s.conditions = {.load_N = run.load_N,
                   .preload_um = run.preload_um ? *run.preload_um : require(g, &GuideSpec::preload_um, "preload_um"),
                   .block_length_mm = run.block_length_mm ? *run.block_length_mm : require(g, &GuideSpec::block_length_mm, "block_length_mm"),

@@ -103,12 +103,7 @@ Draw point_draw(const ModelFile& m) {
 
 // Sets the parameter called `name` of `d` (a friction constant, an effect, α, h or a mechanism's).
 void set_parameter(Draw& d, const std::string& name, double value) {
-  for (std::size_t j = 0; j < kFrictionConstantNames.size(); ++j)
-    if (name == kFrictionConstantNames[j]) {
-      fittable_constant(d.constants, j) = value;
-      return;
-    }
-  if (const auto slot = find_friction_effect(name)) d.effects[*slot] = value;
+  if (double* law = find_law_parameter(d.constants, d.effects, name)) *law = value;
   else if (name == "alpha") d.alpha = value;
   else if (name == "h_W_m2K") d.h_W_m2K = value;
   else
@@ -117,9 +112,7 @@ void set_parameter(Draw& d, const std::string& name, double value) {
 }
 
 double value_of(const Draw& d, const std::string& name) {
-  for (std::size_t j = 0; j < kFrictionConstantNames.size(); ++j)
-    if (name == kFrictionConstantNames[j]) return fittable_constant(d.constants, j);
-  if (const auto slot = find_friction_effect(name)) return d.effects[*slot];
+  if (const double* law = find_law_parameter(d.constants, d.effects, name)) return *law;
   if (name == "alpha") return d.alpha;
   if (name == "h_W_m2K") return d.h_W_m2K;
   for (const auto& [n, v] : d.mechanism_values)
@@ -256,23 +249,15 @@ Trajectory simulate_duty(const ModelFile& m, const DutyCycle& duty, const Draw& 
     }
     outputs.profile_times_s = outputs.output_times_s;
     if (outputs.profile_times_s.empty() || outputs.profile_times_s.back() < s.duration_s) outputs.profile_times_s.push_back(s.duration_s);
-    const RailGeometry geometry{.rail_length_m = duty.rail_length_m,
-                                .area_m2 = *g.area_m2,
-                                .perimeter_m = *g.perimeter_m,
-                                .stroke_m = s.stroke_m,
-                                .contact_length_m = *g.contact_length_mm * 1e-3,
-                                .velocity_m_s = s.velocity_m_s};
+    const RailGeometry geometry = rail_geometry_of(g, duty.rail_length_m, s.stroke_m, *g.contact_length_mm * 1e-3, s.velocity_m_s);
     RailNumerics numerics{.source = s.velocity_m_s > 0 ? m.source : SourceModel::averaged,
                           .scheme = TimeScheme::crank_nicolson,
                           .half_rail_segments = o.half_rail_segments,
                           .time_step_s = o.time_step_s};
-    RailParams<double> params{.heat_partition = d.alpha,
-                              .heat_rate_W = 0,
-                              .h_W_m2K = d.h_W_m2K,
-                              .conductivity_W_mK = *g.conductivity_W_mK,
-                              .density_kg_m3 = *g.density_kg_m3,
-                              .specific_heat_J_kgK = *g.specific_heat_J_kgK,
-                              .initial_temperature_C = initial_C};
+    RailParams<double> params = rail_material_of(g);
+    params.heat_partition = d.alpha;
+    params.h_W_m2K = d.h_W_m2K;
+    params.initial_temperature_C = initial_C;
     params.initial_profile_x_m = carried_x;
     params.initial_profile_C = carried_C;
     FrictionConstants<double> constants = d.constants;

@@ -72,14 +72,6 @@ E choose(const char* parameter, const std::string& name, std::initializer_list<s
   throw InvalidParameter(parameter, fmt::format("unknown value '{}'; expected one of {}", name, accepted));
 }
 
-std::size_t constant_index(const char* parameter, const std::string& name) {
-  for (std::size_t j = 0; j < kFrictionConstantNames.size(); ++j)
-    if (name == kFrictionConstantNames[j]) return j;
-  throw InvalidParameter(parameter, fmt::format("unknown constant '{}'; expected one of k1, k2, mu_st, v_st_m_s, mu_v, "
-                                                "beta_per_K, f0",
-                                                name));
-}
-
 // The covariance and the parameters of a fit, for NumPy.
 py::dict fit_arrays(const FitResult& fit) {
   std::vector<std::string> names;
@@ -364,20 +356,20 @@ void set_friction_options(FrictionFitOptions& f, const py::dict& o) {
   set_fit_options(f.fit, o);
   if (o.contains("free") && !o["free"].is_none()) {
     f.free.fill(false);
-    for (const auto& name : o["free"].cast<std::vector<std::string>>()) f.free[constant_index("free", name)] = true;
+    for (const auto& name : o["free"].cast<std::vector<std::string>>()) f.free[friction_constant_index("free", name)] = true;
   }
   if (o.contains("start"))
     for (const auto& [name, value] : o["start"].cast<std::map<std::string, double>>())
-      fittable_constant(f.start, constant_index("start", name)) = value;
+      fittable_constant(f.start, friction_constant_index("start", name)) = value;
   if (o.contains("fixed"))
     for (const auto& [name, value] : o["fixed"].cast<std::map<std::string, double>>()) {
-      const std::size_t j = constant_index("fixed", name);
+      const std::size_t j = friction_constant_index("fixed", name);
       fittable_constant(f.start, j) = value;
       f.free[j] = false;
     }
   if (o.contains("bounds"))
     for (const auto& [name, range] : o["bounds"].cast<std::map<std::string, std::pair<double, double>>>())
-      f.bounds[constant_index("bounds", name)] = range;
+      f.bounds[friction_constant_index("bounds", name)] = range;
   if (o.contains("effects")) f.effects = o["effects"].cast<std::vector<std::string>>();
   if (o.contains("run_offsets"))
     f.run_offsets = choose<RunOffsets>("run_offsets", o["run_offsets"].cast<std::string>(),
@@ -570,7 +562,7 @@ CalibrationHandle calibrate_py(const std::string& folder, const py::dict& o, con
 
 FrictionConstants<double> constants_from(const std::map<std::string, double>& given) {
   FrictionConstants<double> k = paper_friction_constants();
-  for (const auto& [name, value] : given) fittable_constant(k, constant_index("constants", name)) = value;
+  for (const auto& [name, value] : given) fittable_constant(k, friction_constant_index("constants", name)) = value;
   validate(k);
   return k;
 }
@@ -619,12 +611,10 @@ py::dict simulate_thermal_py(const py::dict& o) {
                                        return AmbientTrace{t, T};
                                      }();
   const double initial_C = o["initial_C"].is_none() ? ambient.temperature_C.front() : number("initial_C");
-  RailParams<double> params{.heat_partition = number("alpha"),
-                            .h_W_m2K = number("h_W_m2K"),
-                            .conductivity_W_mK = require(spec, &GuideSpec::conductivity_W_mK, "conductivity_W_mK"),
-                            .density_kg_m3 = require(spec, &GuideSpec::density_kg_m3, "density_kg_m3"),
-                            .specific_heat_J_kgK = require(spec, &GuideSpec::specific_heat_J_kgK, "specific_heat_J_kgK"),
-                            .initial_temperature_C = initial_C};
+  RailParams<double> params = rail_material_of(spec);
+  params.heat_partition = number("alpha");
+  params.h_W_m2K = number("h_W_m2K");
+  params.initial_temperature_C = initial_C;
   const double V = number("velocity_m_s");
   if (o["heat_rate_W"].is_none()) {
     FrictionConditions<double> c{.load_N = number("load_N"),
@@ -638,12 +628,8 @@ py::dict simulate_thermal_py(const py::dict& o) {
   } else {
     params.heat_rate_W = number("heat_rate_W");
   }
-  const RailGeometry geometry{.rail_length_m = number("rail_length_m"),
-                              .area_m2 = require(spec, &GuideSpec::area_m2, "area_m2"),
-                              .perimeter_m = require(spec, &GuideSpec::perimeter_m, "perimeter_m"),
-                              .stroke_m = number("stroke_m"),
-                              .contact_length_m = given_or_catalog("contact_length_mm", &GuideSpec::contact_length_mm) * 1e-3,
-                              .velocity_m_s = V};
+  const RailGeometry geometry = rail_geometry_of(spec, number("rail_length_m"), number("stroke_m"),
+                                                given_or_catalog("contact_length_mm", &GuideSpec::contact_length_mm) * 1e-3, V);
   const RailNumerics numerics{.source = parse_source_model(o["source"].cast<std::string>()),
                               .scheme = parse_time_scheme(o["scheme"].cast<std::string>()),
                               .half_rail_segments = o["segments"].cast<int>(),

@@ -142,21 +142,13 @@ ThermalRigOutput generate_thermal_dataset(const ThermalRigConfig& config, const 
                                            .velocity_m_s = V, .temperature_C = T};
         return heat_factor * heat_rate_with_effects_W(config.constants, effects.friction, c);
       };
-      const RailGeometry geometry{.rail_length_m = config.rail_length_m,
-                                  .area_m2 = require(spec, &GuideSpec::area_m2, "area_m2"),
-                                  .perimeter_m = require(spec, &GuideSpec::perimeter_m, "perimeter_m"),
-                                  .stroke_m = config.stroke_m,
-                                  .contact_length_m = Lb1 * 1e-3,
-                                  .velocity_m_s = V};
-      RailParams<double> params{
-          .heat_partition = alpha_with_velocity(config.alpha, effects.thermal.alpha_velocity, V),
-          .heat_rate_W = heater ? heat_factor * *config.heat_rate_W : heat_at(T0),
-          .h_W_m2K = convection_with_velocity(config.h_W_m2K, effects.thermal.convection_velocity, V),
-          .conductivity_W_mK = require(spec, &GuideSpec::conductivity_W_mK, "conductivity_W_mK"),
-          .density_kg_m3 = require(spec, &GuideSpec::density_kg_m3, "density_kg_m3"),
-          .specific_heat_J_kgK = require(spec, &GuideSpec::specific_heat_J_kgK, "specific_heat_J_kgK"),
-          .initial_temperature_C = T0,
-          .base_loss_W_mK = effects.thermal.base_loss};
+      const RailGeometry geometry = rail_geometry_of(spec, config.rail_length_m, config.stroke_m, Lb1 * 1e-3, V);
+      RailParams<double> params = rail_material_of(spec);
+      params.heat_partition = alpha_with_velocity(config.alpha, effects.thermal.alpha_velocity, V);
+      params.heat_rate_W = heater ? heat_factor * *config.heat_rate_W : heat_at(T0);
+      params.h_W_m2K = convection_with_velocity(config.h_W_m2K, effects.thermal.convection_velocity, V);
+      params.initial_temperature_C = T0;
+      params.base_loss_W_mK = effects.thermal.base_loss;
       // The heat ends with the heater switched off or the block stopped.
       if (const auto end_s = heat_end_s(config))
         params.heat_schedule = HeatRateSchedule<double>::steps({0.0, *end_s}, {params.heat_rate_W, 0.0});

@@ -32,6 +32,9 @@
 #include <array>
 #include <cmath>
 #include <cstddef>
+#include <optional>
+#include <string>
+#include <string_view>
 #include <utility>
 
 namespace LMCAL_API lmcal {
@@ -62,6 +65,15 @@ struct FrictionConstants {
 // Names of the seven fittable constants, in the order of FrictionConstants.
 inline constexpr std::array<const char*, 7> kFrictionConstantNames = {
     "k1", "k2", "mu_st", "v_st_m_s", "mu_v", "beta_per_K", "f0"};
+
+// The index of a fittable constant by name (into kFrictionConstantNames), or none.
+constexpr std::optional<std::size_t> find_friction_constant(std::string_view name) {
+  for (std::size_t j = 0; j < kFrictionConstantNames.size(); ++j)
+    if (name == kFrictionConstantNames[j]) return j;
+  return std::nullopt;
+}
+// The same, or InvalidParameter naming `parameter` (the option or key it came from) and the constants.
+std::size_t friction_constant_index(const std::string& parameter, std::string_view name);
 
 // The j-th fittable constant, in the order of kFrictionConstantNames (j < 7).
 template <typename T>

@@ -92,6 +92,19 @@ struct FrictionEffects {
   }
 };
 
+// The law's parameter called `name`: a fittable constant of `k` or an effect of `e`; nullptr for
+// another name.
+template <typename T>
+T* find_law_parameter(FrictionConstants<T>& k, FrictionEffects<T>& e, std::string_view name) {
+  if (const auto j = find_friction_constant(name)) return &fittable_constant(k, *j);
+  if (const auto slot = find_friction_effect(name)) return &e[*slot];
+  return nullptr;
+}
+template <typename T>
+const T* find_law_parameter(const FrictionConstants<T>& k, const FrictionEffects<T>& e, std::string_view name) {
+  return find_law_parameter(const_cast<FrictionConstants<T>&>(k), const_cast<FrictionEffects<T>&>(e), name);
+}
+
 // The published law with every effect of `e` applied, N.
 template <typename P, typename C, typename E>
 auto friction_force_with_effects_N(const FrictionConstants<P>& k, const FrictionEffects<E>& e,

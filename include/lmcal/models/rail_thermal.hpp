@@ -48,6 +48,7 @@
 #include <string_view>
 #include <vector>
 
+#include "lmcal/io/catalog.hpp"
 #include "lmcal/models/heat_source.hpp"
 
 namespace LMCAL_API lmcal {
@@ -210,6 +211,13 @@ RailSolution<T> steady_rail(const RailGeometry& geometry, const RailNumerics& nu
                             double ambient_C);
 
 // The same checks simulate_rail applies, for callers that want to fail early.
+// The rail of a catalog guide: its section (A, p) from `spec`, the rest as given; its material
+// (k, ρ, c) from `spec`, every other parameter at its default for the caller to set. A field the
+// catalog lacks is an InvalidParameter naming it and how to supply it (require()).
+RailGeometry rail_geometry_of(const GuideSpec& spec, double rail_length_m, double stroke_m, double contact_length_m,
+                              double velocity_m_s);
+RailParams<double> rail_material_of(const GuideSpec& spec);
+
 void validate(const RailGeometry& geometry);
 void validate(const RailNumerics& numerics);
 void validate(const RailParams<double>& params);
