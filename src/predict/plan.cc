@@ -15,6 +15,7 @@
 #include "lmcal/error.hpp"
 #include "lmcal/io/csv_writer.hpp"
 #include "lmcal/models/friction_effects.hpp"
+#include "predict/design.hpp"
 
 namespace lmcal {
 
@@ -169,7 +170,7 @@ FrictionPlan plan_friction(const FrictionLog& log, const FrictionFitResult& fit,
   info = info.selfadjointView<Eigen::Lower>();
   info /= plan.sigma_N * plan.sigma_N;
   const double ridge = 1e-10 * info.trace() / static_cast<double>(m);
-  Eigen::MatrixXd cov = (info + ridge * Eigen::MatrixXd::Identity(m, m)).ldlt().solve(Eigen::MatrixXd::Identity(m, m));
+  Eigen::MatrixXd cov = detail::ridge_inverse(info, ridge);
   const Eigen::VectorXd before = cov.diagonal();
   // The quoted SEs of the determined parameters are conditional on the undetermined ones held
   // at their start: their variance before, the same (the information of the determined alone).
@@ -178,15 +179,7 @@ FrictionPlan plan_friction(const FrictionLog& log, const FrictionFitResult& fit,
     const ParameterEstimate& e = fit.fit.parameters[p.index[static_cast<std::size_t>(j)]];
     if (!e.held_unidentifiable && std::isfinite(e.se) && e.se > 0) determined.push_back(j);
   }
-  Eigen::VectorXd before_held = before;
-  if (!determined.empty() && determined.size() < static_cast<std::size_t>(m)) {
-    const auto d = static_cast<Eigen::Index>(determined.size());
-    Eigen::MatrixXd sub(d, d);
-    for (Eigen::Index a = 0; a < d; ++a)
-      for (Eigen::Index b = 0; b < d; ++b) sub(a, b) = info(determined[a], determined[b]);
-    const Eigen::MatrixXd sub_cov = (sub + ridge * Eigen::MatrixXd::Identity(d, d)).ldlt().solve(Eigen::MatrixXd::Identity(d, d));
-    for (Eigen::Index a = 0; a < d; ++a) before_held(determined[a]) = sub_cov(a, a);
-  }
+  const Eigen::VectorXd before_held = detail::variances_holding_others(info, determined, ridge);
 
   std::vector<Eigen::VectorXd> grads(candidates.size());
   for (std::size_t c = 0; c < candidates.size(); ++c) grads[c] = gradient.at(candidates[c].conditions, candidates[c].viscosity40_mm2_s);

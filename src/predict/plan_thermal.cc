@@ -11,6 +11,7 @@
 #include "lmcal/error.hpp"
 #include "lmcal/fit/thermal_fit.hpp"
 #include "lmcal/predict/plan.hpp"
+#include "predict/design.hpp"
 
 namespace lmcal {
 
@@ -158,10 +159,6 @@ Eigen::MatrixXd information(const RunShape& s, const ModelFile& m, const Thermal
   return S.transpose() * S / (noise_K * noise_K);
 }
 
-Eigen::MatrixXd inverse(const Eigen::MatrixXd& info, double ridge) {
-  const auto k = info.rows();
-  return (info + ridge * Eigen::MatrixXd::Identity(k, k)).ldlt().solve(Eigen::MatrixXd::Identity(k, k));
-}
 
 double correlation(const Eigen::MatrixXd& cov, std::size_t a, std::size_t b) {
   const auto i = static_cast<Eigen::Index>(a), j = static_cast<Eigen::Index>(b);
@@ -225,22 +222,14 @@ ThermalPlan plan_thermal(const ModelFile& m, const ThermalDataSet& data, const s
   Eigen::MatrixXd info = Eigen::MatrixXd::Zero(k, k);
   for (const ThermalRun& run : data.runs) info += information(shape_of(run, m), m, p, o.record_every_s, plan.noise_K);
   const double ridge = 1e-10 * std::max(info.trace(), 1e-30) / static_cast<double>(k);
-  const Eigen::MatrixXd before_cov = inverse(info, ridge);
+  const Eigen::MatrixXd before_cov = detail::ridge_inverse(info, ridge);
   const Eigen::VectorXd before = before_cov.diagonal();
   // The model's quoted SEs are those of its own parameters, without the separated mechanism it
   // lacks: their variance before from the information of those alone.
   std::vector<Eigen::Index> own;
   for (Eigen::Index j = 0; j < k; ++j)
     if (m.find(p.names[static_cast<std::size_t>(j)])) own.push_back(j);
-  Eigen::VectorXd before_own = before;
-  if (!own.empty() && own.size() < static_cast<std::size_t>(k)) {
-    const auto d = static_cast<Eigen::Index>(own.size());
-    Eigen::MatrixXd sub(d, d);
-    for (Eigen::Index a = 0; a < d; ++a)
-      for (Eigen::Index b = 0; b < d; ++b) sub(a, b) = info(own[a], own[b]);
-    const Eigen::MatrixXd sub_cov = inverse(sub, ridge);
-    for (Eigen::Index a = 0; a < d; ++a) before_own(own[a]) = sub_cov(a, a);
-  }
+  const Eigen::VectorXd before_own = detail::variances_holding_others(info, own, ridge);
   const RunShape base = shape_of(data.runs.front(), m);
   const auto shape_for = [&](const ThermalCandidate& c) {
     RunShape s = base;
@@ -274,7 +263,7 @@ ThermalPlan plan_thermal(const ModelFile& m, const ThermalDataSet& data, const s
     std::size_t best_c = 0;
     for (std::size_t c = 0; c < candidates.size(); ++c) {
       if (taken[c]) continue;
-      const double gain = criterion(inverse(info + candidate_info[c], ridge)) - now;
+      const double gain = criterion(detail::ridge_inverse(info + candidate_info[c], ridge)) - now;
       if (gain > best) {
         best = gain;
         best_c = c;
@@ -282,7 +271,7 @@ ThermalPlan plan_thermal(const ModelFile& m, const ThermalDataSet& data, const s
     }
     taken[best_c] = true;
     info += candidate_info[best_c];
-    cov = inverse(info, ridge);
+    cov = detail::ridge_inverse(info, ridge);
     plan.picks.push_back({candidates[best_c], best});
   }
   plan.correlation_before = p.separated.empty() ? NAN : correlation(before_cov, p.separated[0], p.separated[1]);
