@@ -207,6 +207,28 @@ TEST_F(PredictTest, TheSameSeedGivesTheSameBands) {
   EXPECT_EQ(a.elongation_um.high, b.elongation_um.high);
 }
 
+// A calibrated law with an empirical term (the diagnosis found one) has the term in its
+// covariance; the term describes the load cell's log and is not applied to the heat, so its
+// row is left out of the draws (regression: the draws once aborted on its name).
+TEST_F(PredictTest, AnEmpiricalTermInTheCovarianceIsLeftOutOfTheDraws) {
+  ModelFile m = bundled();
+  FrictionTerm term;
+  term.factors.push_back(*parse_factor("linear:temperature_C"));
+  term.coefficient = 0.5;
+  m.friction_terms.push_back(term);
+  ModelCovariance& f = m.friction_covariance_matrix;
+  const auto n = static_cast<Eigen::Index>(f.parameters.size());
+  f.parameters.push_back("term1");
+  f.matrix.conservativeResize(n + 1, n + 1);
+  f.matrix.row(n).setZero();
+  f.matrix.col(n).setZero();
+  f.matrix(n, n) = 0.01;
+  const DutyCycle d = duty("[[segment]]\nduration_h = 2\nvelocity_m_s = 0.11\n");
+  const Prediction with_term = predict(m, d, quick()), without = predict(bundled(), d, quick());
+  EXPECT_EQ(with_term.elongation_um.value, without.elongation_um.value);  // the term is not applied
+  EXPECT_GT(with_term.elongation_um.high.back(), with_term.elongation_um.low.back());
+}
+
 // --- bad input ---------------------------------------------------------------------------------
 
 TEST_F(PredictTest, BadDutiesAreRefusedNamingTheField) {

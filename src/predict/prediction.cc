@@ -101,24 +101,22 @@ Draw point_draw(const ModelFile& m) {
   return d;
 }
 
-// Sets the parameter called `name` of `d` (a friction constant, an effect, α, h or a mechanism's).
-void set_parameter(Draw& d, const std::string& name, double value) {
-  if (double* law = find_law_parameter(d.constants, d.effects, name)) *law = value;
-  else if (name == "alpha") d.alpha = value;
-  else if (name == "h_W_m2K") d.h_W_m2K = value;
-  else
-    for (auto& [n, v] : d.mechanism_values)
-      if (n == name) v = value;
+// The parameter called `name` of `d` (a friction constant, an effect, α, h or a mechanism's);
+// null for one a prediction does not use (an empirical term of the load cell's log).
+double* find_parameter(Draw& d, const std::string& name) {
+  if (double* law = find_law_parameter(d.constants, d.effects, name)) return law;
+  if (name == "alpha") return &d.alpha;
+  if (name == "h_W_m2K") return &d.h_W_m2K;
+  for (auto& [n, v] : d.mechanism_values)
+    if (n == name) return &v;
+  return nullptr;
 }
 
-double value_of(const Draw& d, const std::string& name) {
-  if (const double* law = find_law_parameter(d.constants, d.effects, name)) return *law;
-  if (name == "alpha") return d.alpha;
-  if (name == "h_W_m2K") return d.h_W_m2K;
-  for (const auto& [n, v] : d.mechanism_values)
-    if (n == name) return v;
-  LMCAL_ASSERT(false, "a covariance names the model's parameters");
-  return 0;
+// Adds the draw's deviations `delta` of the covariance's parameters to `d`. The parameters the
+// prediction does not use are skipped: the others' draws keep their joint (marginal) law.
+void add_deviations(Draw& d, const std::vector<std::string>& parameters, const Eigen::VectorXd& delta) {
+  for (std::size_t j = 0; j < parameters.size(); ++j)
+    if (double* p = find_parameter(d, parameters[j])) *p += delta(static_cast<Eigen::Index>(j));
 }
 
 // A square root of a covariance that also serves a singular one: V diag(√λ₊).
@@ -160,12 +158,10 @@ DrawSet make_draws(const ModelFile& m, const PredictionOptions& o) {
   for (std::size_t i = 0; i < o.samples; ++i) {
     Draw d = point;
     if (nf > 0) {
-      const Eigen::VectorXd delta = Lf * z[i].head(nf);
-      for (Eigen::Index j = 0; j < nf; ++j) set_parameter(d, f.parameters[j], value_of(point, f.parameters[j]) + delta(j));
+      add_deviations(d, f.parameters, Lf * z[i].head(nf));
     }
     if (nt > 0) {
-      const Eigen::VectorXd delta = Lt * z[i].segment(nf, nt);
-      for (Eigen::Index j = 0; j < nt; ++j) set_parameter(d, t.parameters[j], value_of(point, t.parameters[j]) + delta(j));
+      add_deviations(d, t.parameters, Lt * z[i].segment(nf, nt));
     }
     // The rail saw α·Q: with this draw's heat at the calibration runs, α is the one that gives the same.
     if (rescale) d.alpha *= q_point / reference_heat_W(m, d);
