@@ -12,7 +12,7 @@
 #include <utility>
 #include <vector>
 
-#include "cli_common.hpp"
+#include "calibration_options.hpp"
 #include "lmcal/report/calibration.hpp"
 #include "progress.hpp"
 
@@ -23,14 +23,7 @@ namespace {
 struct CalibrateOptions {
   std::string set;
   std::string output_dir;  // empty: fits/<set name>
-  CalibrationOptions calibration;
-  FitOptions uncertainty;  // --covariance, --bootstrap: for every fit
-  FrictionConstantOptions constants;
-  ThermalModelOptions thermal_model;
-  FrictionInputOptions input;  // --catalog and the raw logs' segmentation
-  const CLI::Option* lrt_p = nullptr;
-  const CLI::Option* starts = nullptr;
-  const CLI::Option* seed = nullptr;
+  CalibrationCliOptions calibration;
   bool timings = false;  // --timings: each step's wall time on stderr
 };
 
@@ -66,28 +59,7 @@ class StepTimes {
 
 void run_calibrate(CalibrateOptions& o) {
   const CalibrationSet set = find_calibration_set(o.set);
-  CalibrationOptions& options = o.calibration;
-  options.catalog_file = o.input.catalog_file;
-  options.raw = o.input.parsed();
-  options.raw_given = o.input.raw_given();
-  // One setting, every step that has it: the published fits, the diagnoses' baselines and
-  // the calibrated model's fits.
-  apply_friction_constant_options(o.constants, options.friction);
-  apply_friction_constant_options(o.constants, options.friction_diagnosis.fit);
-  std::vector<std::pair<std::string, std::string>> no_inputs;
-  o.thermal_model.apply(options.thermal, no_inputs);
-  o.thermal_model.apply(options.thermal_diagnosis.fit, no_inputs);
-  o.thermal_model.copy_given(options.thermal, options.thermal_diagnosis.fit);
-  if (o.lrt_p->count() > 0) options.thermal_diagnosis.lrt_p = options.friction_diagnosis.lrt_p;
-  for (FitOptions* fit : {&options.friction.fit, &options.friction_diagnosis.fit.fit, &options.thermal.fit,
-                          &options.thermal_diagnosis.fit.fit}) {
-    fit->covariance = o.uncertainty.covariance;
-    fit->bootstrap = o.uncertainty.bootstrap;
-  }
-  for (FitOptions* fit : {&options.friction_diagnosis.fit.fit}) {
-    if (o.starts->count() > 0) fit->starts = options.friction.fit.starts;
-    if (o.seed->count() > 0) fit->seed = options.friction.fit.seed;
-  }
+  const CalibrationOptions options = o.calibration.resolve();
   TerminalProgress progress;
   StepTimes times;
   const Calibration c = calibrate(set, options,
@@ -111,7 +83,6 @@ void run_calibrate(CalibrateOptions& o) {
 
 void setup_calibrate(CLI::App& app) {
   auto o = std::make_shared<CalibrateOptions>();
-  CalibrationOptions& c = o->calibration;
   CLI::App* calibrate = app.add_subcommand(
       "calibrate",
       "The whole calibration of a measurement folder: fits, spread, diagnoses, report.html. Every option may also "
@@ -119,29 +90,8 @@ void setup_calibrate(CLI::App& app) {
   calibrate->add_option("set", o->set, "Measurement folder (friction*.csv logs or a friction*.toml manifest, a thermal*.toml manifest)")
       ->required();
   calibrate->add_option("-o,--output-dir", o->output_dir, "Output folder (default: fits/<folder name>)");
-  calibrate->add_flag("!--no-diagnosis", c.diagnose, "Skip the two diagnoses (fits and report only)");
   calibrate->add_flag("--timings", o->timings, "Print each step's wall time on stderr");
-  add_uncertainty_options(*calibrate, o->uncertainty);
-  // The friction fits: constants held, freed, started and bounded; the load cell's zero; the
-  // multi-start search.
-  add_friction_constant_options(*calibrate, o->constants);
-  o->starts = calibrate->add_option("--starts", c.friction.fit.starts, "Multi-start local searches of the friction fits")
-                  ->capture_default_str();
-  o->seed = calibrate->add_option("--seed", c.friction.fit.seed, "Seed of the multi-start sequence")->capture_default_str();
-  // The guides' catalog and the raw load-cell logs' segmentation.
-  o->input.add_to(*calibrate);
-  // The rail model: heat, source, numerics, h, offsets.
-  o->thermal_model.add_to(*calibrate, c.thermal);
-  ThermalModelOptions::add_offsets(*calibrate, c.thermal);
-  // The diagnoses' thresholds.
-  calibrate->add_option("--friction-min-gain", c.friction_diagnosis.min_cv_gain_percent,
-                        "Least held-out RMSE gain to accept a friction cause, %")
-      ->capture_default_str();
-  calibrate->add_option("--thermal-min-gain", c.thermal_diagnosis.min_cv_gain_percent,
-                        "Least held-out RMSE gain to accept a thermal mechanism, %")
-      ->capture_default_str();
-  o->lrt_p = calibrate->add_option("--lrt-p", c.friction_diagnosis.lrt_p, "Significance level of the diagnoses' likelihood-ratio tests")
-                 ->capture_default_str();
+  o->calibration.add_to(*calibrate);
   calibrate->callback([o] { run_calibrate(*o); });
 }
 

@@ -22,6 +22,7 @@ int main(int argc, char** argv) {
   lmcal::cli::setup_fit(app, args);
   lmcal::cli::setup_diagnose(app);
   lmcal::cli::setup_calibrate(app);
+  lmcal::cli::setup_fleet(app);
   lmcal::cli::setup_predict(app, args);
   lmcal::cli::setup_plan(app, args);
   try {

@@ -32,6 +32,23 @@ bool is_calibration_output(std::string_view file_name) {
   return std::find(names.begin(), names.end(), file_name) != names.end();
 }
 
+namespace {
+
+bool is_friction_log_name(const fs::path& file) {
+  return file.filename().string().starts_with("friction") && file.extension() == ".csv";
+}
+
+bool is_manifest_name(const fs::path& file, std::string_view kind) {
+  return file.filename().string().starts_with(kind) && file.extension() == ".toml";
+}
+
+}  // namespace
+
+bool is_measurement_file(const fs::path& file) {
+  return (is_friction_log_name(file) && !is_calibration_output(file.filename().string())) ||
+         is_manifest_name(file, "friction") || is_manifest_name(file, "thermal");
+}
+
 CalibrationSet find_calibration_set(const fs::path& dir) {
   if (!fs::is_directory(dir)) throw InputError(dir.string(), 0, 0, "expected a measurement folder (friction*.csv, thermal*.toml)");
   CalibrationSet set;
@@ -41,7 +58,7 @@ CalibrationSet find_calibration_set(const fs::path& dir) {
   for (const auto& entry : fs::directory_iterator(dir)) {
     if (!entry.is_regular_file()) continue;
     const std::string file = entry.path().filename().string();
-    if (file.starts_with("friction") && entry.path().extension() == ".csv") {
+    if (is_friction_log_name(entry.path())) {
       // `calibrate -o SET` writes friction_samples.csv beside the logs: never read it back.
       if (is_calibration_output(file)) {
         set.ignored_files.push_back(entry.path());
@@ -49,8 +66,8 @@ CalibrationSet find_calibration_set(const fs::path& dir) {
       }
       set.friction_logs.push_back(entry.path());
     }
-    if (file.starts_with("thermal") && entry.path().extension() == ".toml") manifests.push_back(entry.path());
-    if (file.starts_with("friction") && entry.path().extension() == ".toml") friction_manifests.push_back(entry.path());
+    if (is_manifest_name(entry.path(), "thermal")) manifests.push_back(entry.path());
+    if (is_manifest_name(entry.path(), "friction")) friction_manifests.push_back(entry.path());
   }
   std::sort(set.friction_logs.begin(), set.friction_logs.end());
   std::sort(manifests.begin(), manifests.end());
@@ -510,6 +527,8 @@ nlohmann::json shifts_json(const FitResult& published, const FitResult& calibrat
 }
 
 }  // namespace
+
+std::string calibration_options_json(const CalibrationOptions& options) { return options_json(options).dump(2); }
 
 std::string calibration_json(const Calibration& c) {
   nlohmann::json inputs = nlohmann::json::array();

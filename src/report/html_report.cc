@@ -115,16 +115,19 @@ Page build(const Calibration& c) {
 
 }  // namespace
 
-std::string calibration_report_html(const Calibration& c) {
-  const Page body = build(c);
+std::string report::html_document(std::string_view title, const Page& body) {
   std::string ids;
   for (const auto& id : body.plot_ids()) ids += (ids.empty() ? "" : " ") + id;
   return fmt::format(
       "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
       "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n"
-      "<title>lmcal calibration: {}</title>\n<style>{}</style>\n</head>\n<body data-plots=\"{}\">\n{}<script>{}</script>\n"
+      "<title>{}</title>\n<style>{}</style>\n</head>\n<body data-plots=\"{}\">\n{}<script>{}</script>\n"
       "</body>\n</html>\n",
-      escape_xml(c.set.name), kStyle, ids, body.html(), kCheck);
+      escape_xml(title), kStyle, ids, body.html(), kCheck);
+}
+
+std::string calibration_report_html(const Calibration& c) {
+  return report::html_document("lmcal calibration: " + c.set.name, build(c));
 }
 
 std::vector<std::string> calibration_report_plots(const Calibration& c) { return build(c).plot_ids(); }

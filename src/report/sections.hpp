@@ -11,6 +11,10 @@
 
 namespace lmcal::report {
 
+// A whole page: the report's style, `body`, and the script the browser test reads
+// (data-plots, data-rendered); opens offline.
+std::string html_document(std::string_view title, const Page& body);
+
 // The first screen: the calibrated model, every parameter with its interval and where it comes from.
 void calibrated_section(Page& page, const Calibration& c);
 // How sure the calibrated model is: the standard errors of every covariance method, the

@@ -63,6 +63,10 @@ struct CalibrationSet {
 const std::vector<std::string>& calibration_output_names();
 bool is_calibration_output(std::string_view file_name);
 
+// Whether `file` is a set's measurement (friction*.csv other than lmcal's outputs,
+// friction*.toml, thermal*.toml): a folder holding one is a measurement set.
+bool is_measurement_file(const std::filesystem::path& file);
+
 // What `dir` holds; InputError when it is not a folder or holds neither half.
 CalibrationSet find_calibration_set(const std::filesystem::path& dir);
 
@@ -136,6 +140,9 @@ Calibration calibrate(const CalibrationSet& set, const CalibrationOptions& optio
 // conditions to log), plan_thermal.json and plan_thermal_manifest.toml (the next thermal runs),
 // calibration.json and report.html.
 std::vector<std::pair<std::string, std::string>> calibration_outputs(const Calibration& c);
+
+// Every setting a calibration runs with, as calibration.json records them ("options").
+std::string calibration_options_json(const CalibrationOptions& options);
 
 // calibration.json: the set, its inputs and their hashes, the steps, the headline numbers and
 // the verdicts.

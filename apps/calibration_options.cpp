@@ -1,0 +1,56 @@
+#include "calibration_options.hpp"
+
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace lmcal::cli {
+
+void CalibrationCliOptions::add_to(CLI::App& app) {
+  CalibrationOptions& c = calibration;
+  app.add_flag("!--no-diagnosis", c.diagnose, "Skip the two diagnoses (fits and report only)");
+  add_uncertainty_options(app, uncertainty);
+  // The friction fits: constants held, freed, started and bounded; the load cell's zero; the
+  // multi-start search.
+  add_friction_constant_options(app, constants);
+  starts = app.add_option("--starts", c.friction.fit.starts, "Multi-start local searches of the friction fits")->capture_default_str();
+  seed = app.add_option("--seed", c.friction.fit.seed, "Seed of the multi-start sequence")->capture_default_str();
+  // The guides' catalog and the raw load-cell logs' segmentation.
+  input.add_to(app);
+  // The rail model: heat, source, numerics, h, offsets.
+  thermal_model.add_to(app, c.thermal);
+  ThermalModelOptions::add_offsets(app, c.thermal);
+  // The diagnoses' thresholds.
+  app.add_option("--friction-min-gain", c.friction_diagnosis.min_cv_gain_percent,
+                 "Least held-out RMSE gain to accept a friction cause, %")
+      ->capture_default_str();
+  app.add_option("--thermal-min-gain", c.thermal_diagnosis.min_cv_gain_percent,
+                 "Least held-out RMSE gain to accept a thermal mechanism, %")
+      ->capture_default_str();
+  lrt_p = app.add_option("--lrt-p", c.friction_diagnosis.lrt_p, "Significance level of the diagnoses' likelihood-ratio tests")
+              ->capture_default_str();
+}
+
+CalibrationOptions CalibrationCliOptions::resolve() {
+  CalibrationOptions options = calibration;
+  options.catalog_file = input.catalog_file;
+  options.raw = input.parsed();
+  options.raw_given = input.raw_given();
+  apply_friction_constant_options(constants, options.friction);
+  apply_friction_constant_options(constants, options.friction_diagnosis.fit);
+  std::vector<std::pair<std::string, std::string>> no_inputs;
+  thermal_model.apply(options.thermal, no_inputs);
+  thermal_model.apply(options.thermal_diagnosis.fit, no_inputs);
+  thermal_model.copy_given(options.thermal, options.thermal_diagnosis.fit);
+  if (lrt_p->count() > 0) options.thermal_diagnosis.lrt_p = options.friction_diagnosis.lrt_p;
+  for (FitOptions* fit : {&options.friction.fit, &options.friction_diagnosis.fit.fit, &options.thermal.fit,
+                          &options.thermal_diagnosis.fit.fit}) {
+    fit->covariance = uncertainty.covariance;
+    fit->bootstrap = uncertainty.bootstrap;
+  }
+  if (starts->count() > 0) options.friction_diagnosis.fit.fit.starts = options.friction.fit.starts;
+  if (seed->count() > 0) options.friction_diagnosis.fit.fit.seed = options.friction.fit.seed;
+  return options;
+}
+
+}  // namespace lmcal::cli

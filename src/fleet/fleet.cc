@@ -1,0 +1,338 @@
+#include "lmcal/fleet/fleet.hpp"
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+#include <omp.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <exception>
+#include <fstream>
+#include <map>
+#include <mutex>
+#include <set>
+#include <thread>
+
+#include "io/manifest.hpp"
+#include "lmcal/error.hpp"
+#include "lmcal/fleet/fleet_record.hpp"
+#include "lmcal/io/atomic_file.hpp"
+#include "lmcal/io/hash.hpp"
+
+namespace lmcal {
+
+namespace fs = std::filesystem;
+
+std::string FleetSet::series() const { return fleet_series(unit, axis); }
+
+namespace {
+
+// --- finding the sets ---------------------------------------------------------------------------
+
+bool holds_measurements(const fs::path& dir) {
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(dir, ec))
+    if (entry.is_regular_file() && is_measurement_file(entry.path())) return true;
+  return false;
+}
+
+// `path` relative to `base`, '/'-separated ("." for base itself); both made absolute first.
+std::string relative_id(const fs::path& path, const fs::path& base) {
+  return fs::absolute(path).lexically_normal().lexically_relative(fs::absolute(base).lexically_normal()).generic_string();
+}
+
+bool is_inside(const fs::path& path, const fs::path& folder) {
+  if (folder.empty()) return false;
+  const std::string rel = relative_id(path, folder);
+  return rel == "." || (!rel.empty() && !rel.starts_with(".."));
+}
+
+// A folder name that is a date: "YYYY-MM-DD" and a real day.
+bool is_date(std::string_view text) { return parse_fleet_date(text).has_value(); }
+
+// Unit and date from the folder: ".../unit/YYYY-MM-DD" or ".../unit".
+void infer_unit_and_date(FleetSet& s, const fs::path& root) {
+  const fs::path id(s.id);
+  const std::string last = id.filename().string();
+  if (is_date(last)) {
+    s.date = last;
+    const std::string above = id.parent_path().generic_string();
+    s.unit = above.empty() ? fs::absolute(root).lexically_normal().parent_path().filename().string() : above;
+  } else {
+    s.unit = s.id == "." ? fs::absolute(root).lexically_normal().filename().string() : s.id;
+  }
+}
+
+std::vector<FleetSet> walk_folders(const fs::path& root, const fs::path& exclude) {
+  std::vector<FleetSet> sets;
+  auto consider = [&](const fs::path& dir) {
+    if (!holds_measurements(dir)) return;
+    FleetSet s{.id = relative_id(dir, root), .dir = dir};
+    infer_unit_and_date(s, root);
+    sets.push_back(std::move(s));
+  };
+  consider(root);
+  std::error_code ec;
+  for (auto it = fs::recursive_directory_iterator(root, fs::directory_options::skip_permission_denied, ec);
+       it != fs::recursive_directory_iterator(); it.increment(ec)) {
+    if (ec) throw InputError(root.string(), 0, 0, "cannot list folder: " + ec.message());
+    if (!it->is_directory()) continue;
+    if (it->path().filename().string().starts_with(".") || is_inside(it->path(), exclude)) {
+      it.disable_recursion_pending();
+      continue;
+    }
+    consider(it->path());
+  }
+  return sets;
+}
+
+// fleet.toml: the sets, each with its unit, axis, machine and date.
+std::vector<FleetSet> read_fleet_file(const fs::path& root, const fs::path& file) {
+  const manifest::Manifest m{.file = file.string(), .folder = root};
+  const toml::table top = m.parse();
+  for (const auto& [key, node] : top)
+    if (key.str() != "set") m.fail(key.source(), fmt::format("unknown key '{}': expected [[set]] tables", key.str()));
+  const toml::node* list_node = top.get("set");
+  const toml::array* list = list_node ? list_node->as_array() : nullptr;
+  if (!list) throw InputError(file.string(), 1, 1, "expected [[set]] tables (folder, unit, axis, machine, date)");
+  std::vector<FleetSet> sets;
+  for (const toml::node& item : *list) {
+    const toml::table& t = manifest::table_of(m, item, "[[set]]");
+    FleetSet s;
+    const toml::node* folder = nullptr;
+    for (const auto& [key, node] : t) {
+      const std::string k(key.str());
+      if (k == "folder") {
+        folder = &node;
+        s.dir = root / manifest::string_of(m, key, node);
+      } else if (k == "unit" || k == "axis" || k == "machine") {
+        std::string& field = k == "unit" ? s.unit : k == "axis" ? s.axis : s.machine;
+        field = manifest::string_of(m, key, node);
+        if (field.empty()) m.fail(node.source(), fmt::format("expected a non-empty {}", k));
+      } else if (k == "date") {
+        if (const auto* d = node.as_date())
+          s.date = fmt::format("{:04}-{:02}-{:02}", d->get().year, d->get().month, d->get().day);
+        else if (node.is_string() && is_date(manifest::string_of(m, key, node)))
+          s.date = manifest::string_of(m, key, node);
+        else
+          m.fail(node.source(), "expected a date: 2026-09-01 or \"2026-09-01\"");
+      } else {
+        m.fail(key.source(), fmt::format("unknown key '{}': expected folder, unit, axis, machine, date", k));
+      }
+    }
+    if (!folder) m.fail(t.source(), "expected folder = \"...\" (the set's folder, relative to the fleet's root)");
+    if (!fs::is_directory(s.dir)) m.fail(folder->source(), fmt::format("folder {} does not exist", s.dir.string()));
+    if (!holds_measurements(s.dir))
+      m.fail(folder->source(),
+             fmt::format("folder {} holds no measurements (friction*.csv, friction*.toml, thermal*.toml)", s.dir.string()));
+    s.id = relative_id(s.dir, root);
+    if (s.unit.empty()) {
+      const std::string date = s.date;
+      infer_unit_and_date(s, root);
+      if (!date.empty()) s.date = date;
+    }
+    for (const FleetSet& other : sets) {
+      if (other.id == s.id) m.fail(folder->source(), fmt::format("folder {} is listed twice", s.id));
+      if (other.unit == s.unit && other.axis == s.axis && other.date == s.date)
+        m.fail(t.source(), fmt::format("unit {} has two sets dated '{}' ({} and {})", s.series(), s.date, other.id, s.id));
+    }
+    sets.push_back(std::move(s));
+  }
+  return sets;
+}
+
+// --- a set's inputs -----------------------------------------------------------------------------
+
+bool is_lmcal_output(const std::string& name) {
+  return is_calibration_output(name) || name == kFleetRecordFile || name.ends_with(".tmp");
+}
+
+// Every file of the set's folder (and below) that may be an input: all but lmcal's outputs,
+// hidden files and the output folder. Relative to the root, sorted.
+std::vector<std::string> folder_files(const Fleet& fleet, const FleetSet& s, const fs::path& output_dir) {
+  std::vector<std::string> files;
+  std::error_code ec;
+  for (auto it = fs::recursive_directory_iterator(s.dir, fs::directory_options::skip_permission_denied, ec);
+       it != fs::recursive_directory_iterator(); it.increment(ec)) {
+    if (ec) throw InputError(s.dir.string(), 0, 0, "cannot list folder: " + ec.message());
+    const std::string name = it->path().filename().string();
+    if (name.starts_with(".") || (it->is_directory() && is_inside(it->path(), output_dir))) {
+      if (it->is_directory()) it.disable_recursion_pending();
+      continue;
+    }
+    if (it->is_regular_file() && !is_lmcal_output(name)) files.push_back(relative_id(it->path(), fleet.root));
+  }
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+std::string read_text(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+}  // namespace
+
+std::optional<int> parse_fleet_date(std::string_view text) {
+  if (text.size() != 10 || text[4] != '-' || text[7] != '-') return std::nullopt;
+  int parts[3] = {0, 0, 0};
+  std::size_t at = 0;
+  for (int p = 0; p < 3; ++p, ++at) {
+    const std::size_t width = p == 0 ? 4 : 2;
+    for (std::size_t i = 0; i < width; ++i, ++at) {
+      if (text[at] < '0' || text[at] > '9') return std::nullopt;
+      parts[p] = parts[p] * 10 + (text[at] - '0');
+    }
+  }
+  const std::chrono::year_month_day day{std::chrono::year(parts[0]), std::chrono::month(static_cast<unsigned>(parts[1])),
+                                        std::chrono::day(static_cast<unsigned>(parts[2]))};
+  if (!day.ok()) return std::nullopt;
+  return static_cast<int>(std::chrono::sys_days(day).time_since_epoch().count());
+}
+
+Fleet discover_fleet(const fs::path& root, const fs::path& exclude) {
+  if (!fs::is_directory(root)) throw InputError(root.string(), 0, 0, "expected the fleet's folder (a folder of measurement folders)");
+  Fleet fleet{.root = root};
+  const fs::path file = root / "fleet.toml";
+  if (fs::exists(file)) {
+    fleet.sets = read_fleet_file(root, file);
+    fleet.source = "fleet.toml";
+  } else {
+    fleet.sets = walk_folders(root, exclude);
+    fleet.source = "folders";
+  }
+  if (fleet.sets.empty())
+    throw InputError(root.string(), 0, 0,
+                     "no measurement folders: expected folders holding friction*.csv, friction*.toml or thermal*.toml "
+                     "(one per unit, or per unit and date), or a fleet.toml listing them");
+  std::sort(fleet.sets.begin(), fleet.sets.end(), [](const FleetSet& a, const FleetSet& b) { return a.id < b.id; });
+  return fleet;
+}
+
+std::string fleet_options_hash(const CalibrationOptions& options) {
+  return sha256_text(std::string("lmcal ") + LMCAL_VERSION + "\n" + calibration_options_json(options));
+}
+
+std::optional<std::string> up_to_date_record(const Fleet& fleet, std::size_t index, const FleetOptions& options,
+                                             const std::string& options_hash) {
+  const FleetSet& s = fleet.sets.at(index);
+  const fs::path out = options.output_dir / s.id;
+  const fs::path file = out / kFleetRecordFile;
+  if (!fs::is_regular_file(file)) return std::nullopt;
+  std::string text = read_text(file);
+  try {
+    const FleetRecord r = parse_fleet_record(text);
+    if (r.id != s.id || r.options_sha256 != options_hash || r.lmcal_version != LMCAL_VERSION) return std::nullopt;
+    if (r.status == "ok" && !fs::is_regular_file(out / "calibration.json")) return std::nullopt;
+    std::map<std::string, std::string> recorded(r.inputs.begin(), r.inputs.end());
+    for (const std::string& f : folder_files(fleet, s, options.output_dir))
+      if (!recorded.contains(f)) return std::nullopt;  // a file added since
+    for (const auto& [f, hash] : recorded) {
+      const fs::path p = fleet.root / f;
+      if (!fs::is_regular_file(p) || sha256_file(p) != hash) return std::nullopt;
+    }
+  } catch (const std::exception&) {
+    return std::nullopt;  // unreadable or of another shape: made again
+  }
+  return text;
+}
+
+FleetSetOutcome run_fleet_set(const Fleet& fleet, std::size_t index, const FleetOptions& options,
+                              const std::string& options_hash) {
+  if (auto record = up_to_date_record(fleet, index, options, options_hash))
+    return {.record = *record, .computed = false, .failed = parse_fleet_record(*record).status != "ok"};
+  const FleetSet& s = fleet.sets.at(index);
+  const fs::path out = options.output_dir / s.id;
+  FleetRecord r{.id = s.id, .unit = s.unit, .axis = s.axis, .machine = s.machine, .date = s.date,
+                .lmcal_version = LMCAL_VERSION, .options_sha256 = options_hash};
+  OutputSet files;
+  std::set<std::string> inputs;
+  try {
+    for (const std::string& f : folder_files(fleet, s, options.output_dir)) inputs.insert(f);
+    const Calibration c = calibrate(find_calibration_set(s.dir), options.calibration);
+    for (const auto& [file, hash] : c.inputs) inputs.insert(relative_id(file, fleet.root));
+    for (const auto& [name, text] : calibration_outputs(c)) files.add(out / name, text);
+    fill_fleet_record(r, c);
+  } catch (const std::exception& e) {
+    r.status = "failed";
+    r.error = e.what();
+    files = OutputSet();
+    // Outputs of an earlier calibration of other inputs would now mislead: removed.
+    std::error_code ignored;
+    for (const std::string& name : calibration_output_names()) fs::remove(out / name, ignored);
+  }
+  for (const std::string& f : inputs) {
+    std::error_code ec;
+    r.inputs.emplace_back(f, fs::is_regular_file(fleet.root / f, ec) ? sha256_file(fleet.root / f) : "missing");
+  }
+  std::string record = fleet_record_json(r);
+  files.add(out / kFleetRecordFile, record);  // last: a record on disk means the outputs are whole
+  files.commit();
+  return {.record = std::move(record), .computed = true, .failed = r.status != "ok"};
+}
+
+FleetRun run_fleet(const Fleet& fleet, const FleetOptions& options, const FleetProgress& progress) {
+  if (options.shards == 0 || options.shard >= options.shards)
+    throw InvalidParameter("--shard", fmt::format("shard {} of {}: expected i/n with 0 <= i < n", options.shard, options.shards));
+  const std::string hash = fleet_options_hash(options.calibration);
+  FleetRun run;
+  run.records.resize(fleet.sets.size());
+  std::vector<std::size_t> mine;
+  for (std::size_t i = 0; i < fleet.sets.size(); ++i)
+    if (i % options.shards == options.shard) mine.push_back(i);
+  std::atomic<std::size_t> next{0};
+  std::mutex mutex;
+  std::size_t done = 0;
+  std::exception_ptr error;
+  auto work = [&] {
+    if (options.jobs > 1) omp_set_num_threads(1);  // the jobs already fill the cores
+    for (std::size_t k; (k = next++) < mine.size();) {
+      {
+        const std::lock_guard lock(mutex);
+        if (error) return;
+      }
+      try {
+        FleetSetOutcome outcome = run_fleet_set(fleet, mine[k], options, hash);
+        const std::lock_guard lock(mutex);
+        (outcome.computed ? run.computed : run.skipped) += 1;
+        run.failed += outcome.failed ? 1 : 0;
+        ++done;
+        if (progress) progress(done, mine.size(), fleet.sets[mine[k]].id, outcome);
+        run.records[mine[k]] = std::move(outcome.record);
+      } catch (...) {  // the outputs could not be written: the fleet stops
+        const std::lock_guard lock(mutex);
+        if (!error) error = std::current_exception();
+      }
+    }
+  };
+  std::vector<std::thread> threads;
+  for (std::size_t j = 1; j < std::max<std::size_t>(1, options.jobs); ++j) threads.emplace_back(work);
+  work();
+  for (auto& t : threads) t.join();
+  if (error) std::rethrow_exception(error);
+  return run;
+}
+
+std::vector<std::string> read_fleet_records(const Fleet& fleet, const FleetOptions& options) {
+  const std::string hash = fleet_options_hash(options.calibration);
+  std::vector<std::string> records, missing;
+  for (std::size_t i = 0; i < fleet.sets.size(); ++i) {
+    if (auto r = up_to_date_record(fleet, i, options, hash))
+      records.push_back(std::move(*r));
+    else
+      missing.push_back(fleet.sets[i].id);
+  }
+  if (!missing.empty()) {
+    const std::size_t shown = std::min<std::size_t>(missing.size(), 5);
+    throw InputError(options.output_dir.string(), 0, 0,
+                     fmt::format("{} of {} sets have no up-to-date results ({}{}): run the shards that did not finish, "
+                                 "or `lmcal fleet {}` with the same options (it calibrates only those)",
+                                 missing.size(), fleet.sets.size(),
+                                 fmt::join(missing.begin(), missing.begin() + static_cast<std::ptrdiff_t>(shown), ", "),
+                                 missing.size() > shown ? ", …" : "", fleet.root.string()));
+  }
+  return records;
+}
+
+}  // namespace lmcal
