@@ -15,6 +15,7 @@
 #include "progress.hpp"
 #include "lmcal/error.hpp"
 #include "lmcal/io/atomic_file.hpp"
+#include "lmcal/rig/fleet_rig.hpp"
 #include "lmcal/rig/virtual_rig.hpp"
 
 namespace lmcal::cli {
@@ -35,6 +36,9 @@ struct GenerateOptions {
   std::string catalog_file;  // the user's catalog (its guides and bars)
   std::optional<GuideCatalog> catalog;
   std::string name = "synthetic";
+  FleetRigConfig fleet;
+  std::map<std::string, double> spread;  // --spread: replaces the default spreads when given
+  std::vector<std::string> outliers, drifts;  // "U:NAME=VALUE"
 };
 
 RigEffects resolve_effects(const std::map<std::string, double>& given) {
@@ -125,6 +129,35 @@ void run_generate_thermal(GenerateOptions& o, const std::vector<std::string>& ar
   std::cout << fmt::format("wrote {} thermal runs of {} records to {} (manifest {}, truth {})\n", made.set.runs.size(),
                            made.set.runs.empty() ? 0 : made.set.runs.front().trace.size(), (dir / "thermal").string(),
                            (dir / "thermal.toml").string(), (dir / "thermal_truth.json").string());
+}
+
+// "U:NAME=VALUE" (unit 1-based): an outlier's factor or a drift's relative change.
+FleetRigChange parse_change(const char* option, const std::string& text) {
+  const auto colon = text.find(':'), equals = text.find('=');
+  FleetRigChange c;
+  try {
+    if (colon == std::string::npos || equals == std::string::npos || equals < colon) throw std::invalid_argument(text);
+    c.unit = std::stoul(text.substr(0, colon));
+    c.parameter = text.substr(colon + 1, equals - colon - 1);
+    c.value = std::stod(text.substr(equals + 1));
+  } catch (const std::logic_error&) {
+    throw InvalidParameter(option, fmt::format("'{}': expected UNIT:NAME=VALUE, e.g. 7:mu_v=1.4", text));
+  }
+  return c;
+}
+
+void run_generate_fleet(GenerateOptions& o) {
+  FleetRigConfig& c = o.fleet;
+  c.seed = o.seed;
+  if (!o.spread.empty()) c.spread = o.spread;
+  for (const auto& text : o.outliers) c.outliers.push_back(parse_change("--outlier", text));
+  for (const auto& text : o.drifts) c.drifts.push_back(parse_change("--drift", text));
+  const FleetRigOutput made = with_progress("generating the fleet", [&](const Progress&) { return generate_fleet(c); });
+  OutputSet out;
+  for (const auto& [file, text] : made.files) out.add(fs::path(o.output) / file, text);
+  out.commit();
+  std::cout << fmt::format("wrote {} sets of {} units to {} (fleet.toml; truth: fleet_truth.json)\n", made.sets, c.units,
+                           o.output);
 }
 
 void add_common(CLI::App& app, GenerateOptions& o) {
@@ -223,6 +256,25 @@ void setup_generate(CLI::App& app, const std::vector<std::string>& argv) {
                              "No ambient columns: the manifest's ambient_C (--ambient) instead");
   thermal->add_option("--ambient-wave", t.ambient_wave_K, "Amplitude of the ambient's 2 h wave, K")->capture_default_str();
   thermal->callback([o, &argv] { run_generate_thermal(*o, argv); });
+
+  CLI::App* fleet = generate->add_subcommand(
+      "fleet", "A fleet of units (a folder per unit, or per unit and date) with a known unit-to-unit spread, for lmcal fleet");
+  fleet->add_option("--seed", o->seed, "Random seed (same seed, same data)")->capture_default_str();
+  fleet->add_option("-o,--output", o->output, "Output folder (the fleet's root)")->required();
+  FleetRigConfig& fl = o->fleet;
+  fleet->add_option("--units", fl.units, "Units")->capture_default_str();
+  fleet->add_option("--dated-units", fl.dated_units, "Units 1 … N are logged on --dates dates, the others once")->capture_default_str();
+  fleet->add_option("--dates", fl.dates, "Dates of the dated units")->capture_default_str();
+  fleet->add_option("--first-date", fl.first_date, "First date, YYYY-MM-DD")->capture_default_str();
+  fleet->add_option("--days-between", fl.days_between, "Days between dates")->capture_default_str();
+  add_assignments(*fleet, "--spread", o->spread,
+                  "Relative unit-to-unit SD of a constant (or alpha): --spread mu_v=0.08 (repeatable; default mu_v=0.08, "
+                  "mu_st=0.05, alpha=0.05)");
+  fleet->add_option("--outlier", o->outliers, "A unit's constant times a factor: --outlier 5:mu_st=1.4 (repeatable)");
+  fleet->add_option("--drift", o->drifts, "A dated unit's constant changing linearly over its dates: --drift 2:mu_v=0.25 (repeatable)");
+  fleet->add_option("--corrupt", fl.corrupt, "Units whose first set has a corrupt friction log")->delimiter(',');
+  fleet->add_flag("!--no-thermal", fl.thermal, "Friction logs only");
+  fleet->callback([o] { run_generate_fleet(*o); });
 
   CLI::App* list = generate->add_subcommand("effects", "List the named effects");
   list->callback([] {

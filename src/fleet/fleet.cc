@@ -39,7 +39,11 @@ bool holds_measurements(const fs::path& dir) {
 
 // `path` relative to `base`, '/'-separated ("." for base itself); both made absolute first.
 std::string relative_id(const fs::path& path, const fs::path& base) {
-  return fs::absolute(path).lexically_normal().lexically_relative(fs::absolute(base).lexically_normal()).generic_string();
+  auto normal = [](const fs::path& p) {
+    fs::path n = fs::absolute(p).lexically_normal();
+    return n.has_filename() ? n : n.parent_path();  // "a/" is "a"
+  };
+  return normal(path).lexically_relative(normal(base)).generic_string();
 }
 
 bool is_inside(const fs::path& path, const fs::path& folder) {

@@ -78,7 +78,8 @@ Plot forest_plot(const PopulationOfParameter& pop) {
             .y_label = fmt::format("{} ({})", pop.name, pop.unit)};
   const std::set<std::size_t> flagged(pop.fit.outliers.begin(), pop.fit.outliers.end());
   const std::size_t step = report::stride(pop.series.size(), kForestUnits);
-  Series units{.label = "unit (95 %)", .mark = report::Mark::points}, outliers{.label = "outlier (95 %)", .mark = report::Mark::points, .color = "#D55E00"};
+  Series units{.label = "unit (95 %)", .mark = report::Mark::points, .color = "#0072B2"};
+  Series outliers{.label = "outlier (95 %)", .mark = report::Mark::points, .color = "#D55E00"};
   for (std::size_t i = 0; i < pop.series.size(); ++i) {
     Series& to = flagged.contains(i) ? outliers : units;
     if (&to == &units && i % step != 0) continue;
@@ -87,7 +88,7 @@ Plot forest_plot(const PopulationOfParameter& pop) {
     to.y_error.push_back(1.96 * pop.estimates[i].se);
   }
   const double x0 = 0.5, x1 = static_cast<double>(pop.series.size()) + 0.5;
-  plot.series.push_back({.label = "population mean, new unit 95 %", .x = {x0, x1}, .y = {r.mean, r.mean}, .color = "#999999",
+  plot.series.push_back({.label = "mean; a new unit (95 %)", .x = {x0, x1}, .y = {r.mean, r.mean}, .color = "#999999",
                          .band_low = {r.mean - 1.96 * r.tau, r.mean - 1.96 * r.tau},
                          .band_high = {r.mean + 1.96 * r.tau, r.mean + 1.96 * r.tau}});
   plot.series.push_back(std::move(units));

@@ -18,6 +18,8 @@ namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
+// No index: subset() leaves nobody out.
+constexpr std::size_t kNobody = std::numeric_limits<std::size_t>::max();
 // A unit is tested for outliers only against at least this many others.
 constexpr std::size_t kMinPopulation = 3;
 // The Q-profile's upper bound is searched up to this multiple of the data's variance.
@@ -227,6 +229,7 @@ double q_profile_bound(std::span<const Estimate> e, double target, double varian
 
 // ---- Outliers -----------------------------------------------------------------------------
 
+// The estimates of `members` but `leave_out`.
 std::vector<Estimate> subset(std::span<const Estimate> e, const std::vector<std::size_t>& members, std::size_t leave_out) {
   std::vector<Estimate> out;
   out.reserve(members.size());
@@ -315,7 +318,7 @@ void fit_trend(std::span<const DatedEstimate> s, Drift& d) {
   const double slope = sty / stt;
   const auto line = [&](double day) { return y_bar + slope * (day - t_bar); };
   double chi2 = 0;
-  for (const DatedEstimate& x : s) chi2 += (x.value - line(x.day)) * (x.value - line(x.day)) / (x.se * x.se);
+  for (const DatedEstimate& x : s) chi2 += std::pow((x.value - line(x.day)) / x.se, 2);
   const ScaledTest test = scaled_test(slope, 1 / std::sqrt(stt), chi2, static_cast<double>(s.size() - 2));
   d.slope_per_day = slope;
   d.slope_se = test.se;
@@ -383,8 +386,8 @@ RandomEffects random_effects(std::span<const Estimate> estimates, double confide
   const double typical_v = dof * f.sum_w / (f.sum_w * f.sum_w - f.sum_w2);
   r.i2 = c.tau2 / (c.tau2 + typical_v);
 
-  r.method = "REML tau (Newton/Fisher scoring from DerSimonian-Laird or a better tau grid point), Q-profile tau interval, "
-             "Hartung-Knapp-Sidik-Jonkman mean interval (t, k - 1 dof, scaled by max(1, q))";
+  r.method = "REML tau (Newton/Fisher scoring from DerSimonian-Laird or a better tau grid point), "
+             "Q-profile tau interval, Hartung-Knapp-Sidik-Jonkman mean interval (t, k - 1 dof, scaled by max(1, q))";
   if (!r.converged) r.method += "; REML did not converge, tau is its last iterate";
   if (std::isinf(r.tau_high)) r.method += "; tau upper bound unbounded (+inf): too few units to bound the spread";
   return r;
@@ -424,7 +427,8 @@ PopulationFit fit_population(std::span<const Estimate> estimates, std::size_t fa
     }
     const double p = worst_deviation.p() * static_cast<double>(members.size()) * family;
     if (!(p < alpha)) {
-      fit.note = fmt::format("stopped: the most extreme unit left ({}) has Bonferroni p = {:.2g} >= {}", worst, std::min(1.0, p), alpha);
+      fit.note = fmt::format("stopped: the most extreme unit left ({}) has Bonferroni p = {:.2g} >= {}", worst,
+                             std::min(1.0, p), alpha);
       break;
     }
     fit.outliers.push_back(worst);
@@ -432,7 +436,7 @@ PopulationFit fit_population(std::span<const Estimate> estimates, std::size_t fa
   }
   std::sort(fit.outliers.begin(), fit.outliers.end());
 
-  const std::vector<Estimate> population = subset(estimates, members, n);
+  const std::vector<Estimate> population = subset(estimates, members, kNobody);
   fit.population = random_effects(population);
   fit.z.resize(n);
   fit.p_adjusted.resize(n);

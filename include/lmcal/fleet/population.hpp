@@ -6,8 +6,10 @@
 //   y_i = μ + u_i + e_i,   u_i ~ N(0, τ²)  (real unit-to-unit difference),  e_i ~ N(0, s_i²)
 //   w_i(τ²) = 1 / (s_i² + τ²),   μ(τ²) = Σ w_i y_i / Σ w_i
 //   Q(τ²)   = Σ w_i(τ²) (y_i − μ(τ²))²      generalized Q, decreasing in τ²; Q(0) is Cochran's Q
-//   τ²      REML (Fisher scoring with step halving, started at DerSimonian-Laird
-//           τ²_DL = max(0, (Q(0) − (k − 1)) / (Σf − Σf²/Σf)), f_i = 1/s_i²), kept >= 0
+//   τ²      REML, kept >= 0: Newton steps (Fisher scoring where the curvature is wrong) with step
+//           halving, from DerSimonian-Laird τ²_DL = max(0, (Q(0) − (k − 1)) / (Σf − Σf²/Σf)),
+//           f_i = 1/s_i², or from a coarse τ² grid's best point when that is higher (with SEs
+//           that differ by orders of magnitude the restricted likelihood can have several maxima)
 //   τ interval   Q-profile (Viechtbauer 2007): Q(τ²_low) = χ²_{k−1}((1 + c)/2),
 //                Q(τ²_high) = χ²_{k−1}((1 − c)/2); a bound is 0 when Q(0) is already below
 //   μ interval   Hartung-Knapp-Sidik-Jonkman: μ ± t_{k−1}((1 + c)/2) · mean_se,
@@ -40,6 +42,7 @@
 // line: the single-mean model's χ² would count the shift itself as noise and cap |Δ|/se(Δ)
 // however large the step. With correct SEs the combined test rejects 2-3 % of clean series at
 // 0.05 (8 to 20 dates; Bonferroni is conservative); a t on the floored SE would reject 0.2 %.
+// With 4 dates and SEs understated 2× it rejects 9 %: few dates cannot tell scatter from SEs.
 //
 // Units: value and se in the constant's own unit (any, the same for all units); day in days
 // since any epoch; slope_per_day in value unit per day; percentages in %; τ in value unit.
@@ -80,7 +83,7 @@ struct RandomEffects {
   std::size_t k = 0;
   double mean = NAN, mean_se = NAN, mean_low = NAN, mean_high = NAN;  // HKSJ; k = 1: the estimate, normal interval
   double tau = NAN, tau_low = NAN, tau_high = NAN;  // REML between-unit SD and its Q-profile interval; NaN for k = 1
-  double tau_dl = NAN;                              // the DerSimonian-Laird moment estimate REML starts from
+  double tau_dl = NAN;                              // the DerSimonian-Laird moment estimate (for comparison)
   double q = NAN, q_p = NAN;                        // Cochran's Q (weights 1/se²) and its χ²(k − 1) upper p
   double i2 = NAN;                                  // τ²/(τ² + s̃²) with the REML τ, in [0, 1)
   bool converged = false;                           // REML converged (false for k < 2)
