@@ -10,6 +10,7 @@ packages=(
   libcli11-dev libfmt-dev nlohmann-json3-dev libtomlplusplus-dev libfast-float-dev
   libboost-dev libssl-dev        # Student-t and F quantiles (Boost.Math); SHA-256 of inputs (OpenSSL)
   pybind11-dev python3-dev python3-numpy  # the Python package lmcal
+  openmpi-bin libopenmpi-dev     # lmcal fleet on a cluster: mpirun -np N (optional at build time)
   libgtest-dev libbenchmark-dev  # tests and benchmarks
   python3-pytest python3-pandas  # the Python package's tests (a DataFrame goes in)
   chromium chromium-driver       # the report's test in a headless browser

@@ -1,0 +1,87 @@
+#!/usr/bin/env bash
+# lmcal fleet end to end, as a cluster user runs it: a generated fleet calibrated once as the
+# reference; killed midway and resumed (the same summary, finished sets not made again, no
+# stray temporary files); on MPI with 2 and 3 ranks (the same bytes); bad layouts refused
+# before any work. $LMCAL is the binary; $LMCAL_MPI=1 when it was built with MPI.
+set -uo pipefail
+: "${LMCAL:?set LMCAL to the lmcal binary}"
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+cd "$work"
+failures=0
+pass=0
+check() {  # check NAME CONDITION...
+  local name=$1; shift
+  if "$@"; then pass=$((pass + 1)); else echo "FAILED: $name"; failures=$((failures + 1)); fi
+}
+same_summary() {  # same_summary DIR: fleet.json, fleet.csv, fleet.html equal the reference's
+  for f in fleet.json fleet.csv fleet.html; do cmp -s "ref/$f" "$1/$f" || { echo "  $1/$f differs"; return 1; }; done
+}
+
+"$LMCAL" generate fleet -o fleet --outlier 9:mu_st=1.4 --outlier 21:mu_v=1.5 --drift 2:mu_v=0.25 --corrupt 30 >/dev/null
+"$LMCAL" fleet fleet -o ref --jobs 2 >ref.txt 2>&1
+check "the reference run succeeds" test -s ref/fleet.json
+check "the outliers are named" grep -q "outlier: u09: mu_st" ref.txt
+check "the second outlier is named" grep -q "outlier: u21: mu_v" ref.txt
+check "the drift is named" grep -q "drift: u02: mu_v" ref.txt
+check "the corrupt set is reported" grep -q "failed u30: fleet/u30/friction.csv:" ref.txt
+
+# --- killed midway, resumed --------------------------------------------------------------------
+"$LMCAL" fleet fleet -o killed --jobs 2 >/dev/null 2>&1 &
+pid=$!
+for _ in $(seq 600); do
+  [[ $(find killed -name fleet_set.json 2>/dev/null | wc -l) -ge 20 ]] && break
+  sleep 0.05
+done
+kill -9 "$pid" 2>/dev/null
+wait "$pid" 2>/dev/null
+find killed -name fleet_set.json | sort >done_before.txt
+done_count=$(wc -l <done_before.txt)
+check "the kill came midway ($done_count sets done)" test "$done_count" -ge 20 -a "$done_count" -lt 68
+for f in $(cat done_before.txt); do stat -c '%n %Y %i' "$f"; done >stamps_before.txt
+"$LMCAL" fleet fleet -o killed --jobs 2 >resumed.txt 2>&1
+skipped=$(sed -n 's/.* \([0-9]*\) up to date.*/\1/p' resumed.txt)
+check "the resumed run skips the finished sets ($skipped of $done_count)" test "${skipped:-0}" -ge "$done_count"
+for f in $(cat done_before.txt); do stat -c '%n %Y %i' "$f"; done >stamps_after.txt
+check "finished sets are not made again" cmp -s stamps_before.txt stamps_after.txt
+check "the resumed summary is the reference's" same_summary killed
+check "no temporary file is left" test -z "$(find killed -name '*.tmp')"
+
+# --- MPI: the same bytes with 2 and 3 ranks --------------------------------------------------
+if [[ "${LMCAL_MPI:-0}" == 1 ]]; then
+  mpi_flags=(--oversubscribe)
+  [[ $(id -u) -eq 0 ]] && mpi_flags+=(--allow-run-as-root)
+  for np in 2 3; do
+    mpirun "${mpi_flags[@]}" -np $np "$LMCAL" fleet fleet -o mpi$np >mpi$np.txt 2>&1
+    check "mpirun -np $np succeeds" test $? -eq 0
+    check "mpirun -np $np gives the reference's summary" same_summary mpi$np
+    check "mpirun -np $np calibrated every set once" grep -q "68 calibrated, 0 up to date" mpi$np.txt
+  done
+else
+  echo "note: lmcal was built without MPI; the mpirun checks were skipped"
+fi
+
+# --- bad layouts: refused before any work, naming the entry --------------------------------
+refused() {  # refused EXPECTED_TEXT ARGS...
+  local expected=$1; shift
+  rm -rf out
+  "$LMCAL" "$@" -o out >stdout.txt 2>stderr.txt
+  local rc=$?
+  if [[ $rc -eq 0 ]]; then echo "  accepted: $*"; return 1; fi
+  if ! grep -qF -- "$expected" stderr.txt; then echo "  message lacks '$expected': $(cat stderr.txt)"; return 1; fi
+  if [[ -e out ]]; then echo "  wrote output despite the error"; return 1; fi
+}
+mkdir -p empty/a
+check "a root without measurement folders is refused" refused "no measurement folders" fleet empty
+mkdir -p listed/a && cp fleet/u05/friction.csv listed/a/
+printf '[[set]]\nfolder = "a"\n[[set]]\nfolder = "b"\n' >listed/fleet.toml
+check "a fleet.toml naming a missing folder is refused" refused "listed/fleet.toml:4:10: folder listed/b does not exist" fleet listed
+mkdir -p listed/b && cp fleet/u05/friction.csv listed/b/
+printf '[[set]]\nfolder = "a"\nunit = "7"\n[[set]]\nfolder = "b"\nunit = "7"\n' >listed/fleet.toml
+check "duplicate unit and date are refused" refused "unit 7 has two sets dated ''" fleet listed
+check "a bad shard is refused" refused "--shard" fleet fleet --shard 2/2
+check "--summarize with --shard is refused" refused "--summarize" fleet fleet --shard 0/2 --summarize
+check "--summarize without results names what is missing" refused "68 of 68 sets have no up-to-date results" fleet fleet --summarize
+
+echo "fleet_test.sh: $pass passed, $failures failed"
+[[ $failures -eq 0 ]]
