@@ -141,32 +141,40 @@ double reml_start(std::span<const Estimate> e, double tau2_dl) {
 //   score = ½ [yᵀP²y − tr P],  observed information = yᵀP³y − ½ tr P²,  expected = ½ tr P².
 // A Newton step where the observed information is positive (it converges in a few steps where
 // Fisher scoring crawls, when the SEs differ widely), a Fisher scoring step elsewhere; a step that
-// lowers the likelihood is halved; τ² is kept >= 0. Needs k >= 2.
+// lowers the likelihood is halved; τ² is kept >= 0. Needs k >= 2. reml_step is one step from τ².
+double reml_step(std::span<const Estimate> e, double tau2) {
+  const double mu = weighted_mean(e, tau2).mean;
+  double sw = 0, sw2 = 0, sw3 = 0, swr = 0, swr2 = 0, sw3r2 = 0;  // r_i = w_i (y_i − μ) = (Py)_i
+  for (const Estimate& x : e) {
+    const double w = 1 / (x.se * x.se + tau2), residual = w * (x.value - mu);
+    sw += w;
+    sw2 += w * w;
+    sw3 += w * w * w;
+    swr += w * residual;
+    swr2 += residual * residual;
+    sw3r2 += w * residual * residual;
+  }
+  const double trace_p = sw - sw2 / sw;
+  const double trace_p2 = sw2 - 2 * sw3 / sw + (sw2 / sw) * (sw2 / sw);
+  const double score = 0.5 * (swr2 - trace_p);
+  const double observed = (sw3r2 - swr * swr / sw) - 0.5 * trace_p2;
+  return score / (observed > 0 ? observed : 0.5 * trace_p2);
+}
+
+// The size τ² changes are judged against (with τ²): the mean s².
+double mean_variance(std::span<const Estimate> e) {
+  double sum = 0;
+  for (const Estimate& x : e) sum += x.se * x.se;
+  return sum / static_cast<double>(e.size());
+}
+
 Reml reml_tau2(std::span<const Estimate> e, double start) {
-  double scale = 0;  // the size of τ² changes are judged against: a typical s² plus τ²
-  for (const Estimate& x : e) scale += x.se * x.se;
-  scale /= static_cast<double>(e.size());
+  const double scale = mean_variance(e);
 
   Reml r{start, false};
   double loglik = restricted_log_likelihood(e, r.tau2);
   for (int iteration = 0; iteration < 200 && !r.converged; ++iteration) {
-    const double mu = weighted_mean(e, r.tau2).mean;
-    double sw = 0, sw2 = 0, sw3 = 0, swr = 0, swr2 = 0, sw3r2 = 0;  // r_i = w_i (y_i − μ) = (Py)_i
-    for (const Estimate& x : e) {
-      const double w = 1 / (x.se * x.se + r.tau2), residual = w * (x.value - mu);
-      sw += w;
-      sw2 += w * w;
-      sw3 += w * w * w;
-      swr += w * residual;
-      swr2 += residual * residual;
-      sw3r2 += w * residual * residual;
-    }
-    const double trace_p = sw - sw2 / sw;
-    const double trace_p2 = sw2 - 2 * sw3 / sw + (sw2 / sw) * (sw2 / sw);
-    const double score = 0.5 * (swr2 - trace_p);
-    const double observed = (sw3r2 - swr * swr / sw) - 0.5 * trace_p2;
-    const double step = score / (observed > 0 ? observed : 0.5 * trace_p2);
-    double next = std::max(0.0, r.tau2 + step);
+    double next = std::max(0.0, r.tau2 + reml_step(e, r.tau2));
     double next_loglik = restricted_log_likelihood(e, next);
     for (int halving = 0; halving < 60 && next_loglik < loglik; ++halving) {
       next = 0.5 * (r.tau2 + next);
@@ -188,18 +196,42 @@ struct Centre {
   bool converged = false;
 };
 
-// REML τ² and the HKSJ mean for k >= 2; for k = 1 the estimate itself, τ unknown.
-Centre fit_centre(std::span<const Estimate> e) {
+// From this many estimates on, a leave-one-out fit starts at the maximum of all members (one unit
+// of k moves it by O(1/k)) and takes plain REML steps, without the grid search and the
+// likelihood's logarithms: k fits of a few passes each, which keeps a fleet of thousands of
+// units to about a second (bench/fleet_bench.cpp). A start from which the steps do not settle
+// falls back to the full search.
+constexpr std::size_t kNearStartUnits = 30;
+
+// REML steps from `start` until they settle (true, `tau2` the maximum) or 30 steps pass (false).
+bool newton_from(std::span<const Estimate> e, double start, double& tau2) {
+  const double scale = mean_variance(e);
+  tau2 = start;
+  for (int i = 0; i < 30; ++i) {
+    const double next = std::max(0.0, tau2 + reml_step(e, tau2));
+    const bool settled = std::abs(next - tau2) <= 1e-10 * (scale + tau2);
+    tau2 = next;
+    if (settled) return true;
+  }
+  return false;
+}
+
+// REML τ² and the HKSJ mean for k >= 2; for k = 1 the estimate itself, τ unknown. `near`: the
+// members' REML τ², from which a leave-one-out fit of kNearStartUnits or more starts.
+Centre fit_centre(std::span<const Estimate> e, double near = kNaN) {
   Centre c;
   if (e.size() == 1) {
     c.mean = e[0].value;
     c.mean_se = e[0].se;
     return c;
   }
-  c.tau2_dl = dersimonian_laird_tau2(e);
-  const Reml reml = reml_tau2(e, reml_start(e, c.tau2_dl));
-  c.tau2 = reml.tau2;
-  c.converged = reml.converged;
+  if (std::isfinite(near) && e.size() >= kNearStartUnits) c.converged = newton_from(e, near, c.tau2);
+  if (!c.converged) {
+    c.tau2_dl = dersimonian_laird_tau2(e);
+    const Reml reml = reml_tau2(e, reml_start(e, c.tau2_dl));
+    c.tau2 = reml.tau2;
+    c.converged = reml.converged;
+  }
   const WeightedMean m = weighted_mean(e, c.tau2);
   const double q_hk = generalized_q(e, c.tau2) / static_cast<double>(e.size() - 1);
   c.mean = m.mean;
@@ -246,10 +278,11 @@ struct Deviation {
   double p() const { return std::isnan(z) ? kNaN : student_t_two_sided_p(z, dof); }
 };
 
-Deviation leave_one_out(std::span<const Estimate> e, const std::vector<std::size_t>& members, std::size_t i) {
+Deviation leave_one_out(std::span<const Estimate> e, const std::vector<std::size_t>& members, std::size_t i,
+                        double members_tau2) {
   const std::vector<Estimate> others = subset(e, members, i);
   if (others.size() < 2) return {};
-  const Centre c = fit_centre(others);
+  const Centre c = fit_centre(others, members_tau2);
   return {(e[i].value - c.mean) / std::sqrt(e[i].se * e[i].se + c.tau2 + c.mean_se * c.mean_se),
           static_cast<double>(others.size() - 1)};
 }
@@ -417,8 +450,9 @@ PopulationFit fit_population(std::span<const Estimate> estimates, std::size_t fa
     std::size_t worst = 0;
     double worst_z = -1;
     Deviation worst_deviation;
+    const double members_tau2 = fit_centre(subset(estimates, members, kNobody)).tau2;
     for (std::size_t i : members) {
-      const Deviation d = leave_one_out(estimates, members, i);
+      const Deviation d = leave_one_out(estimates, members, i, members_tau2);
       if (std::abs(d.z) > worst_z) {
         worst_z = std::abs(d.z);
         worst = i;
@@ -440,8 +474,9 @@ PopulationFit fit_population(std::span<const Estimate> estimates, std::size_t fa
   fit.population = random_effects(population);
   fit.z.resize(n);
   fit.p_adjusted.resize(n);
+  const double members_tau2 = fit.population.tau * fit.population.tau;
   for (std::size_t i = 0; i < n; ++i) {
-    const Deviation d = leave_one_out(estimates, members, i);  // a flagged unit is not a member: all members are its others
+    const Deviation d = leave_one_out(estimates, members, i, members_tau2);  // a flagged unit is not a member: all members are its others
     fit.z[i] = d.z;
     fit.p_adjusted[i] = std::min(1.0, d.p() * static_cast<double>(n) * family);
   }
