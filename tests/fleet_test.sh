@@ -61,6 +61,16 @@ else
   echo "note: lmcal was built without MPI; the mpirun checks were skipped"
 fi
 
+# --- the documented Slurm job array: two array tasks, then the summary ------------------------
+SOURCE=$(cd "$(dirname "$0")/.." && pwd)
+for task in 0 1; do
+  FLEET=fleet OUT=array LMCAL="$LMCAL" SLURM_ARRAY_TASK_ID=$task SLURM_ARRAY_TASK_COUNT=2 \
+    bash "$SOURCE/examples/slurm/fleet_array.sbatch" >array$task.txt 2>&1
+  check "array task $task succeeds" test $? -eq 0
+done
+"$LMCAL" fleet fleet -o array --summarize >/dev/null 2>&1
+check "the job array's summary is the reference's" same_summary array
+
 # --- bad layouts: refused before any work, naming the entry --------------------------------
 refused() {  # refused EXPECTED_TEXT ARGS...
   local expected=$1; shift
