@@ -171,6 +171,18 @@ std::vector<std::string> folder_files(const Fleet& fleet, const FleetSet& s, con
   return files;
 }
 
+// The OpenMP team size of this thread's parallel regions, for a scope (the caller's setting back after).
+class ThreadTeam {
+ public:
+  explicit ThreadTeam(int threads) : before_(omp_get_max_threads()) { omp_set_num_threads(threads); }
+  ~ThreadTeam() { omp_set_num_threads(before_); }
+  ThreadTeam(const ThreadTeam&) = delete;
+  ThreadTeam& operator=(const ThreadTeam&) = delete;
+
+ private:
+  int before_;
+};
+
 std::string read_text(const fs::path& file) {
   std::ifstream in(file, std::ios::binary);
   return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
@@ -290,7 +302,8 @@ FleetRun run_fleet(const Fleet& fleet, const FleetOptions& options, const FleetP
   std::size_t done = 0;
   std::exception_ptr error;
   auto work = [&] {
-    if (options.jobs > 1) omp_set_num_threads(1);  // the jobs already fill the cores
+    std::optional<ThreadTeam> one;  // the jobs already fill the cores: a set's OpenMP loops on one thread
+    if (options.jobs > 1) one.emplace(1);
     for (std::size_t k; (k = next++) < mine.size();) {
       {
         const std::lock_guard lock(mutex);
