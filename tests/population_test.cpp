@@ -403,26 +403,6 @@ TEST(Drift, ShortSeriesTestWhatTheyCan) {
   EXPECT_FALSE(two.note.empty());
 }
 
-// ---- holm_adjust --------------------------------------------------------------------------
-
-TEST(Holm, TextbookExample) {
-  const std::vector<double> p = {0.01, 0.04, 0.03, 0.005};
-  const std::vector<double> adjusted = holm_adjust(p);
-  const std::vector<double> expected = {0.03, 0.06, 0.06, 0.02};
-  ASSERT_EQ(adjusted.size(), 4u);
-  for (std::size_t i = 0; i < 4; ++i) EXPECT_NEAR(adjusted[i], expected[i], 1e-15) << i;
-}
-
-TEST(Holm, NaNStaysOutOfTheFamilyAndLargePCapAtOne) {
-  const double nan = std::numeric_limits<double>::quiet_NaN();
-  const std::vector<double> adjusted = holm_adjust(std::vector<double>{0.01, nan, 0.6, 0.02});
-  EXPECT_NEAR(adjusted[0], 0.03, 1e-15);  // three in the family, not four
-  EXPECT_TRUE(std::isnan(adjusted[1]));
-  EXPECT_NEAR(adjusted[3], 0.04, 1e-15);
-  EXPECT_EQ(adjusted[2], 0.6);
-  EXPECT_EQ(holm_adjust(std::vector<double>{0.5, 0.9})[0], 1.0);
-  EXPECT_THROW(holm_adjust(std::vector<double>{1.5}), InvalidParameter);
-}
 
 }  // namespace
 }  // namespace lmcal

@@ -203,15 +203,10 @@ double change_correlation(const std::vector<double>& current, const std::vector<
 }
 
 void holm_adjust(std::vector<CovariateTest>& tests) {
-  std::vector<std::size_t> order(tests.size());
-  std::iota(order.begin(), order.end(), 0);
-  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return tests[a].p_value < tests[b].p_value; });
-  double running = 0;
-  const double m = static_cast<double>(tests.size());
-  for (std::size_t k = 0; k < order.size(); ++k) {
-    running = std::max(running, std::min(1.0, (m - static_cast<double>(k)) * tests[order[k]].p_value));
-    tests[order[k]].p_adjusted = running;
-  }
+  std::vector<double> p;
+  for (const CovariateTest& t : tests) p.push_back(t.p_value);
+  const std::vector<double> adjusted = lmcal::holm_adjust(p);
+  for (std::size_t k = 0; k < tests.size(); ++k) tests[k].p_adjusted = adjusted[k];
 }
 
 namespace {

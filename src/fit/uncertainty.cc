@@ -79,17 +79,15 @@ CovarianceSummary summary_of(const CovarianceEstimate& e, const FreeView& v, std
 std::vector<RunHeterogeneity> holm(const std::vector<HeterogeneityTest>& tests, const FreeView& v,
                                    const std::vector<ParameterEstimate>& parameters, double level) {
   std::vector<RunHeterogeneity> out;
-  for (const auto& t : tests)
+  std::vector<double> p;
+  for (const auto& t : tests) {
     out.push_back({parameters[static_cast<std::size_t>(v.free[t.parameter])].name, t.runs, t.q, t.p_value, 1, t.i_squared, false});
-  std::vector<std::size_t> order(out.size());
-  for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
-  std::sort(order.begin(), order.end(), [&](auto a, auto b) { return out[a].p_value < out[b].p_value; });
-  double running = 0;
-  for (std::size_t k = 0; k < order.size(); ++k) {
-    RunHeterogeneity& h = out[order[k]];
-    running = std::max(running, std::min(1.0, static_cast<double>(order.size() - k) * h.p_value));
-    h.p_holm = running;
-    h.significant = h.p_holm < level;
+    p.push_back(t.p_value);
+  }
+  const std::vector<double> adjusted = holm_adjust(p);
+  for (std::size_t k = 0; k < out.size(); ++k) {
+    out[k].p_holm = adjusted[k];
+    out[k].significant = adjusted[k] < level;
   }
   return out;
 }

@@ -14,6 +14,7 @@
 
 #include <cstddef>
 #include <span>
+#include <vector>
 
 namespace LMCAL_API lmcal {
 
@@ -40,5 +41,10 @@ struct Spread {
 
 // Mean, Eq. 1 σ, Student-t interval of the mean, min and max. NaN values are left out.
 Spread spread(std::span<const double> values, double confidence = 0.95);
+
+// Holm's step-down adjustment of a family of p-values (each in [0, 1], InvalidParameter
+// otherwise): the k-th smallest becomes max over j <= k of min(1, (m − j + 1) p_(j)). NaN entries
+// stay NaN and do not count in the family m. Same order as the input.
+std::vector<double> holm_adjust(std::span<const double> p);
 
 }  // namespace lmcal

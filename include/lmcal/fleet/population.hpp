@@ -70,6 +70,8 @@
 #include <string>
 #include <vector>
 
+#include "lmcal/fit/statistics.hpp"  // holm_adjust, for the caller's family of drift tests
+
 namespace LMCAL_API lmcal {
 
 // One unit's estimate of a constant. se > 0 and finite, value finite (InvalidParameter naming
@@ -127,9 +129,5 @@ struct Drift {
 };
 
 Drift drift_test(std::span<const DatedEstimate> series);
-
-// Holm's step-down adjustment of a family of p-values (each in [0, 1]); NaN entries stay NaN and
-// do not count in the family. Same order as the input; ties keep their input order.
-std::vector<double> holm_adjust(std::span<const double> p);
 
 }  // namespace lmcal
