@@ -108,6 +108,37 @@ TEST(FleetDate, OnlyRealDaysParse) {
   EXPECT_FALSE(parse_fleet_date("2026-09-01x"));
 }
 
+// Causes across the fleet: units whose diagnosis accepted each, at any date; a failed set
+// counts for nothing. Records made by hand, so no calibration runs.
+TEST(FleetSummary, CountsTheUnitsShowingEachCause) {
+  Fleet fleet{.root = "plant", .source = "folders"};
+  std::vector<std::string> records;
+  auto add = [&](std::string unit, std::string date, std::vector<std::string> causes, std::string status = "ok") {
+    FleetSet s{.id = unit + "/" + date, .unit = unit, .date = date};
+    FleetRecord r{.id = s.id, .unit = s.unit, .date = s.date, .status = status, .friction_causes = std::move(causes)};
+    r.parameters.push_back({.model = "friction", .name = "mu_v", .unit = "1", .value = 0.003, .se = 1e-4});
+    records.push_back(fleet_record_json(r));
+    fleet.sets.push_back(std::move(s));
+  };
+  add("a", "2026-09-01", {"seal_drag"});
+  add("a", "2026-09-08", {"seal_drag", "viscous_load"});
+  add("b", "2026-09-01", {});
+  add("b", "2026-09-08", {"seal_drag"});
+  add("c", "2026-09-01", {"viscous_load"}, "failed");
+  add("d", "2026-09-01", {});
+  const FleetSummary s = summarize_fleet(fleet, records);
+  ASSERT_EQ(s.causes.size(), 1u + 1u);
+  EXPECT_EQ(s.causes[0].cause, "seal_drag");
+  EXPECT_EQ(s.causes[0].series, (std::vector<std::string>{"a", "b"}));
+  EXPECT_EQ(s.causes[1].cause, "viscous_load");
+  EXPECT_EQ(s.causes[1].series, (std::vector<std::string>{"a"}));
+  EXPECT_EQ(s.units, 4u);
+  EXPECT_EQ(s.failed, 1u);
+  // Three units estimated mu_v (c failed): a population, each unit by its earliest set.
+  EXPECT_EQ(s.population.at(0).series, (std::vector<std::string>{"a", "b", "d"}));
+  EXPECT_EQ(s.population.at(0).set_ids.front(), "a/2026-09-01");
+}
+
 // --- a generated fleet, end to end ---------------------------------------------------------------
 
 std::string read(const fs::path& file) {

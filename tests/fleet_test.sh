@@ -5,6 +5,7 @@
 # before any work. $LMCAL is the binary; $LMCAL_MPI=1 when it was built with MPI.
 set -uo pipefail
 : "${LMCAL:?set LMCAL to the lmcal binary}"
+SOURCE=$(cd "$(dirname "$0")/.." && pwd)
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 cd "$work"
@@ -25,6 +26,8 @@ check "the outliers are named" grep -q "outlier: u09: mu_st" ref.txt
 check "the second outlier is named" grep -q "outlier: u21: mu_v" ref.txt
 check "the drift is named" grep -q "drift: u02: mu_v" ref.txt
 check "the corrupt set is reported" grep -q "failed u30: fleet/u30/friction.csv:" ref.txt
+# fleet.html in a real browser: loads without errors, a forest plot and a drift plot per constant draw.
+check "fleet.html loads and its 16 plots draw" bash "$SOURCE/tests/report_render_test.sh" "$work/ref/fleet.html" 16
 
 # --- killed midway, resumed --------------------------------------------------------------------
 "$LMCAL" fleet fleet -o killed --jobs 2 >/dev/null 2>&1 &
@@ -62,7 +65,6 @@ else
 fi
 
 # --- the documented Slurm job array: two array tasks, then the summary ------------------------
-SOURCE=$(cd "$(dirname "$0")/.." && pwd)
 for task in 0 1; do
   FLEET=fleet OUT=array LMCAL="$LMCAL" SLURM_ARRAY_TASK_ID=$task SLURM_ARRAY_TASK_COUNT=2 \
     bash "$SOURCE/examples/slurm/fleet_array.sbatch" >array$task.txt 2>&1
