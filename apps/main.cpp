@@ -6,6 +6,7 @@
 #include <iostream>
 
 #include "cli_common.hpp"
+#include "usage.hpp"
 #include "lmcal/error.hpp"
 
 int main(int argc, char** argv) {
@@ -15,6 +16,7 @@ int main(int argc, char** argv) {
   CLI::App app{"lmcal: calibrate the friction and thermal models of roller LM guides (Cheng et al. 2017)"};
   app.set_version_flag("--version", std::string("lmcal ") + LMCAL_VERSION);
   app.set_config("--config", "", "Read options from a TOML file");
+  app.allow_config_extras(CLI::config_extras_mode::error);  // a misspelt key is refused, as in a manifest
   app.require_subcommand(1);
   lmcal::cli::setup_simulate(app, args);
   lmcal::cli::setup_generate(app, args);
@@ -28,16 +30,16 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    return lmcal::cli::report_parse_error(app, e, args);
   } catch (const lmcal::InputError& e) {
     std::cerr << "lmcal: error: " << e.what() << "\n";
-    return 2;
+    return lmcal::cli::kExitInput;
   } catch (const lmcal::InvalidParameter& e) {
     std::cerr << "lmcal: error: " << e.what() << "\n";
-    return 2;
+    return lmcal::cli::kExitInput;
   } catch (const std::exception& e) {
-    std::cerr << "lmcal: error: " << e.what() << "\n";
-    return 1;
+    std::cerr << "lmcal: error: internal failure, please report it with the command: " << e.what() << "\n";
+    return lmcal::cli::kExitInternal;
   }
   return 0;
 }

@@ -366,6 +366,25 @@ check "plan thermal needs the calibrated model" \
 check "plan refuses a parameter the fit does not have" \
   refused "'k9' is not a free parameter of the fit" plan friction "$SOURCE/measurements/cheng2017/friction.csv" --parameters k9 -o out
 
+# Usage errors: exit status 2, "lmcal: error:", the nearest known name; input refused: 1.
+exits_with() {  # exits_with STATUS EXPECTED_TEXT ARGS...
+  local status=$1 expected=$2; shift 2
+  "$LMCAL" "$@" >stdout.txt 2>stderr.txt
+  local rc=$?
+  [[ $rc -eq $status ]] || { echo "  exit $rc, not $status: $*"; return 1; }
+  grep -qF -- "lmcal: error: $expected" stderr.txt || { echo "  message lacks 'lmcal: error: $expected': $(cat stderr.txt)"; return 1; }
+}
+check "an unknown command names the nearest" exits_with 2 "unknown command 'calibrat'; did you mean 'calibrate'?" calibrat x
+check "an unknown subcommand names the nearest" exits_with 2 "unknown command 'frcition'; did you mean 'friction'?" generate frcition
+check "an unknown option names the nearest" \
+  exits_with 2 "unknown option '--star'; did you mean '--start' or '--starts'?" calibrate --star 3 x
+check "a missing argument is named with what it is" exits_with 2 "missing SET: Measurement folder" calibrate
+check "no command lists the commands" exits_with 2 "expected a command: simulate, generate" 
+printf '[calibrate]\nstarts = 4\nlrtp = 0.01\n' >options.toml
+check "a config file's unknown key is refused where it is" \
+  exits_with 2 "options.toml:3:1: unknown key 'calibrate.lrtp'; did you mean 'calibrate.lrt-p'?" --config options.toml calibrate x
+check "a missing folder is an input error (1)" exits_with 1 "nowhere: expected a measurement folder" calibrate nowhere
+
 # Deterministic: the same outputs with one thread or two (timings aside).
 # Both bundled sets: the diagnoses fit their candidates one per thread.
 same_with_threads() {  # same_with_threads SET
