@@ -8,13 +8,18 @@
 #include "cli_common.hpp"
 #include "usage.hpp"
 #include "lmcal/error.hpp"
+#include "lmcal/version.hpp"
 
 int main(int argc, char** argv) {
   const std::vector<std::string> args(argv, argv + argc);
   // Ceres logs through glog; lmcal reports numerical trouble in its results instead.
   FLAGS_minloglevel = google::GLOG_FATAL;
   CLI::App app{"lmcal: calibrate the friction and thermal models of roller LM guides (Cheng et al. 2017)"};
-  app.set_version_flag("--version", std::string("lmcal ") + LMCAL_VERSION);
+  std::string version = fmt::format("lmcal {} (commit {})\n", LMCAL_VERSION, lmcal::git_commit());
+  for (const auto& [name, v] : lmcal::software_versions())
+    if (name != "lmcal") version += fmt::format("  {:<14} {}\n", name, v);
+  version.pop_back();
+  app.set_version_flag("--version", version, "Print lmcal's version, commit and libraries, and exit");
   app.set_config("--config", "", "Read options from a TOML file");
   app.allow_config_extras(CLI::config_extras_mode::error);  // a misspelt key is refused, as in a manifest
   app.require_subcommand(1);

@@ -17,6 +17,7 @@
 #include "lmcal/report/html_report.hpp"
 #include "lmcal/report/svg_plot.hpp"
 #include "lmcal/rig/virtual_rig.hpp"
+#include "report/sections.hpp"
 #include "support/temp_folder.hpp"
 
 namespace lmcal {
@@ -217,6 +218,50 @@ TEST_F(CalibrationTest, AFullFolderGoesThroughEveryStepIntoACompleteReport) {
   const std::string shift_row = between(between(html, "The parameters that move", "</table>"), "<tr><td>" + shift.name + "</td>", "</tr>");
   for (const auto& [low, high] : {std::pair{shift.baseline_low, shift.baseline_high}, std::pair{shift.extended_low, shift.extended_high}})
     EXPECT_NE(shift_row.find(fmt::format("[{}, {}]", shown(low, 4), shown(high, 4))), std::string::npos) << shift_row;
+}
+
+// The curves of Fig. 6 pass through the points they were fitted to: on a log whose runs carry
+// large load-cell zero offsets, the law with the accepted causes was drawn without its fit's
+// offset and sat off every point of a one-setup run (regression). Each point set against its
+// dashed curve, interpolated at the points' speeds: the mean gap is far below the runs' zeros.
+TEST_F(CalibrationTest, TheCausesCurvesPassThroughThePointsDespiteRunOffsets) {
+  FrictionRigConfig config;
+  config.guides = {"SRN 35C"};
+  config.runs = 3;
+  config.run_offset_N = 0.6;
+  config.one_setup_per_run = true;  // each plotted group is one run, with its own zero
+  config.preload_um = {1.5, 4.0};
+  config.temperature_C = {22, 32};
+  RigEffects effects;
+  set_rig_effect(effects, "seal_drag", 150);
+  write("friction.csv", friction_log_csv(generate_friction_log(config, effects).log));
+  const Calibration c = calibrate(find_calibration_set(dir_), {});
+  ASSERT_TRUE(c.friction_diagnosis && !c.friction_diagnosis->accepted.empty());
+  double rms_offset = 0;
+  for (double o : c.friction_diagnosis->final_fit.run_offset_N) rms_offset += o * o;
+  rms_offset = std::sqrt(rms_offset / static_cast<double>(c.friction_diagnosis->final_fit.run_offset_N.size()));
+  ASSERT_GT(rms_offset, 0.3) << "runs whose zeros differ by far more than the noise";
+  std::size_t compared = 0;
+  for (const report::Plot& plot : report::friction_velocity_panels(c)) {
+    for (std::size_t k = 0; k < plot.series.size(); ++k) {
+      const report::Series& points = plot.series[k];
+      if (points.mark != report::Mark::points) continue;
+      const auto dashed = std::find_if(plot.series.begin() + static_cast<std::ptrdiff_t>(k), plot.series.end(),
+                                       [&](const report::Series& s) { return s.dashed && s.color == points.color; });
+      ASSERT_NE(dashed, plot.series.end()) << plot.id;
+      double gap = 0;
+      for (std::size_t i = 0; i < points.x.size(); ++i) {
+        const auto hi = std::upper_bound(dashed->x.begin(), dashed->x.end(), points.x[i]);
+        const auto j = static_cast<std::size_t>(std::clamp<std::ptrdiff_t>(hi - dashed->x.begin(), 1, static_cast<std::ptrdiff_t>(dashed->x.size()) - 1));
+        const double t = (points.x[i] - dashed->x[j - 1]) / (dashed->x[j] - dashed->x[j - 1]);
+        gap += points.y[i] - (dashed->y[j - 1] + t * (dashed->y[j] - dashed->y[j - 1]));
+      }
+      gap /= static_cast<double>(points.x.size());
+      EXPECT_LT(std::abs(gap), 0.15) << plot.id << " " << points.label << " (runs' zeros: rms " << rms_offset << " N)";
+      ++compared;
+    }
+  }
+  EXPECT_GE(compared, 6u);
 }
 
 TEST_F(CalibrationTest, AFolderWithOneHalfCalibratesThatHalfAndSaysWhatWasSkipped) {

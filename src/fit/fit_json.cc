@@ -117,7 +117,6 @@ nlohmann::json fit_json(const FitResult& fit) {
             {"starts_agreed", s.starts_agreed},
             {"covariance_ok", s.covariance_ok},
             {"covariance_message", s.covariance_message},
-            {"seconds", s.seconds},
             {"brief", s.brief}}},
           {"warnings", fit.warnings}};
 }

@@ -426,12 +426,18 @@ FrictionFitResult fit_friction(const FrictionLog& log, const FrictionFitOptions&
     for (double s : out.sigma_N) sigma2 += s * s;
     out.run_offset_sd_N = std::sqrt(variance.ratio * variance.sigma2 * sigma2 / static_cast<double>(log.size()));
   }
+  // Relative errors against at least a tenth of the median force: a force near zero (a slow,
+  // light condition on a load cell's zero) would otherwise turn a small error into 10⁵ %.
+  std::vector<double> magnitudes(log.size());
+  for (std::size_t i = 0; i < log.size(); ++i) magnitudes[i] = std::abs(log.friction_N[i]);
+  std::nth_element(magnitudes.begin(), magnitudes.begin() + static_cast<std::ptrdiff_t>(magnitudes.size() / 2), magnitudes.end());
+  const double floor_N = std::max(0.1 * magnitudes[magnitudes.size() / 2], 1e-9);
   double ss = 0;
   for (std::size_t i = 0; i < log.size(); ++i) {
     if (!out.run_offset_N.empty() && std::isfinite(out.run_offset_N[log.run[i]])) out.predicted_N[i] += out.run_offset_N[log.run[i]];
     const double r = log.friction_N[i] - out.predicted_N[i];
     ss += r * r;
-    const double relative = std::abs(r) / std::max(std::abs(log.friction_N[i]), 1e-9);
+    const double relative = std::abs(r) / std::max(std::abs(log.friction_N[i]), floor_N);
     if (relative > out.max_relative_error) {
       out.max_relative_error = relative;
       out.max_relative_error_sample = i;

@@ -826,15 +826,3 @@ Eigen::VectorXd leave_group_out_residuals(const FinalState& state, const std::ve
 
 }  // namespace detail
 }  // namespace lmcal
-
-namespace lmcal {
-
-std::vector<std::pair<std::string, std::string>> numerical_library_versions() {
-  int major = 0, minor = 0, bugfix = 0;
-  nlopt::version(major, minor, bugfix);
-  return {{"Ceres Solver", CERES_VERSION_STRING},
-          {"Eigen", fmt::format("{}.{}.{}", EIGEN_WORLD_VERSION, EIGEN_MAJOR_VERSION, EIGEN_MINOR_VERSION)},
-          {"NLopt", fmt::format("{}.{}.{}", major, minor, bugfix)}};
-}
-
-}  // namespace lmcal

@@ -1064,12 +1064,14 @@ std::string thermal_fit_summary(const ThermalFitResult& r) {
     s += "per run:\n";
     for (std::size_t i = 0; i < r.per_run.size(); ++i) {
       const auto& p = r.per_run[i].parameter("alpha");
-      s += fmt::format("  {:<10} V {:.3f} m/s  Q {:.2f} W  alpha {:.4f} ± {:.4f}  ambient sensors differ {:.1f} % (Eq. 2)\n",
-                       r.runs[i].id, r.runs[i].velocity_m_s, r.runs[i].heat_rate_W, p.value, p.se,
-                       r.runs[i].ambient_difference_percent);
+      const double ambient = r.runs[i].ambient_difference_percent;
+      s += fmt::format("  {:<10} V {:.3f} m/s  Q {:.2f} W  alpha {:.4f} ± {:.4f}{}\n", r.runs[i].id, r.runs[i].velocity_m_s,
+                       r.runs[i].heat_rate_W, p.value, p.se,
+                       std::isfinite(ambient) ? fmt::format("  ambient sensors differ {:.1f} % (Eq. 2)", ambient)
+                                              : "  one ambient sensor (no comparison)");
     }
     const auto& sp = r.alpha_spread;
-    s += fmt::format("alpha across runs: {:.3f} ± {:.3f} (mean ± 95 % t half-width; Eq. 1 sigma {:.4f}, n {}, min {:.3f}, max {:.3f})\n",
+    s += fmt::format("alpha across runs: {:.3f} ± {:.3f} (mean ± 95 % t half-width; spread of runs (Eq. 1 sigma) {:.4f}, n {}, min {:.3f}, max {:.3f})\n",
                      sp.mean, sp.half_width, sp.sd, sp.n, sp.min, sp.max);
     for (const auto& [pair, d] : r.repeat_differences) s += fmt::format("  repeats {}: alpha differs {:.1f} % (Eq. 2)\n", pair, d);
   }

@@ -8,10 +8,12 @@
 #include "diagnose/selection.hpp"
 #include "fit/fit_json.hpp"
 #include "lmcal/error.hpp"
+#include "lmcal/version.hpp"
 #include "lmcal/fit/model_file.hpp"
 #include "lmcal/io/hash.hpp"
 #include "lmcal/report/html_report.hpp"
 #include "report/data_checks.hpp"
+#include "report/sections.hpp"
 
 namespace lmcal {
 
@@ -340,6 +342,36 @@ Calibration calibrate(const CalibrationSet& set, const CalibrationOptions& optio
 }
 
 
+namespace {
+
+nlohmann::json options_json(const CalibrationOptions& o);
+
+nlohmann::json software_json() {
+  nlohmann::json software = nlohmann::json::object();
+  for (const auto& [name, version] : software_versions()) software[name] = version;
+  return software;
+}
+
+// Every JSON output says where it came from: the command, the inputs with their SHA-256, the
+// calibration's resolved options and the software's versions (what a writer already records
+// stays as it wrote it).
+void add_provenance(std::vector<std::pair<std::string, std::string>>& outputs, const Calibration& c) {
+  nlohmann::json inputs = nlohmann::json::array();
+  for (const auto& [file, hash] : c.inputs) inputs.push_back({{"file", file}, {"sha256", hash}});
+  const nlohmann::json software = software_json();
+  for (auto& [name, text] : outputs) {
+    if (!name.ends_with(".json")) continue;
+    nlohmann::json j = nlohmann::json::parse(text);
+    if (!j.contains("command")) j["command"] = c.command;
+    if (!j.contains("inputs")) j["inputs"] = inputs;
+    if (j.value("kind", "") != "calibration") j["calibration_options"] = options_json(c.options);  // it has them as "options"
+    j["software"] = software;
+    text = j.dump(2) + "\n";
+  }
+}
+
+}  // namespace
+
 std::vector<std::pair<std::string, std::string>> calibration_outputs(const Calibration& c) {
   std::vector<std::pair<std::string, std::string>> out;
   auto append = [&](std::vector<std::pair<std::string, std::string>> files) {
@@ -375,6 +407,7 @@ std::vector<std::pair<std::string, std::string>> calibration_outputs(const Calib
   }
   out.emplace_back("calibration.json", calibration_json(c));
   out.emplace_back("report.html", calibration_report_html(c));
+  add_provenance(out, c);
   for (const auto& [name, text] : out) LMCAL_ASSERT(is_calibration_output(name), "every output is in calibration_output_names()");
   return out;
 }
@@ -535,7 +568,8 @@ std::string calibration_json(const Calibration& c) {
   for (const auto& [file, hash] : c.inputs) inputs.push_back({{"file", file}, {"sha256", hash}});
   nlohmann::json j{{"kind", "calibration"},  {"lmcal_version", LMCAL_VERSION}, {"set", c.set.name},
                    {"command", c.command},   {"inputs", inputs},               {"notes", c.notes},
-                   {"warnings", c.warnings},          {"options", options_json(c.options)}};
+                   {"warnings", c.warnings},          {"options", options_json(c.options)},
+                   {"software", software_json()}};
   const CalibratedModel& m = c.calibrated;
   nlohmann::json calibrated = {{"what", "the published models with the causes the diagnoses accepted, refitted: the result"},
                                {"file", "model.toml"}};
@@ -608,14 +642,16 @@ std::string calibration_summary(const Calibration& c) {
   if (c.friction)
     s += fmt::format("  friction: {} samples, {} runs; the law alone, residual RMSE {:.3f} N\n", c.friction_log->size(),
                      c.friction->runs.size(), c.friction->rmse_N);
-  if (c.friction_diagnosis) s += fmt::format("  diagnosis: {}\n  {}\n", c.friction_diagnosis->verdict, c.friction_diagnosis->summary);
+  if (c.friction_diagnosis)
+    s += fmt::format("  diagnosis: {}: {}\n", c.friction_diagnosis->verdict, report::without_verdict(c.friction_diagnosis->summary));
   if (c.thermal) {
     const auto& a = c.thermal->joint.parameter("alpha");
     s += fmt::format("  thermal: {} runs; alpha {:.3f} [{:.3f}, {:.3f}] ({} source), across runs {:.3f} ± {:.3f}\n",
                      c.thermal_data->runs.size(), a.value, a.ci_low, a.ci_high, to_string(c.thermal_options.source),
                      c.thermal->alpha_spread.mean, c.thermal->alpha_spread.half_width);
   }
-  if (c.thermal_diagnosis) s += fmt::format("  diagnosis: {}\n  {}\n", c.thermal_diagnosis->verdict, c.thermal_diagnosis->summary);
+  if (c.thermal_diagnosis)
+    s += fmt::format("  diagnosis: {}: {}\n", c.thermal_diagnosis->verdict, report::without_verdict(c.thermal_diagnosis->summary));
   for (const auto& note : c.notes) s += "note: " + note + "\n";
   for (const auto& warning : c.warnings) s += "warning: " + warning + "\n";
   return s;

@@ -77,9 +77,16 @@ std::string held_conditions(const Key& ref, const Varied& varied) {
 Plot velocity_panel(const Calibration& c, const Varied& varied) {
   const FrictionLog& log = *c.friction_log;
   const Key ref = reference_key(log);
-  // value -> velocity -> (sum, n); value -> (a sample, temperature sum, n)
+  // value -> velocity -> (sum, n); value -> (a sample, temperature sum, n); value -> the sum of
+  // each fit's zero offset of the samples' runs (published, with causes): a curve carries the
+  // mean offset of the points it is drawn through, or it sits off them by the runs' zero.
   std::map<double, std::map<double, std::pair<double, std::size_t>>> measured;
   std::map<double, std::tuple<std::size_t, double, std::size_t>> groups;
+  std::map<double, std::pair<double, double>> offsets;
+  const bool extended = c.friction_diagnosis && !c.friction_diagnosis->accepted.empty();
+  auto run_offset = [&](const FrictionFitResult& fit, std::size_t i) {
+    return log.run[i] < fit.run_offset_N.size() ? fit.run_offset_N[log.run[i]] : 0.0;
+  };
   double v_max = 0;
   for (std::size_t i = 0; i < log.size(); ++i) {
     const Key k = key_of(log, i);
@@ -91,6 +98,9 @@ Plot velocity_panel(const Calibration& c, const Varied& varied) {
     m.first += log.friction_N[i], ++m.second;
     auto& g = groups.try_emplace(value, i, 0.0, 0).first->second;
     std::get<1>(g) += log.temperature_C[i], ++std::get<2>(g);
+    auto& o = offsets[value];
+    o.first += run_offset(*c.friction, i);
+    if (extended) o.second += run_offset(c.friction_diagnosis->final_fit, i);
     v_max = std::max(v_max, log.velocity_m_s[i]);
   }
   std::vector<double> grid;
@@ -100,7 +110,6 @@ Plot velocity_panel(const Calibration& c, const Varied& varied) {
             .title = fmt::format("Friction vs velocity by {} ({}{})", varied.name, guide, held_conditions(ref, varied)),
             .x_label = "velocity (m/s)",
             .y_label = "friction force (N)"};
-  const bool extended = c.friction_diagnosis && !c.friction_diagnosis->accepted.empty();
   std::size_t index = 0;
   for (const auto& [value, by_velocity] : measured) {
     Series points{.label = fmt::format("{} {}", num(value), varied.unit), .mark = Mark::points, .color = colour(index)};
@@ -112,10 +121,16 @@ Plot velocity_panel(const Calibration& c, const Varied& varied) {
     const double temperature_C = temperature_sum / static_cast<double>(n);
     FrictionConstants<double> k = c.friction->constants();
     k.T_ref_C = c.friction_options.start.T_ref_C;
+    const auto shifted = [](std::vector<double> y, double by) {
+      for (double& v : y) v += by;
+      return y;
+    };
+    const auto& [published_offset, extended_offset] = offsets.at(value);
     plot.series.push_back(std::move(points));
     plot.series.push_back({.label = index == 0 ? "published law" : "",
                            .x = grid,
-                           .y = law_over_velocity(log, sample, temperature_C, k, c.friction->effects(), grid),
+                           .y = shifted(law_over_velocity(log, sample, temperature_C, k, c.friction->effects(), grid),
+                                        published_offset / static_cast<double>(n)),
                            .color = colour(index)});
     if (extended) {
       const auto& fit = c.friction_diagnosis->final_fit;
@@ -123,7 +138,8 @@ Plot velocity_panel(const Calibration& c, const Varied& varied) {
       ke.T_ref_C = k.T_ref_C;
       plot.series.push_back({.label = index == 0 ? "law + causes" : "",
                              .x = grid,
-                             .y = law_over_velocity(log, sample, temperature_C, ke, fit.effects(), grid),
+                             .y = shifted(law_over_velocity(log, sample, temperature_C, ke, fit.effects(), grid),
+                                          extended_offset / static_cast<double>(n)),
                              .color = colour(index),
                              .dashed = true});
     }
@@ -131,6 +147,16 @@ Plot velocity_panel(const Calibration& c, const Varied& varied) {
   }
   return plot;
 }
+
+}  // namespace
+
+std::vector<Plot> friction_velocity_panels(const Calibration& c) {
+  std::vector<Plot> panels;
+  for (const Varied& varied : kVaried) panels.push_back(velocity_panel(c, varied));
+  return panels;
+}
+
+namespace {
 
 // Mean residual of each condition against one covariate.
 Plot condition_residuals(const std::string& id, const std::string& title, const std::string& x_label,
@@ -164,15 +190,23 @@ void spread_section(Page& page, const FrictionFitResult& f) {
   if (f.spread.empty()) return;
   page.heading(3, "Spread across runs of the published law");
   page.paragraph(
-      "Each run fitted alone. Eq. 1 σ is the runs' standard deviation; the interval is the Student-t 95 % interval "
-      "of their mean. The ratio σ_runs / (SE_pooled √runs) is about 1 when the runs differ by noise only.");
+      "Each run fitted alone. The spread of repeats (Eq. 1 σ) is the runs' standard deviation; the interval is the "
+      "Student-t 95 % interval of their mean. The ratio σ_runs / (SE_pooled √runs) is about 1 when the runs differ by "
+      "noise only.");
   std::vector<std::vector<std::string>> rows;
   for (const auto& sp : f.spread) {
     const auto& pooled = f.fit.parameter(sp.parameter);
+    const std::size_t runs = sp.per_run.size();
+    const std::string note = sp.spread.n == 0  ? "no run's own fit estimated it (held or undetermined in each)"
+                             : sp.spread.n < 2 ? "one run's fit estimated it: no spread"
+                             : sp.spread.n < runs ? fmt::format("{} of {} runs' fits estimated it", sp.spread.n, runs)
+                                                  : "";
     rows.push_back({sp.parameter, num(pooled.value), num(pooled.se, 3), num(sp.spread.mean), num(sp.spread.sd, 3),
-                    bracket(sp.spread.low, sp.spread.high), num(sp.spread.min), num(sp.spread.max), num(sp.ratio, 3)});
+                    bracket(sp.spread.low, sp.spread.high), num(sp.spread.min), num(sp.spread.max), num(sp.ratio, 3), note});
   }
-  page.table({"parameter", "pooled", "SE", "run mean", "Eq. 1 σ", "95 % interval of the mean", "min", "max", "ratio"}, rows);
+  page.table({"parameter", "pooled", "SE", "run mean", "spread of repeats (Eq. 1 σ)", "95 % interval of the mean", "min",
+              "max", "ratio", "note"},
+             rows);
   friction_run_figures(page, f, "friction-spread-");
 }
 
@@ -229,12 +263,12 @@ void friction_section(Page& page, const Calibration& c) {
   const FrictionFitResult& f = *c.friction;
   const FrictionLog& log = *c.friction_log;
   page.heading(2, "Friction: " + published_label(rejects(c.friction_diagnosis)), "friction");
-  page.paragraph(fmt::format("{} samples in {} runs from {} file(s). The published law (Eqs. 3-7) fitted by weighted least "
-                             "squares; residual RMSE {} N, largest relative error {} %.",
-                             log.size(), f.runs.size(), c.set.friction_logs.size(), num(f.rmse_N), num(100 * f.max_relative_error, 3)));
-  std::vector<Plot> panels;
-  for (const Varied& varied : kVaried) panels.push_back(velocity_panel(c, varied));
-  page.figures(panels);
+  const std::size_t files = std::max<std::size_t>(c.set.friction_logs.size(), c.set.friction_manifest ? 1 : 0);
+  page.paragraph(fmt::format("{} samples in {} from {}. The published law (Eqs. 3-7) fitted by weighted least squares; "
+                             "residual RMSE {} N, largest relative error {} % (against at least a tenth of the median force).",
+                             log.size(), plural(f.runs.size(), "run"), plural(files, "file"), num(f.rmse_N),
+                             num(100 * f.max_relative_error, 3)));
+  page.figures(friction_velocity_panels(c));
 
   page.heading(3, "Constants of the published law");
   parameter_tables(page, f.fit, [](const ParameterEstimate&) { return true; });

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "lmcal/version.hpp"
 #include "sections.hpp"
 
 namespace lmcal {
@@ -44,23 +45,24 @@ void brief(Page& page, const Calibration& c) {
   page.heading(2, "Verdicts", "verdicts");
   page << "<div class=\"brief\">\n";
   if (c.friction) {
-    page << fmt::format("<p><b>Friction</b>, {}: the law fitted to {} samples of {} runs, residual RMSE {} N.",
+    page << fmt::format("<p><b>Friction</b>, {}: the law fitted to {} samples of {}, residual RMSE {} N.",
                         escape_xml(report::published_label(report::rejects(c.friction_diagnosis))), c.friction_log->size(),
-                        c.friction->runs.size(), num(c.friction->rmse_N));
+                        report::plural(c.friction->runs.size(), "run"), num(c.friction->rmse_N));
     if (c.friction_diagnosis)
-      page << fmt::format(" Diagnosis: <b>{}</b>. {}", escape_xml(c.friction_diagnosis->verdict),
-                          escape_xml(c.friction_diagnosis->summary));
+      page << fmt::format(" Diagnosis: <b>{}</b>: {}", escape_xml(c.friction_diagnosis->verdict),
+                          escape_xml(report::without_verdict(c.friction_diagnosis->summary)));
     page << "</p>\n";
   }
   if (c.thermal) {
     const auto& a = c.thermal->joint.parameter("alpha");
-    page << fmt::format("<p><b>Thermal</b>, {}: heat partition α = {} {} from {} runs; across runs {} ± {}.",
+    page << fmt::format("<p><b>Thermal</b>, {}: heat partition α = {} {} from {}; across runs {} ± {}.",
                         escape_xml(report::published_label(report::rejects(c.thermal_diagnosis))), num(a.value),
-                        escape_xml(report::interval(a)), c.thermal_data->runs.size(), num(c.thermal->alpha_spread.mean),
+                        escape_xml(report::interval(a)), report::plural(c.thermal_data->runs.size(), "run"),
+                        num(c.thermal->alpha_spread.mean),
                         num(c.thermal->alpha_spread.half_width, 3));
     if (c.thermal_diagnosis)
-      page << fmt::format(" Diagnosis: <b>{}</b>. {}", escape_xml(c.thermal_diagnosis->verdict),
-                          escape_xml(c.thermal_diagnosis->summary));
+      page << fmt::format(" Diagnosis: <b>{}</b>: {}", escape_xml(c.thermal_diagnosis->verdict),
+                          escape_xml(report::without_verdict(c.thermal_diagnosis->summary)));
     page << "</p>\n";
   }
   for (const auto& note : c.notes) page.paragraph("Note: " + note, "warning");
@@ -78,12 +80,8 @@ void provenance(Page& page, const Calibration& c) {
   std::vector<std::vector<std::string>> rows;
   for (const auto& [file, hash] : c.inputs) rows.push_back({file, hash});
   page.table({"input file", "SHA-256"}, rows);
-  rows = {{"lmcal", LMCAL_VERSION}};
-  for (const auto& [name, version] : numerical_library_versions()) rows.push_back({name, version});
-  rows.push_back({"fmt", std::to_string(FMT_VERSION)});
-  rows.push_back({"nlohmann-json", fmt::format("{}.{}.{}", NLOHMANN_JSON_VERSION_MAJOR, NLOHMANN_JSON_VERSION_MINOR,
-                                               NLOHMANN_JSON_VERSION_PATCH)});
-  rows.push_back({"compiler", __VERSION__});
+  rows.clear();
+  for (const auto& [name, version] : software_versions()) rows.push_back({name, version});
   page.table({"software", "version"}, rows);
   if (c.thermal)
     page.paragraph(fmt::format("Thermal model: {} source, {} scheme, {} segments per half rail, time step {} s, ambient: {}.",

@@ -61,6 +61,11 @@ class Page {
   std::vector<std::string> ids_;
 };
 
+// "1 run", "3 runs".
+inline std::string plural(std::size_t n, std::string_view noun) {
+  return fmt::format("{} {}{}", n, noun, n == 1 ? "" : "s");
+}
+
 // A number to 4 significant digits, "–" when it is not finite.
 inline std::string num(double v, int digits = 4) {
   return std::isfinite(v) ? fmt::format("{:.{}g}", v, digits) : "–";

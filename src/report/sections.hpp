@@ -21,6 +21,10 @@ void calibrated_section(Page& page, const Calibration& c);
 // residuals' autocorrelation, the between-run tests, the per-run estimates against the pooled band.
 void how_sure_section(Page& page, const Calibration& c);
 void friction_section(Page& page, const Calibration& c);
+// Fig. 6: the measured force over velocity by load, preload and temperature, with the published
+// law and (when the diagnosis accepted causes) the law with them, each curve carrying its fit's
+// mean zero offset of the runs drawn, so that it passes through the points it was fitted to.
+std::vector<Plot> friction_velocity_panels(const Calibration& c);
 void thermal_section(Page& page, const Calibration& c);
 // What was loaded, converted, skipped and ignored; the data checks' warnings.
 void data_section(Page& page, const Calibration& c);
@@ -85,9 +89,17 @@ inline std::string verdict_class(std::string_view verdict) {
 }
 
 // The verdict, styled by its class, and the summary.
+// A summary without the verdict it starts with ("Unexplained: the residuals …" -> "the
+// residuals …"), for a line that prints the verdict before it: said once, not twice.
+inline std::string without_verdict(const std::string& summary) {
+  for (std::string_view word : {"No significant discrepancy: ", "Partly explained: ", "Unexplained: ", "Explained: "})
+    if (summary.starts_with(word)) return summary.substr(word.size());
+  return summary;
+}
+
 inline void verdict_paragraph(Page& page, const std::string& verdict, const std::string& summary) {
   page << fmt::format("<p class=\"verdict {}\"><b>{}</b>: {}</p>\n", verdict_class(verdict), escape_xml(verdict),
-                      escape_xml(summary));
+                      escape_xml(without_verdict(summary)));
 }
 
 // What the diagnosis learned beyond its library of named causes (nothing unless it searched):

@@ -137,18 +137,19 @@ void spread_section(Page& page, const Calibration& c) {
   const ThermalFitResult& f = *c.thermal;
   page.heading(3, "Spread across runs of the published model");
   const Spread& s = f.alpha_spread;
-  page.paragraph(fmt::format("α of each run fitted alone: mean {}, Eq. 1 σ {}, 95 % interval of the mean [{}, {}] "
-                             "({} runs; the joint fit gives {}).",
-                             num(s.mean), num(s.sd, 3), num(s.low), num(s.high), s.n,
+  page.paragraph(fmt::format("α of each run fitted alone: mean {}, spread of the runs (Eq. 1 σ) {}, 95 % interval of the "
+                             "mean [{}, {}] ({}; the joint fit gives {}).",
+                             num(s.mean), num(s.sd, 3), num(s.low), num(s.high), plural(s.n, "run"),
                              num(f.joint.parameter("alpha").value)));
   std::vector<std::vector<std::string>> rows;
   for (std::size_t r = 0; r < f.runs.size(); ++r) {
     const RunInfo& info = f.runs[r];
     const ParameterEstimate* a = r < f.per_run.size() ? &f.per_run[r].parameter("alpha") : nullptr;
     rows.push_back({info.id, num(info.velocity_m_s), num(info.load_N), num(info.heat_rate_W), info.heat_source,
-                    a ? num(a->value) : "–", a ? interval(*a) : "–", num(info.ambient_difference_percent, 3)});
+                    a ? num(a->value) : "–", a ? interval(*a) : "–",
+                    std::isfinite(info.ambient_difference_percent) ? num(info.ambient_difference_percent, 3) : "one sensor"});
   }
-  page.table({"run", "velocity (m/s)", "load (N)", "Q_f (W)", "heat from", "α", "95 % interval", "ambient sensors' Eq. 2 difference (%)"},
+  page.table({"run", "velocity (m/s)", "load (N)", "Q_f (W)", "heat from", "α", "95 % interval", "ambient sensors' difference (Eq. 2, %)"},
              rows);
   rows.clear();
   for (const auto& [pair, difference] : f.repeat_differences) rows.push_back({pair, num(difference, 3)});

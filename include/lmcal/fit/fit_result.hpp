@@ -167,7 +167,4 @@ struct FitResult {
   std::vector<double> values() const;
 };
 
-// Name -> version of the numerical libraries the fits were built with (Ceres, Eigen, NLopt).
-std::vector<std::pair<std::string, std::string>> numerical_library_versions();
-
 }  // namespace lmcal

@@ -117,7 +117,8 @@ struct FrictionFitResult {
   // determinant Σ log(1 + n_r λ) folded in for random ones. Comparable between models fitted
   // with the same offsets.
   double deviance_ss = 0;
-  double max_relative_error = 0;  // max over samples of |measured - predicted| / |measured|
+  // max over samples of |measured − predicted| / max(|measured|, a tenth of the median |measured|)
+  double max_relative_error = 0;
   std::size_t max_relative_error_sample = 0;
   std::vector<ConditionResidual> conditions;
   std::vector<std::string> runs;

@@ -1,0 +1,25 @@
+// What lmcal was built from: its version and commit, and the libraries' versions, for
+// `lmcal --version`, the report's provenance and the outputs' records.
+//
+// Example: for (auto& [name, version] : lmcal::software_versions()) std::cout << name << " " << version;
+//
+// Trap: the git commit is the build's, not the outputs': it is in --version only, so the same
+// inputs give the same output files from any commit of the same version.
+#pragma once
+
+#include "lmcal/export.hpp"
+
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace LMCAL_API lmcal {
+
+// lmcal, Ceres Solver, Eigen, NLopt, fmt, nlohmann-json, toml++, Boost, OpenSSL and the
+// compiler, each "major.minor.patch" (the compiler as it names itself).
+std::vector<std::pair<std::string, std::string>> software_versions();
+
+// The commit lmcal was built from ("-dirty" with local changes), or "unknown".
+std::string git_commit();
+
+}  // namespace lmcal
