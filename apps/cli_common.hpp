@@ -29,6 +29,11 @@ std::string write_outputs(const std::filesystem::path& dir, std::vector<std::pai
 // Version, command line and time-independent facts every output carries alongside.
 nlohmann::json run_record(const std::vector<std::string>& argv);
 
+// A JSON output's text with where it came from added (what it already records stays): the
+// command, the inputs with their SHA-256 and the software's versions.
+std::string with_record(const std::string& json_text, const std::vector<std::string>& argv,
+                        const std::vector<std::pair<std::string, std::string>>& inputs);
+
 }  // namespace lmcal::cli
 
 #include <functional>
@@ -143,7 +148,7 @@ void setup_generate(CLI::App& app, const std::vector<std::string>& argv);
 void setup_check(CLI::App& app);
 void setup_fit(CLI::App& app, const std::vector<std::string>& argv);
 void setup_fit_thermal(CLI::App& fit, const std::vector<std::string>& argv);
-void setup_diagnose(CLI::App& app);
+void setup_diagnose(CLI::App& app, const std::vector<std::string>& argv);
 void setup_calibrate(CLI::App& app);
 void setup_fleet(CLI::App& app);
 void setup_predict(CLI::App& app, const std::vector<std::string>& argv);

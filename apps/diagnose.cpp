@@ -7,6 +7,7 @@
 #include <iostream>
 
 #include "cli_common.hpp"
+#include "lmcal/io/hash.hpp"
 #include "lmcal/diagnose/friction_diagnosis.hpp"
 #include "lmcal/diagnose/thermal_diagnosis.hpp"
 #include "lmcal/io/atomic_file.hpp"
@@ -105,37 +106,40 @@ void print(const ThermalDiagnosis& d) {
   std::cout << "verdict: " << d.verdict << "\n  " << d.summary << "\n";
 }
 
-void run_diagnose_thermal(DiagnoseThermalOptions& o) {
+void run_diagnose_thermal(DiagnoseThermalOptions& o, const std::vector<std::string>& argv) {
   std::vector<std::pair<std::string, std::string>> inputs;
   o.model.apply(o.diagnosis.fit, inputs);
   const std::optional<GuideCatalog> catalog = user_catalog(o.catalog_file);
   const ThermalDataSet data = load_thermal_dataset(o.manifest, catalog ? &*catalog : nullptr);
+  inputs.emplace_back(o.manifest, sha256_file(o.manifest));
+  for (const auto& run : data.runs) inputs.emplace_back(run.file.string(), sha256_file(run.file));
   const ThermalDiagnosis d = with_progress("thermal diagnosis", [&](const Progress& progress) {
     o.diagnosis.progress = progress;
     return diagnose_thermal(data, o.diagnosis);
   });
   const auto file = std::filesystem::path(o.output_dir) / (o.name + ".json");
-  write_file_atomically(file, thermal_diagnosis_json(d));
+  write_file_atomically(file, with_record(thermal_diagnosis_json(d), argv, inputs));
   print(d);
   std::cout << "wrote " << file.string() << "\n";
 }
 
-void run_diagnose_friction(DiagnoseFrictionOptions& o) {
+void run_diagnose_friction(DiagnoseFrictionOptions& o, const std::vector<std::string>& argv) {
   apply_friction_constant_options(o.constants, o.diagnosis.fit);
-  const FrictionLog log = load_friction_input(o.files, o.input).log;
+  const FrictionInput input = load_friction_input(o.files, o.input);
+  const FrictionLog& log = input.log;
   const FrictionDiagnosis d = with_progress("friction diagnosis", [&](const Progress& progress) {
     o.diagnosis.progress = progress;
     return diagnose_friction(log, o.diagnosis);
   });
   const auto file = std::filesystem::path(o.output_dir) / (o.name + ".json");
-  write_file_atomically(file, friction_diagnosis_json(d));
+  write_file_atomically(file, with_record(friction_diagnosis_json(d), argv, input.inputs));
   print(d);
   std::cout << "wrote " << file.string() << "\n";
 }
 
 }  // namespace
 
-void setup_diagnose(CLI::App& app) {
+void setup_diagnose(CLI::App& app, const std::vector<std::string>& argv) {
   CLI::App* diagnose = app.add_subcommand("diagnose", "Find what the model gets wrong and why");
   diagnose->require_subcommand(1);
   auto o = std::make_shared<DiagnoseFrictionOptions>();
@@ -148,7 +152,7 @@ void setup_diagnose(CLI::App& app) {
       ->capture_default_str();
   friction->add_option("--lrt-p", o->diagnosis.lrt_p, "Significance level of the likelihood-ratio test")->capture_default_str();
   add_friction_constant_options(*friction, o->constants);
-  friction->callback([o] { run_diagnose_friction(*o); });
+  friction->callback([o, &argv] { run_diagnose_friction(*o, argv); });
 
   auto t = std::make_shared<DiagnoseThermalOptions>();
   CLI::App* thermal = diagnose->add_subcommand("thermal", "Rail model against thermocouple traces");
@@ -162,7 +166,7 @@ void setup_diagnose(CLI::App& app) {
   thermal->add_option("--min-gain", t->diagnosis.min_cv_gain_percent, "Least held-out RMSE gain to accept a cause, %")
       ->capture_default_str();
   thermal->add_option("--lrt-p", t->diagnosis.lrt_p, "Significance level of the likelihood-ratio test")->capture_default_str();
-  thermal->callback([t] { run_diagnose_thermal(*t); });
+  thermal->callback([t, &argv] { run_diagnose_thermal(*t, argv); });
 }
 
 }  // namespace lmcal::cli

@@ -11,7 +11,9 @@
 #include "lmcal/version.hpp"
 
 int main(int argc, char** argv) {
-  const std::vector<std::string> args(argv, argv + argc);
+  // As outputs record it: "lmcal …", not where the binary happens to be.
+  std::vector<std::string> args(argv, argv + argc);
+  if (!args.empty()) args[0] = "lmcal";
   // Ceres logs through glog; lmcal reports numerical trouble in its results instead.
   FLAGS_minloglevel = google::GLOG_FATAL;
   CLI::App app{"lmcal: calibrate the friction and thermal models of roller LM guides (Cheng et al. 2017)"};
@@ -27,7 +29,7 @@ int main(int argc, char** argv) {
   lmcal::cli::setup_generate(app, args);
   lmcal::cli::setup_check(app);
   lmcal::cli::setup_fit(app, args);
-  lmcal::cli::setup_diagnose(app);
+  lmcal::cli::setup_diagnose(app, args);
   lmcal::cli::setup_calibrate(app);
   lmcal::cli::setup_fleet(app);
   lmcal::cli::setup_predict(app, args);

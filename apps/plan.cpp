@@ -8,6 +8,7 @@
 #include <iostream>
 
 #include "cli_common.hpp"
+#include "lmcal/io/hash.hpp"
 #include "lmcal/error.hpp"
 #include "lmcal/fit/model_file.hpp"
 #include "lmcal/predict/plan.hpp"
@@ -50,7 +51,9 @@ void run_plan_friction(const PlanFrictionOptions& o, const std::vector<std::stri
     const FrictionFitResult fit = fit_friction(input.log, fit_options);
     return plan_friction(input.log, fit, friction_candidates(input.log, grid), o.plan);
   });
-  const std::string written = write_outputs(o.output_dir, {{"plan.json", friction_plan_json(plan, argv)},
+  std::vector<std::pair<std::string, std::string>> inputs = input.inputs;
+  if (!o.model.file.empty()) inputs.emplace_back(o.model.file, sha256_file(o.model.file));
+  const std::string written = write_outputs(o.output_dir, {{"plan.json", with_record(friction_plan_json(plan, argv), argv, inputs)},
                                                            {"plan_friction_template.csv", friction_plan_template_csv(plan)}});
   std::cout << friction_plan_summary(plan) << "wrote " << written << "\n";
 }
@@ -73,7 +76,9 @@ void run_plan_thermal(const PlanThermalOptions& o, const std::vector<std::string
   const ThermalPlan plan = with_progress("thermal plan", [&](const Progress&) {
     return plan_thermal(model->model, data, thermal_candidates(data, grid), o.plan);
   });
-  const std::string written = write_outputs(o.output_dir, {{"plan.json", thermal_plan_json(plan, argv)},
+  std::vector<std::pair<std::string, std::string>> inputs = {{o.manifest, sha256_file(o.manifest)}, {model->file, model->sha256}};
+  for (const auto& run : data.runs) inputs.emplace_back(run.file.string(), sha256_file(run.file));
+  const std::string written = write_outputs(o.output_dir, {{"plan.json", with_record(thermal_plan_json(plan, argv), argv, inputs)},
                                                            {"plan_thermal_manifest.toml", thermal_plan_manifest_toml(plan, data)}});
   std::cout << thermal_plan_summary(plan) << "wrote " << written << "\n";
 }

@@ -12,7 +12,7 @@ packages=(
   pybind11-dev python3-dev python3-numpy  # the Python package lmcal
   openmpi-bin libopenmpi-dev     # lmcal fleet on a cluster: mpirun -np N (optional at build time)
   libgtest-dev libbenchmark-dev  # tests and benchmarks
-  python3-pytest python3-pandas  # the Python package's tests (a DataFrame goes in)
+  python3-pytest python3-pandas python3-jsonschema  # the Python package's tests (a DataFrame goes in; the outputs' schema)
   chromium chromium-driver       # the report's test in a headless browser
 )
 

@@ -15,6 +15,11 @@
 
 namespace LMCAL_API lmcal {
 
+// The layout of every JSON output ("schema_version"; docs/schema/lmcal-output.schema.json).
+// 2: one parameter record everywhere (parameter_json: "ci95" the quoted interval), and the
+// provenance of every file calibrate writes (command, inputs, options, software).
+inline constexpr int kOutputSchemaVersion = 2;
+
 // lmcal, Ceres Solver, Eigen, NLopt, fmt, nlohmann-json, toml++, Boost, OpenSSL and the
 // compiler, each "major.minor.patch" (the compiler as it names itself).
 std::vector<std::pair<std::string, std::string>> software_versions();

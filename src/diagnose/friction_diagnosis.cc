@@ -1,5 +1,7 @@
 #include "lmcal/diagnose/friction_diagnosis.hpp"
 
+#include "lmcal/version.hpp"
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -401,6 +403,7 @@ std::string friction_diagnosis_json(const FrictionDiagnosis& d) {
   j["kind"] = "friction diagnosis";
   j["design_notes"] = d.design_notes;
   j["lmcal_version"] = LMCAL_VERSION;
+  j["schema_version"] = kOutputSchemaVersion;
   j["baseline_residuals"] = diagnostics(d.baseline);
   j["final_residuals"] = diagnostics(d.final);
   return j.dump(2) +

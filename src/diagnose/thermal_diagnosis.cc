@@ -1,5 +1,7 @@
 #include "lmcal/diagnose/thermal_diagnosis.hpp"
 
+#include "lmcal/version.hpp"
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -382,6 +384,7 @@ std::string thermal_diagnosis_json(const ThermalDiagnosis& d) {
   nlohmann::json j = detail::verdict_json(d, d.cv_rmse_before_K, d.cv_rmse_after_K, "K");
   j["kind"] = "thermal diagnosis";
   j["lmcal_version"] = LMCAL_VERSION;
+  j["schema_version"] = kOutputSchemaVersion;
   j["thermocouple_noise_K"] = number(d.noise_K);
   j["not_tried"] = d.skipped;
   j["dropped_for_the_empirical_term"] = d.dropped;

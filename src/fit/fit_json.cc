@@ -58,25 +58,33 @@ std::string uncertainty_summary(const FitResult& fit) {
   return s;
 }
 
+nlohmann::json parameter_json(const ParameterEstimate& p) {
+  const bool profile = p.interval == "profile", none = p.interval == "none";
+  return {{"name", p.name},
+          {"unit", p.unit},
+          {"value", number(p.value)},
+          {"se", number(p.se)},
+          {"dof", number(p.dof)},
+          {"ci95", {number(none ? NAN : profile ? p.profile_low : p.ci_low), number(none ? NAN : profile ? p.profile_high : p.ci_high)}},
+          {"interval", p.interval},
+          {"linear_ci95", {number(p.ci_low), number(p.ci_high)}},
+          {"profile_ci95", {number(p.profile_low), number(p.profile_high)}},
+          {"bootstrap_ci95", {number(p.boot_low), number(p.boot_high)}},
+          {"start", number(p.start)},
+          {"bounds", {number(p.lower), number(p.upper)}},
+          {"free", p.free},
+          {"held", !p.free || p.held_unidentifiable},
+          {"held_unidentifiable", p.held_unidentifiable},
+          {"at_bound", p.at_bound},
+          {"per_run", p.per_run}};
+}
+
 nlohmann::json fit_json(const FitResult& fit) {
   nlohmann::json parameters = nlohmann::json::array();
   std::vector<std::string> names;
   for (const auto& p : fit.parameters) {
     names.push_back(p.name);
-    parameters.push_back({{"name", p.name},
-                          {"unit", p.unit},
-                          {"value", number(p.value)},
-                          {"start", p.start},
-                          {"bounds", {p.lower, p.upper}},
-                          {"free", p.free},
-                          {"held_unidentifiable", p.held_unidentifiable},
-                          {"at_bound", p.at_bound},
-                          {"se", number(p.se)},
-                          {"dof", number(p.dof)},
-                          {"ci95", {number(p.ci_low), number(p.ci_high)}},
-                          {"bootstrap_ci95", {number(p.boot_low), number(p.boot_high)}},
-                          {"profile_ci95", {number(p.profile_low), number(p.profile_high)}},
-                          {"interval", p.interval}});
+    parameters.push_back(parameter_json(p));
   }
   nlohmann::json correlation = nlohmann::json::array();
   for (Eigen::Index i = 0; i < fit.correlation.rows(); ++i) {

@@ -15,6 +15,10 @@ nlohmann::json uncertainty_json(const FitResult& fit);
 // (non-nuisance) parameter by every method, notes.
 std::string uncertainty_summary(const FitResult& fit);
 // Parameters, uncertainty, correlation, identifiability, solver and warnings.
+// One estimate as every output writes it (schema_version 2): "ci95" is the interval the text
+// quotes ("interval" says which: linear, profile, or none with nulls); the linear, profile and
+// bootstrap intervals beside it; "held" when not fitted (asked to be held, or not identifiable).
+nlohmann::json parameter_json(const ParameterEstimate& p);
 nlohmann::json fit_json(const FitResult& fit);
 
 }  // namespace lmcal::detail

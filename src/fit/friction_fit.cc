@@ -1,5 +1,7 @@
 #include "lmcal/fit/friction_fit.hpp"
 
+#include "lmcal/version.hpp"
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -568,7 +570,7 @@ std::string friction_fit_json(const FrictionFitResult& r, const FrictionFitOptio
   nlohmann::json j = {
       {"kind", "friction fit"},
       {"name", prov.name},
-      {"lmcal_version", LMCAL_VERSION},
+      {"lmcal_version", LMCAL_VERSION}, {"schema_version", kOutputSchemaVersion},
       {"command", prov.command},
       {"inputs", inputs},
       {"seed", o.fit.seed},

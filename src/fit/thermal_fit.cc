@@ -1,5 +1,7 @@
 #include "lmcal/fit/thermal_fit.hpp"
 
+#include "lmcal/version.hpp"
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -973,7 +975,7 @@ std::string thermal_fit_json(const ThermalFitResult& r, const ThermalFitOptions&
   const auto& s = r.alpha_spread;
   nlohmann::json j = {{"kind", "thermal fit"},
                       {"name", name},
-                      {"lmcal_version", LMCAL_VERSION},
+                      {"lmcal_version", LMCAL_VERSION}, {"schema_version", kOutputSchemaVersion},
                       {"command", command},
                       {"inputs", in},
                       {"options",

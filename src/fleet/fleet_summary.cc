@@ -1,5 +1,7 @@
 #include "lmcal/fleet/fleet_summary.hpp"
 
+#include "lmcal/version.hpp"
+
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
@@ -199,7 +201,7 @@ json summary_json(const FleetSummary& s) {
   for (const auto& c : s.causes)
     causes.push_back({{"model", c.model}, {"cause", c.cause}, {"units", c.series.size()}, {"series", c.series}});
   const json j{{"kind", "fleet"},
-               {"lmcal_version", LMCAL_VERSION},
+               {"lmcal_version", LMCAL_VERSION}, {"schema_version", kOutputSchemaVersion},
                {"command", s.command},
                {"root", s.root},
                {"sets_from", s.source},

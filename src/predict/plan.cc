@@ -1,4 +1,6 @@
 // `lmcal plan friction`: sequential optimal design from the friction law's Jacobian (plan.hpp).
+
+#include "lmcal/version.hpp"
 #include "lmcal/predict/plan.hpp"
 
 #include <fmt/format.h>
@@ -282,7 +284,7 @@ std::string friction_plan_json(const FrictionPlan& plan, const std::vector<std::
                           {"se_after", number(p.se_after)}, {"determined_before", p.determined_before}});
   }
   const nlohmann::json j = {{"kind", "friction plan"},
-                            {"lmcal_version", LMCAL_VERSION},
+                            {"lmcal_version", LMCAL_VERSION}, {"schema_version", kOutputSchemaVersion},
                             {"command", command},
                             {"criterion", plan.criterion},
                             {"samples_per_condition", plan.samples_per_condition},

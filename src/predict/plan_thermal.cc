@@ -1,4 +1,6 @@
 // `lmcal plan thermal`: the next thermal runs for a calibrated rail model (plan.hpp).
+
+#include "lmcal/version.hpp"
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
@@ -320,7 +322,7 @@ std::string thermal_plan_json(const ThermalPlan& plan, const std::vector<std::st
   for (const auto& p : plan.parameters)
     parameters.push_back({{"name", p.name}, {"unit", p.unit}, {"value", p.value}, {"se_before", number(p.se_before)},
                           {"se_after", number(p.se_after)}, {"in_model", p.determined_before}});
-  return nlohmann::json({{"kind", "thermal plan"}, {"lmcal_version", LMCAL_VERSION}, {"command", command},
+  return nlohmann::json({{"kind", "thermal plan"}, {"lmcal_version", LMCAL_VERSION}, {"schema_version", kOutputSchemaVersion}, {"command", command},
                          {"criterion", plan.criterion}, {"noise_K", plan.noise_K}, {"runs", runs}, {"parameters", parameters},
                          {"correlation_before", number(plan.correlation_before)},
                          {"correlation_after", number(plan.correlation_after)}, {"notes", plan.notes}})

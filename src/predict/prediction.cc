@@ -1,4 +1,6 @@
 // `lmcal predict`: the calibrated model over a duty cycle, with bands (prediction.hpp).
+
+#include "lmcal/version.hpp"
 #include "lmcal/predict/prediction.hpp"
 
 #include <fmt/format.h>
@@ -444,7 +446,7 @@ std::string prediction_json(const Prediction& p, const DutyCycle& duty, const Mo
                        {"calibration", f.what}});
   const nlohmann::json j = {
       {"kind", "prediction"},
-      {"lmcal_version", LMCAL_VERSION},
+      {"lmcal_version", LMCAL_VERSION}, {"schema_version", kOutputSchemaVersion},
       {"command", command},
       {"model", {{"set", model.set}, {"lmcal_version", model.lmcal_version}, {"command", model.command}}},
       {"duty",

@@ -416,12 +416,6 @@ namespace {
 
 using detail::number;
 
-nlohmann::json estimate_json(const ParameterEstimate& p) {
-  return {{"name", p.name},         {"unit", p.unit},         {"value", number(p.value)}, {"se", number(p.se)},
-          {"ci_low", number(p.interval == "profile" ? p.profile_low : p.ci_low)},
-          {"ci_high", number(p.interval == "profile" ? p.profile_high : p.ci_high)},
-          {"at_bound", p.at_bound}, {"held", !p.free || p.held_unidentifiable}};
-}
 
 // A diagnosis's verdict without its candidate tables (those are in its own file).
 nlohmann::json brief_verdict(nlohmann::json verdict) {
@@ -438,7 +432,7 @@ nlohmann::json how_sure_json(const FitResult& fit) {
 
 nlohmann::json friction_json(const FrictionFitResult& f) {
   nlohmann::json constants = nlohmann::json::array();
-  for (const auto& p : f.fit.parameters) constants.push_back(estimate_json(p));
+  for (const auto& p : f.fit.parameters) constants.push_back(detail::parameter_json(p));
   return {{"rmse_N", number(f.rmse_N)},
           {"cv_rmse_N", number(f.cv_rmse_N)},
           {"max_relative_error", number(f.max_relative_error)},
@@ -453,9 +447,9 @@ nlohmann::json thermal_json(const ThermalFitResult& t, const ThermalFitOptions& 
   nlohmann::json parameters = nlohmann::json::array();
   for (const auto& p : t.joint.parameters)
     if (!p.per_run)
-      parameters.push_back(estimate_json(p));
+      parameters.push_back(detail::parameter_json(p));
   const Spread& s = t.alpha_spread;
-  return {{"alpha", estimate_json(t.joint.parameter("alpha"))},
+  return {{"alpha", detail::parameter_json(t.joint.parameter("alpha"))},
           {"parameters", parameters},
           {"alpha_across_runs", {{"n", s.n}, {"mean", number(s.mean)}, {"sd", number(s.sd)}, {"half_width", number(s.half_width)}}},
           {"source", to_string(o.source)},
@@ -566,7 +560,7 @@ std::string calibration_options_json(const CalibrationOptions& options) { return
 std::string calibration_json(const Calibration& c) {
   nlohmann::json inputs = nlohmann::json::array();
   for (const auto& [file, hash] : c.inputs) inputs.push_back({{"file", file}, {"sha256", hash}});
-  nlohmann::json j{{"kind", "calibration"},  {"lmcal_version", LMCAL_VERSION}, {"set", c.set.name},
+  nlohmann::json j{{"kind", "calibration"},  {"lmcal_version", LMCAL_VERSION}, {"schema_version", kOutputSchemaVersion}, {"set", c.set.name},
                    {"command", c.command},   {"inputs", inputs},               {"notes", c.notes},
                    {"warnings", c.warnings},          {"options", options_json(c.options)},
                    {"software", software_json()}};

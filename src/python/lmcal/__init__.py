@@ -220,7 +220,7 @@ class Parameter:
     def from_json(cls, p: dict) -> "Parameter":
         def num(v):
             return math.nan if v is None else float(v)
-        ci = p.get("profile_ci95") if p.get("interval") == "profile" else p.get("ci95")
+        ci = p.get("ci95")  # the interval the text quotes ("interval" says which)
         return cls(p["name"], num(p.get("value")), num(p.get("se")), p.get("unit", ""),
                    tuple(num(v) for v in (ci or (None, None))), p.get("interval", "linear"), bool(p.get("free")),
                    bool(p.get("held_unidentifiable")), bool(p.get("at_bound")), num(p.get("start")),

@@ -46,7 +46,7 @@ def fit_report(title, fit_dict, statistics, min_correlation=0.1):
         relative = ""
         if se is not None and value not in (None, 0) and math.isfinite(se):
             relative = f" ({abs(se / value) * 100:.2f}%)"
-        interval = p.get("profile_ci95") if p.get("interval") == "profile" else p.get("ci95")
+        interval = p.get("ci95")  # the interval the text quotes ("interval" says which)
         ci = ""
         if interval and None not in interval:
             ci = f" [{_number(interval[0])}, {_number(interval[1])}]{' profile' if p.get('interval') == 'profile' else ''}"
