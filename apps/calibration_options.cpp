@@ -8,12 +8,14 @@ namespace lmcal::cli {
 
 void CalibrationCliOptions::add_to(CLI::App& app) {
   CalibrationOptions& c = calibration;
-  app.add_flag("!--no-diagnosis", c.diagnose, "Skip the two diagnoses (fits and report only)");
+  app.add_flag_function("--no-diagnosis", [&c](std::int64_t) { c.diagnose = false; }, "Skip the two diagnoses (fits and report only)");
   add_uncertainty_options(app, uncertainty);
   // The friction fits: constants held, freed, started and bounded; the load cell's zero; the
   // multi-start search.
   add_friction_constant_options(app, constants);
-  starts = app.add_option("--starts", c.friction.fit.starts, "Multi-start local searches of the friction fits")->capture_default_str();
+  starts = app.add_option("--starts", c.friction.fit.starts, "Multi-start local searches of the friction fits")
+               ->check(at_least(1))
+               ->capture_default_str();
   seed = app.add_option("--seed", c.friction.fit.seed, "Seed of the multi-start sequence")->capture_default_str();
   // The guides' catalog and the raw load-cell logs' segmentation.
   input.add_to(app);
@@ -23,11 +25,14 @@ void CalibrationCliOptions::add_to(CLI::App& app) {
   // The diagnoses' thresholds.
   app.add_option("--friction-min-gain", c.friction_diagnosis.min_cv_gain_percent,
                  "Least held-out RMSE gain to accept a friction cause, %")
+      ->check(at_least(0))
       ->capture_default_str();
   app.add_option("--thermal-min-gain", c.thermal_diagnosis.min_cv_gain_percent,
                  "Least held-out RMSE gain to accept a thermal mechanism, %")
+      ->check(at_least(0))
       ->capture_default_str();
   lrt_p = app.add_option("--lrt-p", c.friction_diagnosis.lrt_p, "Significance level of the diagnoses' likelihood-ratio tests")
+              ->check(inside(0, 1))
               ->capture_default_str();
 }
 

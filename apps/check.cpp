@@ -54,8 +54,8 @@ void print_segmentation(const RunSegmentation& s) {
 
 void check_friction(const std::vector<std::string>& files, const FrictionInputOptions& options) {
   const FrictionLog log = load_friction_input(files, options).log;
-  std::cout << fmt::format("friction log: {} samples, {} runs, {} guides\n", log.size(), log.run_names.size(),
-                           log.guide_names.size());
+  std::cout << fmt::format("friction log: {}, {}, {}\n", plural(log.size(), "sample"), plural(log.run_names.size(), "run"),
+                           plural(log.guide_names.size(), "guide"));
   for (const auto& r : log.reports) {
     print_report(r);
     for (const auto& s : log.segmentation)
@@ -74,7 +74,7 @@ void check_thermal(const std::vector<std::string>& files, const std::string& cat
     }
     const std::optional<GuideCatalog> catalog = user_catalog(catalog_file);
     const ThermalDataSet set = load_thermal_dataset(file, catalog ? &*catalog : nullptr);
-    std::cout << fmt::format("thermal data set '{}': {} runs\n", set.name, set.runs.size());
+    std::cout << fmt::format("thermal data set '{}': {}\n", set.name, plural(set.runs.size(), "run"));
     for (const auto& run : set.runs) {
       const GuideSpec spec = resolved_guide(run);
       std::cout << fmt::format("  run {}: {} ({}, {}) at {} m/s, {} N\n", run.id, spec.model, spec.kind,

@@ -54,6 +54,8 @@ std::string with_software(const std::string& json_text) {
 
 }  // namespace
 
+std::string plural(std::size_t n, std::string_view noun) { return fmt::format("{} {}{}", n, noun, n == 1 ? "" : "s"); }
+
 std::string write_outputs(const std::filesystem::path& dir, std::vector<std::pair<std::string, std::string>> files) {
   OutputSet out;
   std::string written;
@@ -321,8 +323,30 @@ void add_uncertainty_options(CLI::App& app, FitOptions& fit) {
                                                                                  {"hac", CovarianceMethod::hac},
                                                                                  {"cluster", CovarianceMethod::cluster},
                                                                                  {"bootstrap", CovarianceMethod::bootstrap}},
-                                          CLI::ignore_case));
+                                          CLI::ignore_case)
+                     .description(""))
+      ->type_name("METHOD");
   app.add_option("--bootstrap", fit.bootstrap, "Cluster-bootstrap replicates (runs resampled; 0: none)")->capture_default_str();
+}
+
+CLI::Validator at_least(double low) {
+  return CLI::Validator(
+      [low](std::string& text) -> std::string {
+        double v = 0;
+        if (!CLI::detail::lexical_cast(text, v) || !std::isfinite(v)) return fmt::format("expected a number, got '{}'", text);
+        return v >= low ? "" : fmt::format("{} is below {:g}: expected a value of at least {:g}", text, low, low);
+      },
+      "");
+}
+
+CLI::Validator inside(double low, double high) {
+  return CLI::Validator(
+      [low, high](std::string& text) -> std::string {
+        double v = 0;
+        if (!CLI::detail::lexical_cast(text, v) || !std::isfinite(v)) return fmt::format("expected a number, got '{}'", text);
+        return v > low && v < high ? "" : fmt::format("{} is outside ({:g}, {:g}): expected a value strictly between", text, low, high);
+      },
+      "");
 }
 
 void add_list(CLI::App& app, const char* name, std::vector<double>& values, const char* help) {
@@ -368,7 +392,9 @@ void ThermalModelOptions::add_offsets(CLI::App& app, ThermalFitOptions& fit) {
       ->transform(CLI::CheckedTransformer(std::map<std::string, ThermalOffsets>{{"auto", ThermalOffsets::automatic},
                                                                                {"fit", ThermalOffsets::fitted},
                                                                                {"hold", ThermalOffsets::held}},
-                                          CLI::ignore_case));
+                                          CLI::ignore_case)
+                     .description(""))
+      ->type_name("MODE");
 }
 
 void ThermalModelOptions::add_friction_file(CLI::App& app) {

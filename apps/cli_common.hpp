@@ -26,6 +26,9 @@ std::vector<std::pair<double, double>> parse_pairs(std::string_view option, std:
 // written, for the message: "fits/a.json, fits/a_samples.csv and fits/a_conditions.csv".
 std::string write_outputs(const std::filesystem::path& dir, std::vector<std::pair<std::string, std::string>> files);
 
+// "1 run", "3 runs".
+std::string plural(std::size_t n, std::string_view noun);
+
 // Version, command line and time-independent facts every output carries alongside.
 nlohmann::json run_record(const std::vector<std::string>& argv);
 
@@ -201,6 +204,11 @@ struct FrictionInput {
 };
 // CSV logs, or one .toml friction manifest (its runs' conditions and its [raw] settings).
 FrictionInput load_friction_input(const std::vector<std::string>& files, const FrictionInputOptions& options);
+
+// Checks of an option's value, with messages like a file value's: "-5 is below 0: expected a
+// value of at least 0" (CLI11's own print the type's limits).
+CLI::Validator at_least(double low);
+CLI::Validator inside(double low, double high);  // exclusive
 
 // A list option parsed with parse_list.
 void add_list(CLI::App& app, const char* name, std::vector<double>& values, const char* help);

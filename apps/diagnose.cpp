@@ -149,8 +149,11 @@ void setup_diagnose(CLI::App& app, const std::vector<std::string>& argv) {
   friction->add_option("--name", o->name, "Name of the output")->capture_default_str();
   friction->add_option("-o,--output-dir", o->output_dir, "Output folder")->capture_default_str();
   friction->add_option("--min-gain", o->diagnosis.min_cv_gain_percent, "Least held-out RMSE gain to accept a cause, %")
+      ->check(at_least(0))
       ->capture_default_str();
-  friction->add_option("--lrt-p", o->diagnosis.lrt_p, "Significance level of the likelihood-ratio test")->capture_default_str();
+  friction->add_option("--lrt-p", o->diagnosis.lrt_p, "Significance level of the likelihood-ratio test")
+      ->check(inside(0, 1))
+      ->capture_default_str();
   add_friction_constant_options(*friction, o->constants);
   friction->callback([o, &argv] { run_diagnose_friction(*o, argv); });
 
@@ -164,8 +167,11 @@ void setup_diagnose(CLI::App& app, const std::vector<std::string>& argv) {
   t->model.add_to(*thermal, t->diagnosis.fit);
   t->model.add_friction_file(*thermal);
   thermal->add_option("--min-gain", t->diagnosis.min_cv_gain_percent, "Least held-out RMSE gain to accept a cause, %")
+      ->check(at_least(0))
       ->capture_default_str();
-  thermal->add_option("--lrt-p", t->diagnosis.lrt_p, "Significance level of the likelihood-ratio test")->capture_default_str();
+  thermal->add_option("--lrt-p", t->diagnosis.lrt_p, "Significance level of the likelihood-ratio test")
+      ->check(inside(0, 1))
+      ->capture_default_str();
   thermal->callback([t, &argv] { run_diagnose_thermal(*t, argv); });
 }
 

@@ -95,8 +95,8 @@ void run_generate_friction(GenerateOptions& o, const std::vector<std::string>& a
   out.add(dir / "friction.csv", friction_log_csv(made.log, comments));
   out.add(dir / "friction_truth.json", made.truth_json);
   out.commit();
-  std::cout << fmt::format("wrote {} samples in {} runs to {} (truth: {})\n", made.log.size(),
-                           made.log.run_names.size(), (dir / "friction.csv").string(),
+  std::cout << fmt::format("wrote {} in {} to {} (truth: {})\n", plural(made.log.size(), "sample"),
+                           plural(made.log.run_names.size(), "run"), (dir / "friction.csv").string(),
                            (dir / "friction_truth.json").string());
 }
 
@@ -164,7 +164,7 @@ void add_common(CLI::App& app, GenerateOptions& o) {
   add_assignments(app, "--effect", o.effects,
                   "Switch on a named effect: --effect seal_drag=200 (repeatable; see lmcal generate effects)");
   app.add_option("--seed", o.seed, "Random seed (same seed, same data)")->capture_default_str();
-  app.add_option("-o,--output", o.output, "Output folder")->required();
+  app.add_option("-o,--output-dir,--output", o.output, "Output folder")->required();
 }
 
 }  // namespace
@@ -177,7 +177,7 @@ void setup_generate(CLI::App& app, const std::vector<std::string>& argv) {
   CLI::App* friction = generate->add_subcommand("friction", "A friction log (load-cell CSV) and its truth");
   add_common(*friction, *o);
   FrictionRigConfig& f = o->friction;
-  friction->add_option("--guides", f.guides, "Guide models (of the built-in catalog or --catalog)")
+  friction->add_option("--guide,--guides", f.guides, "Guide models (of the built-in catalog or --catalog), a list sweeps them")
       ->delimiter(',')
       ->capture_default_str();
   friction->add_option("--catalog", o->catalog_file, kCatalogHelp);
@@ -260,7 +260,7 @@ void setup_generate(CLI::App& app, const std::vector<std::string>& argv) {
   CLI::App* fleet = generate->add_subcommand(
       "fleet", "A fleet of units (a folder per unit, or per unit and date) with a known unit-to-unit spread, for lmcal fleet");
   fleet->add_option("--seed", o->seed, "Random seed (same seed, same data)")->capture_default_str();
-  fleet->add_option("-o,--output", o->output, "Output folder (the fleet's root)")->required();
+  fleet->add_option("-o,--output-dir,--output", o->output, "Output folder (the fleet's root)")->required();
   FleetRigConfig& fl = o->fleet;
   fleet->add_option("--units", fl.units, "Units")->capture_default_str();
   fleet->add_option("--dated-units", fl.dated_units, "Units 1 … N are logged on --dates dates, the others once")->capture_default_str();

@@ -79,10 +79,10 @@ check "generated friction log and truth" test -s rig/friction.csv -a -s rig/fric
 check "generated log says it is synthetic" grep -q '^# SYNTHETIC' rig/friction.csv
 check "truth names the effect" grep -q '"seal_drag"' rig/friction_truth.json
 "$LMCAL" check friction rig/friction.csv > check.txt
-check "check reads the generated log" grep -q 'friction log: .* samples, 2 runs, 1 guides' check.txt
+check "check reads the generated log" grep -q 'friction log: .* samples, 2 runs, 1 guide$' check.txt
 "$LMCAL" generate thermal -o rig --velocity 0.11 --duration 1200 --record-every 10 >/dev/null
 "$LMCAL" check thermal rig/thermal.toml > check.txt
-check "check reads the generated manifest" grep -q "thermal data set 'synthetic': 1 runs" check.txt
+check "check reads the generated manifest" grep -q "thermal data set 'synthetic': 1 run$" check.txt
 "$LMCAL" resample rig/thermal/v110.csv -o coarse.csv --every 12 >/dev/null
 check "resample keeps every 12th record" test "$(grep -vc '^#' coarse.csv)" -eq 12
 check "unknown effect" refused "unknown effect 'warp'" generate friction -o out --effect warp=1
@@ -380,6 +380,17 @@ check "an unknown option names the nearest" \
   exits_with 2 "unknown option '--star'; did you mean '--start' or '--starts'?" calibrate --star 3 x
 check "a missing argument is named with what it is" exits_with 2 "missing SET: Measurement folder" calibrate
 check "no command lists the commands" exits_with 2 "expected a command: simulate, generate" 
+check "an option's value out of range is refused like a file's" \
+  exits_with 2 "--friction-min-gain: -5 is below 0: expected a value of at least 0" calibrate x --friction-min-gain -5
+check "a thermal effect is refused for a friction log" \
+  exits_with 1 "--effect: coupling is thermal: a friction log does not see it" generate friction -o out --effect coupling=1
+check "a CSV given as a manifest is named as one" \
+  exits_with 1 "$SOURCE/measurements/cheng2017/friction.csv: this looks like a CSV file (comma-separated columns); expected a TOML manifest" \
+  fit thermal "$SOURCE/measurements/cheng2017/friction.csv"
+check "a CSV given as a friction fit is named as one" \
+  exits_with 1 "$SOURCE/measurements/cheng2017/friction.csv: this looks like a CSV file (comma-separated columns); expected a friction fit JSON" \
+  fit thermal "$SOURCE/measurements/cheng2017/thermal.toml" --friction "$SOURCE/measurements/cheng2017/friction.csv" -o out
+check "--guide is --guide in every command" "$LMCAL" generate friction --guide "SRN 35C" --runs 1 -o guide_out
 printf '[calibrate]\nstarts = 4\nlrtp = 0.01\n' >options.toml
 check "a config file's unknown key is refused where it is" \
   exits_with 2 "options.toml:3:1: unknown key 'calibrate.lrtp'; did you mean 'calibrate.lrt-p'?" --config options.toml calibrate x

@@ -10,6 +10,7 @@
 #include <map>
 #include <nlohmann/json.hpp>
 
+#include "io/file_kind.hpp"
 #include "lmcal/error.hpp"
 #include "lmcal/io/catalog.hpp"
 #include "lmcal/io/csv_writer.hpp"
@@ -915,12 +916,18 @@ FitResult friction_fit_uncertainty(const nlohmann::json& j) {
 }  // namespace
 
 void read_friction_fit(const std::string& json_file, ThermalFitOptions& options) {
-  std::ifstream in(json_file);
+  std::ifstream in(json_file, std::ios::binary);
   if (!in) throw InputError(json_file, 0, 0, "cannot open friction fit file");
+  const std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
   nlohmann::json j;
   try {
-    j = nlohmann::json::parse(in);
+    j = nlohmann::json::parse(text);
   } catch (const nlohmann::json::parse_error& e) {
+    const std::string kind = io::looks_like(text);
+    if (!kind.empty() && kind != "a JSON document")
+      throw InputError(json_file, 0, 0,
+                       fmt::format("this looks like {}; expected a friction fit JSON (friction.json of lmcal fit friction, "
+                                   "or calibrated_friction.json of lmcal calibrate)", kind));
     throw InputError(json_file, 0, static_cast<long>(e.byte), "not valid JSON: " + std::string(e.what()));
   }
   if (j.value("kind", "") != "friction fit")

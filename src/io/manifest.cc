@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "io/csv_reader.hpp"
+#include "io/file_kind.hpp"
 #include "lmcal/error.hpp"
 
 namespace lmcal::manifest {
@@ -35,6 +36,9 @@ toml::table Manifest::parse() const {
   try {
     return toml::parse(text, file);
   } catch (const toml::parse_error& e) {
+    const std::string kind = io::looks_like(text);
+    if (!kind.empty() && !kind.starts_with("a TOML"))
+      throw InputError(file, 0, 0, fmt::format("this looks like {}; expected a TOML manifest (key = value lines, [[run]] tables)", kind));
     fail(e.source(), std::string(e.description()));
   }
 }

@@ -75,6 +75,7 @@ void validate(const RawFrictionRigConfig& raw) {
 
 RawFrictionRigOutput generate_raw_friction_logs(const FrictionRigConfig& config, const RawFrictionRigConfig& raw,
                                                 const RigEffects& effects, const std::vector<std::string>& comments) {
+  rig::require_no_thermal_effects(effects);
   validate(raw);
   require_autocorrelation("noise_ar1", config.noise_ar1);
   const std::vector<Phase> phases = motion_profile(config.velocity_m_s, raw);

@@ -89,4 +89,7 @@ nlohmann::json effects_json(const RigEffects& effects);
 // The friction constants by name (the truth file's "friction_constants").
 nlohmann::json constants_json(const FrictionConstants<double>& k);
 
+// InvalidParameter naming --effect when a thermal effect is on: a friction log does not see it.
+void require_no_thermal_effects(const RigEffects& effects);
+
 }  // namespace lmcal::rig

@@ -139,7 +139,22 @@ void require_autocorrelation(const char* parameter, double phi) {
   if (!(phi >= 0 && phi < 1)) throw InvalidParameter(parameter, phi, "a value in [0, 1)");
 }
 
+namespace rig {
+
+void require_no_thermal_effects(const RigEffects& effects) {
+  std::vector<std::string> given;
+  for (const auto& e : effect_table())
+    if (e.thermal && e.value(effects) != e.info.neutral) given.push_back(e.info.name);
+  if (!given.empty())
+    throw InvalidParameter("--effect", fmt::format("{} {} thermal: a friction log does not see {}; give {} to generate thermal",
+                                                   fmt::join(given, ", "), given.size() == 1 ? "is" : "are",
+                                                   given.size() == 1 ? "it" : "them", given.size() == 1 ? "it" : "them"));
+}
+
+}  // namespace rig
+
 FrictionRigOutput generate_friction_log(const FrictionRigConfig& config, const RigEffects& effects) {
+  rig::require_no_thermal_effects(effects);
   validate(config.constants);
   if (config.runs < 1) throw InvalidParameter("runs", config.runs, "at least 1");
   require_non_negative("noise_N", config.noise_N);
