@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "calibration_options.hpp"
+#include "output_mode.hpp"
 #include "lmcal/report/calibration.hpp"
 #include "progress.hpp"
 
@@ -74,7 +75,7 @@ void run_calibrate(CalibrateOptions& o) {
   const std::string written = write_outputs(dir, calibration_outputs(c));
   times.stop();
   progress.clear();
-  if (o.timings) times.print(stderr);
+  if (o.timings || output_mode().verbosity == Verbosity::verbose) times.print(stderr);
   std::cout << "calibration of " << set.dir.string() << "\n" << calibration_summary(c);
   std::cout << "wrote " << written << "\nreport: " << (dir / "report.html").string() << "\n";
 }

@@ -1,6 +1,7 @@
 #include "cli_common.hpp"
 
 #include "lmcal/version.hpp"
+#include "output_mode.hpp"
 
 #include "lmcal/io/hash.hpp"
 
@@ -61,7 +62,10 @@ std::string write_outputs(const std::filesystem::path& dir, std::vector<std::pai
   std::string written;
   for (std::size_t i = 0; i < files.size(); ++i) {
     const std::filesystem::path path = dir / files[i].first;
-    if (path.extension() == ".json") files[i].second = with_software(files[i].second);
+    if (path.extension() == ".json") {
+      files[i].second = with_software(files[i].second);
+      offer_machine_output(path, path.filename() == "calibration.json" || path.filename() == "fleet.json");
+    }
     written += (i == 0 ? "" : i + 1 == files.size() ? " and " : ", ") + path.string();
     out.add(path, std::move(files[i].second));
   }

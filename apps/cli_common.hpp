@@ -154,6 +154,7 @@ void setup_fit_thermal(CLI::App& fit, const std::vector<std::string>& argv);
 void setup_diagnose(CLI::App& app, const std::vector<std::string>& argv);
 void setup_calibrate(CLI::App& app);
 void setup_fleet(CLI::App& app);
+void setup_completion(CLI::App& app);
 void setup_predict(CLI::App& app, const std::vector<std::string>& argv);
 void setup_plan(CLI::App& app, const std::vector<std::string>& argv);
 

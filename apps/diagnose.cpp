@@ -7,6 +7,7 @@
 #include <iostream>
 
 #include "cli_common.hpp"
+#include "output_mode.hpp"
 #include "lmcal/io/hash.hpp"
 #include "lmcal/diagnose/friction_diagnosis.hpp"
 #include "lmcal/diagnose/thermal_diagnosis.hpp"
@@ -119,6 +120,7 @@ void run_diagnose_thermal(DiagnoseThermalOptions& o, const std::vector<std::stri
   });
   const auto file = std::filesystem::path(o.output_dir) / (o.name + ".json");
   write_file_atomically(file, with_record(thermal_diagnosis_json(d), argv, inputs));
+  offer_machine_output(file, true);
   print(d);
   std::cout << "wrote " << file.string() << "\n";
 }
@@ -133,6 +135,7 @@ void run_diagnose_friction(DiagnoseFrictionOptions& o, const std::vector<std::st
   });
   const auto file = std::filesystem::path(o.output_dir) / (o.name + ".json");
   write_file_atomically(file, with_record(friction_diagnosis_json(d), argv, input.inputs));
+  offer_machine_output(file, true);
   print(d);
   std::cout << "wrote " << file.string() << "\n";
 }

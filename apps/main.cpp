@@ -4,8 +4,10 @@
 #include <glog/logging.h>
 
 #include <iostream>
+#include <optional>
 
 #include "cli_common.hpp"
+#include "output_mode.hpp"
 #include "usage.hpp"
 #include "lmcal/error.hpp"
 #include "lmcal/version.hpp"
@@ -24,6 +26,16 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", version, "Print lmcal's version, commit and libraries, and exit");
   app.set_config("--config", "", "Read options from a TOML file");
   app.allow_config_extras(CLI::config_extras_mode::error);  // a misspelt key is refused, as in a manifest
+  lmcal::cli::OutputMode& mode = lmcal::cli::output_mode();
+  app.add_flag_function("-q,--quiet", [&mode](std::int64_t) { mode.verbosity = lmcal::cli::Verbosity::quiet; },
+                        "Errors only: no summary, no progress");
+  app.add_flag_function("-v,--verbose", [&mode](std::int64_t) { mode.verbosity = lmcal::cli::Verbosity::verbose; },
+                        "Progress as lines even in a pipe or a log, and each step's wall time");
+  app.add_flag("--json", mode.json, "Print the command's main JSON output (calibration.json, friction.json, …) on stdout "
+                                    "instead of the summary");
+  // After the options, before the command runs: stdout silenced for -q and --json.
+  std::optional<lmcal::cli::StdoutGate> gate;
+  app.parse_complete_callback([&gate] { gate.emplace(); });
   app.require_subcommand(1);
   lmcal::cli::setup_simulate(app, args);
   lmcal::cli::setup_generate(app, args);
@@ -34,8 +46,13 @@ int main(int argc, char** argv) {
   lmcal::cli::setup_fleet(app);
   lmcal::cli::setup_predict(app, args);
   lmcal::cli::setup_plan(app, args);
+  lmcal::cli::setup_completion(app);
   try {
     app.parse(argc, argv);
+    if (mode.json && gate && !gate->print_machine_output()) {
+      std::cerr << "lmcal: error: --json: this command writes no JSON output\n";
+      return lmcal::cli::kExitUsage;
+    }
   } catch (const CLI::ParseError& e) {
     return lmcal::cli::report_parse_error(app, e, args);
   } catch (const lmcal::InputError& e) {

@@ -1,16 +1,26 @@
 #include "progress.hpp"
 
+#include "output_mode.hpp"
+
 #include <fmt/format.h>
 #include <sys/ioctl.h>
 #include <unistd.h>
 
 namespace lmcal::cli {
 
-TerminalProgress::TerminalProgress(std::FILE* out) : out_(out), enabled_(isatty(fileno(out)) != 0) {}
+TerminalProgress::TerminalProgress(std::FILE* out)
+    : out_(out),
+      lines_(output_mode().verbosity == Verbosity::verbose && isatty(fileno(out)) == 0),
+      enabled_(isatty(fileno(out)) != 0 && output_mode().verbosity != Verbosity::quiet && !output_mode().json) {}
 
 TerminalProgress::~TerminalProgress() { clear(); }
 
 void TerminalProgress::step(std::size_t index, std::size_t count, const std::string& name) {
+  if (lines_) {  // -v in a pipe or a log: one line per step
+    std::lock_guard lock(mutex_);
+    std::fprintf(out_, "[%zu/%zu] %s\n", index + 1, count, name.c_str());
+    std::fflush(out_);
+  }
   if (!enabled_) return;
   std::lock_guard lock(mutex_);
   step_ = fmt::format("[{}/{}] {}", index + 1, count, name);

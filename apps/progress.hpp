@@ -38,7 +38,8 @@ class TerminalProgress {
   void draw();  // with mutex_ held
 
   std::FILE* out_;
-  bool enabled_;
+  bool lines_;    // -v without a terminal: a line per step
+  bool enabled_;  // a terminal, not -q or --json: one line rewritten in place
   std::mutex mutex_;
   bool shown_ = false;
   std::string step_, detail_;

@@ -5,6 +5,7 @@
 
 #include <iostream>
 
+#include "output_mode.hpp"
 #include "cli_common.hpp"
 #include "lmcal/error.hpp"
 #include "lmcal/io/atomic_file.hpp"
@@ -86,6 +87,7 @@ void run_simulate_friction(const FrictionSweepOptions& o, const std::vector<std:
   OutputSet out;
   out.add(o.output, csv.str());
   out.add(o.output + ".json", record.dump(2) + "\n");
+  offer_machine_output(o.output + ".json", true);
   out.commit();
   if (model)
     std::cout << fmt::format("the calibrated friction law of {} (set {}, lmcal {}); effects: {}\n", model->file,

@@ -13,6 +13,7 @@
 #include <cmath>
 #include <iostream>
 
+#include "output_mode.hpp"
 #include "cli_common.hpp"
 #include "progress.hpp"
 #include "lmcal/error.hpp"
@@ -392,6 +393,7 @@ void run_simulate_thermal(const ThermalSweepOptions& o, const std::vector<std::s
   out.add(o.output + "_time.csv", time_csv.str());
   out.add(o.output + "_profile.csv", profile_csv.str());
   out.add(o.output + ".json", record.dump(2) + "\n");
+  offer_machine_output(o.output + ".json", true);
   out.commit();
   std::cout << fmt::format("wrote {0}_time.csv, {0}_profile.csv and {0}.json\n", o.output);
 }

@@ -396,6 +396,25 @@ check "a config file's unknown key is refused where it is" \
   exits_with 2 "options.toml:3:1: unknown key 'calibrate.lrtp'; did you mean 'calibrate.lrt-p'?" --config options.toml calibrate x
 check "a missing folder is an input error (1)" exits_with 1 "nowhere: expected a measurement folder" calibrate nowhere
 
+# Shell completion and the man page, generated from the command tree.
+"$LMCAL" completion bash >completion.bash
+completes() {  # completes EXPECTED WORD... : the last word completed after the others
+  local expected=$1; shift
+  (source completion.bash; COMP_WORDS=(lmcal "$@"); COMP_CWORD=$#; _lmcal; printf '%s\n' "${COMPREPLY[@]}") | grep -qx -- "$expected" ||
+    { echo "  '$*' does not complete to $expected"; return 1; }
+}
+check "bash completes a command" completes calibrate cal
+check "bash completes a subcommand" completes friction generate fr
+check "bash completes an option of a subcommand, in its group too" completes --raw generate friction --ra
+check "bash completes a global option" completes --json --js
+"$LMCAL" man >lmcal.1
+check "the man page has every command and option" grep -q '^.SH lmcal generate friction' lmcal.1
+check "the man page lists an option's help" grep -q '^.B \\-\\-friction\\-min\\-gain' lmcal.1
+check "the man page says the exit status" grep -q '^.SH EXIT STATUS' lmcal.1
+check "--json prints the main output" bash -c '"$0" --json fit friction "$1" -o jsonout | python3 -c "import json,sys; assert json.load(sys.stdin)[\"kind\"] == \"friction fit\""' \
+  "$LMCAL" "$SOURCE/measurements/cheng2017/friction.csv"
+check "-q prints nothing" test -z "$("$LMCAL" -q fit friction "$SOURCE/measurements/cheng2017/friction.csv" -o quietout 2>&1)"
+
 # Deterministic: the same bytes with one thread or two (no timings in the outputs, so that the
 # main job leaves the committed fits as they are).
 # Both bundled sets: the diagnoses fit their candidates one per thread.

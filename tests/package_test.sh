@@ -15,6 +15,8 @@ trap 'rm -rf "$work"' EXIT
 cmake --install "$build" --prefix "$work/prefix" >/dev/null
 test -f "$work/prefix/include/lmcal/fit/friction_fit.hpp"
 test -f "$work/prefix/share/lmcal/guides.toml"
+test -s "$work/prefix/share/man/man1/lmcal.1"                          # the man page
+test -s "$work/prefix/share/bash-completion/completions/lmcal"         # the bash completion
 cmake -S "$source/examples/cpp" -B "$work/example" -DCMAKE_PREFIX_PATH="$work/prefix" -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build "$work/example" >/dev/null
 "$work/example/fit_log" "$source/measurements/cheng2017/friction.csv" >"$work/fit.txt"

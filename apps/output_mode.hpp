@@ -1,0 +1,45 @@
+// How much the command line says, and in which form (the global options of main.cpp):
+//   -q, --quiet     errors only: no summary on stdout, no progress on stderr
+//   -v, --verbose   progress as lines on stderr even in a pipe or a log file, and each step's
+//                   wall time
+//   --json          the command's main JSON output (calibration.json, friction.json,
+//                   fleet.json, …) on stdout instead of the summary, for scripts: `lmcal
+//                   --json calibrate SET | jq .calibrated_model`
+#pragma once
+
+#include <filesystem>
+#include <iosfwd>
+#include <string>
+
+namespace lmcal::cli {
+
+enum class Verbosity { quiet, normal, verbose };
+
+struct OutputMode {
+  Verbosity verbosity = Verbosity::normal;
+  bool json = false;
+  std::filesystem::path machine_output;  // the JSON a command wrote that --json prints
+};
+
+OutputMode& output_mode();
+
+// Records `file` as the command's JSON output when none better is known: `main` marks the
+// one that sums the command up (calibration.json, fleet.json), which later files do not replace.
+void offer_machine_output(const std::filesystem::path& file, bool main = false);
+
+// Before the command: silences stdout for -q and --json. After it: prints the recorded JSON
+// for --json (an error when the command wrote none), and restores stdout.
+class StdoutGate {
+ public:
+  StdoutGate();
+  ~StdoutGate();
+  StdoutGate(const StdoutGate&) = delete;
+  StdoutGate& operator=(const StdoutGate&) = delete;
+  // The JSON for --json; false when the command wrote none.
+  bool print_machine_output();
+
+ private:
+  std::streambuf* saved_;
+};
+
+}  // namespace lmcal::cli
