@@ -1,4 +1,4 @@
-#include "lmcal/fleet/population.hpp"
+#include "lmcal/fit/population.hpp"
 
 #include <gtest/gtest.h>
 

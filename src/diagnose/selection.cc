@@ -185,6 +185,7 @@ bool score_candidate(const ModelFit& current, const ModelFit& candidate, const S
 
 void set_estimate(CandidateScore& c, const ParameterEstimate& p) {
   c.value = p.value;
+  c.unit = p.unit;
   c.se = p.se;
   c.ci_low = p.ci_low;
   c.ci_high = p.ci_high;
@@ -284,7 +285,8 @@ Verdict make_verdict(const VerdictInput& in) {
     std::string causes, ties;
     for (const auto& c : in.accepted) {
       causes += causes.empty() ? "" : "; ";
-      causes += std::isfinite(c.value) ? fmt::format("{} = {:.4g} (95 % [{:.4g}, {:.4g}])", c.effect, c.value, c.ci_low, c.ci_high)
+      causes += std::isfinite(c.value) ? fmt::format("{} = {:.4g}{} (95 % [{:.4g}, {:.4g}])", c.effect, c.value,
+                                                     c.unit.empty() || c.unit == "1" ? "" : " " + c.unit, c.ci_low, c.ci_high)
                                        : c.effect;
       if (!c.tied_with.empty()) {
         std::vector<std::string> all{c.effect};
@@ -347,6 +349,7 @@ Verdict make_verdict(const VerdictInput& in) {
 
 nlohmann::json candidate_json(const CandidateScore& c, const std::string& unit) {
   return nlohmann::json{{"effect", c.effect},
+                        {"unit", c.unit},
                         {"value", number(c.value)},
                         {"se", number(c.se)},
                         {"ci95", {number(c.ci_low), number(c.ci_high)}},

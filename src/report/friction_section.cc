@@ -298,8 +298,8 @@ void candidate_tables(Page& page, const std::vector<std::vector<CandidateScore>>
   for (std::size_t r = 0; r < rounds.size(); ++r) {
     std::vector<std::vector<std::string>> rows;
     for (const auto& cand : rounds[r])
-      rows.push_back({cand.effect, num(cand.value), bracket(cand.ci_low, cand.ci_high),
-                      num(cand.lrt_p, 2), num(cand.cv_rmse), fmt::format("{:+.2f} %", cand.cv_gain_percent),
+      rows.push_back({cand.effect, num(cand.value) + (cand.unit.empty() || cand.unit == "1" ? "" : " " + cand.unit), bracket(cand.ci_low, cand.ci_high),
+                      p_value(cand.lrt_p), num(cand.cv_rmse), fmt::format("{:+.2f} %", cand.cv_gain_percent),
                       (cand.accepted ? "accepted: " : "") + cand.reason});
     page.paragraph(fmt::format("Candidates, step {} (held-out RMSE in {}, gain against the model so far):", r + 1, unit));
     page.table({"cause", "estimate", "95 % interval", "LRT p", "held-out RMSE", "gain", "decision"}, rows);
@@ -309,7 +309,7 @@ void candidate_tables(Page& page, const std::vector<std::vector<CandidateScore>>
 void lack_of_fit_paragraph(Page& page, const LackOfFit& baseline, const LackOfFit& final, const std::string& unit,
                            const std::vector<std::string>& design_notes) {
   auto words = [&](const LackOfFit& l) {
-    return fmt::format("F = {} on ({:.0f}, {:.0f}) dof, p = {}: {}", num(l.statistic, 3), l.df1, l.df2, num(l.p_value, 2),
+    return fmt::format("F = {} on ({:.0f}, {:.0f}) dof, p = {}: {}", num(l.statistic, 3), l.df1, l.df2, p_value(l.p_value),
                        l.fits ? "within the noise" : fmt::format("{} {} beyond it", num(l.lack_rms, 3), unit));
   };
   if (baseline.tested)
@@ -370,7 +370,7 @@ void empirical_section(Page& page, const EmpiricalFinding& e, const std::string&
   page.table({"term", "what it does", "covariates", "coefficient", "95 % interval", "scale", "95 % interval"}, rows);
   page.paragraph(fmt::format("Held-out (leave-one-run-out) RMSE {} {} before the term, {} {} with it: a gain of {:.1f} % "
                              "(LRT p = {}, ΔBIC = {}). Kept: {}.",
-                             num(e.cv_rmse_before), unit, num(e.cv_rmse_after), unit, e.cv_gain_percent, num(e.lrt_p, 2),
+                             num(e.cv_rmse_before), unit, num(e.cv_rmse_after), unit, e.cv_gain_percent, p_value(e.lrt_p),
                              num(e.delta_bic, 3), e.reason));
   page.paragraph(e.resembles.empty() ? "It resembles no mechanism we know of."
                                      : "It resembles " + e.resembles + ". A resemblance, not a diagnosis: to name the "

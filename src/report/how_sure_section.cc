@@ -73,7 +73,7 @@ void heterogeneity_table(Page& page, const Uncertainty& u) {
   if (u.heterogeneity.empty()) return;
   std::vector<std::vector<std::string>> rows;
   for (const auto& h : u.heterogeneity)
-    rows.push_back({h.parameter, std::to_string(h.runs), num(h.q, 3), num(h.p_value, 2), num(h.p_holm, 2),
+    rows.push_back({h.parameter, std::to_string(h.runs), num(h.q, 3), p_value(h.p_value), p_value(h.p_holm),
                     num(100 * h.i_squared, 3) + " %", h.significant ? "yes" : "no"});
   page.paragraph("Between runs: Cochran's Q of each parameter against χ²(runs − 1), Holm-adjusted over the parameters; I² is "
                  "the share of the between-run spread that is real rather than noise.");

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "lmcal/fit/population.hpp"
 #include "lmcal/version.hpp"
 #include "sections.hpp"
 
@@ -63,6 +64,22 @@ void brief(Page& page, const Calibration& c) {
     if (c.thermal_diagnosis)
       page << fmt::format(" Diagnosis: <b>{}</b>: {}", escape_xml(c.thermal_diagnosis->verdict),
                           escape_xml(report::without_verdict(c.thermal_diagnosis->summary)));
+    // The runs' own α disagreeing beyond their intervals (the per-run plot) is structure the
+    // verdict must not hide: Cochran's Q of the per-run fits.
+    std::vector<Estimate> per_run;
+    for (const FitResult& run : c.thermal->per_run) {
+      const ParameterEstimate& a = run.parameter("alpha");
+      if (std::isfinite(a.value) && std::isfinite(a.se) && a.se > 0) per_run.push_back({a.value, a.se});
+    }
+    const RandomEffects runs = per_run.size() >= 3 ? random_effects(per_run) : RandomEffects{};
+    if (runs.k >= 3 && runs.q_p < 0.05)
+      page << fmt::format(
+          " <span class=\"warning\">But the runs' own α differ beyond their intervals (Cochran's Q = {} on {} runs, "
+          "{}): either something changes from run to run that {}, or the per-run intervals are too narrow — each takes "
+          "its run's heat as exact, and an error in the logged friction moves α in proportion. Read α as an average over "
+          "runs that differ, and see the per-run α below.</span>",
+          num(runs.q, 3), runs.k, report::p_is(runs.q_p),
+          report::rejects(c.thermal_diagnosis) ? "the accepted mechanisms may not cover" : "no mechanism of the library explains");
     page << "</p>\n";
   }
   for (const auto& note : c.notes) page.paragraph("Note: " + note, "warning");
@@ -70,6 +87,45 @@ void brief(Page& page, const Calibration& c) {
     page << fmt::format("<p class=\"warning\">{} warning{} about the data: see <a href=\"#data\">Data loaded</a>.</p>\n",
                         c.warnings.size(), c.warnings.size() > 1 ? "s" : "");
   page << "</div>\n";
+}
+
+// What to do next, as the exact commands (paths as the calibration was given them; the files
+// named without a folder are this report's neighbours).
+void next_steps(Page& page, const Calibration& c) {
+  page.heading(2, "Next steps", "next-steps");
+  const std::string set = c.set.dir.string();
+  std::string logs = c.set.friction_manifest ? c.set.friction_manifest->string() : "";
+  for (const auto& log : c.set.friction_logs)
+    if (!c.set.friction_manifest) logs += (logs.empty() ? "" : " ") + log.string();
+  std::vector<std::pair<std::string, std::string>> steps;
+  if (c.calibrated.friction && c.calibrated.thermal)
+    steps.emplace_back("Predict the rail's temperature and growth over your machine's duty (a TOML of segments; "
+                       "example: examples/duty/two_shifts.toml):",
+                       "lmcal predict model.toml duty.toml");
+  if (c.plan)
+    steps.emplace_back("Log the friction conditions that would narrow the constants most (plan_friction_template.csv: "
+                       "fill in the forces), add the file to the set, and calibrate again:",
+                       fmt::format("lmcal calibrate {}", set));
+  if (c.thermal_plan)
+    steps.emplace_back("Run the thermal runs planned next (plan_thermal_manifest.toml lists their conditions), add them to "
+                       "the thermal manifest, and calibrate again:",
+                       fmt::format("lmcal calibrate {}", set));
+  const bool unexplained = (c.friction_diagnosis && c.friction_diagnosis->verdict.starts_with("unexplained")) ||
+                           (c.thermal_diagnosis && c.thermal_diagnosis->verdict.starts_with("unexplained"));
+  if (unexplained)
+    steps.emplace_back("Something is left that no named cause explains (see the verdicts): try a cause you suspect on the "
+                       "friction log yourself, and compare its held-out error:",
+                       fmt::format("lmcal diagnose friction {} --min-gain 1", logs));
+  if (c.friction)
+    steps.emplace_back("Refit the law with a cause of your choice, or a constant held (lmcal fit friction --help lists "
+                       "them):",
+                       fmt::format("lmcal fit friction {} --effect {}", logs,
+                                   c.calibrated.friction_causes.empty() ? "seal_drag" : c.calibrated.friction_causes.front()));
+  steps.emplace_back("Calibrate every unit of a lot, or an axis every week, and see the population and its drift:",
+                     "lmcal fleet FOLDER_OF_SETS --jobs 4");
+  page << "<ol>";
+  for (const auto& [why, command] : steps) page << "<li>" << escape_xml(why) << " <code>" << escape_xml(command) << "</code></li>";
+  page << "</ol>\n";
 }
 
 void provenance(Page& page, const Calibration& c) {
@@ -100,9 +156,10 @@ Page build(const Calibration& c) {
   if (calibrated) body << "<a href=\"#how-sure\">How sure</a>";
   if (c.friction) body << "<a href=\"#friction\">Friction (published model)</a>";
   if (c.thermal) body << "<a href=\"#thermal\">Thermal (published model)</a>";
-  body << "<a href=\"#data\">Data loaded</a><a href=\"#inputs\">Inputs and versions</a></nav>\n";
+  body << "<a href=\"#next-steps\">Next steps</a><a href=\"#data\">Data loaded</a><a href=\"#inputs\">Inputs and versions</a></nav>\n";
   report::calibrated_section(body, c);
   brief(body, c);
+  next_steps(body, c);
   report::how_sure_section(body, c);
   if (c.friction) report::friction_section(body, c);
   if (c.thermal) report::thermal_section(body, c);

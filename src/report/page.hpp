@@ -71,6 +71,11 @@ inline std::string num(double v, int digits = 4) {
   return std::isfinite(v) ? fmt::format("{:.{}g}", v, digits) : "–";
 }
 
+// A p-value to 2 significant digits; below what a double resolves, "< 1e-16" (not "0").
+inline std::string p_value(double p) { return std::isfinite(p) && p < 1e-16 ? "< 1e-16" : num(p, 2); }
+// "p = 0.032", or "p < 1e-16".
+inline std::string p_is(double p) { return std::isfinite(p) && p < 1e-16 ? "p < 1e-16" : "p = " + num(p, 2); }
+
 // "[low, high]".
 inline std::string bracket(double low, double high) { return fmt::format("[{}, {}]", num(low), num(high)); }
 

@@ -34,6 +34,7 @@ struct CovariateTest {
 struct CandidateScore {
   std::string effect;
   double value = 0, se = 0, ci_low = 0, ci_high = 0;  // its (first) parameter; NaN for a switch
+  std::string unit;                                   // that parameter's ("N s2/m2" for seal_drag)
   std::size_t added_parameters = 1;
   double aicc = 0, bic = 0;
   double lrt_statistic = 0, lrt_p = 1;  // NaN for a switch (not nested: BIC decides)

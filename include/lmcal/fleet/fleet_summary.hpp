@@ -34,7 +34,7 @@
 
 #include "lmcal/fleet/fleet.hpp"
 #include "lmcal/fleet/fleet_record.hpp"
-#include "lmcal/fleet/population.hpp"
+#include "lmcal/fit/population.hpp"
 
 namespace LMCAL_API lmcal {
 
