@@ -44,11 +44,14 @@ class CalibrationTest : public test::TempFolderTest {
     set_rig_effect(effects, "seal_drag", 100);
     write(file, friction_log_csv(generate_friction_log(config, effects).log));
   }
-  void write_thermal(const std::string& manifest = "thermal.toml") {
+  static ThermalRigConfig short_runs() {
     ThermalRigConfig config;
     config.velocity_m_s = {0.066, 0.083, 0.11};
     config.duration_s = 3 * 3600;
     config.record_every_s = 30;
+    return config;
+  }
+  void write_thermal(const std::string& manifest = "thermal.toml", const ThermalRigConfig& config = short_runs()) {
     ThermalDataSet set = generate_thermal_dataset(config, {}, "test").set;
     OutputSet out;
     for (ThermalRun& run : set.runs) {
@@ -269,25 +272,13 @@ TEST_F(CalibrationTest, TheCausesCurvesPassThroughThePointsDespiteRunOffsets) {
 // nothing logged sees it): the brief says so, and names both readings. (Clean runs disagree
 // too, as long as a run's interval takes its heat as exact: the intervals' issue.)
 TEST_F(CalibrationTest, RunsWhoseAlphaDisagreeAreSaidBesideTheVerdict) {
-  const auto brief_of = [&](double heat_variation) {
-    ThermalRigConfig config;
-    config.velocity_m_s = {0.066, 0.083, 0.11};
-    config.repeats = 2;
-    config.duration_s = 4 * 3600;
-    config.record_every_s = 30;
-    config.heat_variation = heat_variation;
-    config.seed = 3;
-    ThermalDataSet set = generate_thermal_dataset(config, {}, "test").set;
-    OutputSet out;
-    for (ThermalRun& run : set.runs) {
-      run.file = dir_ / run.file;
-      out.add(run.file, thermal_trace_csv(run.trace));
-    }
-    out.add(dir_ / "thermal.toml", thermal_manifest_toml(set, dir_));
-    out.commit();
-    return calibration_report_html(calibrate(find_calibration_set(dir_), {}));
-  };
-  const std::string html = brief_of(0.3);
+  ThermalRigConfig config = short_runs();
+  config.repeats = 2;
+  config.duration_s = 4 * 3600;
+  config.heat_variation = 0.3;
+  config.seed = 3;
+  write_thermal("thermal.toml", config);
+  const std::string html = calibration_report_html(calibrate(find_calibration_set(dir_), {}));
   EXPECT_NE(html.find("But the runs' own α differ beyond their intervals"), std::string::npos);
   EXPECT_NE(html.find("or the per-run intervals are too narrow"), std::string::npos);
 }
