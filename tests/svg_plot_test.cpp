@@ -164,6 +164,32 @@ TEST(SvgPlot, PointsLandOnTheFrameAtTheLimitsAndInBetweenLinearly) {
   EXPECT_NEAR(p[3].y, frame.y + frame.height / 4, tol);
 }
 
+// Per-run plots name their runs on the x axis (not ticks 1, 1.5, 2 …) when the names fit side by
+// side; too many names for the axis leave the numeric ticks.
+TEST(SvgPlot, NamedTicksReplaceTheNumbersWhenTheyFit) {
+  Plot plot{.id = "runs", .x_label = "run", .y_label = "alpha"};
+  plot.series.push_back({.x = {1, 2, 3}, .y = {0.6, 0.61, 0.59}, .mark = Mark::points});
+  plot.x_tick_labels = {{1, "v066"}, {2, "v083"}, {3, "v110"}};
+  const std::string named = render_svg(plot);
+  for (const char* name : {">v066<", ">v083<", ">v110<"}) EXPECT_NE(named.find(name), std::string::npos) << name;
+  EXPECT_EQ(named.find(">1.5<"), std::string::npos);
+  plot.x_tick_labels.clear();
+  for (int r = 1; r <= 3; ++r) plot.x_tick_labels.emplace_back(r, std::string(200, 'x'));  // cannot fit
+  const std::string numeric = render_svg(plot);
+  EXPECT_EQ(numeric.find(std::string(200, 'x')), std::string::npos);
+  EXPECT_NE(numeric.find(">2<"), std::string::npos);
+}
+
+TEST(SvgPlot, ASeriesWithoutPointsIsALegendKeyOnly) {
+  Plot plot{.id = "key"};
+  plot.series.push_back({.x = {0, 1}, .y = {0, 1}, .color = "#E69F00"});
+  plot.series.push_back({.label = "law (line)", .color = "#444444", .legend_only = true});
+  plot.series.push_back({.label = "gone", .x = {NAN}, .y = {NAN}});  // points, none drawable, not a key: no entry
+  const std::string svg = render_svg(plot);
+  EXPECT_NE(svg.find(">law (line)<"), std::string::npos);
+  EXPECT_EQ(svg.find(">gone<"), std::string::npos);
+}
+
 TEST(SvgPlot, ErrorBarsSpanYPlusMinusError) {
   Plot plot = points_on_fixed_limits({5}, {0});
   plot.series[0].y_error = {0.5};

@@ -127,8 +127,7 @@ Plot velocity_panel(const Calibration& c, const Varied& varied) {
     };
     const auto& [published_offset, extended_offset] = offsets.at(value);
     plot.series.push_back(std::move(points));
-    plot.series.push_back({.label = index == 0 ? "published law" : "",
-                           .x = grid,
+    plot.series.push_back({.x = grid,
                            .y = shifted(law_over_velocity(log, sample, temperature_C, k, c.friction->effects(), grid),
                                         published_offset / static_cast<double>(n)),
                            .color = colour(index)});
@@ -136,8 +135,7 @@ Plot velocity_panel(const Calibration& c, const Varied& varied) {
       const auto& fit = c.friction_diagnosis->final_fit;
       FrictionConstants<double> ke = fit.constants();
       ke.T_ref_C = k.T_ref_C;
-      plot.series.push_back({.label = index == 0 ? "law + causes" : "",
-                             .x = grid,
+      plot.series.push_back({.x = grid,
                              .y = shifted(law_over_velocity(log, sample, temperature_C, ke, fit.effects(), grid),
                                           extended_offset / static_cast<double>(n)),
                              .color = colour(index),
@@ -145,6 +143,9 @@ Plot velocity_panel(const Calibration& c, const Varied& varied) {
     }
     ++index;
   }
+  // The curves' legend in a neutral colour: each curve is drawn in its points' colour.
+  plot.series.push_back({.label = "published law (line)", .color = "#444444", .legend_only = true});
+  if (extended) plot.series.push_back({.label = "law + causes (dashed)", .color = "#444444", .dashed = true, .legend_only = true});
   return plot;
 }
 
@@ -398,7 +399,7 @@ void friction_run_figures(Page& page, const FrictionFitResult& f, const std::str
   for (const auto& sp : f.spread) {
     if (std::none_of(sp.per_run.begin(), sp.per_run.end(), [](double v) { return std::isfinite(v); })) continue;
     Plot plot = per_run_plot(plot_id(id_prefix + sp.parameter), sp.parameter + " per run", f.fit.parameter(sp.parameter),
-                             {.value = sp.per_run}, "");
+                             {.value = sp.per_run, .names = f.runs}, "");
     plot.width_px = 300, plot.height_px = 220;
     plots.push_back(std::move(plot));
   }

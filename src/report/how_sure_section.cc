@@ -132,10 +132,11 @@ void how_sure_section(Page& page, const Calibration& c) {
 
 PerRun per_run_estimates(const ThermalFitResult& f, const std::string& parameter) {
   PerRun out;
-  for (const FitResult& run : f.per_run) {
-    const ParameterEstimate& p = run.parameter(parameter);
+  for (std::size_t r = 0; r < f.per_run.size(); ++r) {
+    const ParameterEstimate& p = f.per_run[r].parameter(parameter);
     out.value.push_back(p.value);
     out.half_width_95.push_back(student_t_quantile(0.5 + 0.5 * kConfidence, p.dof) * p.se);
+    out.names.push_back(r < f.runs.size() ? f.runs[r].id : std::to_string(r + 1));
   }
   return out;
 }
@@ -151,6 +152,8 @@ Plot per_run_plot(const std::string& id, const std::string& title, const Paramet
     points.y.push_back(runs.value[r]);
     points.y_error.push_back(r < runs.half_width_95.size() ? runs.half_width_95[r] : std::nan(""));
   }
+  for (std::size_t r = 0; r < runs.names.size() && r < runs.value.size(); ++r)
+    plot.x_tick_labels.emplace_back(static_cast<double>(r + 1), runs.names[r]);
   const std::vector<double> across{0.5, static_cast<double>(runs.value.size()) + 0.5};
   const auto [low, high] = quoted_bounds(pooled);
   plot.series.push_back(std::move(points));

@@ -122,6 +122,7 @@ void shift_table(Page& page, const std::vector<ParameterShift>& shifts, const st
 // unknown), beside the pooled estimate and its quoted 95 % interval (dashed lines).
 struct PerRun {
   std::vector<double> value, half_width_95;
+  std::vector<std::string> names;  // the runs' names: the x axis's ticks when they fit
 };
 Plot per_run_plot(const std::string& id, const std::string& title, const ParameterEstimate& pooled, const PerRun& runs,
                   const std::string& pooled_label);

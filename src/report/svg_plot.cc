@@ -331,7 +331,7 @@ std::string render_svg(const Plot& plot) {
   std::vector<std::size_t> legend;  // series indices
   double legend_text_px = 0;
   for (std::size_t i = 0; i < plot.series.size(); ++i)
-    if (!samples[i].empty() && !plot.series[i].label.empty()) {
+    if ((!samples[i].empty() || plot.series[i].legend_only) && !plot.series[i].label.empty()) {
       legend.push_back(i);
       legend_text_px = std::max(legend_text_px, text_px(plot.series[i].label));
     }
@@ -355,6 +355,16 @@ std::string render_svg(const Plot& plot) {
   ax.px_lo = left;
   ax.px_hi = right;
   if (has_data) x_ticks = ticks_of(ax, right - left, 75);
+  if (has_data && !plot.x_tick_labels.empty()) {  // named positions, when they fit side by side
+    std::vector<Tick> named;
+    double text = 0;
+    for (const auto& [at, label] : plot.x_tick_labels)
+      if (ax.contains(at)) {
+        named.push_back({at, label});
+        text += text_px(label) + kCharPx;
+      }
+    if (!named.empty() && text < 0.95 * (right - left)) x_ticks = std::move(named);
+  }
 
   std::string svg;
   const Out out = std::back_inserter(svg);

@@ -20,8 +20,9 @@ Plot time_plot(const Calibration& c, std::size_t r) {
             .y_label = "temperature (°C)"};
   const auto& sensors = f.sensor_names[r];
   for (std::size_t s = 0; s < sensors.size(); ++s) {
-    Series measured{.label = sensors[s], .mark = Mark::points, .color = colour(s)};
-    Series simulated{.label = s == 0 ? "model" : "", .color = colour(s)};
+    // One legend entry per sensor, in its colour: its points measured, its line the model.
+    Series measured{.label = sensors[s] + " (points; line: model)", .mark = Mark::points, .color = colour(s)};
+    Series simulated{.color = colour(s)};
     std::vector<const ThermalFitResult::Sample*> mine;
     for (const auto& sample : f.samples)
       if (sample.run == r && sample.sensor == s) mine.push_back(&sample);
@@ -64,19 +65,22 @@ Plot position_plot(const Calibration& c, std::size_t r) {
             .title = fmt::format("Run {} along the rail at {} h", run.id, num(end.model.time_s / kHour_s, 3)),
             .x_label = "position from the rail centre (mm)",
             .y_label = "temperature (°C)"};
-  Series model{.label = "model", .color = colour(0)};
+  Series model{.label = "model", .color = "#444444"};
   for (std::size_t i = 0; i < end.model.position_m.size(); ++i) {
     model.x.push_back(1e3 * end.model.position_m[i]);
     model.y.push_back(end.model.temperature_C[i]);
   }
+  plot.series.push_back(std::move(model));
+  // Each sensor in its colour, as in the run's time plot.
   const bool offsets = std::any_of(c.thermal->joint.parameters.begin(), c.thermal->joint.parameters.end(),
                                    [](const ParameterEstimate& p) { return p.name.starts_with("offset "); });
-  Series measured{.label = offsets ? "measured less its offset" : "measured", .mark = Mark::points, .color = colour(1)};
-  for (std::size_t s = 0; s < end.sensor_position_m.size(); ++s) {
-    measured.x.push_back(1e3 * end.sensor_position_m[s]);
-    measured.y.push_back(end.measured_C[s]);
-  }
-  plot.series = {std::move(model), std::move(measured)};
+  const auto& sensors = c.thermal->sensor_names[r];
+  for (std::size_t s = 0; s < end.sensor_position_m.size(); ++s)
+    plot.series.push_back({.label = (s < sensors.size() ? sensors[s] : std::to_string(s + 1)) + (offsets ? " less its offset" : ""),
+                           .x = {1e3 * end.sensor_position_m[s]},
+                           .y = {end.measured_C[s]},
+                           .mark = Mark::points,
+                           .color = colour(s)});
   return plot;
 }
 

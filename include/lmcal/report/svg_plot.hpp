@@ -16,6 +16,9 @@
 // series' colour under every series' lines and points, its legend entry a shaded box behind the
 // line: {.label = "term (95 % band)", .x = x, .y = mean, .band_low = low, .band_high = high}.
 //
+// A series marked legend_only is a legend entry and nothing else: a line style or colour
+// explained once for curves drawn in their points' colours.
+//
 // Pairs with a non-finite x or y (beyond ±1e300 counts as non-finite; on a log axis, so does a
 // non-positive one) are skipped and break a line there; a point left alone on a line is drawn
 // as a dot; a plot without any drawable pair says "no data". Unset limits come from the
@@ -33,6 +36,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 namespace LMCAL_API lmcal {
@@ -51,6 +55,7 @@ struct Series {
   // cannot be drawn breaks the band there, as a non-finite pair breaks a line; a band needs two
   // neighbouring points to show.
   std::vector<double> band_low, band_high;
+  bool legend_only = false;  // no data: only its legend entry (label, colour, dashes)
 };
 
 // A full-width (horizontal, y = at) or full-height (vertical, x = at) dashed line.
@@ -67,6 +72,9 @@ struct Plot {
   std::vector<ReferenceLine> references;
   bool log_x = false, log_y = false;    // log axes skip non-positive values
   std::optional<double> x_min, x_max, y_min, y_max;  // fixed limits, in data units
+  // Named x positions (runs, units) instead of numeric ticks: drawn when their labels fit side by
+  // side along the axis, else the numeric ticks stand.
+  std::vector<std::pair<double, std::string>> x_tick_labels;
   int width_px = 520, height_px = 340;  // clamped to [160, 4000] × [120, 4000]
 };
 
