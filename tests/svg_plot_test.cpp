@@ -190,6 +190,23 @@ TEST(SvgPlot, ASeriesWithoutPointsIsALegendKeyOnly) {
   EXPECT_EQ(svg.find(">gone<"), std::string::npos);
 }
 
+// A long title is set smaller and fitted to the plot's width, never clipped at both ends.
+TEST(SvgPlot, ALongTitleFitsTheWidth) {
+  Plot plot{.id = "title", .title = std::string(120, 'T'), .width_px = 300};
+  plot.series.push_back({.x = {0, 1}, .y = {0, 1}});
+  const std::string svg = render_svg(plot);
+  const std::smatch m = [&] {
+    std::smatch found;
+    std::regex_search(svg, found, std::regex("font-size=\"([0-9.]+)\" font-weight=\"bold\" textLength=\"([0-9.]+)\""));
+    return found;
+  }();
+  ASSERT_EQ(m.size(), 3u) << "a fitted title";
+  EXPECT_LT(std::stod(m[1]), 13);
+  EXPECT_LE(std::stod(m[2]), 300 - 12);
+  plot.title = "short";
+  EXPECT_NE(render_svg(plot).find("font-size=\"13\" font-weight=\"bold\">short<"), std::string::npos);
+}
+
 TEST(SvgPlot, ErrorBarsSpanYPlusMinusError) {
   Plot plot = points_on_fixed_limits({5}, {0});
   plot.series[0].y_error = {0.5};

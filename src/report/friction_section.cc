@@ -4,6 +4,7 @@
 #include <tuple>
 
 #include "lmcal/models/friction_effects.hpp"
+#include "lmcal/fit/statistics.hpp"
 #include "sections.hpp"
 
 namespace lmcal::report {
@@ -166,12 +167,30 @@ Plot condition_residuals(const std::string& id, const std::string& title, const 
   Plot plot{.id = id, .title = title, .x_label = x_label, .y_label = "mean residual (N)"};
   plot.references.push_back({});
   for (std::size_t f = 0; f < fits.size(); ++f) {
-    Series s{.label = fits[f].first, .mark = Mark::points, .color = colour(f)};
-    for (const auto& r : *fits[f].second) {
+    const auto& conditions = *fits[f].second;
+    // The conditions (thinned to a readable cloud), and the mean of each level of the covariate
+    // with its 95 % interval: what the eye cannot read from thousands of overlapping points.
+    const std::string prefix = fits[f].first.empty() ? "" : fits[f].first + ": ";
+    Series s{.label = prefix + "each condition", .mark = Mark::points, .color = colour(f)};
+    const std::size_t every = stride(conditions.size(), 600);
+    std::map<double, std::vector<double>> levels;
+    for (std::size_t i = 0; i < conditions.size(); ++i) {
+      const ConditionResidual& r = conditions[i];
+      levels[std::stod(fmt::format("{:.3g}", r.*x))].push_back(r.bias_N);
+      if (i % every != 0) continue;
       s.x.push_back(r.*x);
       s.y.push_back(r.bias_N);
     }
     plot.series.push_back(std::move(s));
+    if (levels.size() > 30) continue;  // a covariate that barely repeats: no levels to average
+    Series means{.label = prefix + "mean per level (95 %)", .mark = Mark::line_points, .color = colour(f + 4)};
+    for (const auto& [level, values] : levels) {
+      const Spread sp = spread(values);
+      means.x.push_back(level);
+      means.y.push_back(sp.mean);
+      means.y_error.push_back(sp.n >= 2 ? sp.half_width : 0.0);
+    }
+    plot.series.push_back(std::move(means));
   }
   return plot;
 }
