@@ -51,8 +51,10 @@ class CalibrationTest : public test::TempFolderTest {
     config.record_every_s = 30;
     return config;
   }
-  void write_thermal(const std::string& manifest = "thermal.toml", const ThermalRigConfig& config = short_runs()) {
-    ThermalDataSet set = generate_thermal_dataset(config, {}, "test").set;
+  // The data set's runs, and how many.
+  std::size_t write_thermal(const std::string& manifest = "thermal.toml", const ThermalRigConfig& config = short_runs(),
+                            const RigEffects& effects = {}) {
+    ThermalDataSet set = generate_thermal_dataset(config, effects, "test").set;
     OutputSet out;
     for (ThermalRun& run : set.runs) {
       run.file = dir_ / run.file;
@@ -60,6 +62,7 @@ class CalibrationTest : public test::TempFolderTest {
     }
     out.add(dir_ / manifest, thermal_manifest_toml(set, dir_));
     out.commit();
+    return set.runs.size();
   }
 };
 
@@ -281,6 +284,23 @@ TEST_F(CalibrationTest, RunsWhoseAlphaDisagreeAreSaidBesideTheVerdict) {
   const std::string html = calibration_report_html(calibrate(find_calibration_set(dir_), {}));
   EXPECT_NE(html.find("But the runs' own α differ beyond their intervals"), std::string::npos);
   EXPECT_NE(html.find("or the per-run intervals are too narrow"), std::string::npos);
+}
+
+// The thermal figures show the calibrated model beside the rejected one, as the friction
+// figures do: a dashed curve per sensor, keyed once, in every run's time plot.
+TEST_F(CalibrationTest, TheThermalFiguresShowTheModelWithItsMechanisms) {
+  RigEffects effects;
+  set_rig_effect(effects, "convection_velocity", 15);
+  ThermalRigConfig config = short_runs();
+  config.seed = 2;
+  const std::size_t runs = write_thermal("thermal.toml", config, effects);
+  const Calibration c = calibrate(find_calibration_set(dir_), {});
+  ASSERT_FALSE(c.calibrated.thermal_causes.empty());
+  const std::string html = calibration_report_html(c);
+  const std::string key = fmt::format("with {} (dashed)", fmt::join(c.calibrated.thermal_causes, " + "));
+  std::size_t keys = 0;
+  for (auto at = html.find(key); at != std::string::npos; at = html.find(key, at + 1)) ++keys;
+  EXPECT_EQ(keys, runs);
 }
 
 TEST_F(CalibrationTest, AFolderWithOneHalfCalibratesThatHalfAndSaysWhatWasSkipped) {

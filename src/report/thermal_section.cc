@@ -40,6 +40,26 @@ Plot time_plot(const Calibration& c, std::size_t r) {
     plot.series.push_back(std::move(measured));
     plot.series.push_back(std::move(simulated));
   }
+  // The calibrated model (the published one with the accepted mechanisms), dashed in each
+  // sensor's colour: as the friction figures show the law with its causes.
+  const CalibratedModel& m = c.calibrated;
+  if (m.thermal && !m.thermal_causes.empty()) {
+    for (std::size_t s = 0; s < sensors.size(); ++s) {
+      Series calibrated{.color = colour(s), .dashed = true};
+      std::vector<const ThermalFitResult::Sample*> mine;
+      for (const auto& sample : m.thermal->samples)
+        if (sample.run == r && sample.sensor == s) mine.push_back(&sample);
+      const std::size_t every = stride(mine.size(), 3 * kPointsPerSeries);
+      for (std::size_t k = 0; k < mine.size(); ++k)
+        if (k % every == 0 || k + 1 == mine.size()) {
+          calibrated.x.push_back(mine[k]->time_s / kHour_s);
+          calibrated.y.push_back(mine[k]->simulated_C);
+        }
+      plot.series.push_back(std::move(calibrated));
+    }
+    plot.series.push_back({.label = fmt::format("with {} (dashed)", fmt::join(m.thermal_causes, " + ")),
+                           .color = "#444444", .dashed = true, .legend_only = true});
+  }
   const auto& trace = run.trace;
   if (!trace.ambient.empty()) {
     Series ambient{.label = "ambient (mean)", .color = "#999999", .dashed = true};
