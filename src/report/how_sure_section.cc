@@ -2,6 +2,11 @@
 // by covariance method side by side (and the quoted one over the iid one), what the
 // residuals' autocorrelation leaves of the sample, whether the runs disagree beyond their own
 // errors, and each run's own estimate against the pooled estimate's quoted 95 % interval.
+#include <cmath>
+#include <map>
+#include <utility>
+#include <vector>
+
 #include "lmcal/fit/statistics.hpp"
 #include "sections.hpp"
 
@@ -103,6 +108,39 @@ void thermal_run_table(Page& page, const ThermalFitResult& t) {
   page.table({"", "run", "velocity (m/s)", "α alone", "SE", "95 % interval", "heat's relative SE", "thermocouple offsets"}, rows);
 }
 
+// The residuals' autocorrelation by lag, pooled over series (a run, or a run's sensor) in time
+// order, with the band ±1.96/√n that independent residuals stay inside: what the quoted
+// covariance has to account for, and why s²(JᵀJ)⁻¹ does not.
+Plot autocorrelation_plot(const std::string& id, const std::string& title, const std::vector<std::vector<double>>& series,
+                          double effective_n) {
+  constexpr std::size_t kLags = 30;
+  std::vector<double> c(kLags + 1, 0.0);
+  double n = 0;
+  for (const auto& x : series) {
+    if (x.size() < 2) continue;
+    double mean = 0;
+    for (double v : x) mean += v / static_cast<double>(x.size());
+    for (std::size_t lag = 0; lag <= kLags && lag < x.size(); ++lag)
+      for (std::size_t i = lag; i < x.size(); ++i) c[lag] += (x[i] - mean) * (x[i - lag] - mean);
+    n += static_cast<double>(x.size());
+  }
+  Plot plot{.id = id, .x_label = "lag (samples within a series)", .y_label = "autocorrelation"};
+  Series acf{.label = "residuals", .mark = Mark::line_points, .color = colour(0)};
+  for (std::size_t lag = 1; lag <= kLags && c[0] > 0; ++lag) {
+    acf.x.push_back(static_cast<double>(lag));
+    acf.y.push_back(c[lag] / c[0]);
+  }
+  plot.series.push_back(std::move(acf));
+  const double band = n > 0 ? 1.96 / std::sqrt(n) : 0;
+  plot.title = fmt::format("{} (n {:.0f}, effective {:.0f})", title, n, effective_n);
+  plot.references.push_back({});  // zero
+  plot.series.push_back(
+      {.label = "independent (±1.96/√n)", .x = {0.5, kLags + 0.5}, .y = {band, band}, .color = "#999999", .dashed = true});
+  plot.series.push_back({.x = {0.5, kLags + 0.5}, .y = {-band, -band}, .color = "#999999", .dashed = true});
+  plot.width_px = 640;
+  return plot;
+}
+
 }  // namespace
 
 void how_sure_section(Page& page, const Calibration& c) {
@@ -116,6 +154,12 @@ void how_sure_section(Page& page, const Calibration& c) {
     page.heading(3, "Friction law: how sure");
     fit_panel(page, m.friction->fit);
     friction_run_figures(page, *m.friction, "calibrated-friction-runs-");
+    const FrictionLog& log = *c.friction_log;
+    std::vector<std::vector<double>> runs(log.run_names.size());
+    for (std::size_t i = 0; i < log.size() && i < m.friction->predicted_N.size(); ++i)
+      runs[log.run[i]].push_back(log.friction_N[i] - m.friction->predicted_N[i]);
+    page.figures({autocorrelation_plot("calibrated-friction-acf", "Friction residuals: autocorrelation within runs", runs,
+                                       m.friction->fit.uncertainty.effective_sample_size)});
   }
   if (m.thermal) {
     const ThermalFitResult& t = *m.thermal;
@@ -126,7 +170,12 @@ void how_sure_section(Page& page, const Calibration& c) {
     Plot plot = per_run_plot("calibrated-thermal-runs-alpha", "α of each run alone (±t·SE) and the pooled 95 % interval", alpha,
                              per_run_estimates(t, "alpha"), "pooled (" + t.joint.uncertainty.method + ")");
     plot.width_px = 640;
-    page.figures({plot});
+    std::map<std::pair<std::size_t, std::size_t>, std::vector<double>> by_sensor;
+    for (const auto& sample : t.samples) by_sensor[{sample.run, sample.sensor}].push_back(sample.measured_C - sample.simulated_C);
+    std::vector<std::vector<double>> series;
+    for (auto& [key, residuals] : by_sensor) series.push_back(std::move(residuals));
+    page.figures({plot, autocorrelation_plot("calibrated-thermal-acf", "Rail-temperature residuals: autocorrelation within "
+                                             "each run's sensor", series, t.joint.uncertainty.effective_sample_size)});
   }
 }
 
