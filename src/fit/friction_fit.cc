@@ -482,6 +482,7 @@ FrictionFitResult fit_friction(const FrictionLog& log, const FrictionFitOptions&
     run_options.starts = 1;
     run_options.profile = ProfileMode::none;
     std::vector<std::vector<double>> values(specs.size(), std::vector<double>(log.run_names.size(), kNaN));
+    std::vector<std::vector<double>> half_widths = values;
     for (std::uint32_t r = 0; r < log.run_names.size(); ++r) {
       FrictionData run_data{&log, {}, {}, options.start.T_ref_C, data.run_shrink};
       run_data.terms = &options.terms;
@@ -495,7 +496,10 @@ FrictionFitResult fit_friction(const FrictionLog& log, const FrictionFitOptions&
       const FitResult run_fit = detail::solve_least_squares(FrictionModel(run_data, slots), run_specs, run_options);
       if (!run_fit.solver.usable) continue;
       for (std::size_t j = 0; j < specs.size(); ++j)
-        if (run_specs[j].free && !run_fit.parameters[j].held_unidentifiable) values[j][r] = run_fit.parameters[j].value;
+        if (run_specs[j].free && !run_fit.parameters[j].held_unidentifiable) {
+          values[j][r] = run_fit.parameters[j].value;
+          half_widths[j][r] = 0.5 * (run_fit.parameters[j].ci_high - run_fit.parameters[j].ci_low);
+        }
     }
     const double runs = static_cast<double>(log.run_names.size());
     for (std::size_t j = 0; j < specs.size(); ++j) {
@@ -503,6 +507,7 @@ FrictionFitResult fit_friction(const FrictionLog& log, const FrictionFitOptions&
       RunSpread s;
       s.parameter = specs[j].name;
       s.per_run = values[j];
+      s.per_run_half_width_95 = half_widths[j];
       s.spread = spread(values[j], options.fit.confidence);
       s.pooled_se = out.fit.parameters[j].se;
       s.ratio = s.spread.sd / (s.pooled_se * std::sqrt(runs));

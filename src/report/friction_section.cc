@@ -418,12 +418,12 @@ void friction_run_figures(Page& page, const FrictionFitResult& f, const std::str
   for (const auto& sp : f.spread) {
     if (std::none_of(sp.per_run.begin(), sp.per_run.end(), [](double v) { return std::isfinite(v); })) continue;
     Plot plot = per_run_plot(plot_id(id_prefix + sp.parameter), sp.parameter + " per run", f.fit.parameter(sp.parameter),
-                             {.value = sp.per_run, .names = f.runs}, "");
+                             {.value = sp.per_run, .half_width_95 = sp.per_run_half_width_95, .names = f.runs}, "");
     plot.width_px = 300, plot.height_px = 220;
     plots.push_back(std::move(plot));
   }
   if (plots.empty()) return;
-  page.paragraph(fmt::format("Points: each run fitted alone (runs {}); solid line: the pooled estimate; dashed lines: its "
+  page.paragraph(fmt::format("Points: each run fitted alone, with its own 95 % interval (runs {}); solid line: the pooled estimate; dashed lines: its "
                              "quoted 95 % interval. A run alone is about √runs times less certain than the pooled fit, so "
                              "its points scatter beyond that interval without disagreeing (the ratio σ_runs / (SE √runs) and "
                              "the between-run test say whether they do).",

@@ -87,6 +87,7 @@ struct ConditionResidual {
 struct RunSpread {
   std::string parameter;
   std::vector<double> per_run;  // one value per run (NaN where a run's fit failed)
+  std::vector<double> per_run_half_width_95;  // each run's own 95 % half-width (its fit's linear interval)
   Spread spread;                // Eq. 1 σ, t interval of the mean, min, max
   double pooled_se = 0;
   // σ_runs / (SE_pooled · √runs): about 1 when the runs differ only by noise the model
