@@ -26,6 +26,7 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", version, "Print lmcal's version, commit and libraries, and exit");
   app.set_config("--config", "", "Read options from a TOML file");
   app.allow_config_extras(CLI::config_extras_mode::error);  // a misspelt key is refused, as in a manifest
+  app.fallthrough();  // the global options work after the command too: lmcal fit friction LOG --json
   lmcal::cli::OutputMode& mode = lmcal::cli::output_mode();
   app.add_flag_function("-q,--quiet", [&mode](std::int64_t) { mode.verbosity = lmcal::cli::Verbosity::quiet; },
                         "Errors only: no summary, no progress");

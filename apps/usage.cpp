@@ -141,9 +141,11 @@ std::vector<std::string> nearest(std::string_view given, const std::vector<std::
     if (near.size() > 3) near.resize(3);
     return near;
   }
-  std::size_t best = std::max<std::size_t>(2, given.size() / 3) + 1;
+  const std::size_t limit = std::max<std::size_t>(2, given.size() / 3);
+  std::size_t best = limit;
   for (const std::string& k : known) {
     const std::size_t d = edit_distance(given, k);
+    if (d > limit) continue;
     if (d < best) {
       best = d;
       near.clear();
@@ -159,10 +161,12 @@ int report_parse_error(CLI::App& app, const CLI::ParseError& e, const std::vecto
   if (kind == "CallForHelp" || kind == "CallForAllHelp" || kind == "CallForVersion") return app.exit(e);
   CLI::App* where = deepest(&app);
   std::string message = e.what();
-  if (const auto* extras = dynamic_cast<const CLI::ExtrasError*>(&e)) {
-    (void)extras;
+  if (dynamic_cast<const CLI::ExtrasError*>(&e)) {
     std::vector<std::string> unknown;
-    for (const std::string& a : where->remaining(true)) {
+    // With fallthrough (global options after the command) the unknown ones land in a parent.
+    std::vector<std::string> extras;
+    for (const CLI::App* a = where; a && extras.empty(); a = a->get_parent()) extras = a->remaining(false);
+    for (const std::string& a : extras) {
       if (a.starts_with("-")) {
         const std::string name = a.substr(0, a.find('='));
         unknown.push_back("option " + with_suggestion(name, option_names(*where)));

@@ -413,6 +413,10 @@ check "the man page lists an option's help" grep -q '^.B \\-\\-friction\\-min\\-
 check "the man page says the exit status" grep -q '^.SH EXIT STATUS' lmcal.1
 check "--json prints the main output" bash -c '"$0" --json fit friction "$1" -o jsonout | python3 -c "import json,sys; assert json.load(sys.stdin)[\"kind\"] == \"friction fit\""' \
   "$LMCAL" "$SOURCE/measurements/cheng2017/friction.csv"
+check "a global option works after the command too" bash -c '"$0" fit friction "$1" -o jsonout2 --json | python3 -c "import json,sys; json.load(sys.stdin)"' \
+  "$LMCAL" "$SOURCE/measurements/cheng2017/friction.csv"
+no_suggestion() { exits_with 2 "unknown option '--bogus'" fit friction x.csv --bogus && ! grep -q "did you mean" stderr.txt; }
+check "an unknown option with no near one suggests nothing" no_suggestion
 check "-q prints nothing" test -z "$("$LMCAL" -q fit friction "$SOURCE/measurements/cheng2017/friction.csv" -o quietout 2>&1)"
 
 # Deterministic: the same bytes with one thread or two (no timings in the outputs, so that the
