@@ -1,6 +1,6 @@
 #include "cli_common.hpp"
 
-#include "lmcal/version.hpp"
+#include "lmcal/io/output_record.hpp"
 #include "output_mode.hpp"
 
 #include "lmcal/io/hash.hpp"
@@ -41,20 +41,6 @@ std::vector<std::string_view> split(std::string_view text, char separator) {
 
 }  // namespace
 
-namespace {
-
-// A JSON output with the software's versions and the layout's version, where it lacks them.
-std::string with_software(const std::string& json_text) {
-  nlohmann::json j = nlohmann::json::parse(json_text);
-  if (j.contains("software") && j.contains("schema_version")) return json_text;
-  if (!j.contains("schema_version")) j["schema_version"] = kOutputSchemaVersion;
-  j["software"] = nlohmann::json::object();
-  for (const auto& [name, version] : software_versions()) j["software"][name] = version;
-  return j.dump(2) + "\n";
-}
-
-}  // namespace
-
 std::string plural(std::size_t n, std::string_view noun) { return fmt::format("{} {}{}", n, noun, n == 1 ? "" : "s"); }
 
 std::string write_outputs(const std::filesystem::path& dir, std::vector<std::pair<std::string, std::string>> files) {
@@ -63,7 +49,7 @@ std::string write_outputs(const std::filesystem::path& dir, std::vector<std::pai
   for (std::size_t i = 0; i < files.size(); ++i) {
     const std::filesystem::path path = dir / files[i].first;
     if (path.extension() == ".json") {
-      files[i].second = with_software(files[i].second);
+      files[i].second = with_output_record(files[i].second);
       offer_machine_output(path, path.filename() == "calibration.json" || path.filename() == "fleet.json");
     }
     written += (i == 0 ? "" : i + 1 == files.size() ? " and " : ", ") + path.string();
@@ -110,17 +96,6 @@ std::vector<std::pair<double, double>> parse_pairs(std::string_view option, std:
 
 nlohmann::json run_record(const std::vector<std::string>& argv) {
   return {{"lmcal_version", LMCAL_VERSION}, {"command", argv}};
-}
-
-std::string with_record(const std::string& json_text, const std::vector<std::string>& argv,
-                        const std::vector<std::pair<std::string, std::string>>& inputs) {
-  nlohmann::json j = nlohmann::json::parse(json_text);
-  if (!j.contains("command")) j["command"] = argv;
-  if (!j.contains("inputs")) {
-    j["inputs"] = nlohmann::json::array();
-    for (const auto& [file, hash] : inputs) j["inputs"].push_back({{"file", file}, {"sha256", hash}});
-  }
-  return with_software(j.dump(2) + "\n");
 }
 
 }  // namespace lmcal::cli

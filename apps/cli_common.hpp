@@ -32,10 +32,6 @@ std::string plural(std::size_t n, std::string_view noun);
 // Version, command line and time-independent facts every output carries alongside.
 nlohmann::json run_record(const std::vector<std::string>& argv);
 
-// A JSON output's text with where it came from added (what it already records stays): the
-// command, the inputs with their SHA-256 and the software's versions.
-std::string with_record(const std::string& json_text, const std::vector<std::string>& argv,
-                        const std::vector<std::pair<std::string, std::string>>& inputs);
 
 }  // namespace lmcal::cli
 

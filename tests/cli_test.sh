@@ -3,31 +3,9 @@
 # can parse, numbers that match the physics, and bad input refused with a clear
 # message, a non-zero exit and no output written. $LMCAL is the binary.
 set -uo pipefail
-: "${LMCAL:?set LMCAL to the lmcal binary}"
 SOURCE=$(cd "$(dirname "$0")/.." && pwd)
 DATA="$SOURCE/tests/data"
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-cd "$work"
-failures=0
-pass=0
-
-check() {  # check NAME CONDITION...
-  local name=$1; shift
-  if "$@"; then pass=$((pass + 1)); else echo "FAILED: $name"; failures=$((failures + 1)); fi
-}
-
-# Refused: exit code 2, message naming the parameter, nothing written.
-refused() {  # refused EXPECTED_TEXT ARGS...
-  local expected=$1; shift
-  rm -rf out; mkdir out
-  "$LMCAL" "$@" >stdout.txt 2>stderr.txt
-  local rc=$?
-  if [[ $rc -eq 0 ]]; then echo "  accepted: $*"; return 1; fi
-  if ! grep -qF -- "$expected" stderr.txt; then echo "  message lacks '$expected': $(cat stderr.txt)"; return 1; fi
-  if [[ -n "$(ls -A out)" ]]; then echo "  wrote output despite the error: $(ls out)"; return 1; fi
-  return 0
-}
+source "$SOURCE/tests/support/checks.sh"
 
 # The value of column NAME (found by its header) in the rows where column KEY equals VALUE.
 column_where() {  # column_where FILE NAME KEY VALUE
@@ -443,5 +421,4 @@ same_as_bundled() {  # same_as_bundled SET FOLDER
 check "bundled data set regenerates identically" same_as_bundled cheng2017 "$work/bundled"
 check "the rig-shaped set regenerates identically" same_as_bundled rig "$work/bundled-rig"
 
-echo "$pass passed, $failures failed"
-exit $((failures > 0))
+finish cli_test.sh

@@ -4,17 +4,8 @@
 # stray temporary files); on MPI with 2 and 3 ranks (the same bytes); bad layouts refused
 # before any work. $LMCAL is the binary; $LMCAL_MPI=1 when it was built with MPI.
 set -uo pipefail
-: "${LMCAL:?set LMCAL to the lmcal binary}"
 SOURCE=$(cd "$(dirname "$0")/.." && pwd)
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-cd "$work"
-failures=0
-pass=0
-check() {  # check NAME CONDITION...
-  local name=$1; shift
-  if "$@"; then pass=$((pass + 1)); else echo "FAILED: $name"; failures=$((failures + 1)); fi
-}
+source "$SOURCE/tests/support/checks.sh"
 same_summary() {  # same_summary DIR: fleet.json, fleet.csv, fleet.html equal the reference's
   for f in fleet.json fleet.csv fleet.html; do cmp -s "ref/$f" "$1/$f" || { echo "  $1/$f differs"; return 1; }; done
 }
@@ -74,26 +65,16 @@ done
 check "the job array's summary is the reference's" same_summary array
 
 # --- bad layouts: refused before any work, naming the entry --------------------------------
-refused() {  # refused EXPECTED_TEXT ARGS...
-  local expected=$1; shift
-  rm -rf out
-  "$LMCAL" "$@" -o out >stdout.txt 2>stderr.txt
-  local rc=$?
-  if [[ $rc -eq 0 ]]; then echo "  accepted: $*"; return 1; fi
-  if ! grep -qF -- "$expected" stderr.txt; then echo "  message lacks '$expected': $(cat stderr.txt)"; return 1; fi
-  if [[ -e out ]]; then echo "  wrote output despite the error"; return 1; fi
-}
 mkdir -p empty/a
-check "a root without measurement folders is refused" refused "no measurement folders" fleet empty
+check "a root without measurement folders is refused" refused "no measurement folders" fleet empty -o out
 mkdir -p listed/a && cp fleet/u05/friction.csv listed/a/
 printf '[[set]]\nfolder = "a"\n[[set]]\nfolder = "b"\n' >listed/fleet.toml
-check "a fleet.toml naming a missing folder is refused" refused "listed/fleet.toml:4:10: folder listed/b does not exist" fleet listed
+check "a fleet.toml naming a missing folder is refused" refused "listed/fleet.toml:4:10: folder listed/b does not exist" fleet listed -o out
 mkdir -p listed/b && cp fleet/u05/friction.csv listed/b/
 printf '[[set]]\nfolder = "a"\nunit = "7"\n[[set]]\nfolder = "b"\nunit = "7"\n' >listed/fleet.toml
-check "duplicate unit and date are refused" refused "unit 7 has two sets dated ''" fleet listed
-check "a bad shard is refused" refused "--shard" fleet fleet --shard 2/2
-check "--summarize with --shard is refused" refused "--summarize" fleet fleet --shard 0/2 --summarize
-check "--summarize without results names what is missing" refused "68 of 68 sets have no up-to-date results" fleet fleet --summarize
+check "duplicate unit and date are refused" refused "unit 7 has two sets dated ''" fleet listed -o out
+check "a bad shard is refused" refused "--shard" fleet fleet --shard 2/2 -o out
+check "--summarize with --shard is refused" refused "--summarize" fleet fleet --shard 0/2 --summarize -o out
+check "--summarize without results names what is missing" refused "68 of 68 sets have no up-to-date results" fleet fleet --summarize -o out
 
-echo "fleet_test.sh: $pass passed, $failures failed"
-[[ $failures -eq 0 ]]
+finish fleet_test.sh

@@ -11,6 +11,7 @@
 #include "lmcal/version.hpp"
 #include "lmcal/fit/model_file.hpp"
 #include "lmcal/io/hash.hpp"
+#include "lmcal/io/output_record.hpp"
 #include "lmcal/report/html_report.hpp"
 #include "report/data_checks.hpp"
 #include "report/sections.hpp"
@@ -346,27 +347,15 @@ namespace {
 
 nlohmann::json options_json(const CalibrationOptions& o);
 
-nlohmann::json software_json() {
-  nlohmann::json software = nlohmann::json::object();
-  for (const auto& [name, version] : software_versions()) software[name] = version;
-  return software;
-}
-
 // Every JSON output says where it came from: the command, the inputs with their SHA-256, the
 // calibration's resolved options and the software's versions (what a writer already records
 // stays as it wrote it).
 void add_provenance(std::vector<std::pair<std::string, std::string>>& outputs, const Calibration& c) {
-  nlohmann::json inputs = nlohmann::json::array();
-  for (const auto& [file, hash] : c.inputs) inputs.push_back({{"file", file}, {"sha256", hash}});
-  const nlohmann::json software = software_json();
   for (auto& [name, text] : outputs) {
     if (!name.ends_with(".json")) continue;
     nlohmann::json j = nlohmann::json::parse(text);
-    if (!j.contains("command")) j["command"] = c.command;
-    if (!j.contains("inputs")) j["inputs"] = inputs;
     if (j.value("kind", "") != "calibration") j["calibration_options"] = options_json(c.options);  // it has them as "options"
-    j["software"] = software;
-    text = j.dump(2) + "\n";
+    text = with_output_record(j.dump(2), c.command, &c.inputs);
   }
 }
 
@@ -562,8 +551,7 @@ std::string calibration_json(const Calibration& c) {
   for (const auto& [file, hash] : c.inputs) inputs.push_back({{"file", file}, {"sha256", hash}});
   nlohmann::json j{{"kind", "calibration"},  {"lmcal_version", LMCAL_VERSION}, {"schema_version", kOutputSchemaVersion}, {"set", c.set.name},
                    {"command", c.command},   {"inputs", inputs},               {"notes", c.notes},
-                   {"warnings", c.warnings},          {"options", options_json(c.options)},
-                   {"software", software_json()}};
+                   {"warnings", c.warnings},          {"options", options_json(c.options)}};
   const CalibratedModel& m = c.calibrated;
   nlohmann::json calibrated = {{"what", "the published models with the causes the diagnoses accepted, refitted: the result"},
                                {"file", "model.toml"}};
@@ -589,7 +577,7 @@ std::string calibration_json(const Calibration& c) {
   if (c.thermal_diagnosis)
     j["thermal_diagnosis"] = brief_verdict(detail::verdict_json(*c.thermal_diagnosis, c.thermal_diagnosis->cv_rmse_before_K,
                                                                 c.thermal_diagnosis->cv_rmse_after_K, "K"));
-  return j.dump(2) + "\n";
+  return with_output_record(j.dump(2), c.command, &c.inputs);
 }
 
 namespace {
