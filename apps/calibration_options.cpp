@@ -53,6 +53,8 @@ CalibrationOptions CalibrationCliOptions::resolve() {
     fit->covariance = uncertainty.covariance;
     fit->bootstrap = uncertainty.bootstrap;
   }
+  // Profiles where the model is quoted (the diagnoses' many candidate fits keep theirs automatic).
+  options.friction.fit.profile = options.thermal.fit.profile = uncertainty.profile;
   if (starts->count() > 0) options.friction_diagnosis.fit.fit.starts = options.friction.fit.starts;
   if (seed->count() > 0) options.friction_diagnosis.fit.fit.seed = options.friction.fit.seed;
   return options;

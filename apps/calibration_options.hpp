@@ -12,7 +12,7 @@ namespace lmcal::cli {
 
 struct CalibrationCliOptions {
   CalibrationOptions calibration;
-  FitOptions uncertainty;  // --covariance, --bootstrap: for every fit
+  FitOptions uncertainty;  // --covariance, --bootstrap: for every fit; --profile: the quoted fits
   FrictionConstantOptions constants;
   ThermalModelOptions thermal_model;
   FrictionInputOptions input;  // --catalog and the raw logs' segmentation

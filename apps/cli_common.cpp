@@ -306,6 +306,14 @@ void add_uncertainty_options(CLI::App& app, FitOptions& fit) {
                      .description(""))
       ->type_name("METHOD");
   app.add_option("--bootstrap", fit.bootstrap, "Cluster-bootstrap replicates (runs resampled; 0: none)")->capture_default_str();
+  app.add_option("--profile", fit.profile,
+                 "Profile-likelihood intervals: auto (where the linear one is unreliable), all or none")
+      ->transform(CLI::CheckedTransformer(std::map<std::string, ProfileMode>{{"auto", ProfileMode::automatic},
+                                                                            {"all", ProfileMode::all},
+                                                                            {"none", ProfileMode::none}},
+                                          CLI::ignore_case)
+                     .description(""))
+      ->type_name("MODE");
 }
 
 CLI::Validator at_least(double low) {

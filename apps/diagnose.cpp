@@ -120,7 +120,7 @@ void run_diagnose_thermal(DiagnoseThermalOptions& o, const std::vector<std::stri
     return diagnose_thermal(data, o.diagnosis);
   });
   const auto file = std::filesystem::path(o.output_dir) / (o.name + ".json");
-  write_file_atomically(file, with_output_record(thermal_diagnosis_json(d), argv, &inputs));
+  write_file_atomically(file, with_output_record(thermal_diagnosis_json(d), argv, &inputs, &output_mode().options));
   offer_machine_output(file, true);
   print(d);
   std::cout << "wrote " << file.string() << "\n";
@@ -135,7 +135,7 @@ void run_diagnose_friction(DiagnoseFrictionOptions& o, const std::vector<std::st
     return diagnose_friction(log, o.diagnosis);
   });
   const auto file = std::filesystem::path(o.output_dir) / (o.name + ".json");
-  write_file_atomically(file, with_output_record(friction_diagnosis_json(d), argv, &input.inputs));
+  write_file_atomically(file, with_output_record(friction_diagnosis_json(d), argv, &input.inputs, &output_mode().options));
   offer_machine_output(file, true);
   print(d);
   std::cout << "wrote " << file.string() << "\n";

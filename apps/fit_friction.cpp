@@ -34,9 +34,8 @@ struct FitFrictionOptions {
   std::string weights = "none";
   int starts = 8;
   std::uint64_t seed = 1;
-  std::string profile = "auto";
   bool run_fits = true;
-  FitOptions uncertainty;  // --covariance, --bootstrap
+  FitOptions uncertainty;  // --covariance, --bootstrap, --profile
 };
 
 FrictionFitOptions to_fit_options(const FitFrictionOptions& o) {
@@ -56,12 +55,9 @@ FrictionFitOptions to_fit_options(const FitFrictionOptions& o) {
   if (o.starts < 1) throw InvalidParameter("--starts", o.starts, "at least 1");
   f.fit.covariance = o.uncertainty.covariance;
   f.fit.bootstrap = o.uncertainty.bootstrap;
+  f.fit.profile = o.uncertainty.profile;
   f.fit.starts = o.starts;
   f.fit.seed = o.seed;
-  if (o.profile == "auto") f.fit.profile = ProfileMode::automatic;
-  else if (o.profile == "all") f.fit.profile = ProfileMode::all;
-  else if (o.profile == "none") f.fit.profile = ProfileMode::none;
-  else throw InvalidParameter("--profile", "unknown mode '" + o.profile + "'; expected auto, all or none");
   f.per_run_fits = o.run_fits;
   return f;
 }
@@ -96,7 +92,6 @@ void setup_fit(CLI::App& app, const std::vector<std::string>& argv) {
       ->capture_default_str();
   friction->add_option("--starts", o->starts, "Multi-start local searches")->capture_default_str();
   friction->add_option("--seed", o->seed, "Seed of the multi-start sequence")->capture_default_str();
-  friction->add_option("--profile", o->profile, "Profile-likelihood intervals: auto, all or none")->capture_default_str();
   friction->add_flag("!--no-run-fits", o->run_fits, "Skip the per-run fits (spread across runs)");
   add_uncertainty_options(*friction, o->uncertainty);
   friction->callback([o, &argv] { run_fit_friction(*o, argv); });

@@ -36,7 +36,10 @@ int main(int argc, char** argv) {
                                     "instead of the summary");
   // After the options, before the command runs: stdout silenced for -q and --json.
   std::optional<lmcal::cli::StdoutGate> gate;
-  app.parse_complete_callback([&gate] { gate.emplace(); });
+  app.parse_complete_callback([&gate, &app] {
+    lmcal::cli::record_resolved_options(app);
+    gate.emplace();
+  });
   app.require_subcommand(1);
   lmcal::cli::setup_simulate(app, args);
   lmcal::cli::setup_generate(app, args);

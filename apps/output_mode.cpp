@@ -21,6 +21,46 @@ void offer_machine_output(const std::filesystem::path& file, bool main) {
   machine_output_is_main = machine_output_is_main || main;
 }
 
+namespace {
+
+// A name given, or its value as given (a list joined by commas; a flag's count), else its default.
+std::string resolved_value(const CLI::Option& option) {
+  if (option.count() == 0) return option.get_default_str();
+  if (option.get_type_size() == 0) return std::to_string(option.count());
+  std::string value;
+  for (const std::string& r : option.results()) value += (value.empty() ? "" : ",") + r;
+  return value;
+}
+
+// The options of `command` and of its option groups (unnamed sub-apps).
+void collect_options(const CLI::App& command, std::vector<std::pair<std::string, std::string>>& out) {
+  for (const CLI::Option* option : command.get_options()) {
+    const std::string name = option->get_name();  // the long name, or a positional's
+    if (name.empty() || name == "--help") continue;
+    out.emplace_back(name.substr(name.find_first_not_of('-')), resolved_value(*option));
+  }
+  for (const CLI::App* group : command.get_subcommands([](const CLI::App* a) { return a->get_name().empty(); }))
+    collect_options(*group, out);
+}
+
+}  // namespace
+
+void record_resolved_options(const CLI::App& app) {
+  const CLI::App* command = &app;
+  for (bool deeper = true; deeper;) {
+    deeper = false;
+    for (const CLI::App* used : command->get_subcommands())
+      if (!used->get_name().empty()) {
+        command = used;
+        deeper = true;
+        break;
+      }
+  }
+  if (command == &app) return;
+  output_mode().options.clear();
+  collect_options(*command, output_mode().options);
+}
+
 StdoutGate::StdoutGate() : saved_(std::cout.rdbuf()) {
   const OutputMode& m = output_mode();
   if (m.json || m.verbosity == Verbosity::quiet) std::cout.rdbuf(nullptr);  // writes fail silently

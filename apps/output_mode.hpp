@@ -7,9 +7,13 @@
 //                   --json calibrate SET | jq .calibrated_model`
 #pragma once
 
+#include <CLI/CLI.hpp>
+
 #include <filesystem>
 #include <iosfwd>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace lmcal::cli {
 
@@ -19,7 +23,13 @@ struct OutputMode {
   Verbosity verbosity = Verbosity::normal;
   bool json = false;
   std::filesystem::path machine_output;  // the JSON a command wrote that --json prints
+  // The invoked command's options as it runs with them: given (the last value, a list joined
+  // by commas; a flag's count), else the default ("" where there is none). Outputs record it.
+  std::vector<std::pair<std::string, std::string>> options;
 };
+
+// Reads the invoked command's options into output_mode().options, once the line is parsed.
+void record_resolved_options(const CLI::App& app);
 
 OutputMode& output_mode();
 

@@ -8,6 +8,7 @@
 #include <iostream>
 
 #include "cli_common.hpp"
+#include "output_mode.hpp"
 #include "lmcal/io/hash.hpp"
 #include "lmcal/io/output_record.hpp"
 #include "lmcal/error.hpp"
@@ -54,7 +55,7 @@ void run_plan_friction(const PlanFrictionOptions& o, const std::vector<std::stri
   });
   std::vector<std::pair<std::string, std::string>> inputs = input.inputs;
   if (!o.model.file.empty()) inputs.emplace_back(o.model.file, sha256_file(o.model.file));
-  const std::string written = write_outputs(o.output_dir, {{"plan.json", with_output_record(friction_plan_json(plan, argv), argv, &inputs)},
+  const std::string written = write_outputs(o.output_dir, {{"plan.json", with_output_record(friction_plan_json(plan, argv), argv, &inputs, &output_mode().options)},
                                                            {"plan_friction_template.csv", friction_plan_template_csv(plan)}});
   std::cout << friction_plan_summary(plan) << "wrote " << written << "\n";
 }
@@ -79,7 +80,7 @@ void run_plan_thermal(const PlanThermalOptions& o, const std::vector<std::string
   });
   std::vector<std::pair<std::string, std::string>> inputs = {{o.manifest, sha256_file(o.manifest)}, {model->file, model->sha256}};
   for (const auto& run : data.runs) inputs.emplace_back(run.file.string(), sha256_file(run.file));
-  const std::string written = write_outputs(o.output_dir, {{"plan.json", with_output_record(thermal_plan_json(plan, argv), argv, &inputs)},
+  const std::string written = write_outputs(o.output_dir, {{"plan.json", with_output_record(thermal_plan_json(plan, argv), argv, &inputs, &output_mode().options)},
                                                            {"plan_thermal_manifest.toml", thermal_plan_manifest_toml(plan, data)}});
   std::cout << thermal_plan_summary(plan) << "wrote " << written << "\n";
 }

@@ -6,6 +6,7 @@
 #include <iostream>
 
 #include "cli_common.hpp"
+#include "output_mode.hpp"
 #include "lmcal/io/hash.hpp"
 #include "lmcal/io/output_record.hpp"
 #include "lmcal/fit/model_file.hpp"
@@ -27,7 +28,7 @@ void run_predict(const PredictOptions& o, const std::vector<std::string>& argv) 
   const DutyCycle duty = load_duty_cycle(o.duty, catalog ? &*catalog : nullptr);
   const Prediction p = with_progress("prediction", [&](const Progress&) { return predict(model, duty, o.prediction); });
   const std::vector<std::pair<std::string, std::string>> inputs = {{o.model, sha256_file(o.model)}, {o.duty, sha256_file(o.duty)}};
-  const std::string written = write_outputs(o.output_dir, {{"prediction.json", with_output_record(prediction_json(p, duty, model, argv), argv, &inputs)},
+  const std::string written = write_outputs(o.output_dir, {{"prediction.json", with_output_record(prediction_json(p, duty, model, argv), argv, &inputs, &output_mode().options)},
                                                            {"prediction_time.csv", prediction_time_csv(p)}});
   std::cout << prediction_summary(p) << "wrote " << written << "\n";
 }

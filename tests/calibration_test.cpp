@@ -92,6 +92,15 @@ std::vector<std::string> expected_plots(const Calibration& c) {
     ids.push_back("thermal-empirical-term");
   if (c.calibrated.friction && !c.calibrated.friction->spread.empty()) ids.push_back("calibrated-friction-runs-k1");
   if (c.calibrated.thermal) ids.push_back("calibrated-thermal-runs-alpha");
+  // How sure: the multi-start waterfall of every fit that ran starts, a profile per profile interval.
+  for (const auto& [prefix, fit] : {std::pair{"calibrated-friction-", c.calibrated.friction ? &c.calibrated.friction->fit : nullptr},
+                                    std::pair{"calibrated-thermal-", c.calibrated.thermal ? &c.calibrated.thermal->joint : nullptr}}) {
+    if (!fit) continue;
+    const bool law = fit->solver.start_costs.size() < 2 && c.friction && fit == &c.calibrated.friction->fit;
+    if ((law ? c.friction->fit : *fit).solver.start_costs.size() > 1) ids.push_back(std::string(prefix) + "starts");
+    for (std::size_t j = 0; j < fit->parameters.size(); ++j)
+      if (fit->parameters[j].interval == "profile" && !fit->parameters[j].per_run) ids.push_back(prefix + fmt::format("profile-{}", j));
+  }
   return ids;
 }
 
@@ -301,6 +310,26 @@ TEST_F(CalibrationTest, TheThermalFiguresShowTheModelWithItsMechanisms) {
   std::size_t keys = 0;
   for (auto at = html.find(key); at != std::string::npos; at = html.find(key, at + 1)) ++keys;
   EXPECT_EQ(keys, runs);
+}
+
+// Where an interval is a profile one, the report draws the profile it came from: the curve
+// through the fit's evaluated points, crossing the 95 % line at the interval quoted in its title.
+TEST_F(CalibrationTest, AProfileIntervalIsDrawnWithItsProfile) {
+  write_friction();
+  CalibrationOptions options;
+  options.diagnose = false;
+  options.friction.fit.profile = ProfileMode::all;
+  const Calibration c = calibrate(find_calibration_set(dir_), options);
+  ASSERT_TRUE(c.calibrated.friction);
+  const std::string html = calibration_report_html(c);
+  expect_complete_report(c, html);
+  const FitResult& fit = c.calibrated.friction->fit;
+  const auto j = static_cast<std::size_t>(&fit.parameter("k1") - fit.parameters.data());
+  ASSERT_EQ(fit.parameters[j].interval, "profile");
+  const std::string plot = between(html, fmt::format("data-plot=\"calibrated-friction-profile-{}\"", j), "</svg>");
+  ASSERT_FALSE(plot.empty());
+  EXPECT_NE(plot.find(report::escape_xml(report::interval(fit.parameters[j]))), std::string::npos) << "the title quotes the interval";
+  EXPECT_NE(plot.find("linear interval&#39;s parabola"), std::string::npos);
 }
 
 TEST_F(CalibrationTest, AFolderWithOneHalfCalibratesThatHalfAndSaysWhatWasSkipped) {
@@ -520,7 +549,9 @@ TEST(BundledCalibration, AFreshRunReproducesTheCommittedResults) {
   EXPECT_EQ(outside_prediction.find("class=\"band\""), std::string::npos);
   for (const auto* e : {&c.friction_diagnosis->empirical, &c.thermal_diagnosis->empirical}) {
     EXPECT_FALSE(e->found) << e->formula;
-    if (e->searched) EXPECT_NE(html.find(report::escape_xml(e->reason)), std::string::npos) << e->reason;
+    if (e->searched) {
+      EXPECT_NE(html.find(report::escape_xml(e->reason)), std::string::npos) << e->reason;
+    }
   }
   // The answer holds the truth the set was made with (measurements/cheng2017/*_truth.json):
   // α inside its 95 % interval; the nine friction parameters each within 3 of their quoted SEs

@@ -90,6 +90,9 @@ check "a diagnosis holds what it is told to, and never reports it as moving" awk
   /"estimated_in_both"/ { both = $2 } /"parameter": "f0"/ { found = 1; ok = (both == "false,") }
   END { exit !(found && ok) }' fitout/dfix.json
 check "the held f0 is not among the parameters that move" bash -c "! grep -q 'move: .*f0 ' diagfix.txt"
+check "a diagnosis records the options it ran with, given and default" python3 -c '
+import json; o = json.load(open("fitout/dfix.json"))["options"]
+assert o["fix"] == "f0=0.029" and o["run-offsets"] == "random" and o["min-gain"] is not None and o["catalog"] is None, o'
 check "diagnosis prints its lack-of-fit test" grep -q '^lack of fit' diagfix.txt
 check "diagnosis refuses an unknown run-offset model" refused "unknown model 'sometimes'" diagnose friction drag/friction.csv -o out --run-offsets sometimes
 # Beyond the library: running-in (not a library effect) learned as an empirical term, carried by
@@ -311,6 +314,8 @@ check "a bar missing its material is refused at load, naming where to add it" re
 "$LMCAL" predict "$SOURCE/fits/cheng2017/model.toml" "$SOURCE/examples/duty/two_shifts.toml" -o predout --samples 50 >predict.txt
 check "predict writes the bands and a summary" test -s predout/prediction.json -a -s predout/prediction_time.csv
 check "predict summarises the elongation with its band" grep -q 'rail elongation at the end: .* \[.*\] µm' predict.txt
+check "predict records the options it ran with" python3 -c '
+import json; assert json.load(open("predout/prediction.json"))["options"]["samples"] == "50"'
 cat >badduty.toml <<'EOF_DUTY'
 guide = "SRN 35C"
 rail_length_m = 0.6
@@ -333,6 +338,8 @@ check "a model file of another major version is refused" \
   --velocity 0.001,0.002,0.15,0.3 --parameters v_st_m_s,mu_st -n 3 -o planout >plan.txt
 check "plan writes the plan and a friction log template to fill" test -s planout/plan.json -a -s planout/plan_friction_template.csv
 check "plan says which criterion and what the SEs become" grep -q 'A-optimal for v_st_m_s, mu_st' plan.txt
+check "plan records the options it ran with" python3 -c '
+import json; o = json.load(open("planout/plan.json"))["options"]; assert o["velocity"] == "0.001,0.002,0.15,0.3", o'
 check "the template loads as a friction log with nothing yet to fit" \
   bash -c "'$LMCAL' check friction planout/plan_friction_template.csv 2>&1 | grep -q 'friction_N empty'"
 "$LMCAL" plan thermal "$SOURCE/measurements/cheng2017/thermal.toml" --model "$SOURCE/fits/cheng2017/model.toml" \

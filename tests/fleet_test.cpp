@@ -141,11 +141,6 @@ TEST(FleetSummary, CountsTheUnitsShowingEachCause) {
 
 // --- a generated fleet, end to end ---------------------------------------------------------------
 
-std::string read(const fs::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
 class GeneratedFleet : public test::TempFolderTest {
  protected:
   static FleetRigConfig config() {

@@ -3,6 +3,7 @@
 #include <ceres/cost_function.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "fit/friction_model.hpp"
@@ -234,6 +235,39 @@ TEST(FrictionFit, RunsThatDisagreeWidenTheIntervals) {
   const auto& f0 = offset.fit.parameter("f0");
   EXPECT_GT(f0.se, 3 * u.find("iid")->se[6]) << "the zero offsets move f0 by run";
   for (const auto& s : offset.spread) EXPECT_LT(s.ratio, 2.5) << s.parameter << ": the quoted SE holds the runs' spread";
+}
+
+// The profile curve each interval came from, and where each start ended: the curve is 0 at the
+// estimate, rises on both sides and crosses 1 at the quoted interval's edges; the multi-start
+// record holds one cost per start, the agreeing ones within 0.1 % of the best.
+TEST(FrictionFit, RecordsTheProfileCurvesAndWhereEachStartEnded) {
+  FrictionFitOptions o;
+  o.fit.profile = ProfileMode::all;
+  const auto fit = fit_friction(generate_friction_log(compact_rig(14, 2), {}).log, o);
+  for (std::size_t j = 0; j < 7; ++j) {
+    const ParameterEstimate& p = fit.fit.parameters[j];
+    ASSERT_EQ(p.interval, "profile") << p.name;
+    ASSERT_GE(p.profile_curve.size(), 8u) << p.name;
+    auto at = [&](double value) {  // the curve, linearly interpolated
+      const auto& c = p.profile_curve;
+      for (std::size_t k = 1; k < c.size(); ++k)
+        if (c[k].value >= value) return c[k - 1].excess + (c[k].excess - c[k - 1].excess) * (value - c[k - 1].value) / (c[k].value - c[k - 1].value);
+      return c.back().excess;
+    };
+    EXPECT_TRUE(std::is_sorted(p.profile_curve.begin(), p.profile_curve.end(),
+                               [](const ProfilePoint& a, const ProfilePoint& b) { return a.value < b.value; }));
+    EXPECT_NEAR(at(p.value), 0.0, 1e-6) << p.name;
+    EXPECT_NEAR(at(p.profile_low), 1.0, 0.02) << p.name;
+    EXPECT_NEAR(at(p.profile_high), 1.0, 0.02) << p.name;
+    EXPECT_GT(p.profile_curve.front().excess, 1.0) << p.name << ": the curve reaches beyond the interval";
+    EXPECT_GT(p.profile_curve.back().excess, 1.0) << p.name;
+  }
+  const SolverReport& s = fit.fit.solver;
+  ASSERT_EQ(s.start_costs.size(), static_cast<std::size_t>(s.starts));
+  EXPECT_GT(s.start_residuals, 0u);
+  const double best = *std::min_element(s.start_costs.begin(), s.start_costs.end());
+  EXPECT_EQ(std::count_if(s.start_costs.begin(), s.start_costs.end(), [&](double c) { return c - best <= 1e-3 * best + 1e-12; }),
+            s.starts_agreed);
 }
 
 TEST(FrictionFit, WeightsFromTheSpreadOfRepeats) {

@@ -91,6 +91,7 @@ TEST_F(FrictionLogTest, LoadsColumnsCommentsQuotesAndReport) {
   EXPECT_EQ(log.friction_N, (std::vector<double>{28.2, 28.4, 44.2}));
   EXPECT_EQ(log.viscosity40_mm2_s, (std::vector<double>{99, 99, 68}));
   EXPECT_EQ(log.direction, (std::vector<std::int8_t>{1, -1, 1}));  // "+1" reads as +1
+  EXPECT_EQ(log.line, (std::vector<std::uint32_t>{4, 7, 9}));  // each sample's row, past comments and blank lines
 
   const FrictionConditions<double> c = log.conditions(2);
   EXPECT_EQ(c.velocity_m_s, 0.11);

@@ -391,7 +391,9 @@ TEST(ModelFile, EmpiricalTermsRoundTripAndSettleInASteadySweep) {
     for (std::size_t f = 0; f < a.factors.size(); ++f) EXPECT_EQ(factor_text(a.factors[f]), factor_text(b.factors[f]));
     EXPECT_EQ(bits(a.coefficient), bits(b.coefficient));
     EXPECT_EQ(a.has_scale(), b.has_scale());
-    if (a.has_scale()) EXPECT_EQ(bits(a.scale), bits(b.scale));
+    if (a.has_scale()) {
+      EXPECT_EQ(bits(a.scale), bits(b.scale));
+    }
     ASSERT_EQ(a.seen.size(), b.seen.size());
     for (std::size_t k = 0; k < a.seen.size(); ++k) EXPECT_EQ(bits(a.seen[k].max), bits(b.seen[k].max));
   }

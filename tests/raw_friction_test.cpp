@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <numeric>
 #include <sstream>
 
@@ -84,6 +85,15 @@ TEST_F(RawFriction, PlateausMatchTheRigsConstantVelocitySegments) {
   EXPECT_GT(seg.dropped_stationary, 0u);  // the dwells
   EXPECT_EQ(set.log.size(), seg.kept);
   EXPECT_TRUE(set.log.reports.at(0).warnings.empty());
+  // Each kept sample names its raw row: the line of the file that holds its time.
+  std::ifstream file(set.log.reports.at(0).file);
+  std::vector<std::string> lines(1);  // lines[1] is line 1
+  for (std::string line; std::getline(file, line);) lines.push_back(line);
+  ASSERT_EQ(set.log.line.size(), set.log.size());
+  for (std::size_t i = 0; i < set.log.size(); i += 97) {
+    ASSERT_LT(set.log.line[i], lines.size());
+    EXPECT_DOUBLE_EQ(std::stod(lines[set.log.line[i]]), set.log.time_s[i]) << "sample " << i << ", line " << set.log.line[i];
+  }
 }
 
 // A raw run's CSV text with its motion column (the second) rewritten: `cell(k, value)` gives

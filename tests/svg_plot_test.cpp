@@ -175,8 +175,8 @@ TEST(SvgPlot, NamedTicksReplaceTheNumbersWhenTheyFit) {
   EXPECT_EQ(named.find(">1.5<"), std::string::npos);
   plot.x_tick_labels.clear();
   for (int r = 1; r <= 3; ++r) plot.x_tick_labels.emplace_back(r, std::string(200, 'x'));  // cannot fit
-  const std::string numeric = render_svg(plot);
-  EXPECT_EQ(numeric.find(std::string(200, 'x')), std::string::npos);
+  const std::string numeric = render_svg(plot);  // no tick draws them (the tooltips still name the runs)
+  EXPECT_EQ(numeric.find(">" + std::string(200, 'x') + "<"), std::string::npos);
   EXPECT_NE(numeric.find(">2<"), std::string::npos);
 }
 
@@ -367,6 +367,19 @@ TEST(SvgPlot, TickLabelsAreCompact) {
   big.series.push_back({.x = {0, 3000}, .y = {0, 1}});
   const std::vector<std::string> b = tick_labels(render_svg(big), true);
   EXPECT_NE(std::find(b.begin(), b.end(), "2000"), b.end());
+}
+
+// Every point's values on hover, with the axes' names, a named position by its name.
+TEST(SvgPlot, PointsCarryTheirValuesAsTooltips) {
+  Plot plot{.id = "runs", .x_label = "run", .y_label = "α"};
+  plot.series.push_back({.label = "each <run>", .x = {1, 2}, .y = {0.6, 0.612345678}, .y_error = {0.01, 0.02}, .mark = Mark::points});
+  plot.x_tick_labels = {{1, "v066"}, {2, "v083"}};
+  const std::string svg = render_svg(plot);
+  EXPECT_NE(svg.find("<title>each &lt;run&gt;: run v066, α 0.6 ± 0.01</title>"), std::string::npos) << svg;
+  EXPECT_NE(svg.find("<title>each &lt;run&gt;: run v083, α 0.61235 ± 0.02</title>"), std::string::npos);
+  plot.x_tick_labels.clear();
+  EXPECT_NE(render_svg(plot).find(": run 2, α 0.61235"), std::string::npos);
+  EXPECT_EQ(tag_balance_error(svg), "");
 }
 
 TEST(SvgPlot, EscapesEveryUserString) {

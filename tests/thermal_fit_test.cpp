@@ -1,3 +1,4 @@
+#include "lmcal/io/units.hpp"
 #include "lmcal/fit/thermal_fit.hpp"
 
 #include <gtest/gtest.h>
@@ -227,6 +228,24 @@ TEST(ThermalFit, ReportsEquationTwoBetweenAmbientSensorsAndRepeats) {
   for (const auto& run : result.runs) EXPECT_NEAR(run.ambient_difference_percent, 0.0, 1e-9);  // unbiased sensors
 }
 
+// A sensor is labelled by its name, not by the unit its column was written in: a column
+// tc1_K (loaded into °C) is "tc1" beside measured_C in the samples and in its offset's name.
+TEST(ThermalFit, SensorsAreLabelledWithoutTheirColumnsUnit) {
+  auto rig = clean_rig(3600);
+  rig.velocity_m_s = {0.11};
+  auto data = generate_thermal_dataset(rig, {}, "k").set;
+  ThermalRun& run = data.runs.at(0);
+  const std::string column = run.trace.rail.at(0).name;
+  ASSERT_EQ(column, "tc1_C");
+  run.trace.rail[0].name = "tc1_K";
+  run.sensor_position_m["tc1_K"] = run.sensor_position_m.at(column);
+  run.sensor_position_m.erase(column);
+  const auto result = fit_thermal(data, options_for_rig());
+  EXPECT_EQ(result.sensor_names.at(0).at(0), "tc1");
+  EXPECT_EQ(result.sensor_names.at(0).at(1), "tc2");
+  EXPECT_NE(thermal_fit_samples_csv(result).find("\nv110,,tc1,"), std::string::npos) << "run, line (none: generated), sensor";
+}
+
 }  // namespace
 }  // namespace lmcal
 
@@ -249,9 +268,10 @@ TEST(ThermalFit, OffsetsAreFittedWhereARunStartsIsothermalAndHeldWhereNot) {
   const auto truth = nlohmann::json::parse(generated.truth_json);
   for (std::size_t r = 0; r < fit.runs.size(); ++r) {
     EXPECT_TRUE(fit.runs[r].offsets_fitted);
-    for (const auto& tc : truth["runs"][r]["thermocouples"])
-      EXPECT_NEAR(fit.joint.parameter("offset " + fit.runs[r].id + " " + tc["column"].get<std::string>()).value,
-                  tc["bias_K"].get<double>(), 0.03);
+    for (const auto& tc : truth["runs"][r]["thermocouples"]) {
+      const std::string sensor = split_unit(tc["column"].get<std::string>(), Quantity::temperature)->name;  // tc1_C: tc1
+      EXPECT_NEAR(fit.joint.parameter("offset " + fit.runs[r].id + " " + sensor).value, tc["bias_K"].get<double>(), 0.03);
+    }
   }
   EXPECT_NEAR(fit.joint.parameter("alpha").value, 0.6, 0.01);
   // The second run still warm from a run before: its offsets held, and said why.

@@ -72,6 +72,7 @@ ThermalTrace awkward_trace(std::size_t n, double step_s) {
 TEST_F(ThermalRunTest, KeepsMissingSamplesAsNaNAndCountsThem) {
   const ThermalTrace trace = load_thermal_trace(kGood / "thermal" / "v066.csv");
   EXPECT_EQ(trace.time_s, (std::vector<double>{0, 5, 10, 15, 20, 35, 40}));
+  EXPECT_EQ(trace.line, (std::vector<std::uint32_t>{4, 5, 6, 7, 8, 9, 10}));  // below two comments and the header
   ASSERT_EQ(trace.ambient.size(), 2u);
   ASSERT_EQ(trace.rail.size(), 3u);
   EXPECT_EQ(trace.ambient[1].name, "ambient2_C");

@@ -60,7 +60,7 @@ std::string uncertainty_summary(const FitResult& fit) {
 
 nlohmann::json parameter_json(const ParameterEstimate& p) {
   const bool profile = p.interval == "profile", none = p.interval == "none";
-  return {{"name", p.name},
+  nlohmann::json j = {{"name", p.name},
           {"unit", p.unit},
           {"value", number(p.value)},
           {"se", number(p.se)},
@@ -77,6 +77,12 @@ nlohmann::json parameter_json(const ParameterEstimate& p) {
           {"held_unidentifiable", p.held_unidentifiable},
           {"at_bound", p.at_bound},
           {"per_run", p.per_run}};
+  if (!p.profile_curve.empty()) {
+    nlohmann::json curve = nlohmann::json::array();
+    for (const ProfilePoint& point : p.profile_curve) curve.push_back({number(point.value), number(point.excess)});
+    j["profile_curve"] = curve;
+  }
+  return j;
 }
 
 nlohmann::json fit_json(const FitResult& fit) {
@@ -123,6 +129,8 @@ nlohmann::json fit_json(const FitResult& fit) {
             {"final_cost", s.final_cost},
             {"starts", s.starts},
             {"starts_agreed", s.starts_agreed},
+            {"start_costs", s.start_costs},
+            {"start_residuals", s.start_residuals},
             {"covariance_ok", s.covariance_ok},
             {"covariance_message", s.covariance_message},
             {"brief", s.brief}}},

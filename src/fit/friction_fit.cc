@@ -610,11 +610,12 @@ std::string friction_fit_json(const FrictionFitResult& r, const FrictionFitOptio
 }
 
 std::string friction_fit_samples_csv(const FrictionFitResult& r, const FrictionLog& log) {
-  CsvText csv({"run", "time_s", "guide", "velocity_m_s", "load_N", "preload_um", "block_length_mm", "temperature_C",
+  CsvText csv({"run", "line", "time_s", "guide", "velocity_m_s", "load_N", "preload_um", "block_length_mm", "temperature_C",
                "direction", "measured_N", "predicted_N", "residual_N", "sigma_N"});
   csv.expect_rows(log.size());
   for (std::size_t i = 0; i < log.size(); ++i) {
-    csv.cell(log.run_names[log.run[i]]).cell(i < log.time_s.size() ? log.time_s[i] : NAN);  // nan: the log has no time
+    csv.cell(log.run_names[log.run[i]]).cell(i < log.line.size() && log.line[i] > 0 ? std::to_string(log.line[i]) : "");
+    csv.cell(i < log.time_s.size() ? log.time_s[i] : NAN);  // nan: the log has no time
     csv.cell(log.guide_names.empty() ? "" : log.guide_names[log.guide[i]]);
     csv.cell(log.velocity_m_s[i]).cell(log.load_N[i]).cell(log.preload_um[i]).cell(log.block_length_mm[i]);
     csv.cell(log.temperature_C[i]).cell(double(log.direction[i])).cell(log.friction_N[i]).cell(r.predicted_N[i]);

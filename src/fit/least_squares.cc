@@ -418,11 +418,13 @@ double relative_scale(const ParameterSpec& spec, double value) {
 struct MultiStart {
   std::vector<double> best;
   int starts = 0, agreed = 0;
+  std::vector<double> costs;  // where each start ended, in start order
+  std::size_t rows = 0;       // residuals the searches used
 };
 
 MultiStart multi_start(const LeastSquaresModel& model, const std::vector<ParameterSpec>& specs,
                        const std::vector<bool>& held, const std::vector<double>& start, const FitOptions& options) {
-  MultiStart out{start, 0, 0};
+  MultiStart out{start, 0, 0, {}, 0};
   std::vector<int> free;
   for (std::size_t j = 0; j < specs.size(); ++j)
     if (!held[j]) free.push_back(static_cast<int>(j));
@@ -470,8 +472,11 @@ MultiStart multi_start(const LeastSquaresModel& model, const std::vector<Paramet
   const auto best = std::min_element(ends.begin(), ends.end(), [](auto& a, auto& b) { return a.first < b.first; });
   out.best = best->second;
   out.starts = options.starts;
-  for (const auto& [f, theta] : ends)
+  out.rows = rows.size();
+  for (const auto& [f, theta] : ends) {
+    out.costs.push_back(f);
     if (f - best->first <= 1e-3 * std::abs(best->first) + 1e-12) ++out.agreed;
+  }
   return out;
 }
 
@@ -606,7 +611,7 @@ Estimate estimate(const LeastSquaresModel& model, const std::vector<ParameterSpe
   // A linear model has one minimum: neither multi-start nor iterations are needed.
   const bool linear = model.linear(held) && options.loss == RobustLoss::none;
   Estimate e;
-  e.starts = linear ? MultiStart{start, 1, 1} : multi_start(model, specs, held, start, options);
+  e.starts = linear ? MultiStart{start, 1, 1, {}, 0} : multi_start(model, specs, held, start, options);
   std::vector<double> theta = e.starts.best;
   // Large problems: converge on a tenth of the residuals first, so that the polish over all
   // of them starts next to the minimum and needs only a step or two.
@@ -659,6 +664,8 @@ void report_solver(const Estimate& e, const FitOptions& options, FitResult& resu
   s.covariance_message = e.state.covariance_message;
   s.starts = e.starts.starts;
   s.starts_agreed = e.starts.agreed;
+  s.start_costs = e.starts.costs;
+  s.start_residuals = e.starts.rows;
   if (!s.converged) result.warnings.push_back("the solver stopped without converging: " + summary.message);
   if (!s.covariance_ok && result.free_parameters > 0) result.warnings.push_back(s.covariance_message);
   if (e.starts.starts > 1 && e.starts.agreed * 2 < e.starts.starts)
@@ -715,7 +722,9 @@ void profile_intervals(const LeastSquaresModel& model, const std::vector<Paramet
     auto excess = [&](double value) {
       std::vector<double> th = state.theta;
       th[j] = value;
-      return polish(*cost, specs, held_j, th).summary.final_cost - final_cost;
+      const double x = polish(*cost, specs, held_j, th).summary.final_cost - final_cost;
+      e.profile_curve.push_back({value, x / threshold});
+      return x;
     };
     auto bound_side = [&](double direction) {
       const double limit = direction > 0 ? specs[j].upper : specs[j].lower;
@@ -737,8 +746,16 @@ void profile_intervals(const LeastSquaresModel& model, const std::vector<Paramet
       }
       return limit;
     };
+    e.profile_curve = {{e.value, 0.0}};
     e.profile_low = bound_side(-1);
     e.profile_high = bound_side(+1);
+    // The search crowds its points at the edges; half-way in and a half beyond draw the shape.
+    for (const double edge : {e.profile_low, e.profile_high}) {
+      excess(e.value + 0.5 * (edge - e.value));
+      const double beyond = std::clamp(e.value + 1.5 * (edge - e.value), specs[j].lower, specs[j].upper);
+      if (beyond != edge) excess(beyond);
+    }
+    std::sort(e.profile_curve.begin(), e.profile_curve.end(), [](const ProfilePoint& a, const ProfilePoint& b) { return a.value < b.value; });
     e.interval = "profile";
   }
 }

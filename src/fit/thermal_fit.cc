@@ -14,6 +14,7 @@
 #include "lmcal/error.hpp"
 #include "lmcal/io/catalog.hpp"
 #include "lmcal/io/csv_writer.hpp"
+#include "lmcal/io/units.hpp"
 #include "fit_json.hpp"
 #include "friction_model.hpp"
 #include "lmcal/fit/friction_fit.hpp"
@@ -179,12 +180,20 @@ Prepared prepare_run(const ThermalRun& run, const ThermalFitOptions& o) {
     throw InvalidParameter(run.id, "the ambient record must cover the run from its first to its last record");
 
   for (const auto& channel : trace.rail) {
-    pr.sensor_names.push_back(channel.name);
+    // Labelled by name, not by the unit its column was written in: "tc1" beside values in °C,
+    // not "tc1_K" (the header stays where two columns would share a name).
+    const auto split = split_unit(channel.name, Quantity::temperature);
+    const bool shared = split && std::any_of(trace.rail.begin(), trace.rail.end(), [&](const TemperatureChannel& other) {
+      const auto o = split_unit(other.name, Quantity::temperature);
+      return &other != &channel && o && o->name == split->name;
+    });
+    pr.sensor_names.push_back(split && !shared ? split->name : channel.name);
     pr.sensor_positions_m.push_back(run.sensor_position_m.at(channel.name));
     out.rise_K.push_back(rise(channel.values));
   }
   for (std::size_t i = 0; i < trace.size(); i += o.every) {
     pr.times_s.push_back(trace.time_s[i] - t0);
+    if (i < trace.line.size()) pr.lines.push_back(trace.line[i]);
     std::vector<double> row;
     for (const auto& channel : trace.rail) row.push_back(channel.values[i]);
     pr.measured.push_back(std::move(row));
@@ -818,7 +827,8 @@ ThermalFitResult fit_thermal(const ThermalDataSet& data, const ThermalFitOptions
         ss += error[k] * error[k];
         g.max_error_K = std::max(g.max_error_K, std::abs(error[k]));
         ++g.n;
-        result.samples.push_back({r, s, pr.times_s[rows[k].time], measured, measured - error[k]});
+        const std::size_t t = rows[k].time;
+        result.samples.push_back({r, s, pr.times_s[t], measured, measured - error[k], t < pr.lines.size() ? pr.lines[t] : 0u});
         sample_rows.push_back(k);
       }
       g.rmse_K = g.n ? std::sqrt(ss / static_cast<double>(g.n)) : kNaN;
@@ -1027,10 +1037,11 @@ std::string thermal_fit_json(const ThermalFitResult& r, const ThermalFitOptions&
 }
 
 std::string thermal_fit_samples_csv(const ThermalFitResult& r) {
-  CsvText csv({"run", "sensor", "time_s", "measured_C", "simulated_C", "residual_K"});
+  CsvText csv({"run", "line", "sensor", "time_s", "measured_C", "simulated_C", "residual_K"});
   csv.expect_rows(r.samples.size());
   for (const auto& s : r.samples) {
-    csv.cell(r.runs[s.run].id).cell(r.sensor_names[s.run][s.sensor]).cell(s.time_s).cell(s.measured_C);
+    csv.cell(r.runs[s.run].id).cell(s.line > 0 ? std::to_string(s.line) : "");
+    csv.cell(r.sensor_names[s.run][s.sensor]).cell(s.time_s).cell(s.measured_C);
     csv.cell(s.simulated_C).cell(s.measured_C - s.simulated_C).end_row();
   }
   return csv.str();

@@ -21,6 +21,7 @@ struct PreparedRun {
   RailParams<double> params;  // α, h and T0 are starting values; Q, k, ρ, c fixed
   AmbientTrace ambient;
   std::vector<double> times_s;                // fitted records
+  std::vector<std::uint32_t> lines;           // their lines in the run's file (empty: not from a file)
   std::vector<std::string> sensor_names;
   std::vector<double> sensor_positions_m;
   std::vector<std::vector<double>> measured;  // [time][sensor], NaN = missing

@@ -19,7 +19,7 @@ inline std::string looks_like(std::string_view text) {
     const auto first = line.find_first_not_of(" \t\r");
     if (first == std::string_view::npos || line[first] == '#') continue;
     line = line.substr(first);
-    if (line[0] == '{' || line[0] == '[' && line.size() > 1 && (line[1] == '{' || line[1] == '"')) return "a JSON document";
+    if (line[0] == '{' || (line[0] == '[' && line.size() > 1 && (line[1] == '{' || line[1] == '"'))) return "a JSON document";
     if (line[0] == '[' || line.find('=') != std::string_view::npos) return "a TOML file (key = value lines)";
     if (std::count(line.begin(), line.end(), ',') >= 1) return "a CSV file (comma-separated columns)";
     return "";

@@ -266,6 +266,7 @@ class FileLoader {
     log_.run.reserve(capacity);
     log_.guide.reserve(capacity);
     log_.direction.reserve(capacity);
+    log_.line.reserve(capacity);
   }
 
   // The manifest's conditions of run `run_index` (nullptr when it does not list the run);
@@ -336,7 +337,7 @@ class FileLoader {
     FrictionConditions<double> sample = c;
     sample.velocity_m_s = v;
     sample.direction = dir;
-    log_.append(run_index, guide_index, t, sample, f, nu40);
+    log_.append(run_index, guide_index, t, sample, f, nu40, static_cast<std::uint32_t>(reader_.line()));
     if (dir < 0) {
       ++backward_rows_;
       negative_backward_ += f < 0;
@@ -427,7 +428,7 @@ class FileLoader {
         c.velocity_m_s = std::abs(v);
         c.direction = v < 0 ? -1.0 : 1.0;
         log_.append(r.run, setup.guide, r.samples.time_s[i], c, raw::friction_N(r.samples, s, raw_, i),
-                    setup.viscosity40);
+                    setup.viscosity40, static_cast<std::uint32_t>(r.line[i]));
       }
       log_.raw_traces.push_back(thin_trace(name, r.samples, s));
       total.kept += seg.kept;
@@ -519,7 +520,8 @@ FrictionConditions<double> FrictionLog::conditions(std::size_t i) const {
 }
 
 void FrictionLog::append(std::uint32_t run_index, std::uint32_t guide_index, double time,
-                         const FrictionConditions<double>& c, double friction, double viscosity40) {
+                         const FrictionConditions<double>& c, double friction, double viscosity40,
+                         std::uint32_t source_line) {
   run.push_back(run_index);
   guide.push_back(guide_index);
   time_s.push_back(time);
@@ -531,6 +533,7 @@ void FrictionLog::append(std::uint32_t run_index, std::uint32_t guide_index, dou
   friction_N.push_back(friction);
   viscosity40_mm2_s.push_back(viscosity40);
   direction.push_back(static_cast<std::int8_t>(c.direction));
+  line.push_back(source_line);
 }
 
 FrictionLog load_friction_log(const fs::path& file, const RawFrictionOptions& raw) {

@@ -510,6 +510,7 @@ ThermalTrace load_thermal_trace(const fs::path& file) {
 
   const std::size_t rows = reader.estimated_rows();
   trace.time_s.reserve(rows);
+  trace.line.reserve(rows);
   for (Channel& c : channels) c.values->reserve(rows);
 
   long previous_line = 0;
@@ -524,6 +525,7 @@ ThermalTrace load_thermal_trace(const fs::path& file) {
     // A measured power has no gaps to skip: the heat between records must be known.
     if (heat) trace.heat_rate_W.push_back(reader.number(*heat, false));
     previous_line = reader.line();
+    trace.line.push_back(static_cast<std::uint32_t>(previous_line));
     for (Channel& c : channels) {
       const double value = reader.number(*c.column, true);
       c.missing += std::isnan(value);

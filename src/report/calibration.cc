@@ -465,7 +465,8 @@ const char* run_offsets_name(RunOffsets r) {
 }
 
 nlohmann::json uncertainty_options_json(const FitOptions& f) {
-  return {{"covariance", covariance_name(f.covariance)}, {"bootstrap", f.bootstrap}, {"starts", f.starts}, {"seed", f.seed}};
+  const char* profile = f.profile == ProfileMode::all ? "all" : f.profile == ProfileMode::none ? "none" : "auto";
+  return {{"covariance", covariance_name(f.covariance)}, {"bootstrap", f.bootstrap}, {"profile", profile}, {"starts", f.starts}, {"seed", f.seed}};
 }
 
 nlohmann::json friction_options_json(const FrictionFitOptions& f) {

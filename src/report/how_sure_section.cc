@@ -2,7 +2,9 @@
 // by covariance method side by side (and the quoted one over the iid one), what the
 // residuals' autocorrelation leaves of the sample, whether the runs disagree beyond their own
 // errors, and each run's own estimate against the pooled estimate's quoted 95 % interval.
+#include <algorithm>
 #include <cmath>
+#include <optional>
 #include <map>
 #include <utility>
 #include <vector>
@@ -85,14 +87,82 @@ void heterogeneity_table(Page& page, const Uncertainty& u) {
   page.table({"parameter", "runs", "Q", "p", "Holm p", "I²", "runs disagree"}, rows);
 }
 
-// Everything a fit's uncertainty says, except the per-run plots.
-void fit_panel(Page& page, const FitResult& fit) {
+// The multi-start waterfall: where each local search ended, best first, relative to the best.
+// Starts on the flat line at 1 found the same minimum; a staircase means the cost surface has
+// several, and the best is only as sure as the count of starts that reached it.
+std::optional<Plot> waterfall_plot(const std::string& id, const SolverReport& s) {
+  std::vector<double> costs = s.start_costs;
+  if (costs.size() < 2) return std::nullopt;
+  std::sort(costs.begin(), costs.end());
+  const double best = costs.front();
+  if (!(best > 0)) return std::nullopt;
+  Plot plot{.id = id,
+            .title = fmt::format("Multi-start: {} of {} searches reached the best minimum", s.starts_agreed, s.starts),
+            .x_label = "start, ranked by where it ended",
+            .y_label = fmt::format("cost / best cost ({} residuals)", s.start_residuals),
+            .log_y = true};
+  Series ends{.label = "each start", .mark = Mark::points, .color = colour(0)};
+  for (std::size_t k = 0; k < costs.size(); ++k) {
+    ends.x.push_back(static_cast<double>(k + 1));
+    ends.y.push_back(costs[k] / best);
+  }
+  plot.series.push_back(std::move(ends));
+  plot.references.push_back({.horizontal = true, .at = 1 + 1e-3, .label = "agrees (within 0.1 %)"});
+  plot.width_px = 640;
+  return plot;
+}
+
+// A parameter's profile: held at each value, the rest refitted; the quoted interval is where
+// the curve crosses 1, and the dashed parabola is what the linear interval assumes.
+Plot profile_plot(const std::string& id, const ParameterEstimate& p) {
+  Plot plot{.id = id,
+            .title = fmt::format("Profile of {}: {}", p.name, interval(p)),
+            .x_label = p.unit.empty() || p.unit == "1" ? p.name : fmt::format("{} ({})", p.name, p.unit),
+            .y_label = "cost rise / 95 % threshold"};
+  Series profile{.label = "profile (others refitted)", .mark = Mark::line_points, .color = colour(0)};
+  Series linear{.label = "linear interval's parabola", .color = colour(1), .dashed = true};
+  const double half = 0.5 * (p.ci_high - p.ci_low);
+  for (const ProfilePoint& point : p.profile_curve) {
+    profile.x.push_back(point.value);
+    profile.y.push_back(point.excess);
+    if (half > 0) {
+      linear.x.push_back(point.value);
+      linear.y.push_back(std::pow((point.value - p.value) / half, 2));
+    }
+  }
+  plot.y_min = 0;
+  plot.y_max = 2.5;
+  plot.series.push_back(std::move(profile));
+  if (!linear.x.empty()) plot.series.push_back(std::move(linear));
+  plot.references.push_back({.horizontal = true, .at = 1, .label = "95 %"});
+  plot.width_px = 640;
+  return plot;
+}
+
+// Everything a fit's uncertainty says, except the per-run plots; figure ids start `id`. The
+// waterfall is `searched`'s: the fit whose multi-start found the minimum this one started from.
+void fit_panel(Page& page, const FitResult& fit, const std::string& id, const FitResult& searched) {
   const std::vector<std::size_t> shown = estimated(fit);
   page.paragraph(intervals_statement(fit.uncertainty));
   method_table(page, fit, shown);
   structure_paragraph(page, fit);
   heterogeneity_table(page, fit.uncertainty);
   correlation_table(page, fit, shown);
+  std::vector<Plot> figures;
+  for (std::size_t j : shown)
+    if (fit.parameters[j].interval == "profile" && fit.parameters[j].profile_curve.size() > 2)
+      figures.push_back(profile_plot(fmt::format("{}profile-{}", id, j), fit.parameters[j]));
+  if (!figures.empty())
+    page.paragraph("Profile likelihood, where the quoted interval is the profile one: the parameter held at each value and "
+                   "the others refitted. The interval is where the curve crosses 1 (the cost rise that a 95 % F test "
+                   "allows, widened as the quoted covariance is); where the curve leaves the dashed parabola the linear "
+                   "interval would have been wrong.");
+  if (auto waterfall = waterfall_plot(id + "starts", searched.solver)) {
+    if (&searched != &fit)
+      page.paragraph("The multi-start below is the law's fit, whose minimum this fit started from.");
+    figures.push_back(std::move(*waterfall));
+  }
+  if (!figures.empty()) page.figures(figures);
 }
 
 // Each run's α alone: its heat, its offsets, its estimate and interval.
@@ -152,7 +222,8 @@ void how_sure_section(Page& page, const Calibration& c) {
                  "error side by side; the quoted one is the method that fits the data's structure.");
   if (m.friction) {
     page.heading(3, "Friction law: how sure");
-    fit_panel(page, m.friction->fit);
+    const FitResult& searched = m.friction->fit.solver.start_costs.size() < 2 && c.friction ? c.friction->fit : m.friction->fit;
+    fit_panel(page, m.friction->fit, "calibrated-friction-", searched);
     friction_run_figures(page, *m.friction, "calibrated-friction-runs-");
     const FrictionLog& log = *c.friction_log;
     std::vector<std::vector<double>> runs(log.run_names.size());
@@ -164,7 +235,7 @@ void how_sure_section(Page& page, const Calibration& c) {
   if (m.thermal) {
     const ThermalFitResult& t = *m.thermal;
     page.heading(3, "Rail model: how sure");
-    fit_panel(page, t.joint);
+    fit_panel(page, t.joint, "calibrated-thermal-", t.joint);
     thermal_run_table(page, t);
     const ParameterEstimate& alpha = t.joint.parameter("alpha");
     Plot plot = per_run_plot("calibrated-thermal-runs-alpha", "α of each run alone (±t·SE) and the pooled 95 % interval", alpha,

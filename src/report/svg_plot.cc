@@ -147,6 +147,7 @@ std::vector<Tick> ticks_of(const Axis& axis, double length_px, double spacing_px
 // A drawable pair on the axis scales; `starts_run` when the pair before it was not drawable.
 struct Sample {
   double x, y;
+  std::size_t index;  // of the pair in its series (its values for a tooltip)
   std::optional<double> y_lo, y_hi;  // error bar ends; none: not drawable (log axis: ≤ 0)
   bool has_error = false;
   bool starts_run = true;
@@ -162,7 +163,7 @@ std::vector<Sample> samples_of(const Series& series, bool log_x, bool log_y) {
       run = false;
       continue;
     }
-    Sample s{*x, *y, std::nullopt, std::nullopt, false, !run};
+    Sample s{*x, *y, i, std::nullopt, std::nullopt, false, !run};
     if (i < series.y_error.size() && std::isfinite(series.y_error[i]) && series.y_error[i] >= 0) {
       s.has_error = true;
       s.y_lo = to_scale(series.y[i] - series.y_error[i], log_y);
@@ -190,8 +191,20 @@ void write_line(Out out, double x1, double y1, double x2, double y2, std::string
   fmt::format_to(out, "<line x1=\"{}\" y1=\"{}\" x2=\"{}\" y2=\"{}\"{}/>\n", px(x1), px(y1), px(x2), px(y2), extra);
 }
 
+// A point's tooltip (the browser's own, from <title>): its series, and its values with the axes' names.
+std::string tooltip(const Series& series, std::size_t i, const Plot& plot) {
+  std::string text = series.label.empty() ? "" : series.label + ": ";
+  const auto named = std::find_if(plot.x_tick_labels.begin(), plot.x_tick_labels.end(),
+                                  [&](const auto& tick) { return tick.first == series.x[i]; });
+  text += named != plot.x_tick_labels.end() ? fmt::format("{} {}", plot.x_label, named->second)
+                                            : fmt::format("{} {:.5g}", plot.x_label, series.x[i]);
+  text += fmt::format(", {} {:.5g}", plot.y_label, series.y[i]);
+  if (i < series.y_error.size() && std::isfinite(series.y_error[i])) text += fmt::format(" ± {:.3g}", series.y_error[i]);
+  return escape_xml(text);
+}
+
 void write_series(Out out, const Series& series, const std::vector<Sample>& samples, std::string_view color,
-                  const Axis& ax, const Axis& ay) {
+                  const Axis& ax, const Axis& ay, const Plot& plot) {
   fmt::format_to(out, "<g class=\"series\" data-label=\"{}\" fill=\"{}\" stroke=\"{}\" stroke-width=\"1.5\">\n",
                  escape_xml(series.label), color, color);
   if (series.mark != Mark::points) {
@@ -214,8 +227,8 @@ void write_series(Out out, const Series& series, const std::vector<Sample>& samp
   for (std::size_t i = 0; i < samples.size(); ++i) {
     const bool isolated = samples[i].starts_run && (i + 1 == samples.size() || samples[i + 1].starts_run);
     if (series.mark != Mark::line || isolated)
-      fmt::format_to(out, "<circle cx=\"{}\" cy=\"{}\" r=\"2.2\" fill-opacity=\"0.7\"/>\n", px(ax.to_px(samples[i].x)),
-                     px(ay.to_px(samples[i].y)));
+      fmt::format_to(out, "<circle cx=\"{}\" cy=\"{}\" r=\"2.2\" fill-opacity=\"0.7\"><title>{}</title></circle>\n",
+                     px(ax.to_px(samples[i].x)), px(ay.to_px(samples[i].y)), tooltip(series, samples[i].index, plot));
   }
   fmt::format_to(out, "</g>\n");
 }
@@ -419,7 +432,7 @@ std::string render_svg(const Plot& plot) {
     }
     for (std::size_t i = 0; i < plot.series.size(); ++i) {
       if (samples[i].empty()) continue;
-      write_series(out, plot.series[i], samples[i], color_of(plot, i), ax, ay);
+      write_series(out, plot.series[i], samples[i], color_of(plot, i), ax, ay, plot);
     }
     fmt::format_to(out, "</g>\n");
     if (!labels.empty()) fmt::format_to(out, "<g class=\"reference-labels\" fill=\"#555\">\n{}</g>\n", labels);

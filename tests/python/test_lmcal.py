@@ -28,7 +28,7 @@ THERMAL_TOML = os.path.join(SET, "thermal.toml")
 VOLATILE = {"command", "seconds"}
 # What `calibrate` adds to every JSON file it writes (where it came from); a result's to_dict()
 # describes the result alone.
-PROVENANCE = {"calibration_options", "software", "inputs"}
+PROVENANCE = {"calibration_options", "software", "inputs", "options"}
 
 
 def assert_same(a, b, path="", rel=1e-10):

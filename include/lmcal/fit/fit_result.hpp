@@ -58,6 +58,14 @@ struct FitOptions {
   std::size_t bootstrap = 999;  // cluster-bootstrap replicates (0: none)
 };
 
+// One point of a parameter's profile: the parameter held at `value`, the others refitted;
+// `excess` = (S(value) − S_min) / threshold, so the profile interval's edges are where it
+// crosses 1 (and a quadratic ((value − θ̂)/(t·SE))² is what the linear interval assumes).
+struct ProfilePoint {
+  double value = 0;
+  double excess = 0;
+};
+
 struct ParameterEstimate {
   std::string name;
   std::string unit;
@@ -76,6 +84,7 @@ struct ParameterEstimate {
   double profile_low = 0, profile_high = 0;  // NaN unless computed
   double boot_low = 0, boot_high = 0;        // cluster-bootstrap percentile interval; NaN unless computed
   std::string interval = "linear";           // "linear", "profile" or "none"
+  std::vector<ProfilePoint> profile_curve;   // every point the profile search evaluated, by value
 };
 
 // One covariance method's standard errors, beside the others.
@@ -145,6 +154,10 @@ struct SolverReport {
   std::string brief;             // Ceres BriefReport of the polish
   double initial_cost = 0, final_cost = 0;  // ½ Σ ρ(r²)
   int starts = 0, starts_agreed = 0;        // multi-start: how many reached the best minimum
+  // Where each start's local search ended, ½ Σ ρ(r²) over the `start_residuals` rows the
+  // multi-start uses, in start order (empty for a linear model, which needs no starts).
+  std::vector<double> start_costs;
+  std::size_t start_residuals = 0;
   bool covariance_ok = false;
   std::string covariance_message;
   double seconds = 0;

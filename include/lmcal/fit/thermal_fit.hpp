@@ -191,6 +191,7 @@ struct ThermalFitResult {
   struct Sample {
     std::size_t run, sensor;
     double time_s, measured_C, simulated_C;
+    std::uint32_t line;  // of its record in the run's file (0: not from a file)
   };
   // The same data fitted with the other source model (paper <-> averaged): its α, and the
   // ratio α_paper / α_averaged, which PHYSICS.md §7 expects near Lb1/L1.

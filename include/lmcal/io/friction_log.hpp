@@ -121,6 +121,7 @@ struct FrictionLog {
   std::vector<double> friction_N;
   std::vector<double> viscosity40_mm2_s;
   std::vector<std::int8_t> direction;    // +1 or -1
+  std::vector<std::uint32_t> line;       // the sample's row in its file (a raw log's: the row kept); 0: not from a file
   std::vector<LoadReport> reports;       // one per file loaded
   std::vector<RunSegmentation> segmentation;  // one per raw run (none for a tidy log)
   std::vector<RawTrace> raw_traces;           // one per raw run
@@ -131,7 +132,7 @@ struct FrictionLog {
   FrictionConditions<double> conditions(std::size_t i) const;
   // Appends one sample to every column.
   void append(std::uint32_t run_index, std::uint32_t guide_index, double time, const FrictionConditions<double>& c,
-              double friction, double viscosity40);
+              double friction, double viscosity40, std::uint32_t source_line = 0);
 };
 
 FrictionLog load_friction_log(const std::filesystem::path& file, const RawFrictionOptions& raw = {});

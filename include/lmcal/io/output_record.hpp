@@ -1,7 +1,8 @@
 // Where a JSON output came from, as every one records it (schema_version 2,
 // docs/schema/lmcal-output.schema.json):
 //   "command": ["lmcal", …], "inputs": [{"file", "sha256"}], "software": {name: version},
-//   "schema_version": 2
+//   "schema_version": 2, and where the writer knows them the options it ran with,
+//   "options": {name: value} (the command line's, given or default; null: neither)
 //
 // Example: text = lmcal::with_output_record(text, {"lmcal", "fit", "friction", "a.csv"}, &inputs);
 //
@@ -18,8 +19,10 @@
 namespace LMCAL_API lmcal {
 
 // `json_text` (a JSON object) with the record added: the command unless empty, the inputs
-// (file -> sha256) unless null, the software's versions and the schema version.
+// (file -> sha256) and the options (name -> value, "" for none) unless null, the software's
+// versions and the schema version.
 std::string with_output_record(const std::string& json_text, const std::vector<std::string>& command = {},
-                               const std::vector<std::pair<std::string, std::string>>* inputs = nullptr);
+                               const std::vector<std::pair<std::string, std::string>>* inputs = nullptr,
+                               const std::vector<std::pair<std::string, std::string>>* options = nullptr);
 
 }  // namespace lmcal

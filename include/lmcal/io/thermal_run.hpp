@@ -63,6 +63,7 @@
 
 #include "lmcal/export.hpp"
 
+#include <cstdint>
 #include <filesystem>
 #include <map>
 #include <optional>
@@ -84,6 +85,7 @@ struct ThermalTrace {
   std::vector<TemperatureChannel> ambient;
   std::vector<TemperatureChannel> rail;  // the tc… columns
   std::vector<double> heat_rate_W;       // the optional heat_rate_W column (empty: none), W
+  std::vector<std::uint32_t> line;       // each record's line in report.file (empty: not read from a file)
   LoadReport report;
   std::size_t size() const { return time_s.size(); }
 };

@@ -16,6 +16,9 @@
 // series' colour under every series' lines and points, its legend entry a shaded box behind the
 // line: {.label = "term (95 % band)", .x = x, .y = mean, .band_low = low, .band_high = high}.
 //
+// Every point carries its values as a tooltip (an SVG <title>: the browser shows it on hover,
+// no script): "label: x_label x, y_label y ± error", a named x position by its name.
+//
 // A series marked legend_only is a legend entry and nothing else: a line style or colour
 // explained once for curves drawn in their points' colours.
 //
