@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # The bundled set's report (fits/cheng2017/report.html; calibration_test checks a fresh run
 # reproduces it) in a real browser, headless Chromium: it loads without script errors and
-# every plot the page lists draws with a size (the page's own check, read from the DOM).
+# every plot the page lists draws with a size, no text is drawn outside its plot, every
+# axis that should name runs or units shows the names, and no x tick labels overlap (the page's
+# own check, read from the DOM).
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 report="${1:-$root/fits/cheng2017/report.html}"  # or the report given
@@ -26,5 +28,10 @@ for id in $listed; do
   grep -q "data-plot=\"$id\"" "$tmp/dom.html" || fail "plot $id is not in the rendered page"
 done
 if grep -q 'data-errors=' "$tmp/dom.html"; then fail "script errors: $(grep -o 'data-errors="[^"]*"' "$tmp/dom.html")"; fi
+# What only the browser's fonts can tell (the page's own check): no text outside its plot, every
+# axis that should name its runs or units names them, no x tick labels running into each other.
+for what in clipped unnamed overlap; do
+  if grep -q "data-$what=" "$tmp/dom.html"; then fail "$what: $(grep -o "data-$what=\"[^\"]*\"" "$tmp/dom.html" | head -c 600)"; fi
+done
 if grep -E 'CONSOLE|Uncaught|Failed to load resource' "$tmp/browser.log"; then fail "the browser reported errors (above)"; fi
-echo "ok: the report loads and all $count plots draw"
+echo "ok: the report loads, all $count plots draw, no text is clipped and every named axis shows its names"

@@ -3,6 +3,7 @@
 // escaping, well-formed and deterministic output.
 #include "lmcal/report/svg_plot.hpp"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -91,7 +92,7 @@ std::vector<std::string> tick_labels(const std::string& svg, bool x_axis) {
   const std::size_t at = svg.find("<g class=\"tick-labels\"");
   if (at == std::string::npos) return {};
   const std::string group = svg.substr(at, svg.find("</g>", at) - at);
-  const std::regex label(std::string("text-anchor=\"") + (x_axis ? "middle" : "end") + "\">([^<]*)</text>");
+  const std::regex label(x_axis ? "class=\"x-tick\"[^>]*>([^<]*)</text>" : "text-anchor=\"end\">([^<]*)</text>");
   std::vector<std::string> labels;
   for (std::sregex_iterator it(group.begin(), group.end(), label), end; it != end; ++it) labels.push_back((*it)[1]);
   return labels;
@@ -367,6 +368,24 @@ TEST(SvgPlot, TickLabelsAreCompact) {
   big.series.push_back({.x = {0, 3000}, .y = {0, 1}});
   const std::vector<std::string> b = tick_labels(render_svg(big), true);
   EXPECT_NE(std::find(b.begin(), b.end(), "2000"), b.end());
+}
+
+// Names too wide to stand side by side stand upright under their ticks, the frame raised to
+// make room: ten runs named like a rig's on a narrow per-run plot.
+TEST(SvgPlot, NamesTooWideSideBySideStandUpright) {
+  Plot plot{.id = "runs", .x_label = "run", .y_label = "k1", .width_px = 260};
+  std::vector<double> x, y;
+  for (int r = 1; r <= 10; ++r) {
+    x.push_back(r);
+    y.push_back(0.3 + 0.001 * r);
+    plot.x_tick_labels.emplace_back(r, fmt::format("v066_r{:02}", r));
+  }
+  plot.series.push_back({.x = x, .y = y, .mark = Mark::points});
+  const std::string svg = render_svg(plot);
+  EXPECT_NE(svg.find("data-x-names=\"v066_r01|v066_r02|"), std::string::npos);
+  for (int r = 1; r <= 10; ++r) EXPECT_NE(svg.find(fmt::format(">v066_r{:02}</text>", r)), std::string::npos) << r;
+  EXPECT_NE(svg.find("class=\"x-tick\" transform=\"rotate(-90"), std::string::npos);
+  EXPECT_EQ(tag_balance_error(svg), "");
 }
 
 // Every point's values on hover, with the axes' names, a named position by its name.

@@ -31,13 +31,28 @@ th{background:#f2f2f2}td.num{text-align:right;font-variant-numeric:tabular-nums}
 )";
 
 // Marks <body data-rendered> with "all N" when every listed plot drew, or with those that
-// did not; <body data-errors> collects script errors. For the browser test; the page itself
-// needs no script.
+// did not; <body data-errors> collects script errors. Then what only a browser's fonts can
+// tell: <body data-clipped> lists text drawn outside its plot (a title cut at both ends),
+// <body data-unnamed> plots whose x axis does not show the names it should (runs, units;
+// svg data-x-names), <body data-overlap> plots whose x tick labels run into each other. For
+// the browser test; the page itself needs no script.
 constexpr const char* kCheck = R"(
 window.addEventListener('error',function(e){document.body.dataset.errors=(document.body.dataset.errors||'')+e.message+';'});
 window.addEventListener('load',function(){var ids=document.body.dataset.plots.split(' ').filter(Boolean),missing=[];
 ids.forEach(function(id){var s=document.querySelector('svg[data-plot="'+id+'"]');var b=s&&s.getBoundingClientRect();
 if(!b||!(b.width>0&&b.height>0)||!s.querySelector('.series,text'))missing.push(id)});
+var clipped=[],unnamed=[],overlap=[];
+document.querySelectorAll('svg.plot').forEach(function(s){var id=s.dataset.plot,p=s.getBoundingClientRect();
+s.querySelectorAll('text').forEach(function(t){var r=t.getBoundingClientRect();
+if(r.width>0&&(r.left<p.left-0.5||r.right>p.right+0.5||r.top<p.top-0.5||r.bottom>p.bottom+0.5))clipped.push(id+': '+t.textContent)});
+var ticks=[].slice.call(s.querySelectorAll('text.x-tick'));
+if(s.dataset.xNames!==undefined){var shown=ticks.map(function(t){return t.textContent});
+if(s.dataset.xNames.split('|').some(function(n){return shown.indexOf(n)<0}))unnamed.push(id)}
+var rs=ticks.map(function(t){return t.getBoundingClientRect()}).sort(function(a,b){return a.left-b.left});
+for(var i=1;i<rs.length;i++)if(rs[i].left<rs[i-1].right){overlap.push(id);break}});
+if(clipped.length)document.body.dataset.clipped=clipped.join('; ');
+if(unnamed.length)document.body.dataset.unnamed=unnamed.join(' ');
+if(overlap.length)document.body.dataset.overlap=overlap.join(' ');
 document.body.dataset.rendered=missing.length?'missing '+missing.join(' '):'all '+ids.length});
 )";
 

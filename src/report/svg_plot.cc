@@ -21,6 +21,7 @@ constexpr std::array<std::string_view, 8> kPalette{"#0072B2", "#D55E00", "#009E7
 constexpr double kLargest = 1e300;  // beyond this a value counts as non-finite: spans stay finite
 constexpr double kCharPx = 6.2;     // mean glyph advance of the 11 px sans-serif text
 constexpr double kLegendRowPx = 16;
+constexpr double kLegendLinePx = 13;  // a wrapped legend label's next line
 
 // A pixel coordinate: at most 2 decimals, trailing zeros dropped, never "-0".
 std::string px(double v) {
@@ -45,6 +46,25 @@ double text_px(std::string_view text) {
   const auto n = std::count_if(text.begin(), text.end(),
                                [](char c) { return (static_cast<unsigned char>(c) & 0xC0) != 0x80; });
   return kCharPx * static_cast<double>(n);
+}
+
+// `text` broken at spaces into lines of at most `max_px` (a word longer than that stands alone).
+std::vector<std::string> wrap(const std::string& text, double max_px) {
+  std::vector<std::string> lines;
+  std::string line;
+  std::size_t at = 0;
+  while (at < text.size()) {
+    const std::size_t end = std::min(text.find(' ', at), text.size());
+    const std::string word = text.substr(at, end - at);
+    if (!line.empty() && text_px(line + " " + word) > max_px) {
+      lines.push_back(line);
+      line.clear();
+    }
+    line += (line.empty() ? "" : " ") + word;
+    at = end + 1;
+  }
+  if (!line.empty() || lines.empty()) lines.push_back(line);
+  return lines;
 }
 
 // The value on the axis' own scale (log10 on a log axis), or nothing if it cannot be drawn.
@@ -350,43 +370,63 @@ std::string render_svg(const Plot& plot) {
     }
 
   // Layout: y ticks first (their labels set the left margin), x ticks once the width is known.
-  const double top = plot.title.empty() ? 12 : 30, bottom = height - (plot.x_label.empty() ? 26 : 42);
+  const double top = plot.title.empty() ? 12 : 30;
+  double bottom = height - (plot.x_label.empty() ? 26 : 42);
   Axis ax{plot.log_x}, ay{plot.log_y};
-  ay.px_lo = bottom;
   ay.px_hi = top;
   std::vector<Tick> x_ticks, y_ticks;
-  double y_tick_px = 0;
   if (has_data) {
     std::tie(ax.lo, ax.hi) = axis_range(xs, plot.x_min, plot.x_max, plot.log_x);
     std::tie(ay.lo, ay.hi) = axis_range(ys, plot.y_min, plot.y_max, plot.log_y);
-    y_ticks = ticks_of(ay, bottom - top, 45);
-    for (const Tick& t : y_ticks) y_tick_px = std::max(y_tick_px, text_px(t.label));
   }
-  const double left = (plot.y_label.empty() ? 10 : 26) + std::max(y_tick_px, 3 * kCharPx) + 8;
   const double legend_px = legend.empty() ? 0 : std::min(0.35 * width, 40 + legend_text_px);
-  const double right = width - 14 - legend_px;
-  ax.px_lo = left;
-  ax.px_hi = right;
+  double left = 0, right = 0;
+  const auto place = [&] {  // the frame for this bottom: y ticks set the left margin
+    ay.px_lo = bottom;
+    double y_tick_px = 0;
+    if (has_data) y_ticks = ticks_of(ay, bottom - top, 45);
+    for (const Tick& t : y_ticks) y_tick_px = std::max(y_tick_px, text_px(t.label));
+    left = (plot.y_label.empty() ? 10 : 26) + std::max(y_tick_px, 3 * kCharPx) + 8;
+    right = width - 14 - legend_px;
+    ax.px_lo = left;
+    ax.px_hi = right;
+  };
+  place();
   if (has_data) x_ticks = ticks_of(ax, right - left, 75);
-  if (has_data && !plot.x_tick_labels.empty()) {  // named positions, when they fit side by side
+  // Named positions (runs, units): side by side where they fit, else turned upright (the frame
+  // rises by the longest), else the numbers stand.
+  bool upright = false;
+  if (has_data && !plot.x_tick_labels.empty()) {
     std::vector<Tick> named;
-    double text = 0;
+    double text = 0, longest = 0;
     for (const auto& [at, label] : plot.x_tick_labels)
       if (ax.contains(at)) {
         named.push_back({at, label});
         text += text_px(label) + kCharPx;
+        longest = std::max(longest, text_px(label));
       }
-    if (!named.empty() && text < 0.95 * (right - left)) x_ticks = std::move(named);
+    const double span = right - left;
+    upright = !named.empty() && text >= 0.95 * span && 14.0 * static_cast<double>(named.size()) < 0.95 * span &&
+              longest <= 0.3 * height;
+    if (upright) {
+      bottom -= longest - 8;
+      place();
+    }
+    if (!named.empty() && (upright || text < 0.95 * span)) x_ticks = std::move(named);
   }
 
   std::string svg;
   const Out out = std::back_inserter(svg);
   const std::string id = escape_xml(plot.id), title = escape_xml(plot.title.empty() ? "plot" : plot.title);
+  // The names the x axis should show, for a check in the browser that it does ("|"-separated).
+  std::string names;
+  for (const auto& [at, label] : plot.x_tick_labels) names += (names.empty() ? "" : "|") + label;
   fmt::format_to(out,
                  "<svg xmlns=\"http://www.w3.org/2000/svg\" class=\"plot\" data-plot=\"{}\" viewBox=\"0 0 {} {}\" "
                  "width=\"{}\" height=\"{}\" role=\"img\" aria-label=\"{}\" font-family=\"sans-serif\" "
-                 "font-size=\"11\">\n<title>{}</title>\n",
-                 id, width, height, width, height, title, title);
+                 "font-size=\"11\"{}>\n<title>{}</title>\n",
+                 id, width, height, width, height, title,
+                 names.empty() ? "" : fmt::format(" data-x-names=\"{}\"", escape_xml(names)), title);
   fmt::format_to(out, "<rect class=\"background\" width=\"{}\" height=\"{}\" fill=\"#fff\"/>\n", width, height);
   const std::string frame = fmt::format("x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\"", px(left), px(top),
                                         px(right - left), px(bottom - top));
@@ -401,7 +441,14 @@ std::string render_svg(const Plot& plot) {
     for (const Tick& t : x_ticks) write_line(out, ax.to_px(t.at), bottom, ax.to_px(t.at), bottom + 4);
     for (const Tick& t : y_ticks) write_line(out, left - 4, ay.to_px(t.at), left, ay.to_px(t.at));
     fmt::format_to(out, "</g>\n<g class=\"tick-labels\" fill=\"#333\">\n");
-    for (const Tick& t : x_ticks) write_text(out, ax.to_px(t.at), bottom + 15, "middle", t.label);
+    for (const Tick& t : x_ticks) {
+      const double x = ax.to_px(t.at);
+      if (upright)  // reads upwards, ending under its tick
+        write_text(out, x + 4, bottom + 8, "end", t.label,
+                   fmt::format(" class=\"x-tick\" transform=\"rotate(-90 {} {})\"", px(x + 4), px(bottom + 8)));
+      else
+        write_text(out, x, bottom + 15, "middle", t.label, " class=\"x-tick\"");
+    }
     for (const Tick& t : y_ticks) write_text(out, left - 6, ay.to_px(t.at) + 4, "end", t.label);
     fmt::format_to(out, "</g>\n");
 
@@ -458,10 +505,11 @@ std::string render_svg(const Plot& plot) {
 
   if (!legend.empty()) {
     fmt::format_to(out, "<g class=\"legend\">\n");
+    double y = top + 8;  // of the next entry; a long label wraps onto lines of its own
     for (std::size_t row = 0; row < legend.size(); ++row) {
       const Series& series = plot.series[legend[row]];
       const std::string color = color_of(plot, legend[row]);
-      const double x = right + 10, y = top + 8 + kLegendRowPx * static_cast<double>(row);
+      const double x = right + 10;
       if (banded[legend[row]])
         fmt::format_to(out, "<rect x=\"{}\" y=\"{}\" width=\"20\" height=\"10\" fill=\"{}\" fill-opacity=\"0.2\"/>\n", px(x),
                        px(y - 5), color);
@@ -472,7 +520,9 @@ std::string render_svg(const Plot& plot) {
       if (series.mark != Mark::line)
         fmt::format_to(out, "<circle cx=\"{}\" cy=\"{}\" r=\"2.2\" fill=\"{}\" stroke=\"{}\" stroke-width=\"1.5\"/>\n",
                        px(x + 10), px(y), color, color);
-      write_text(out, x + 26, y + 4, "start", series.label);
+      const std::vector<std::string> lines = wrap(series.label, 0.9 * (width - x - 26 - 4));
+      for (std::size_t k = 0; k < lines.size(); ++k) write_text(out, x + 26, y + 4 + kLegendLinePx * static_cast<double>(k), "start", lines[k]);
+      y += kLegendRowPx + kLegendLinePx * static_cast<double>(lines.size() - 1);
     }
     fmt::format_to(out, "</g>\n");
   }
