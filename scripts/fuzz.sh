@@ -1,0 +1,91 @@
+#!/usr/bin/env bash
+# Coverage-guided fuzzing of lmcal's readers (fuzz/, libFuzzer with ASan and UBSan). Builds the
+# harnesses with clang into build-fuzz/ when needed, replays every saved reproducer of
+# fuzz/regressions/<harness>/, then runs each harness SECONDS seconds on a fresh working copy of
+# its seeds (fuzz/corpus/<harness>, committed small; the grown corpus stays in build-fuzz/) with
+# its format's dictionary. Prints executions and coverage per harness; fails on any crash,
+# sanitizer report, timeout or broken property ("lmcal fuzz finding: ..."), leaving the input
+# that did it in build-fuzz/artifacts/<harness>/. A finding that is known and not fixed yet is
+# listed in fuzz/regressions/OPEN: its reproducer's failure, and a fuzzing failure of its
+# harness that prints the same text, are reported but do not fail the run.
+# Usage: scripts/fuzz.sh SECONDS [HARNESS...]   (default: every harness, one after the other)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+seconds=${1:?usage: scripts/fuzz.sh SECONDS [HARNESS...]}
+shift
+all=(friction_csv thermal_csv friction_manifest thermal_manifest catalog fit_json)
+harnesses=("${@:-${all[@]}}")
+
+bash scripts/install-deps.sh
+if [[ ! -f build-fuzz/CMakeCache.txt ]]; then
+  CC=clang-16 CXX=clang++-16 cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=Release -DLMCAL_FUZZ=ON -DLMCAL_BUILD_TESTS=OFF \
+    -DLMCAL_BUILD_BENCHMARKS=OFF -DLMCAL_PYTHON=OFF -DLMCAL_MPI=OFF >/dev/null
+fi
+if ! cmake --build build-fuzz -j"${FUZZ_BUILD_JOBS:-$(nproc)}" --target "${harnesses[@]/#/fuzz_}" >build-fuzz/build.log 2>&1; then
+  tail -30 build-fuzz/build.log >&2
+  exit 1
+fi
+
+# Per format: the dictionary and the largest input (the biggest seed fits; more only slows).
+declare -A dict=([friction_csv]=csv [thermal_csv]=csv [friction_manifest]=toml [thermal_manifest]=toml
+                 [catalog]=toml [fit_json]=json)
+declare -A max_len=([friction_csv]=8192 [thermal_csv]=8192 [friction_manifest]=4096 [thermal_manifest]=4096
+                    [catalog]=4096 [fit_json]=8192)
+export ASAN_OPTIONS=${ASAN_OPTIONS:-abort_on_error=1}
+export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1}
+
+# fuzz/regressions/OPEN: "<harness>/<file> | <text its failure prints>" per line.
+open_entry() { awk -F' [|] ' -v want="$1" '$1 == want { print $2 }' fuzz/regressions/OPEN; }
+open_texts() { awk -F' [|] ' -v h="$1/" 'index($1, h) == 1 { print $2 }' fuzz/regressions/OPEN; }
+finding_lines() { grep -m3 -E 'lmcal fuzz finding|ERROR: |runtime error|SUMMARY' "$1" || tail -20 "$1"; }
+
+failed=()
+for h in "${harnesses[@]}"; do
+  for input in fuzz/regressions/"$h"/*; do
+    [[ -f "$input" ]] || continue
+    known=$(open_entry "${input#fuzz/regressions/}")
+    if build-fuzz/fuzz/fuzz_"$h" "$input" >build-fuzz/replay.log 2>&1; then
+      [[ -z "$known" ]] || echo "fuzz $h: $input passes now: remove its line from fuzz/regressions/OPEN"
+    elif [[ -n "$known" ]] && grep -qF -- "$known" build-fuzz/replay.log; then
+      echo "fuzz $h: open finding, not fixed yet: $input ($known)"
+    else
+      echo "fuzz $h: regression $input fails:" >&2
+      finding_lines build-fuzz/replay.log >&2
+      failed+=("$h: $input")
+    fi
+  done
+done
+
+for h in "${harnesses[@]}"; do
+  work=build-fuzz/corpus/$h
+  artifacts=build-fuzz/artifacts/$h/
+  log=build-fuzz/fuzz_$h.log
+  rm -rf "$work" "$artifacts"
+  mkdir -p "$work" "$artifacts"
+  cp fuzz/corpus/"$h"/* "$work"/
+  status=0
+  build-fuzz/fuzz/fuzz_"$h" "$work" -dict=fuzz/dict/"${dict[$h]}".dict -max_len="${max_len[$h]}" \
+    -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -artifact_prefix="$artifacts" -print_final_stats=1 \
+    >"$log" 2>&1 || status=$?
+  # libFuzzer's last status line: "#<executions> DONE cov: <edges> ft: <features> corp: <inputs>/<bytes> ...".
+  last=$(grep -E '^#[0-9]+' "$log" | tail -1 || true)
+  execs=$(grep -oE 'stat::number_of_executed_units: *[0-9]+' "$log" | grep -oE '[0-9]+$' || echo "${last%%[[:space:]]*}")
+  cov=$(grep -oE 'cov: [0-9]+ ft: [0-9]+ corp: [0-9]+' <<<"$last" || echo "cov: ? ft: ? corp: ?")
+  echo "fuzz $h: ${execs#\#} executions in ${seconds} s, $cov"
+  if ((status != 0)); then
+    known=$(open_texts "$h" | grep -F -f - "$log" | head -1 || true)
+    if [[ -n "$known" ]]; then
+      echo "fuzz $h: stopped on an open finding (fuzz/regressions/OPEN), not counted: $known"
+    else
+      echo "fuzz $h: FAILED (exit $status); input in $artifacts, log $log:" >&2
+      finding_lines "$log" >&2
+      failed+=("$h")
+    fi
+  fi
+done
+
+if ((${#failed[@]})); then
+  echo "fuzz: ${#failed[@]} failed: ${failed[*]}" >&2
+  exit 1
+fi
+echo "fuzz: ${#harnesses[@]} harnesses ran clean for ${seconds} s each"
