@@ -72,7 +72,7 @@ void run_calibrate(CalibrateOptions& o) {
                                    .detail = progress.detail_callback()});
   times.start("writing the outputs");
   const std::filesystem::path dir = o.output_dir.empty() ? std::filesystem::path("fits") / set.name : std::filesystem::path(o.output_dir);
-  const std::string written = write_outputs(dir, calibration_outputs(c));
+  const std::string written = write_outputs(dir, calibration_outputs(c), calibration_output_names());
   times.stop();
   progress.clear();
   if (o.timings || output_mode().verbosity == Verbosity::verbose) times.print(stderr);

@@ -43,8 +43,10 @@ std::vector<std::string_view> split(std::string_view text, char separator) {
 
 std::string plural(std::size_t n, std::string_view noun) { return fmt::format("{} {}{}", n, noun, n == 1 ? "" : "s"); }
 
-std::string write_outputs(const std::filesystem::path& dir, std::vector<std::pair<std::string, std::string>> files) {
+std::string write_outputs(const std::filesystem::path& dir, std::vector<std::pair<std::string, std::string>> files,
+                          const std::vector<std::string>& replaced) {
   OutputSet out;
+  for (const std::string& name : replaced) out.remove(dir / name);
   std::string written;
   for (std::size_t i = 0; i < files.size(); ++i) {
     const std::filesystem::path path = dir / files[i].first;

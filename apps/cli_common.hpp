@@ -22,9 +22,12 @@ std::vector<double> parse_list(std::string_view option, std::string_view text);
 // "t:T,t:T,..." pairs of time (s) and temperature (°C), for an ambient trace.
 std::vector<std::pair<double, double>> parse_pairs(std::string_view option, std::string_view text);
 
-// Writes `files` (name -> contents) into `dir`, all or none (OutputSet); returns the paths
-// written, for the message: "fits/a.json, fits/a_samples.csv and fits/a_conditions.csv".
-std::string write_outputs(const std::filesystem::path& dir, std::vector<std::pair<std::string, std::string>> files);
+// Writes `files` (name -> contents) into `dir`, all or none (OutputSet), and removes there the
+// `replaced` names that are not among them (an earlier run's outputs this one does not
+// write); returns the paths written, for the message: "fits/a.json, fits/a_samples.csv and
+// fits/a_conditions.csv".
+std::string write_outputs(const std::filesystem::path& dir, std::vector<std::pair<std::string, std::string>> files,
+                          const std::vector<std::string>& replaced = {});
 
 // "1 run", "3 runs".
 std::string plural(std::size_t n, std::string_view noun);

@@ -104,6 +104,10 @@ check "the term is printed with its scale" grep -q 'exp(-s/l1)·F_law .*term1_sc
 check "the diagnosis json holds the term" grep -q '"form": "sparse"' fitout/din.json
 "$LMCAL" calibrate runin -o calin >/dev/null 2>&1
 check "the calibrated model carries the term, marked" grep -q 'empirical: learned from the residuals, not a named cause' calin/model.toml
+cp -r calin calin_again
+"$LMCAL" calibrate runin -o calin_again --no-diagnosis >/dev/null 2>&1
+check "a run without diagnosis leaves no earlier run's diagnosis beside its outputs" bash -c \
+  'test -s calin_again/calibration.json && test ! -e calin_again/friction_diagnosis.json && test -z "$(find calin_again -name ".*")"'
 "$LMCAL" simulate friction --model calin/model.toml --temperature 26,60 -o simin.csv > simin.txt
 check "simulate friction adds the term's columns" grep -q 'empirical_N,extrapolated,friction_N' simin.csv
 

@@ -274,10 +274,10 @@ FleetSetOutcome run_fleet_set(const Fleet& fleet, std::size_t index, const Fleet
     r.status = "failed";
     r.error = e.what();
     files = OutputSet();
-    // Outputs of an earlier calibration of other inputs would now mislead: removed.
-    std::error_code ignored;
-    for (const std::string& name : calibration_output_names()) fs::remove(out / name, ignored);
   }
+  // Outputs of an earlier calibration that this one did not write (a failed set writes none)
+  // would now mislead: removed in the same commit.
+  for (const std::string& name : calibration_output_names()) files.remove(out / name);
   for (const std::string& f : inputs) {
     std::error_code ec;
     r.inputs.emplace_back(f, fs::is_regular_file(fleet.root / f, ec) ? sha256_file(fleet.root / f) : "missing");

@@ -93,8 +93,10 @@ py::dict fit_arrays(const FitResult& fit) {
   return d;
 }
 
-void write_files(const fs::path& dir, const Files& files) {
+// `replaced`: names an earlier set may have written there that this one replaces by nothing.
+void write_files(const fs::path& dir, const Files& files, const std::vector<std::string>& replaced = {}) {
   OutputSet out;
+  for (const std::string& name : replaced) out.remove(dir / name);
   for (const auto& [name, contents] : files) out.add(dir / name, contents);
   out.commit();
 }
@@ -839,7 +841,7 @@ PYBIND11_MODULE(_lmcal, m) {
   py::class_<CalibrationHandle>(m, "CalibrationHandle")
       .def("json", &CalibrationHandle::json)
       .def("summary", [](const CalibrationHandle& h) { return calibration_summary(*h.c); })
-      .def("write", [](const CalibrationHandle& h, const std::string& dir) { write_files(dir, h.files()); })
+      .def("write", [](const CalibrationHandle& h, const std::string& dir) { write_files(dir, h.files(), calibration_output_names()); })
       .def("report_html", [](const CalibrationHandle& h) { return calibration_report_html(*h.c); })
       .def("friction", &CalibrationHandle::friction)
       .def("thermal", &CalibrationHandle::thermal)
