@@ -1,6 +1,8 @@
-// The bad-input corpus (tests/data/bad/): every file there must be refused with exactly the
+// The bad-input corpus (tests/data/bad/; loaders: friction and thermal CSVs, thermal manifests,
+// friction fit JSONs as --friction reads them): every file there must be refused with exactly the
 // message tests/data/bad/expected.txt gives for it, and every file must be listed there.
 #include "lmcal/error.hpp"
+#include "lmcal/fit/thermal_fit.hpp"
 #include "lmcal/io/friction_log.hpp"
 #include "lmcal/io/thermal_run.hpp"
 
@@ -67,6 +69,9 @@ std::string load_message(const std::string& loader, const std::string& file) {
       load_thermal_trace(file);
     } else if (loader == "manifest") {
       load_thermal_dataset(file);
+    } else if (loader == "fitjson") {
+      ThermalFitOptions options;
+      read_friction_fit(file, options);
     } else {
       return "unknown loader '" + loader + "'";
     }

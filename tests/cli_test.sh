@@ -64,6 +64,8 @@ check "check reads the generated manifest" grep -q "thermal data set 'synthetic'
 "$LMCAL" resample rig/thermal/v110.csv -o coarse.csv --every 12 >/dev/null
 check "resample keeps every 12th record" test "$(grep -vc '^#' coarse.csv)" -eq 12
 check "unknown effect" refused "unknown effect 'warp'" generate friction -o out --effect warp=1
+check "a speed listed twice is refused" refused "each speed once" generate thermal --velocity 0.066,0.11,0.11 -o dupspeed
+check "and nothing of it is written" test ! -e dupspeed
 check "bad log refused by check" refused "friction_semicolon.csv:" check friction "$DATA/bad/friction_semicolon.csv"
 
 # --- friction fit ------------------------------------------------------------------------------

@@ -270,6 +270,29 @@ TEST(FrictionFit, RecordsTheProfileCurvesAndWhereEachStartEnded) {
             s.starts_agreed);
 }
 
+// Logs that carry no friction law are refused with the reason, not fitted to an exact,
+// meaningless agreement: nothing in motion; every sample at one condition.
+TEST(FrictionFit, LogsWithoutMotionOrWithoutAnyVariationAreRefused) {
+  FrictionLog log = generate_friction_log(compact_rig(15, 1), {}).log;
+  FrictionLog still = log;
+  std::fill(still.velocity_m_s.begin(), still.velocity_m_s.end(), 0.0);
+  try {
+    fit_friction(still, {});
+    FAIL() << "fitted a log in which nothing moves";
+  } catch (const InvalidParameter& e) {
+    EXPECT_NE(std::string(e.what()).find("no sample in motion"), std::string::npos) << e.what();
+  }
+  FrictionLog one = log;
+  for (auto* column : {&one.velocity_m_s, &one.load_N, &one.preload_um, &one.temperature_C})
+    std::fill(column->begin(), column->end(), column->front());
+  try {
+    fit_friction(one, {});
+    FAIL() << "fitted a log of one condition";
+  } catch (const InvalidParameter& e) {
+    EXPECT_NE(std::string(e.what()).find("every sample at one condition"), std::string::npos) << e.what();
+  }
+}
+
 TEST(FrictionFit, WeightsFromTheSpreadOfRepeats) {
   auto rig = compact_rig(13, 4);
   rig.noise_N = 0.3;

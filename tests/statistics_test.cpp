@@ -24,6 +24,14 @@ TEST(Statistics, ThePapersAlphaValuesGive0600PlusMinus0019) {
   EXPECT_DOUBLE_EQ(s.max, 0.61);
 }
 
+// The spread across runs in words: the paper's figure, and for one run what is missing rather
+// than "0.000 ± 0.000".
+TEST(Statistics, AcrossRunsSaysWhenThereIsOnlyOneRun) {
+  const std::vector<double> alpha = {0.593, 0.61, 0.61, 0.586};
+  EXPECT_EQ(across_runs(spread(alpha)), "across runs 0.6 ± 0.0194");
+  EXPECT_EQ(across_runs(spread(std::vector<double>{0.6})), "one run: no spread across runs");
+}
+
 TEST(Statistics, EquationOneIsTheNMinusOneStandardDeviation) {
   const std::vector<double> x = {2, 4, 4, 4, 5, 5, 7, 9};  // Σ(x - 5)² = 32
   EXPECT_NEAR(sample_standard_deviation(x), std::sqrt(32.0 / 7.0), 1e-15);

@@ -228,6 +228,25 @@ TEST(ThermalFit, ReportsEquationTwoBetweenAmbientSensorsAndRepeats) {
   for (const auto& run : result.runs) EXPECT_NEAR(run.ambient_difference_percent, 0.0, 1e-9);  // unbiased sensors
 }
 
+// A run too short to follow the rail's heating is refused, naming the run (three records
+// fitted α 0.753 [0.398, 1.108]).
+TEST(ThermalFit, ARunOfAFewRecordsIsRefused) {
+  auto rig = clean_rig(3600);
+  rig.velocity_m_s = {0.11};
+  auto data = generate_thermal_dataset(rig, {}, "short").set;
+  ThermalTrace& trace = data.runs.at(0).trace;
+  trace.time_s.resize(3);
+  for (auto* channels : {&trace.ambient, &trace.rail})
+    for (TemperatureChannel& c : *channels) c.values.resize(3);
+  try {
+    fit_thermal(data, options_for_rig());
+    FAIL() << "fitted a run of three records";
+  } catch (const InvalidParameter& e) {
+    EXPECT_NE(std::string(e.what()).find("3 records to fit"), std::string::npos) << e.what();
+    EXPECT_EQ(e.parameter(), data.runs[0].id);
+  }
+}
+
 // A sensor is labelled by its name, not by the unit its column was written in: a column
 // tc1_K (loaded into °C) is "tc1" beside measured_C in the samples and in its offset's name.
 TEST(ThermalFit, SensorsAreLabelledWithoutTheirColumnsUnit) {

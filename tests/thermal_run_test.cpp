@@ -212,6 +212,26 @@ TEST_F(ThermalRunTest, ErrorsDeepInALongFileHaveTheRightLine) {
   }
 }
 
+// Limits checked where they are met, at the cell: a run spanning more than kMaxRunSpan_s (three
+// records over 10^12 s crashed the solver), and a value that overflows in internal units.
+TEST_F(ThermalRunTest, ARunTooLongAndATimeInfiniteInSecondsAreRefusedAtTheirCell) {
+  try {
+    load_thermal_trace(write("span.csv", "time_s,ambient1_C,tc1_C\n0,24,24\n5e11,24,24.1\n1e12,24,24.2\n"));
+    FAIL() << "accepted a run of 10^12 s";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.line(), 3);
+    EXPECT_EQ(e.column(), 1);
+    EXPECT_NE(std::string(e.what()).find("at most 1e+07 s"), std::string::npos) << e.what();
+  }
+  try {
+    load_thermal_trace(write("minutes.csv", "time_min,ambient1_C,tc1_C\n0,24,24\n1e307,24,24.1\n"));
+    FAIL() << "accepted 1e307 min, infinite in seconds";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.line(), 3);
+    EXPECT_NE(std::string(e.what()).find("finite"), std::string::npos) << e.what();
+  }
+}
+
 TEST_F(ThermalRunTest, DataSetLoadsUnitsSensorsAndOverrides) {
   const ThermalDataSet set = load_thermal_dataset(kGood / "dataset.toml");
   EXPECT_EQ(set.name, "loader-test");

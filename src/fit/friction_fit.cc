@@ -288,6 +288,18 @@ FrictionEffects<double> FrictionFitResult::effects() const {
 
 FrictionFitResult fit_friction(const FrictionLog& log, const FrictionFitOptions& options) {
   if (log.size() == 0) throw InvalidParameter("log", "the friction log has no samples");
+  // The law is friction in motion against the conditions: with nothing moving, or nothing
+  // varied, none of it can be fitted (the fit would report an exact, meaningless agreement).
+  const auto varies = [&](const std::vector<double>& column) {
+    const auto [low, high] = std::minmax_element(column.begin(), column.end());
+    return *low != *high;
+  };
+  if (*std::max_element(log.velocity_m_s.begin(), log.velocity_m_s.end()) <= 0)
+    throw InvalidParameter("velocity_m_s", "no sample in motion (every speed 0): the friction law describes sliding; "
+                                           "log the block moving");
+  if (!varies(log.velocity_m_s) && !varies(log.load_N) && !varies(log.preload_um) && !varies(log.temperature_C))
+    throw InvalidParameter("conditions", "every sample at one condition (speed, load, preload and temperature constant): the "
+                                         "law's constants cannot be told apart; log at least two speeds");
   validate(options.start);
   const std::vector<std::size_t> slots = effect_slots(options);
   const auto specs = parameter_specs(options, slots);

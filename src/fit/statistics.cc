@@ -79,6 +79,11 @@ double chi_squared_upper_p(double x, double dof) {
   return boost::math::cdf(boost::math::complement(boost::math::chi_squared_distribution<double>(dof), x));
 }
 
+std::string across_runs(const Spread& s, int digits) {
+  if (s.n < 2) return s.n == 1 ? "one run: no spread across runs" : "no run estimate: no spread across runs";
+  return fmt::format("across runs {:.{}g} ± {:.{}g}", s.mean, digits, s.half_width, digits);
+}
+
 Spread spread(std::span<const double> values, double confidence) {
   std::vector<double> finite;
   for (double v : values)

@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "io/file_kind.hpp"
+#include "io/json_input.hpp"
 #include "lmcal/error.hpp"
 #include "lmcal/io/catalog.hpp"
 #include "lmcal/io/csv_writer.hpp"
@@ -140,8 +141,13 @@ struct Prepared {
 
 Prepared prepare_run(const ThermalRun& run, const ThermalFitOptions& o) {
   const ThermalTrace& trace = run.trace;
-  if (trace.size() < 2) throw InvalidParameter(run.id, "a thermal run needs at least two records");
   if (o.every < 1) throw InvalidParameter("every", 0.0, "at least 1");
+  // Fewer records cannot tell the rail's heating course (hours) from the sensors' noise.
+  constexpr std::size_t kMinRecords = 10;
+  if ((trace.size() + o.every - 1) / o.every < kMinRecords)
+    throw InvalidParameter(run.id, fmt::format("{} records{} to fit: a thermal run needs at least {} to follow the rail's heating",
+                                               (trace.size() + o.every - 1) / o.every, o.every > 1 ? " kept (--every)" : "",
+                                               kMinRecords));
   const GuideSpec spec = resolved_guide(run);
   Prepared out;
   PreparedRun& pr = out.run;
@@ -901,60 +907,67 @@ namespace {
 
 // The estimates and covariance of a friction fit JSON (se and correlation), for the two-stage
 // uncertainty; its bootstrap replicates are not in the file.
-FitResult friction_fit_uncertainty(const nlohmann::json& j) {
+// The friction fit's estimates, SEs and covariance (from its correlation matrix and SEs), each
+// field checked: a document of the wrong shape is refused naming the field.
+FitResult friction_fit_uncertainty(const io::JsonFile& f) {
   FitResult fit;
-  for (const auto& p : j["parameters"]) {
+  const nlohmann::json& parameters = f.array(f.root, "parameters", "");
+  for (std::size_t i = 0; i < parameters.size(); ++i) {
+    const std::string at = fmt::format("parameters[{}]", i);
     ParameterEstimate e;
-    e.name = p.value("name", "");
-    e.value = p.contains("value") && p["value"].is_number() ? p["value"].get<double>() : kNaN;
-    e.se = p.contains("se") && p["se"].is_number() ? p["se"].get<double>() : kNaN;
-    e.free = p.value("free", false) && !p.value("held_unidentifiable", false);
+    e.name = f.text(parameters[i], "name", at);
+    e.value = f.number(parameters[i], "value", at, true);  // null: not estimated
+    e.se = f.number(parameters[i], "se", at, true);
+    e.free = f.flag(parameters[i], "free", at, false) && !f.flag(parameters[i], "held_unidentifiable", at, false);
     fit.parameters.push_back(e);
+  }
+  // The law's seven constants must all be there: a fit without them is no fit of this law.
+  for (const char* name : kFrictionConstantNames) {
+    const auto p = std::find_if(fit.parameters.begin(), fit.parameters.end(), [&](const ParameterEstimate& q) { return q.name == name; });
+    if (p == fit.parameters.end() || !std::isfinite(p->value))
+      f.fail("parameters", fmt::format("the friction law's {} has no value: expected all of {}", name, fmt::join(kFrictionConstantNames, ", ")));
   }
   const auto n = static_cast<Eigen::Index>(fit.parameters.size());
   fit.covariance = Eigen::MatrixXd::Zero(n, n);
-  const auto& matrix = j["correlation"]["matrix"];
-  for (Eigen::Index a = 0; a < n; ++a)
+  const nlohmann::json& matrix = f.array(f.object(f.root, "correlation", ""), "matrix", "correlation");
+  if (matrix.size() != parameters.size())
+    f.fail("correlation.matrix", fmt::format("expected {} rows, one per parameter, found {}", n, matrix.size()));
+  for (Eigen::Index a = 0; a < n; ++a) {
+    const nlohmann::json& row = matrix[static_cast<std::size_t>(a)];
+    const std::string at = fmt::format("correlation.matrix[{}]", a);
+    if (!row.is_array() || row.size() != parameters.size())
+      f.fail(at, fmt::format("expected an array of {} numbers, found {}", n, io::json_type(row)));
     for (Eigen::Index b = 0; b < n; ++b) {
-      const auto& c = matrix.at(static_cast<std::size_t>(a)).at(static_cast<std::size_t>(b));
+      const nlohmann::json& c = row[static_cast<std::size_t>(b)];
+      if (!c.is_null() && !c.is_number()) f.fail(fmt::format("{}[{}]", at, b), "expected a number or null, found " + io::json_type(c));
       const double sa = fit.parameters[static_cast<std::size_t>(a)].se, sb = fit.parameters[static_cast<std::size_t>(b)].se;
-      if (c.is_number() && std::isfinite(sa) && std::isfinite(sb)) fit.covariance(a, b) = c.get<double>() * sa * sb;
+      if (c.is_number() && std::isfinite(c.get<double>()) && std::isfinite(sa) && std::isfinite(sb))
+        fit.covariance(a, b) = c.get<double>() * sa * sb;
     }
+  }
   return fit;
 }
 
 }  // namespace
 
 void read_friction_fit(const std::string& json_file, ThermalFitOptions& options) {
-  std::ifstream in(json_file, std::ios::binary);
-  if (!in) throw InputError(json_file, 0, 0, "cannot open friction fit file");
-  const std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(text);
-  } catch (const nlohmann::json::parse_error& e) {
-    const std::string kind = io::looks_like(text);
-    if (!kind.empty() && kind != "a JSON document")
-      throw InputError(json_file, 0, 0,
-                       fmt::format("this looks like {}; expected a friction fit JSON (friction.json of lmcal fit friction, "
-                                   "or calibrated_friction.json of lmcal calibrate)", kind));
-    throw InputError(json_file, 0, static_cast<long>(e.byte), "not valid JSON: " + std::string(e.what()));
-  }
-  if (j.value("kind", "") != "friction fit")
+  const io::JsonFile f = io::read_json_file(
+      json_file, "a friction fit JSON (friction.json of lmcal fit friction, or calibrated_friction.json of lmcal calibrate)");
+  if (f.root.value("kind", nlohmann::json()) != "friction fit")
     throw InputError(json_file, 0, 0, "expected a friction fit (\"kind\": \"friction fit\") written by lmcal fit friction");
+  FitResult fit = friction_fit_uncertainty(f);
   FrictionConstants<double> k = paper_friction_constants();
   FrictionEffects<double> e;
-  if (!j.contains("parameters") || !j["parameters"].is_array())
-    throw InputError(json_file, 0, 0, "expected a \"parameters\" array");
-  for (const auto& p : j["parameters"]) {
-    const std::string name = p.value("name", "");
-    if (!p.contains("value") || !p["value"].is_number()) continue;  // null: not estimated
-    const double value = p["value"].get<double>();
-    if (double* law = find_law_parameter(k, e, name)) *law = value;
+  for (const ParameterEstimate& p : fit.parameters)
+    if (double* law = find_law_parameter(k, e, p.name); law && std::isfinite(p.value)) *law = p.value;
+  try {
+    validate(k);
+  } catch (const InvalidParameter& bad) {
+    f.fail("parameters", bad.what());
   }
   options.friction = k;
   options.friction_effects = e;
-  options.friction_fit = friction_fit_uncertainty(j);
+  options.friction_fit = std::move(fit);
 }
 
 // ---- output ---------------------------------------------------------------------------------
@@ -1091,8 +1104,11 @@ std::string thermal_fit_summary(const ThermalFitResult& r) {
                                               : "  one ambient sensor (no comparison)");
     }
     const auto& sp = r.alpha_spread;
-    s += fmt::format("alpha across runs: {:.3f} ± {:.3f} (mean ± 95 % t half-width; spread of runs (Eq. 1 sigma) {:.4f}, n {}, min {:.3f}, max {:.3f})\n",
-                     sp.mean, sp.half_width, sp.sd, sp.n, sp.min, sp.max);
+    if (sp.n < 2)
+      s += fmt::format("alpha {}\n", across_runs(sp));
+    else
+      s += fmt::format("alpha across runs: {:.3f} ± {:.3f} (mean ± 95 % t half-width; spread of runs (Eq. 1 sigma) {:.4f}, n {}, min {:.3f}, max {:.3f})\n",
+                       sp.mean, sp.half_width, sp.sd, sp.n, sp.min, sp.max);
     for (const auto& [pair, d] : r.repeat_differences) s += fmt::format("  repeats {}: alpha differs {:.1f} % (Eq. 2)\n", pair, d);
   }
   s += "goodness per sensor (joint fit):\n";

@@ -266,6 +266,8 @@ double Reader::number(const Column& column, bool allow_missing) const {
     if (std::isnan(value)) return value;  // missing, and allowed
   }
   value = to_internal(column.conversion, value);
+  // Finite as written is not enough: 1e306 kN is infinite in newtons.
+  if (!std::isfinite(value)) fail_number(column, trim(cell), "a number that stays finite in the column's internal unit");
   if (!satisfies(column.rule, value)) fail_rule(column);
   return value;
 }

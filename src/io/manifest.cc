@@ -62,6 +62,14 @@ double number_of(const Manifest& m, const toml::key& key, const toml::node& node
   return *value;
 }
 
+double converted_number_of(const Manifest& m, const toml::key& key, const toml::node& node, const Conversion& conversion) {
+  const double value = csv::to_internal(conversion, number_of(m, key, node));
+  if (!std::isfinite(value))
+    m.fail(node.source(), fmt::format("{} = {}: expected a number that stays finite in internal units", key.str(),
+                                      number_of(m, key, node)));
+  return value;
+}
+
 const std::string& string_of(const Manifest& m, const toml::key& key, const toml::node& node) {
   const auto* s = node.as_string();
   if (!s) m.fail(node.source(), fmt::format("expected a string for {}", key.str()));

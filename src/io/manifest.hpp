@@ -36,6 +36,9 @@ struct Given {
 
 // A finite TOML number (integer or float).
 double number_of(const Manifest& m, const toml::key& key, const toml::node& node);
+// The key's number in internal units; refused at the value when the conversion overflows
+// (load_kN = 1e306 is finite as written, infinite in newtons).
+double converted_number_of(const Manifest& m, const toml::key& key, const toml::node& node, const Conversion& conversion);
 const std::string& string_of(const Manifest& m, const toml::key& key, const toml::node& node);
 // `where` names the table in messages: "[run.sensors_m]".
 const toml::table& table_of(const Manifest& m, const toml::node& node, std::string_view where);

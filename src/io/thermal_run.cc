@@ -175,7 +175,7 @@ std::optional<Conversion> number_key(const Manifest& m, const toml::key& key, co
 double bounded_number(const Manifest& m, const toml::key& key, const toml::node& node, const NumberKey& nk,
                       const Conversion& conversion) {
   const double written = number_of(m, key, node);
-  const double value = csv::to_internal(conversion, written);
+  const double value = converted_number_of(m, key, node, conversion);
   std::string bound;
   if (!within(nk.bound, value, bound))
     m.fail(node.source(), fmt::format("{} = {}: a thermal run needs {} {}", key.str(), written, nk.base, bound));
@@ -440,7 +440,7 @@ ThermalRun read_run(const Manifest& m, const toml::table& table) {
         m.fail(key.source(), fmt::format("sensor '{}' names no tc column of '{}' (its tc columns: {})", key.str(), file,
                                          fmt::join(known, ", ")));
       }
-      const double x_m = csv::to_internal(keys.sensors->conversion, number_of(m, key, node));
+      const double x_m = converted_number_of(m, key, node, keys.sensors->conversion);
       if (!run.sensor_position_m.emplace(channel->name, x_m).second) {
         m.fail(key.source(), fmt::format("duplicate position for column '{}'", channel->name));
       }
@@ -521,6 +521,11 @@ ThermalTrace load_thermal_trace(const fs::path& file) {
                                          "increase strictly",
                                          time.header, reader.cell(time.cell), previous_line));
     }
+    if (!trace.time_s.empty() && t - trace.time_s.front() > kMaxRunSpan_s)
+      reader.fail(time.cell, fmt::format("{} = {}: the run would span {:.3g} s; a run may span at most {:.0e} s (about {:.0f} "
+                                         "days)",
+                                         time.header, reader.cell(time.cell), t - trace.time_s.front(), kMaxRunSpan_s,
+                                         kMaxRunSpan_s / 86400));
     trace.time_s.push_back(t);
     // A measured power has no gaps to skip: the heat between records must be known.
     if (heat) trace.heat_rate_W.push_back(reader.number(*heat, false));

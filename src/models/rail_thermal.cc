@@ -4,6 +4,8 @@
 
 #include <ceres/jet.h>
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <deque>
@@ -623,7 +625,12 @@ RailSolution<T> simulate_on(const Operator<O>& op, const Prepared<T>& prep, cons
   const Grid& grid = prep.grid;
   const std::size_t n = grid.size();
 
-  const int steps = static_cast<int>(std::ceil(outputs.duration_s / numerics.time_step_s - 1e-9));
+  const double step_count = std::ceil(outputs.duration_s / numerics.time_step_s - 1e-9);
+  if (!(step_count <= kMaxTimeSteps))
+    throw InvalidParameter("time_step_s", numerics.time_step_s,
+                           fmt::format("at most {:.0e} steps over {:.3g} s: a longer step or a shorter run", kMaxTimeSteps,
+                                       outputs.duration_s));
+  const int steps = static_cast<int>(step_count);
   const double dt = outputs.duration_s / steps;
   const bool crank_nicolson = numerics.scheme == TimeScheme::crank_nicolson;
   const ThetaStepper<O> stepper(op, n, crank_nicolson ? 0.5 : 1.0, dt);

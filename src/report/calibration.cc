@@ -629,9 +629,8 @@ std::string calibration_summary(const Calibration& c) {
     s += fmt::format("  diagnosis: {}: {}\n", c.friction_diagnosis->verdict, report::without_verdict(c.friction_diagnosis->summary));
   if (c.thermal) {
     const auto& a = c.thermal->joint.parameter("alpha");
-    s += fmt::format("  thermal: {} runs; alpha {:.3f} [{:.3f}, {:.3f}] ({} source), across runs {:.3f} ± {:.3f}\n",
-                     c.thermal_data->runs.size(), a.value, a.ci_low, a.ci_high, to_string(c.thermal_options.source),
-                     c.thermal->alpha_spread.mean, c.thermal->alpha_spread.half_width);
+    s += fmt::format("  thermal: {}; alpha {:.3f} [{:.3f}, {:.3f}] ({} source), {}\n", report::plural(c.thermal_data->runs.size(), "run"),
+                     a.value, a.ci_low, a.ci_high, to_string(c.thermal_options.source), across_runs(c.thermal->alpha_spread));
   }
   if (c.thermal_diagnosis)
     s += fmt::format("  diagnosis: {}: {}\n", c.thermal_diagnosis->verdict, report::without_verdict(c.thermal_diagnosis->summary));

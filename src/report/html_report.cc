@@ -71,11 +71,10 @@ void brief(Page& page, const Calibration& c) {
   }
   if (c.thermal) {
     const auto& a = c.thermal->joint.parameter("alpha");
-    page << fmt::format("<p><b>Thermal</b>, {}: heat partition α = {} {} from {}; across runs {} ± {}.",
+    page << fmt::format("<p><b>Thermal</b>, {}: heat partition α = {} {} from {}; {}.",
                         escape_xml(report::published_label(report::rejects(c.thermal_diagnosis))), num(a.value),
                         escape_xml(report::interval(a)), report::plural(c.thermal_data->runs.size(), "run"),
-                        num(c.thermal->alpha_spread.mean),
-                        num(c.thermal->alpha_spread.half_width, 3));
+                        across_runs(c.thermal->alpha_spread));
     if (c.thermal_diagnosis)
       page << fmt::format(" Diagnosis: <b>{}</b>: {}", escape_xml(c.thermal_diagnosis->verdict),
                           escape_xml(report::without_verdict(c.thermal_diagnosis->summary)));

@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <set>
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <numbers>
@@ -79,6 +80,11 @@ ThermalRigOutput generate_thermal_dataset(const ThermalRigConfig& config, const 
   const bool moving = effects.thermal.moving_source != 0;
   const bool coupled = effects.thermal.coupling != 0;
   validate_phases(config, moving, coupled);
+  // A run is named after its speed in mm/s: two speeds that round alike would be one run twice.
+  std::set<long> speeds_mm_s;
+  for (double v : config.velocity_m_s)
+    if (!speeds_mm_s.insert(std::lround(v * 1000)).second)
+      throw InvalidParameter("velocity", v, "each speed once (a run per speed; --repeats repeats them)");
   const bool heater = config.heat_rate_W.has_value();
   // A heater needs no friction law, hence no block length or preload (a plain bar has none).
   const double Lb = heater ? 0.0 : require(spec, &GuideSpec::block_length_mm, "block_length_mm");

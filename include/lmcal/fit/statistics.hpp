@@ -14,6 +14,7 @@
 
 #include <cstddef>
 #include <span>
+#include <string>
 #include <vector>
 
 namespace LMCAL_API lmcal {
@@ -41,6 +42,10 @@ struct Spread {
 
 // Mean, Eq. 1 σ, Student-t interval of the mean, min and max. NaN values are left out.
 Spread spread(std::span<const double> values, double confidence = 0.95);
+
+// "across runs 0.601 ± 0.012" (mean ± t half-width, `digits` significant), or, with fewer than
+// two runs, what is missing: "one run: no spread across runs" (never "0.000 ± 0.000").
+std::string across_runs(const Spread& s, int digits = 3);
 
 // Holm's step-down adjustment of a family of p-values (each in [0, 1], InvalidParameter
 // otherwise): the k-th smallest becomes max over j <= k of min(1, (m − j + 1) p_(j)). NaN entries

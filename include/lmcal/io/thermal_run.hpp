@@ -80,6 +80,10 @@ struct TemperatureChannel {
   std::vector<double> values;  // °C, NaN = missing sample
 };
 
+// The longest time a trace may span, first record to last: 10^7 s, about 116 days (a guideway
+// test runs hours; the rail model steps through every second of it).
+inline constexpr double kMaxRunSpan_s = 1e7;
+
 struct ThermalTrace {
   std::vector<double> time_s;
   std::vector<TemperatureChannel> ambient;

@@ -68,6 +68,9 @@ struct RailGeometry {
   double velocity_m_s = 0;      // V (moving source)
 };
 
+// The most time steps a simulation takes (an InvalidParameter beyond): 10^8, minutes of work.
+inline constexpr double kMaxTimeSteps = 1e8;
+
 struct RailNumerics {
   SourceModel source = SourceModel::averaged;
   TimeScheme scheme = TimeScheme::crank_nicolson;
