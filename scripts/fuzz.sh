@@ -31,8 +31,7 @@ declare -A dict=([friction_csv]=csv [thermal_csv]=csv [friction_manifest]=toml [
                  [catalog]=toml [fit_json]=json)
 declare -A max_len=([friction_csv]=8192 [thermal_csv]=8192 [friction_manifest]=4096 [thermal_manifest]=4096
                     [catalog]=4096 [fit_json]=8192)
-export ASAN_OPTIONS=${ASAN_OPTIONS:-abort_on_error=1}
-export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1}
+source scripts/sanitizer-env.sh
 
 # fuzz/regressions/OPEN: "<harness>/<file> | <text its failure prints>" per line.
 open_entry() { awk -F' [|] ' -v want="$1" '$1 == want { print $2 }' fuzz/regressions/OPEN; }
