@@ -918,6 +918,7 @@ FitResult friction_fit_uncertainty(const io::JsonFile& f) {
     e.name = f.text(parameters[i], "name", at);
     e.value = f.number(parameters[i], "value", at, true);  // null: not estimated
     e.se = f.number(parameters[i], "se", at, true);
+    if (e.se < 0) f.fail(at + ".se", "expected a standard error >= 0");
     e.free = f.flag(parameters[i], "free", at, false) && !f.flag(parameters[i], "held_unidentifiable", at, false);
     fit.parameters.push_back(e);
   }
@@ -941,8 +942,11 @@ FitResult friction_fit_uncertainty(const io::JsonFile& f) {
       const nlohmann::json& c = row[static_cast<std::size_t>(b)];
       if (!c.is_null() && !c.is_number()) f.fail(fmt::format("{}[{}]", at, b), "expected a number or null, found " + io::json_type(c));
       const double sa = fit.parameters[static_cast<std::size_t>(a)].se, sb = fit.parameters[static_cast<std::size_t>(b)].se;
-      if (c.is_number() && std::isfinite(c.get<double>()) && std::isfinite(sa) && std::isfinite(sb))
+      if (c.is_number() && std::isfinite(sa) && std::isfinite(sb)) {
         fit.covariance(a, b) = c.get<double>() * sa * sb;
+        if (!std::isfinite(fit.covariance(a, b)))
+          f.fail(fmt::format("{}[{}]", at, b), "the covariance it gives with the SEs (correlation × SE × SE) overflows");
+      }
     }
   }
   return fit;

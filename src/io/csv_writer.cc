@@ -39,7 +39,11 @@ CsvText& CsvText::cell(double value) {
 CsvText& CsvText::cell(std::string_view text) {
   LMCAL_ASSERT(in_row_ < columns_, "CSV row with too many cells");
   if (in_row_++) text_ += ',';
-  if (text.find_first_of(",\"\n") == std::string_view::npos) {
+  // Quoted where it would not read back as written: separators, quotes and line ends inside, a
+  // leading '#' (a comment line), spaces at either end (trimmed when unquoted).
+  const bool plain = text.find_first_of(",\"\n\r") == std::string_view::npos && !text.starts_with('#') &&
+                     !text.starts_with(' ') && !text.ends_with(' ') && !text.starts_with('\t') && !text.ends_with('\t');
+  if (plain) {
     text_ += text;
     return *this;
   }

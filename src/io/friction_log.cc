@@ -311,8 +311,10 @@ class FileLoader {
     if (!column(kRun) && !file_run_) file_run_ = runs_(file_.run);
     const std::uint32_t run_index = column(kRun) ? runs_(name_cell(reader_, *column(kRun), scratch)) : *file_run_;
     const FrictionRunConditions* given = manifest_conditions(run_index);
-    const std::uint32_t guide_index = column(kGuide) ? guides_(name_cell(reader_, *column(kGuide), scratch))
-                                                     : run_guide(run_index, given);
+    // An empty guide cell: the run's guide from the manifest, or none (a log lmcal writes for
+    // samples of which only some name a guide).
+    const std::string_view guide = column(kGuide) ? reader_.text(column(kGuide)->cell, scratch) : std::string_view();
+    const std::uint32_t guide_index = guide.empty() ? run_guide(run_index, given) : guides_(guide);
     const double t = column(kTime) ? reader_.number(*column(kTime), false) : kNaN;
     const FrictionConditions<double> c{
         .load_N = condition(kLoad, &FrictionRunConditions::load_N, given),
