@@ -2,10 +2,10 @@
 # Coverage-guided fuzzing of lmcal's readers (fuzz/, libFuzzer with ASan and UBSan). Builds the
 # harnesses with clang into build-fuzz/ when needed, replays every saved reproducer of
 # fuzz/regressions/<harness>/, then runs each harness SECONDS seconds on a fresh working copy of
-# its seeds (fuzz/corpus/<harness>, committed small; the grown corpus stays in build-fuzz/) with
+# its seeds (fuzz/corpus/<harness>, committed small; the grown corpus stays in the build folder) with
 # its format's dictionary. Prints executions and coverage per harness; fails on any crash,
 # sanitizer report, timeout or broken property ("lmcal fuzz finding: ..."), leaving the input
-# that did it in build-fuzz/artifacts/<harness>/. A finding that is known and not fixed yet is
+# that did it in <build folder>/artifacts/<harness>/. A finding that is known and not fixed yet is
 # listed in fuzz/regressions/OPEN: its reproducer's failure, and a fuzzing failure of its
 # harness that prints the same text, are reported but do not fail the run.
 # Usage: scripts/fuzz.sh SECONDS [HARNESS...]   (default: every harness, one after the other)
@@ -16,13 +16,16 @@ shift
 all=(friction_csv thermal_csv friction_manifest thermal_manifest catalog fit_json)
 harnesses=("${@:-${all[@]}}")
 
+# The build folder: build-fuzz/ by default; LMCAL_FUZZ_BUILD=build-asan reuses the sanitizer
+# suite's build (scripts/sanitize.sh configures it with the fuzzers: one library build for both).
+build=${LMCAL_FUZZ_BUILD:-build-fuzz}
 bash scripts/install-deps.sh
-if [[ ! -f build-fuzz/CMakeCache.txt ]]; then
-  CC=clang-16 CXX=clang++-16 cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=Release -DLMCAL_FUZZ=ON -DLMCAL_BUILD_TESTS=OFF \
+if [[ ! -f $build/CMakeCache.txt ]]; then
+  CC=clang-16 CXX=clang++-16 cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release -DLMCAL_FUZZ=ON -DLMCAL_BUILD_TESTS=OFF \
     -DLMCAL_BUILD_BENCHMARKS=OFF -DLMCAL_PYTHON=OFF -DLMCAL_MPI=OFF >/dev/null
 fi
-if ! cmake --build build-fuzz -j"${FUZZ_BUILD_JOBS:-$(nproc)}" --target "${harnesses[@]/#/fuzz_}" >build-fuzz/build.log 2>&1; then
-  tail -30 build-fuzz/build.log >&2
+if ! cmake --build "$build" -j"${FUZZ_BUILD_JOBS:-$(nproc)}" --target "${harnesses[@]/#/fuzz_}" >"$build"/fuzz-build.log 2>&1; then
+  tail -30 "$build"/fuzz-build.log >&2
   exit 1
 fi
 
@@ -43,27 +46,27 @@ for h in "${harnesses[@]}"; do
   for input in fuzz/regressions/"$h"/*; do
     [[ -f "$input" ]] || continue
     known=$(open_entry "${input#fuzz/regressions/}")
-    if build-fuzz/fuzz/fuzz_"$h" "$input" >build-fuzz/replay.log 2>&1; then
+    if "$build"/fuzz/fuzz_"$h" "$input" >"$build"/replay.log 2>&1; then
       [[ -z "$known" ]] || echo "fuzz $h: $input passes now: remove its line from fuzz/regressions/OPEN"
-    elif [[ -n "$known" ]] && grep -qF -- "$known" build-fuzz/replay.log; then
+    elif [[ -n "$known" ]] && grep -qF -- "$known" "$build"/replay.log; then
       echo "fuzz $h: open finding, not fixed yet: $input ($known)"
     else
       echo "fuzz $h: regression $input fails:" >&2
-      finding_lines build-fuzz/replay.log >&2
+      finding_lines "$build"/replay.log >&2
       failed+=("$h: $input")
     fi
   done
 done
 
 for h in "${harnesses[@]}"; do
-  work=build-fuzz/corpus/$h
-  artifacts=build-fuzz/artifacts/$h/
-  log=build-fuzz/fuzz_$h.log
+  work=$build/corpus/$h
+  artifacts=$build/artifacts/$h/
+  log=$build/fuzz_$h.log
   rm -rf "$work" "$artifacts"
   mkdir -p "$work" "$artifacts"
   cp fuzz/corpus/"$h"/* "$work"/
   status=0
-  build-fuzz/fuzz/fuzz_"$h" "$work" -dict=fuzz/dict/"${dict[$h]}".dict -max_len="${max_len[$h]}" \
+  "$build"/fuzz/fuzz_"$h" "$work" -dict=fuzz/dict/"${dict[$h]}".dict -max_len="${max_len[$h]}" \
     -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -artifact_prefix="$artifacts" -print_final_stats=1 \
     >"$log" 2>&1 || status=$?
   # libFuzzer's last status line: "#<executions> DONE cov: <edges> ft: <features> corp: <inputs>/<bytes> ...".

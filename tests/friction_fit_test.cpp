@@ -293,6 +293,25 @@ TEST(FrictionFit, LogsWithoutMotionOrWithoutAnyVariationAreRefused) {
   }
 }
 
+// The convergence claim holds: at a minimum the step still to go is ~0 SE; a polish stopped short
+// (here after one iteration, from a start far off) is reported as not converged, with why.
+TEST(FrictionFit, ConvergedMeansNoStepIsLeftToTake) {
+  const FrictionLog log = generate_friction_log(compact_rig(16, 2), {}).log;
+  const auto fit = fit_friction(log, {});
+  EXPECT_TRUE(fit.fit.solver.converged);
+  EXPECT_LT(fit.fit.solver.remaining_step_se, 1e-3);
+  FrictionFitOptions cut;
+  cut.fit.starts = 0;  // no multi-start: the polish alone, from the start
+  cut.fit.max_iterations = 1;
+  cut.start.mu_v *= 30;
+  cut.start.k1 *= 0.5;
+  const auto stopped = fit_friction(log, cut);
+  EXPECT_FALSE(stopped.fit.solver.converged);
+  EXPECT_GT(stopped.fit.solver.remaining_step_se, 0.1);
+  EXPECT_TRUE(std::any_of(stopped.fit.warnings.begin(), stopped.fit.warnings.end(),
+                          [](const std::string& w) { return w.find("standard errors to go") != std::string::npos; }));
+}
+
 TEST(FrictionFit, WeightsFromTheSpreadOfRepeats) {
   auto rig = compact_rig(13, 4);
   rig.noise_N = 0.3;

@@ -131,6 +131,8 @@ nlohmann::json fit_json(const FitResult& fit) {
             {"starts_agreed", s.starts_agreed},
             {"start_costs", s.start_costs},
             {"start_residuals", s.start_residuals},
+            {"remaining_step_se", number(s.remaining_step_se)},
+            {"restarted", s.restarted},
             {"covariance_ok", s.covariance_ok},
             {"covariance_message", s.covariance_message},
             {"brief", s.brief}}},

@@ -696,8 +696,10 @@ std::string friction_fit_summary(const FrictionFitResult& r) {
       s += fmt::format(" {}/{} {:+.3f};", std::get<2>(pairs[k]), std::get<3>(pairs[k]), std::get<1>(pairs[k]));
     s += "\n";
   }
-  s += fmt::format("solver: {} after {} iterations; {} of {} starts reached the best minimum; covariance {}\n",
-                   f.solver.termination, f.solver.iterations, f.solver.starts_agreed, f.solver.starts,
+  s += fmt::format("solver: {} after {} iterations{}; {} of {} starts reached the best minimum of a {}-residual subsample{}; "
+                   "covariance {}\n",
+                   f.solver.termination, f.solver.iterations, f.solver.converged ? "" : " (not converged)", f.solver.starts_agreed,
+                   f.solver.starts, f.solver.start_residuals, f.solver.restarted ? " (polished again from the best on all data)" : "",
                    f.solver.covariance_ok ? "ok" : "FAILED");
   s += fmt::format("goodness: RMSE {:.3f} N, max relative error {:.1f} % (sample {}), residual sigma {:.3g}\n", r.rmse_N,
                    100 * r.max_relative_error, r.max_relative_error_sample, std::sqrt(f.residual_variance));

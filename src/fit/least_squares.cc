@@ -418,13 +418,14 @@ double relative_scale(const ParameterSpec& spec, double value) {
 struct MultiStart {
   std::vector<double> best;
   int starts = 0, agreed = 0;
-  std::vector<double> costs;  // where each start ended, in start order
-  std::size_t rows = 0;       // residuals the searches used
+  std::vector<double> costs;               // where each start ended, in start order
+  std::vector<std::vector<double>> ends;   // and at which parameters
+  std::size_t rows = 0;                    // residuals the searches used
 };
 
 MultiStart multi_start(const LeastSquaresModel& model, const std::vector<ParameterSpec>& specs,
                        const std::vector<bool>& held, const std::vector<double>& start, const FitOptions& options) {
-  MultiStart out{start, 0, 0, {}, 0};
+  MultiStart out{start, 0, 0, {}, {}, 0};
   std::vector<int> free;
   for (std::size_t j = 0; j < specs.size(); ++j)
     if (!held[j]) free.push_back(static_cast<int>(j));
@@ -475,6 +476,7 @@ MultiStart multi_start(const LeastSquaresModel& model, const std::vector<Paramet
   out.rows = rows.size();
   for (const auto& [f, theta] : ends) {
     out.costs.push_back(f);
+    out.ends.push_back(theta);
     if (f - best->first <= 1e-3 * std::abs(best->first) + 1e-12) ++out.agreed;
   }
   return out;
@@ -596,7 +598,55 @@ struct Estimate {
   FinalState state;
   Polish fit;
   MultiStart starts;
+  double remaining_step = 0;   // at the end, in SEs: see remaining_step()
+  bool stopped_short = false;  // and a step along it lowers the cost: no minimum
+  bool restarted = false;      // the polish stopped short of a minimum and was run again from the best start
 };
+
+// How far from a minimum the solution is: the Gauss-Newton step still to go, (JᵀJ)⁻¹Jᵀr, in
+// standard errors (s²(JᵀJ)⁻¹), the largest over the free parameters not pressing on a bound. At
+// a minimum it is ~0; a polish that stops because the cost falls too slowly along a badly
+// scaled valley (μv at 1e-7 beside k1 at 0.3) leaves it large, though Ceres reports
+// CONVERGENCE. 0 where the covariance could not be formed (reported on its own).
+double remaining_step(const std::vector<ParameterSpec>& specs, const FinalState& state, double cost, std::size_t n) {
+  if (!state.covariance_ok || state.jacobian.rows() != state.residuals.size() || state.residuals.size() == 0) return 0;
+  const Eigen::VectorXd g = state.jacobian.transpose() * state.residuals;
+  const Eigen::VectorXd step = -state.bread * g;
+  const double dof = static_cast<double>(n) - static_cast<double>(free_indices(state.held).size());
+  if (!(dof > 0) || !(cost > 0)) return 0;
+  const double s2 = 2 * cost / dof;
+  double worst = 0;
+  for (std::size_t j = 0; j < specs.size(); ++j) {
+    const auto k = static_cast<Eigen::Index>(j);
+    if (state.held[j] || !(state.bread(k, k) > 0)) continue;
+    const double tol = 1e-7 * (specs[j].upper - specs[j].lower);
+    if ((step[k] < 0 && state.theta[j] <= specs[j].lower + tol) || (step[k] > 0 && state.theta[j] >= specs[j].upper - tol)) continue;
+    worst = std::max(worst, std::abs(step[k]) / std::sqrt(s2 * state.bread(k, k)));
+  }
+  return worst;
+}
+
+// A step still to go above this many standard errors is no minimum, if taking it (or half, or a
+// quarter of it) lowers the cost by more than a hundredth of what one SE is worth (½ s²): where
+// the model is strongly nonlinear the quadratic model's step may not, and the polish did stop
+// at a minimum.
+constexpr double kStationary = 0.1;
+
+bool step_lowers_cost(const ceres::CostFunction& cost, const std::vector<ParameterSpec>& specs, const FinalState& state,
+                      double final_cost, std::size_t n) {
+  const Eigen::VectorXd step = -state.bread * (state.jacobian.transpose() * state.residuals);
+  const double dof = static_cast<double>(n) - static_cast<double>(free_indices(state.held).size());
+  const double worth = 0.01 * 0.5 * (2 * final_cost / dof);
+  Eigen::VectorXd r(cost.num_residuals());
+  for (double t : {1.0, 0.5, 0.25}) {
+    std::vector<double> theta = state.theta;
+    for (std::size_t j = 0; j < specs.size(); ++j)
+      if (!state.held[j]) theta[j] = std::clamp(theta[j] + t * step[static_cast<Eigen::Index>(j)], specs[j].lower, specs[j].upper);
+    const double* parameters[] = {theta.data()};
+    if (cost.Evaluate(parameters, r.data(), nullptr) && r.allFinite() && final_cost - 0.5 * r.squaredNorm() > worth) return true;
+  }
+  return false;
+}
 
 // Steps 1-3: multi-start, polish, and the covariance at the solution; a direction the data
 // cannot determine is held and the rest refitted, until every direction is determined.
@@ -611,7 +661,7 @@ Estimate estimate(const LeastSquaresModel& model, const std::vector<ParameterSpe
   // A linear model has one minimum: neither multi-start nor iterations are needed.
   const bool linear = model.linear(held) && options.loss == RobustLoss::none;
   Estimate e;
-  e.starts = linear ? MultiStart{start, 1, 1, {}, 0} : multi_start(model, specs, held, start, options);
+  e.starts = linear ? MultiStart{start, 1, 1, {}, {}, 0} : multi_start(model, specs, held, start, options);
   std::vector<double> theta = e.starts.best;
   // Large problems: converge on a tenth of the residuals first, so that the polish over all
   // of them starts next to the minimum and needs only a step or two.
@@ -622,29 +672,66 @@ Estimate estimate(const LeastSquaresModel& model, const std::vector<ParameterSpe
   }
   std::optional<double> condition_number;
   FinalState& state = e.state;
-  for (std::size_t round = 0; round <= p; ++round) {
-    if (linear && model.linear(held)) {
-      e.fit = linear_solve(model, *cost, specs, held, theta, loss, state.jacobian);
-      state.residuals = e.fit.residuals;
-    } else {
-      e.fit = polish(*cost, specs, held, theta, options.max_iterations);
-      state.residuals = evaluate_residuals(model, e.fit.theta, loss, &state.jacobian);
-    }
-    theta = state.theta = e.fit.theta;
-    state.held = held;
-    state.covariance_message.clear();
-    state.covariance_ok = covariance_from_jacobian(state.jacobian, held, state.bread, state.covariance_message);
-    const double dof = static_cast<double>(n) - static_cast<double>(free_indices(held).size());
-    const double s2 = dof > 0 ? 2.0 * e.fit.summary.final_cost / dof : kNaN;
-    auto issue = weakest_direction(model, specs, state, s2, options, condition_number);
-    if (!issue) break;
-    for (std::size_t j = 0; j < p; ++j)
-      if (specs[j].name == issue->held.front()) {
-        held[j] = true;
-        theta[j] = specs[j].start;
+  const std::vector<bool> held_given = held;
+  const Identifiability identifiability_given = identifiability;
+  // Polish from `theta`, hold what the data cannot determine and refit, until all is determined.
+  auto settle = [&](std::vector<double> from) {
+    std::vector<double> theta = std::move(from);
+    held = held_given;
+    identifiability = identifiability_given;
+    condition_number.reset();
+    for (std::size_t round = 0; round <= p; ++round) {
+      if (linear && model.linear(held)) {
+        e.fit = linear_solve(model, *cost, specs, held, theta, loss, state.jacobian);
+        state.residuals = e.fit.residuals;
+      } else {
+        e.fit = polish(*cost, specs, held, theta, options.max_iterations);
+        state.residuals = evaluate_residuals(model, e.fit.theta, loss, &state.jacobian);
       }
-    identifiability.identifiable = false;
-    identifiability.issues.push_back(std::move(*issue));
+      theta = state.theta = e.fit.theta;
+      state.held = held;
+      state.covariance_message.clear();
+      state.covariance_ok = covariance_from_jacobian(state.jacobian, held, state.bread, state.covariance_message);
+      const double dof = static_cast<double>(n) - static_cast<double>(free_indices(held).size());
+      const double s2 = dof > 0 ? 2.0 * e.fit.summary.final_cost / dof : kNaN;
+      auto issue = weakest_direction(model, specs, state, s2, options, condition_number);
+      if (!issue) break;
+      for (std::size_t j = 0; j < p; ++j)
+        if (specs[j].name == issue->held.front()) {
+          held[j] = true;
+          theta[j] = specs[j].start;
+        }
+      identifiability.identifiable = false;
+      identifiability.issues.push_back(std::move(*issue));
+    }
+    e.remaining_step = linear ? 0.0 : remaining_step(specs, state, e.fit.summary.final_cost, n);
+    e.stopped_short = e.remaining_step > kStationary && step_lowers_cost(*cost, specs, state, e.fit.summary.final_cost, n);
+  };
+  settle(theta);
+  // Stopped short of a minimum (the starts agreed on a subsample): every start's end on all the
+  // data, the best polished again; kept if it is lower.
+  if (!linear && e.stopped_short && e.starts.ends.size() > 1) {
+    const Estimate first = e;
+    const Identifiability first_identifiability = identifiability;
+    const std::optional<double> first_condition = condition_number;
+    std::vector<double> best = e.starts.ends.front();
+    double best_cost = std::numeric_limits<double>::infinity();
+    Eigen::VectorXd r(static_cast<Eigen::Index>(n));
+    for (const auto& end : e.starts.ends) {
+      const double* parameters[] = {end.data()};
+      if (cost->Evaluate(parameters, r.data(), nullptr) && r.allFinite() && 0.5 * r.squaredNorm() < best_cost) {
+        best_cost = 0.5 * r.squaredNorm();
+        best = end;
+      }
+    }
+    settle(best);
+    e.restarted = true;
+    if (!(e.fit.summary.final_cost < first.fit.summary.final_cost)) {
+      e = first;
+      e.restarted = true;
+      identifiability = first_identifiability;
+      condition_number = first_condition;
+    }
   }
   identifiability.condition_number = condition_number.value_or(0.0);
   return e;
@@ -666,6 +753,14 @@ void report_solver(const Estimate& e, const FitOptions& options, FitResult& resu
   s.starts_agreed = e.starts.agreed;
   s.start_costs = e.starts.costs;
   s.start_residuals = e.starts.rows;
+  s.remaining_step_se = e.remaining_step;
+  s.restarted = e.restarted;
+  if (e.stopped_short) {
+    s.converged = false;
+    result.warnings.push_back(fmt::format("the solver stopped where the cost still falls (a step of {:.2g} standard errors "
+                                          "to go, > {:g}): the estimate may not be a minimum",
+                                          e.remaining_step, kStationary));
+  }
   if (!s.converged) result.warnings.push_back("the solver stopped without converging: " + summary.message);
   if (!s.covariance_ok && result.free_parameters > 0) result.warnings.push_back(s.covariance_message);
   if (e.starts.starts > 1 && e.starts.agreed * 2 < e.starts.starts)

@@ -158,6 +158,12 @@ struct SolverReport {
   // multi-start uses, in start order (empty for a linear model, which needs no starts).
   std::vector<double> start_costs;
   std::size_t start_residuals = 0;
+  // The Gauss-Newton step still to go at the end, in standard errors (the largest over the free
+  // parameters not pressing on a bound): ~0 at a minimum. Above 0.1, and taking it lowers the
+  // cost, the polish stopped where the cost still falls: `converged` is false (whatever Ceres
+  // said). `restarted`: it did, and the best start, judged on all the data, was polished again.
+  double remaining_step_se = 0;
+  bool restarted = false;
   bool covariance_ok = false;
   std::string covariance_message;
   double seconds = 0;
