@@ -297,25 +297,16 @@ void add_assignments(CLI::App& app, const char* name, std::map<std::string, doub
 }
 
 void add_uncertainty_options(CLI::App& app, FitOptions& fit) {
-  app.add_option("--covariance", fit.covariance,
-                 "Covariance the intervals quote: auto (by the data's structure), iid, hac, cluster or bootstrap")
-      ->transform(CLI::CheckedTransformer(std::map<std::string, CovarianceMethod>{{"auto", CovarianceMethod::automatic},
-                                                                                 {"iid", CovarianceMethod::iid},
-                                                                                 {"hac", CovarianceMethod::hac},
-                                                                                 {"cluster", CovarianceMethod::cluster},
-                                                                                 {"bootstrap", CovarianceMethod::bootstrap}},
-                                          CLI::ignore_case)
-                     .description(""))
-      ->type_name("METHOD");
+  add_choice(app, "--covariance", fit.covariance,
+             "Covariance the intervals quote: auto (by the data's structure), iid, hac, cluster or bootstrap", "METHOD",
+             {{"auto", CovarianceMethod::automatic},
+              {"iid", CovarianceMethod::iid},
+              {"hac", CovarianceMethod::hac},
+              {"cluster", CovarianceMethod::cluster},
+              {"bootstrap", CovarianceMethod::bootstrap}});
   app.add_option("--bootstrap", fit.bootstrap, "Cluster-bootstrap replicates (runs resampled; 0: none)")->capture_default_str();
-  app.add_option("--profile", fit.profile,
-                 "Profile-likelihood intervals: auto (where the linear one is unreliable), all or none")
-      ->transform(CLI::CheckedTransformer(std::map<std::string, ProfileMode>{{"auto", ProfileMode::automatic},
-                                                                            {"all", ProfileMode::all},
-                                                                            {"none", ProfileMode::none}},
-                                          CLI::ignore_case)
-                     .description(""))
-      ->type_name("MODE");
+  add_choice(app, "--profile", fit.profile, "Profile-likelihood intervals: auto (where the linear one is unreliable), all or none",
+             "MODE", {{"auto", ProfileMode::automatic}, {"all", ProfileMode::all}, {"none", ProfileMode::none}});
 }
 
 CLI::Validator at_least(double low) {
@@ -376,14 +367,9 @@ void ThermalModelOptions::add_to(CLI::App& app, ThermalFitOptions& fit) {
 }
 
 void ThermalModelOptions::add_offsets(CLI::App& app, ThermalFitOptions& fit) {
-  app.add_option("--offsets", fit.offsets,
-                 "Thermocouple offsets: auto (fitted for a run that starts isothermal, at the ambient), fit or hold")
-      ->transform(CLI::CheckedTransformer(std::map<std::string, ThermalOffsets>{{"auto", ThermalOffsets::automatic},
-                                                                               {"fit", ThermalOffsets::fitted},
-                                                                               {"hold", ThermalOffsets::held}},
-                                          CLI::ignore_case)
-                     .description(""))
-      ->type_name("MODE");
+  add_choice(app, "--offsets", fit.offsets,
+             "Thermocouple offsets: auto (fitted for a run that starts isothermal, at the ambient), fit or hold", "MODE",
+             {{"auto", ThermalOffsets::automatic}, {"fit", ThermalOffsets::fitted}, {"hold", ThermalOffsets::held}});
 }
 
 void ThermalModelOptions::add_friction_file(CLI::App& app) {

@@ -7,6 +7,7 @@
 #include "lmcal/io/csv_writer.hpp"
 
 #include <filesystem>
+#include <cctype>
 #include <map>
 #include <string>
 #include "lmcal/fit/friction_fit.hpp"
@@ -163,6 +164,32 @@ void add_assignments(CLI::App& app, const char* name, std::map<std::string, doub
 // --covariance (which covariance the intervals quote: auto, iid, hac, cluster, bootstrap) and
 // --bootstrap (cluster-bootstrap replicates, 0: none), into `fit`.
 void add_uncertainty_options(CLI::App& app, FitOptions& fit);
+
+// An option that takes one of named values (any case), without CLI11's map dump in its help
+// or its errors ("--offsets: 'bogus': expected one of auto, fit, hold"):
+// add_choice(app, "--profile", fit.profile, "…", "MODE", {{"auto", …}, …}).
+template <typename Enum>
+CLI::Option* add_choice(CLI::App& app, const std::string& name, Enum& target, const std::string& help,
+                        const std::string& type_name, std::map<std::string, Enum> values) {
+  std::string names, current;
+  for (const auto& [key, value] : values) {
+    names += (names.empty() ? "" : ", ") + key;
+    if (value == target) current = key;  // the default, as help and the outputs' options show it
+  }
+  return app.add_option_function<std::string>(
+                name,
+                [&target, values, names, name](const std::string& given) {
+                  std::string key = given;
+                  for (char& c : key) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+                  const auto it = values.find(key);
+                  if (it == values.end())
+                    throw CLI::ValidationError(name, "'" + given + "': expected one of " + names);
+                  target = it->second;
+                },
+                help)
+      ->type_name(type_name)
+      ->default_str(current);
+}
 
 // The friction constants a command fits, holds and starts from: --free, --fix, --start,
 // --bound, and --run-offsets (how the load cell's zero moves between runs).

@@ -26,6 +26,8 @@ namespace fs = std::filesystem;
 
 const std::vector<std::string> kNames{"a.json", "b.csv", "c.html"};
 
+std::pair<int, int> stop_at;  // step, signal: the child's hook reads it (a plain function pointer)
+
 class OutputSetTest : public test::TempFolderTest {
  protected:
   // The folder's files, name -> contents (hidden ones too).
@@ -54,6 +56,17 @@ class OutputSetTest : public test::TempFolderTest {
     for (const auto& name : kNames) write(name, "old " + name);
     write("d.txt", "old d.txt");
   }
+  // Over the old set: the new one committed in a child that raises `signal` at `step`; returns
+  // how the child ended.
+  int commit_stopped_at(int step, int signal) const {
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    write_old();
+    stop_at = {step, signal};
+    return commit_in_child([](int k) {
+      if (k == stop_at.first) ::raise(stop_at.second);
+    });
+  }
   // Commits the new set in a child that `hook` may stop; returns how the child ended.
   int commit_in_child(void (*hook)(int)) const {
     const pid_t child = ::fork();
@@ -72,19 +85,11 @@ class OutputSetTest : public test::TempFolderTest {
   }
 };
 
-int kill_at = 0;
-
 TEST_F(OutputSetTest, AKillAtAnyStepLeavesTheOldSetOrTheNewOne) {
   const std::vector<int> steps{1, 2, 3, 50, 51, 100, 101, 102, 103, 104};
   for (int k : steps) {
     SCOPED_TRACE(testing::Message() << "killed at step " << k);
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-    write_old();
-    kill_at = k;
-    const int status = commit_in_child([](int step) {
-      if (step == kill_at) ::raise(SIGKILL);
-    });
+    const int status = commit_stopped_at(k, SIGKILL);
     ASSERT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL) << "the child was not killed there";
     recover_outputs(dir_);  // what the next run does first
     const auto files = folder();
@@ -99,24 +104,14 @@ TEST_F(OutputSetTest, AKillAtAnyStepLeavesTheOldSetOrTheNewOne) {
 TEST_F(OutputSetTest, CtrlCDuringTheCommitWaitsUntilItIsOver) {
   for (int k : {2, 51, 101}) {
     SCOPED_TRACE(testing::Message() << "SIGINT at step " << k);
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-    write_old();
-    kill_at = k;
-    const int status = commit_in_child([](int step) {
-      if (step == kill_at) ::raise(SIGINT);
-    });
+    const int status = commit_stopped_at(k, SIGINT);
     ASSERT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGINT) << "Ctrl-C is delivered once the set is in place";
     EXPECT_EQ(folder(), expected("new", false)) << "no temporary left, nothing old mixed in";
   }
 }
 
 TEST_F(OutputSetTest, TheNextCommitFinishesWhatAKilledOneLeft) {
-  write_old();
-  kill_at = 101;
-  ASSERT_TRUE(WIFSIGNALED(commit_in_child([](int step) {
-    if (step == kill_at) ::raise(SIGKILL);
-  })));
+  ASSERT_TRUE(WIFSIGNALED(commit_stopped_at(101, SIGKILL)));
   EXPECT_TRUE(fs::exists(dir_ / ".lmcal-commit")) << "killed in the middle of the renames: the journal stays";
   OutputSet next;
   next.add(dir_ / "e.txt", "e");

@@ -369,6 +369,8 @@ check "an unknown command names the nearest" exits_with 2 "unknown command 'cali
 check "an unknown subcommand names the nearest" exits_with 2 "unknown command 'frcition'; did you mean 'friction'?" generate frcition
 check "an unknown option names the nearest" \
   exits_with 2 "unknown option '--star'; did you mean '--start' or '--starts'?" calibrate --star 3 x
+check "a choice refused names the choices, not CLI11's map" \
+  exits_with 2 "--offsets: 'bogus': expected one of auto, fit, hold" fit thermal x --offsets bogus
 check "a missing argument is named with what it is" exits_with 2 "missing SET: Measurement folder" calibrate
 check "no command lists the commands" exits_with 2 "expected a command: simulate, generate" 
 check "an option's value out of range is refused like a file's" \
