@@ -4,6 +4,7 @@
 #include "lmcal/io/thermal_run.hpp"
 
 #include "lmcal/error.hpp"
+#include "lmcal/io/limits.hpp"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
@@ -136,11 +137,11 @@ TEST_F(ThermalRunTest, WriterUsesCanonicalUnits) {
 }
 
 TEST_F(ThermalRunTest, LongTraceCrossesChunkBoundariesIntact) {
-  // ~7 MB: several of the reader's 1 MiB chunks, plus one line longer than a chunk.
+  // ~7 MB: several of the reader's 1 MiB chunks, plus one line of nearly the longest allowed.
   constexpr std::size_t kRows = 200000;
   std::string text = "# long trace\ntime_s,ambient1_C,tc1_C,tc2_C,note\n";
   for (std::size_t i = 0; i < kRows; ++i) {
-    const std::string note = i == 123457 ? std::string(3u << 20, 'x') : "";
+    const std::string note = i == 123457 ? std::string(io::kMaxLineBytes - 100, 'x') : "";
     text +=
         fmt::format("{},{},{},{},{}\n", 5 * i, 20 + 0.001 * static_cast<double>(i % 1000),
                     i % 997 == 0 ? "" : fmt::format("{:.3f}", 25 + 1e-3 * static_cast<double>(i % 5000)), -i % 7, note);

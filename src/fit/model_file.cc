@@ -5,9 +5,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
-#include <sstream>
 
+#include "io/input_file.hpp"
 #include "lmcal/error.hpp"
 #include "lmcal/fit/statistics.hpp"
 
@@ -658,13 +657,10 @@ std::string model_file_toml(const ModelFile& m) {
 
 ModelFile read_model_file(const std::filesystem::path& path) {
   const std::string file = path.string();
-  std::ifstream in(path);
-  if (!in) throw InputError(file, 0, 0, "cannot open the model file");
-  std::stringstream text;
-  text << in.rdbuf();
+  const std::string text = io::read_text_file(path, "the model file");
   toml::table root;
   try {
-    root = toml::parse(text.str(), file);
+    root = toml::parse(text, file);
   } catch (const toml::parse_error& e) {
     fail(file, e.source(), std::string(e.description()));
   }

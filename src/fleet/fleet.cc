@@ -8,12 +8,12 @@
 #include <atomic>
 #include <chrono>
 #include <exception>
-#include <fstream>
 #include <map>
 #include <mutex>
 #include <set>
 #include <thread>
 
+#include "io/input_file.hpp"
 #include "io/manifest.hpp"
 #include "lmcal/error.hpp"
 #include "lmcal/fleet/fleet_record.hpp"
@@ -183,11 +183,6 @@ class ThreadTeam {
   int before_;
 };
 
-std::string read_text(const fs::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
 }  // namespace
 
 std::optional<int> parse_fleet_date(std::string_view text) {
@@ -236,8 +231,9 @@ std::optional<std::string> up_to_date_record(const Fleet& fleet, std::size_t ind
   const fs::path out = options.output_dir / s.id;
   const fs::path file = out / kFleetRecordFile;
   if (!fs::is_regular_file(file)) return std::nullopt;
-  std::string text = read_text(file);
+  std::string text;
   try {
+    text = io::read_text_file(file, "fleet record");
     const FleetRecord r = parse_fleet_record(text);
     if (r.id != s.id || r.options_sha256 != options_hash || r.lmcal_version != LMCAL_VERSION) return std::nullopt;
     if (r.status == "ok" && !fs::is_regular_file(out / "calibration.json")) return std::nullopt;

@@ -1,5 +1,6 @@
 #include "lmcal/io/catalog.hpp"
 
+#include "io/input_file.hpp"
 #include "lmcal/error.hpp"
 
 #include <fmt/format.h>
@@ -10,8 +11,6 @@
 #include <array>
 #include <cctype>
 #include <cmath>
-#include <fstream>
-#include <iterator>
 
 namespace lmcal {
 
@@ -131,6 +130,8 @@ GuideSpec parse_guide(const toml::table& table, std::string_view kind, const std
                    fmt::format("expected a non-empty string '{}' in each [[{}]]", name_key, kind));
   }
   spec.model = model_text->get();
+  if (auto problem = io::name_problem(spec.model))
+    throw error_at(source_name, model->source(), fmt::format("{}: {}", name_key, *problem));
 
   for (const auto& [key, node] : table) {
     if (key.str() == name_key) continue;
@@ -234,12 +235,7 @@ const GuideSpec& find_guide(std::string_view model, const GuideCatalog* user) {
 }
 
 GuideCatalog load_catalog(const std::filesystem::path& file) {
-  std::error_code ec;
-  std::ifstream in(file, std::ios::binary);
-  if (!in || std::filesystem::is_directory(file, ec)) throw InputError(file.string(), 0, 0, "cannot open catalog file");
-  const std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-  if (in.bad()) throw InputError(file.string(), 0, 0, "cannot open catalog file");
-  return parse_catalog(text, file.string());
+  return parse_catalog(io::read_text_file(file, "catalog file"), file.string());
 }
 
 const GuideCatalog& builtin_catalog() {

@@ -13,7 +13,9 @@
 #include <limits>
 #include <map>
 
+#include "io/input_file.hpp"
 #include "lmcal/error.hpp"
+#include "lmcal/io/limits.hpp"
 
 namespace lmcal::csv {
 
@@ -21,8 +23,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// Large enough that fread and the tail move are noise; a longer line grows the buffer.
-constexpr std::size_t kChunkBytes = std::size_t{1} << 20;
+// Large enough that fread and the tail move are noise, and the longest line allowed: a
+// longer one is refused when it fills the buffer.
+constexpr std::size_t kChunkBytes = io::kMaxLineBytes;
 constexpr double kAbsoluteZero_C = -273.15;
 
 bool is_space(char c) { return c == ' ' || c == '\t'; }
@@ -89,12 +92,9 @@ bool plain_decimal(const char* p, const char* end, double& out) {
 // ---- Reader -------------------------------------------------------------------------------
 
 Reader::Reader(const fs::path& file) : file_(file.string()) {
-  std::error_code ec;
-  if (fs::is_directory(file, ec)) throw InputError(file_, 0, 0, "cannot read: this is a folder, not a file");
+  file_size_ = io::check_input_file(file, io::kMaxCsvBytes, "file");
   stream_.reset(std::fopen(file.c_str(), "rb"));
   if (!stream_) throw InputError(file_, 0, 0, fmt::format("cannot open file: {}", std::strerror(errno)));
-  file_size_ = fs::file_size(file, ec);
-  if (ec) file_size_ = 0;  // a pipe: estimated_rows() then only looks at the first chunk
   buffer_.resize(kChunkBytes);
 }
 
@@ -105,22 +105,30 @@ bool Reader::refill() {
   if (tail != 0 && pos_ != 0) std::memmove(buffer_.data(), buffer_.data() + pos_, tail);
   pos_ = 0;
   end_ = tail;
-  if (end_ == buffer_.size()) buffer_.resize(2 * buffer_.size());  // one line longer than the buffer
+  if (end_ == buffer_.size()) {
+    // One line fills the buffer: memory stays bounded by refusing it rather than growing.
+    fail_at(line_ + 1, 1,
+            fmt::format("line longer than {} (the limit, docs/formats.md#limits): expected the lines of a CSV file",
+                        io::byte_size(io::kMaxLineBytes)));
+  }
   const std::size_t wanted = buffer_.size() - end_;
   const std::size_t got = std::fread(buffer_.data() + end_, 1, wanted, stream_.get());
   if (got < wanted) {
-    if (std::ferror(stream_.get())) throw InputError(file_, 0, 0, "read error");
+    if (std::ferror(stream_.get())) throw InputError(file_, 0, 0, fmt::format("read error: {}", std::strerror(errno)));
     at_eof_ = true;
   }
   end_ += got;
   bytes_read_ += got;
+  if (bytes_read_ > io::kMaxCsvBytes) {
+    fail_at(line_ + 1, 1, fmt::format("the file grew beyond the limit of {} while it was read", io::byte_size(io::kMaxCsvBytes)));
+  }
   return got != 0;
 }
 
 bool Reader::next_line() {
   for (;;) {
     const char* begin = buffer_.data() + pos_;
-    if (const void* nl = std::memchr(begin, '\n', end_ - pos_)) {
+    if (const void* nl = std::memchr(begin, eol_, end_ - pos_)) {
       line_begin_ = begin;
       line_end_ = static_cast<const char*>(nl);
       pos_ = static_cast<std::size_t>(line_end_ - buffer_.data()) + 1;
@@ -205,10 +213,18 @@ void Reader::read_header() {
   refill();
   // A UTF-8 byte-order mark (spreadsheet exports) is not part of the first header cell.
   if (end_ >= 3 && std::memcmp(buffer_.data(), "\xEF\xBB\xBF", 3) == 0) pos_ = 3;
+  // Lines end in "\n" or "\r\n"; a file with '\r' but no '\n' in its first chunk ends them
+  // in '\r' alone (old Mac and some instrument exports).
+  const std::string_view first(buffer_.data(), end_);
+  if (first.find('\n') == std::string_view::npos && first.find('\r') != std::string_view::npos) eol_ = '\r';
   while (next_line()) {
     if (is_skipped(line_begin_, line_end_)) continue;
     header_line_ = line_;
     split();
+    if (cells_.size() > io::kMaxColumns) {
+      fail(io::kMaxColumns, fmt::format("{} columns; at most {} are read (the limit, docs/formats.md#limits)", cells_.size(),
+                                        io::kMaxColumns));
+    }
     if (cells_.size() == 1) {
       const std::string_view line(line_begin_, static_cast<std::size_t>(line_end_ - line_begin_));
       const auto semicolons = std::count(line.begin(), line.end(), ';');
@@ -220,7 +236,10 @@ void Reader::read_header() {
       }
     }
     std::string scratch;
-    for (std::size_t i = 0; i < cells_.size(); ++i) header_.emplace_back(text(i, scratch));
+    for (std::size_t i = 0; i < cells_.size(); ++i) {
+      header_.emplace_back(text(i, scratch));
+      if (auto problem = io::name_problem(header_.back())) fail(i, "column name: " + *problem);
+    }
     return;
   }
   fail_at(0, 0, "empty file; expected a header line");
@@ -229,6 +248,11 @@ void Reader::read_header() {
 bool Reader::next() {
   while (next_line()) {
     if (is_skipped(line_begin_, line_end_)) continue;
+    if (++rows_ > io::kMaxRows) {
+      fail_at(line_, 1, fmt::format("more than {} data rows in one file (the limit, docs/formats.md#limits): split the "
+                                    "log into several files listed in a manifest",
+                                    io::kMaxRows));
+    }
     split();
     if (cells_.size() > header_.size()) {
       fail(header_.size(), fmt::format("expected {} cells as in the header, found {}{}", header_.size(), cells_.size(),
@@ -357,16 +381,25 @@ void Reader::fail_at(long line, long column, const std::string& what) const {
 }
 
 std::size_t Reader::estimated_rows() const {
-  const char* rest = buffer_.data() + pos_;
+  // Data lines only: a file of blank lines around one row must not reserve for millions.
+  const char* p = buffer_.data() + pos_;
+  const char* const end = buffer_.data() + end_;
+  std::size_t lines = 0;
+  while (p != end) {
+    const char* nl = static_cast<const char*>(std::memchr(p, eol_, static_cast<std::size_t>(end - p)));
+    const char* line_end = nl ? nl : end;
+    const char* content_end = line_end != p && line_end[-1] == '\r' ? line_end - 1 : line_end;
+    lines += !is_skipped(p, content_end);
+    p = nl ? nl + 1 : end;
+  }
   const std::size_t rest_bytes = end_ - pos_;
-  const auto lines = static_cast<std::size_t>(std::count(rest, rest + rest_bytes, '\n'));
-  if (at_eof_) return lines + 1;
+  if (at_eof_) return lines;
   const std::uintmax_t consumed = bytes_read_ - rest_bytes;
   if (lines == 0 || file_size_ <= consumed) return lines;
   // A little above the extrapolation, so that one reserve() usually suffices.
   const double rows =
       static_cast<double>(file_size_ - consumed) * static_cast<double>(lines) / static_cast<double>(rest_bytes);
-  return static_cast<std::size_t>(rows * 1.03) + 16;
+  return std::min(static_cast<std::size_t>(rows * 1.03) + 16, io::kMaxRows);
 }
 
 // ---- Names with units ---------------------------------------------------------------------

@@ -3,7 +3,8 @@
 //
 // The reader walks the file in large chunks; a row is a set of views into the chunk
 // (valid until the next call to next()), so no string is built per line or per cell.
-// Lines starting with '#' and blank lines are skipped; "\r\n" ends a line like "\n".
+// Lines starting with '#' and blank lines are skipped; "\r\n" ends a line like "\n", and so does
+// '\r' alone in a file without '\n'. The limits of lmcal/io/limits.hpp are checked as the file is read.
 // Text cells may be quoted ("a ""b""", no line breaks inside). Numbers are parsed with
 // fast_float, after an exact shortcut for plain decimals like "24.013" (most cells; see
 // plain_decimal in the .cc); "nan"/"NaN" and an empty cell both read as missing (NaN).
@@ -119,7 +120,9 @@ class Reader {
   std::vector<char> buffer_;
   std::size_t pos_ = 0, end_ = 0;  // unread part of buffer_
   bool at_eof_ = false;
+  char eol_ = '\n';       // '\r' for a file whose lines end in a bare CR
   long line_ = 0;
+  std::size_t rows_ = 0;  // data rows so far
   const char* line_begin_ = nullptr;
   const char* line_end_ = nullptr;  // without the line break
   std::vector<std::string_view> cells_;

@@ -11,9 +11,11 @@
 
 #include "io/csv_reader.hpp"
 #include "io/friction_files.hpp"
+#include "io/input_file.hpp"
 #include "io/raw_friction.hpp"
 #include "lmcal/error.hpp"
 #include "lmcal/io/csv_writer.hpp"
+#include "lmcal/io/limits.hpp"
 
 namespace lmcal {
 
@@ -81,6 +83,7 @@ class NameIndex {
     last_ = it->second;
     return it->second;
   }
+  std::size_t size() const { return names_.size(); }
 
  private:
   std::vector<std::string>& names_;
@@ -307,14 +310,31 @@ class FileLoader {
     return c && (c->*field) ? *(c->*field) : fallback;
   }
 
+  // The index of a run or guide name; a name seen for the first time is checked (UTF-8,
+  // printable) and counted against the limit.
+  std::uint32_t name_index(NameIndex& names, const csv::Column& column, std::string_view name, std::string_view what) {
+    const std::size_t known = names.size();
+    const std::uint32_t index = names(name);
+    if (names.size() != known) {
+      if (auto problem = io::name_problem(name)) reader_.fail(column.cell, fmt::format("{} name: {}", what, *problem));
+      if (names.size() > io::kMaxRuns) {
+        reader_.fail(column.cell, fmt::format("more than {} {}s in one data set (the limit, docs/formats.md#limits)",
+                                              io::kMaxRuns, what));
+      }
+    }
+    return index;
+  }
+
   void read_row(std::string& scratch) {
     if (!column(kRun) && !file_run_) file_run_ = runs_(file_.run);
-    const std::uint32_t run_index = column(kRun) ? runs_(name_cell(reader_, *column(kRun), scratch)) : *file_run_;
+    const std::uint32_t run_index =
+        column(kRun) ? name_index(runs_, *column(kRun), name_cell(reader_, *column(kRun), scratch), "run") : *file_run_;
     const FrictionRunConditions* given = manifest_conditions(run_index);
     // An empty guide cell: the run's guide from the manifest, or none (a log lmcal writes for
     // samples of which only some name a guide).
     const std::string_view guide = column(kGuide) ? reader_.text(column(kGuide)->cell, scratch) : std::string_view();
-    const std::uint32_t guide_index = guide.empty() ? run_guide(run_index, given) : guides_(guide);
+    const std::uint32_t guide_index =
+        guide.empty() ? run_guide(run_index, given) : name_index(guides_, *column(kGuide), guide, "guide");
     const double t = column(kTime) ? reader_.number(*column(kTime), false) : kNaN;
     const FrictionConditions<double> c{
         .load_N = condition(kLoad, &FrictionRunConditions::load_N, given),

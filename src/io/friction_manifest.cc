@@ -202,8 +202,7 @@ FrictionDataSet load_friction_dataset(const fs::path& manifest_file, const Guide
     } else if (k == "raw") {
       set.raw = read_raw(m, manifest::table_of(m, node, "[raw]"));
     } else if (k == "run") {
-      runs = node.as_array();
-      if (!runs || !runs->is_array_of_tables()) m.fail(node.source(), "expected [[run]] tables");
+      runs = &manifest::run_tables(m, node);
     } else {
       m.fail(key.source(), fmt::format("unknown key '{}'; known: name, description, catalog, file, raw, run", k));
     }

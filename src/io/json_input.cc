@@ -3,10 +3,9 @@
 #include <fmt/format.h>
 
 #include <cmath>
-#include <fstream>
-#include <iterator>
 
 #include "io/file_kind.hpp"
+#include "io/input_file.hpp"
 #include "lmcal/error.hpp"
 
 namespace lmcal::io {
@@ -95,9 +94,7 @@ bool JsonFile::flag(const nlohmann::json& parent, const std::string& key, const 
 }
 
 JsonFile read_json_file(const std::filesystem::path& file, const std::string& expected) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw InputError(file.string(), 0, 0, "cannot open " + expected);
-  const std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  const std::string text = read_text_file(file, expected);
   JsonFile out{file.string(), {}};
   try {
     out.root = nlohmann::json::parse(text);

@@ -3,13 +3,13 @@
 #include <fmt/format.h>
 
 #include <cmath>
-#include <fstream>
-#include <iterator>
 #include <utility>
 
 #include "io/csv_reader.hpp"
 #include "io/file_kind.hpp"
+#include "io/input_file.hpp"
 #include "lmcal/error.hpp"
+#include "lmcal/io/limits.hpp"
 
 namespace lmcal::manifest {
 
@@ -28,11 +28,7 @@ void Manifest::fail(const toml::source_region& where, const std::string& what) c
 }
 
 toml::table Manifest::parse() const {
-  std::error_code ec;
-  std::ifstream in(file, std::ios::binary);
-  if (!in || fs::is_directory(file, ec)) throw InputError(file, 0, 0, "cannot open manifest file");
-  const std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-  if (in.bad()) throw InputError(file, 0, 0, "cannot read manifest file");
+  const std::string text = io::read_text_file(file, "manifest file");
   try {
     return toml::parse(text, file);
   } catch (const toml::parse_error& e) {
@@ -46,10 +42,11 @@ toml::table Manifest::parse() const {
 fs::path Manifest::existing_file(const toml::node& where, const std::string& name) const {
   const fs::path path = folder / name;
   std::error_code ec;
-  if (!fs::is_regular_file(path, ec)) {
+  if (!fs::exists(path, ec)) {
     fail(where.source(),
          fmt::format("file '{}' not found (looked in {})", name, folder.empty() ? std::string(".") : folder.string()));
   }
+  if (auto problem = io::not_a_file(path)) fail(where.source(), fmt::format("file '{}': {}", name, *problem));
   return path;
 }
 
@@ -73,6 +70,8 @@ double converted_number_of(const Manifest& m, const toml::key& key, const toml::
 const std::string& string_of(const Manifest& m, const toml::key& key, const toml::node& node) {
   const auto* s = node.as_string();
   if (!s) m.fail(node.source(), fmt::format("expected a string for {}", key.str()));
+  // Every string a manifest gives is a name or a file name that reaches outputs and terminals.
+  if (auto problem = io::name_problem(s->get(), key.str() == "description")) m.fail(node.source(), fmt::format("{}: {}", key.str(), *problem));
   return s->get();
 }
 
@@ -80,6 +79,16 @@ const toml::table& table_of(const Manifest& m, const toml::node& node, std::stri
   const auto* t = node.as_table();
   if (!t) m.fail(node.source(), fmt::format("expected a table {}", where));
   return *t;
+}
+
+const toml::array& run_tables(const Manifest& m, const toml::node& node) {
+  const auto* runs = node.as_array();
+  if (!runs || !runs->is_array_of_tables()) m.fail(node.source(), "expected [[run]] tables");
+  if (runs->size() > io::kMaxRuns) {
+    m.fail((*runs)[io::kMaxRuns].source(),
+           fmt::format("more than {} [[run]] tables (the limit, docs/formats.md#limits)", io::kMaxRuns));
+  }
+  return *runs;
 }
 
 std::optional<Conversion> unit_key(const Manifest& m, const toml::key& key, std::string_view base, Quantity quantity) {

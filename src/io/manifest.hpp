@@ -39,9 +39,13 @@ double number_of(const Manifest& m, const toml::key& key, const toml::node& node
 // The key's number in internal units; refused at the value when the conversion overflows
 // (load_kN = 1e306 is finite as written, infinite in newtons).
 double converted_number_of(const Manifest& m, const toml::key& key, const toml::node& node, const Conversion& conversion);
+// A string value, checked with io::name_problem (line breaks and tabs allowed only for the
+// free text of a `description`).
 const std::string& string_of(const Manifest& m, const toml::key& key, const toml::node& node);
 // `where` names the table in messages: "[run.sensors_m]".
 const toml::table& table_of(const Manifest& m, const toml::node& node, std::string_view where);
+// The [[run]] tables of a manifest, at most kMaxRuns of them (lmcal/io/limits.hpp).
+const toml::array& run_tables(const Manifest& m, const toml::node& node);
 
 // The conversion of a key with a unit suffix that names `base` ("velocity_mm_s" for
 // "velocity"), nullopt for a key that names something else. A missing or unknown unit is an

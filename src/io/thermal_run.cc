@@ -596,8 +596,7 @@ ThermalDataSet load_thermal_dataset(const fs::path& manifest, const GuideCatalog
       string_of(m, key, node);
       catalog = &node;
     } else if (key.str() == "run") {
-      runs = node.as_array();
-      if (!runs || !runs->is_array_of_tables()) m.fail(node.source(), "expected [[run]] tables");
+      runs = &manifest::run_tables(m, node);
     } else {
       m.fail(key.source(), fmt::format("unknown key '{}'; known: name, description, catalog, run", key.str()));
     }

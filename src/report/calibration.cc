@@ -7,6 +7,7 @@
 
 #include "diagnose/selection.hpp"
 #include "fit/fit_json.hpp"
+#include "io/input_file.hpp"
 #include "lmcal/error.hpp"
 #include "lmcal/version.hpp"
 #include "lmcal/fit/model_file.hpp"
@@ -57,6 +58,7 @@ CalibrationSet find_calibration_set(const fs::path& dir) {
   CalibrationSet set;
   set.dir = dir;
   set.name = fs::weakly_canonical(dir).filename().string();
+  io::check_path_name(fs::weakly_canonical(dir), "folder name");
   std::vector<fs::path> manifests, friction_manifests;
   for (const auto& entry : fs::directory_iterator(dir)) {
     if (!entry.is_regular_file()) continue;
