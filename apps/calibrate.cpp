@@ -26,6 +26,7 @@ struct CalibrateOptions {
   std::string output_dir;  // empty: fits/<set name>
   CalibrationCliOptions calibration;
   bool timings = false;  // --timings: each step's wall time on stderr
+  bool keep_unusable = false;
 };
 
 // Wall time of each step, printed on stderr when asked (--timings): where a slow calibration
@@ -70,6 +71,8 @@ void run_calibrate(CalibrateOptions& o) {
                                          progress.step(i, n, name);
                                        },
                                    .detail = progress.detail_callback()});
+  progress.clear();
+  require_usable(unusable_headline(c), o.keep_unusable);
   times.start("writing the outputs");
   const std::filesystem::path dir = o.output_dir.empty() ? std::filesystem::path("fits") / set.name : std::filesystem::path(o.output_dir);
   const std::string written = write_outputs(dir, calibration_outputs(c), calibration_output_names());
@@ -92,6 +95,7 @@ void setup_calibrate(CLI::App& app) {
       ->required();
   calibrate->add_option("-o,--output-dir", o->output_dir, "Output folder (default: fits/<folder name>)");
   calibrate->add_flag("--timings", o->timings, "Print each step's wall time on stderr");
+  add_keep_unusable(*calibrate, o->keep_unusable);
   o->calibration.add_to(*calibrate);
   calibrate->callback([o] { run_calibrate(*o); });
 }

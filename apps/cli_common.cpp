@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <charconv>
+#include <iostream>
 #include <cmath>
 
 #include "lmcal/error.hpp"
@@ -40,6 +41,18 @@ std::vector<std::string_view> split(std::string_view text, char separator) {
 }
 
 }  // namespace
+
+void add_keep_unusable(CLI::App& app, bool& keep) {
+  app.add_flag("--keep-unusable", keep,
+               "Write the outputs of a fit that gives no usable answer (non-finite residuals, no degree of freedom "
+               "left, a failed solver) and exit 0; without it such a run writes nothing and exits with status 4");
+}
+
+void require_usable(const std::optional<std::string>& why, bool keep) {
+  if (!why) return;
+  if (!keep) throw UnusableFit(*why + "; nothing was written (--keep-unusable writes the outputs anyway)");
+  std::cerr << "lmcal: warning: " << *why << " (kept: --keep-unusable)\n";
+}
 
 std::string plural(std::size_t n, std::string_view noun) { return fmt::format("{} {}{}", n, noun, n == 1 ? "" : "s"); }
 

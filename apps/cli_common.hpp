@@ -42,6 +42,7 @@ nlohmann::json run_record(const std::vector<std::string>& argv);
 #include <functional>
 #include <map>
 #include <optional>
+#include <stdexcept>
 
 #include <CLI/CLI.hpp>
 
@@ -52,6 +53,18 @@ nlohmann::json run_record(const std::vector<std::string>& argv);
 #include "lmcal/models/friction.hpp"
 
 namespace lmcal::cli {
+
+// A fit that gives no answer to use (SolverReport::usable false): its own exit status
+// (kExitUnusable), nothing written, unless the user asked to keep it.
+class UnusableFit : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+// --keep-unusable, on every command that fits.
+void add_keep_unusable(CLI::App& app, bool& keep);
+// Throws UnusableFit for `why` (what is not usable, and the reason) unless `keep`; with `keep`
+// a warning on stderr. Call it before writing the outputs.
+void require_usable(const std::optional<std::string>& why, bool keep);
 
 // The help of every --catalog option.
 inline constexpr const char* kCatalogHelp =

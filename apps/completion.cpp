@@ -113,6 +113,7 @@ std::string man_page(const CLI::App& root) {
   }
   page += ".SH EXIT STATUS\n.TP\n0\ndone\n.TP\n1\ninput refused: a file, a value in it, or an option's value\n.TP\n2\n"
           "usage: an unknown command or option, a missing or malformed argument\n.TP\n3\nan internal failure (a bug)\n"
+          ".TP\n4\na fit that gives no usable answer (nothing written unless --keep-unusable)\n"
           ".SH SEE ALSO\nThe README of lmcal; docs/formats.md (the file formats).\n";
   return page;
 }

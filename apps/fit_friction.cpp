@@ -35,6 +35,7 @@ struct FitFrictionOptions {
   int starts = 8;
   std::uint64_t seed = 1;
   bool run_fits = true;
+  bool keep_unusable = false;
   FitOptions uncertainty;  // --covariance, --bootstrap, --profile
 };
 
@@ -68,6 +69,8 @@ void run_fit_friction(const FitFrictionOptions& o, const std::vector<std::string
   const FrictionLog& log = input.log;
   const FitProvenance provenance{o.name, input.inputs, argv};
   const FrictionFitResult result = with_progress("friction fit", [&](const Progress&) { return fit_friction(log, options); });
+  if (!result.fit.solver.usable)
+    require_usable(fmt::format("the friction fit is not usable: {}", result.fit.solver.unusable_reason), o.keep_unusable);
   const std::string written = write_outputs(o.output_dir, friction_fit_files(result, log, options, provenance));
   std::cout << "friction fit '" << o.name << "': " << friction_fit_summary(result);
   std::cout << "wrote " << written << "\n";
@@ -94,6 +97,7 @@ void setup_fit(CLI::App& app, const std::vector<std::string>& argv) {
   friction->add_option("--seed", o->seed, "Seed of the multi-start sequence")->capture_default_str();
   friction->add_flag("!--no-run-fits", o->run_fits, "Skip the per-run fits (spread across runs)");
   add_uncertainty_options(*friction, o->uncertainty);
+  add_keep_unusable(*friction, o->keep_unusable);
   friction->callback([o, &argv] { run_fit_friction(*o, argv); });
   setup_fit_thermal(*fit, argv);
 }

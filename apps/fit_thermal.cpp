@@ -29,6 +29,7 @@ struct FitThermalOptions {
   std::string catalog_file;  // wins over the manifest's `catalog`
   ThermalModelOptions model;
   ThermalFitOptions fit;
+  bool keep_unusable = false;
 };
 
 void run_fit_thermal(FitThermalOptions& o, const std::vector<std::string>& argv) {
@@ -42,6 +43,8 @@ void run_fit_thermal(FitThermalOptions& o, const std::vector<std::string>& argv)
   for (const auto& run : data.runs) inputs.emplace_back(run.file.string(), sha256_file(run.file));
 
   const ThermalFitResult result = with_progress("thermal fit", [&](const Progress&) { return fit_thermal(data, f); });
+  if (!result.joint.solver.usable)
+    require_usable(fmt::format("the thermal fit is not usable: {}", result.joint.solver.unusable_reason), o.keep_unusable);
   const std::string written = write_outputs(o.output_dir, thermal_fit_files(result, f, inputs, argv, o.name));
   std::cout << "thermal fit '" << o.name << "' (" << to_string(f.source) << " source): " << thermal_fit_summary(result);
   std::cout << "wrote " << written << "\n";
@@ -66,6 +69,7 @@ void setup_fit_thermal(CLI::App& fit, const std::vector<std::string>& argv) {
   app->add_flag("!--no-run-fits", o->fit.per_run_fits, "Skip the per-run fits");
   app->add_flag("!--no-source-comparison", o->fit.compare_sources, "Skip the paper/averaged comparison");
   add_uncertainty_options(*app, o->fit.fit);
+  add_keep_unusable(*app, o->keep_unusable);
   app->callback([o, &argv] { run_fit_thermal(*o, argv); });
 }
 

@@ -59,6 +59,9 @@ int main(int argc, char** argv) {
     }
   } catch (const CLI::ParseError& e) {
     return lmcal::cli::report_parse_error(app, e, args);
+  } catch (const lmcal::cli::UnusableFit& e) {
+    std::cerr << "lmcal: error: " << e.what() << "\n";
+    return lmcal::cli::kExitUnusable;
   } catch (const lmcal::InputError& e) {
     std::cerr << "lmcal: error: " << e.what() << "\n";
     return lmcal::cli::kExitInput;

@@ -18,7 +18,7 @@
 
 namespace lmcal::cli {
 
-inline constexpr int kExitInput = 1, kExitUsage = 2, kExitInternal = 3;
+inline constexpr int kExitInput = 1, kExitUsage = 2, kExitInternal = 3, kExitUnusable = 4;
 
 // The known names nearest to `given` (at most 3): those it begins, else those at the least edit
 // distance within a third of its length (at least 2); none when nothing is near.

@@ -388,6 +388,24 @@ printf '[calibrate]\nstarts = 4\nlrtp = 0.01\n' >options.toml
 check "a config file's unknown key is refused where it is" \
   exits_with 2 "options.toml:3:1: unknown key 'calibrate.lrtp'; did you mean 'calibrate.lrt-p'?" --config options.toml calibrate x
 check "a missing folder is an input error (1)" exits_with 1 "nowhere: expected a measurement folder" calibrate nowhere
+check "a device is refused before a byte is read" exits_with 1 "/dev/zero: cannot open file: this is a device" check friction /dev/zero
+printf 'run,velocity_m_s,load_N,preload_um,block_length_mm,temperature_C,friction_N\na,0.01,3000,4,120,25,20\na,0.1,3000,4,120,30,30\nb,0.05,1000,4,120,25,15\nb,0.2,2000,4,120,35,35\nc,0.02,3000,8,120,28,25\n' >five_rows.csv
+unusable_writes_nothing() {
+  exits_with 4 "the friction fit is not usable: no degree of freedom left: 5 residuals for 7 free parameters; nothing was written" \
+    fit friction five_rows.csv -o unusable && test ! -e unusable
+}
+check "a fit with no degree of freedom left exits 4, writing nothing" unusable_writes_nothing
+keeps_unusable() {
+  "$LMCAL" fit friction five_rows.csv -o kept --keep-unusable >/dev/null 2>stderr.txt &&
+    grep -q "lmcal: warning: the friction fit is not usable" stderr.txt &&
+    python3 -c 'import json,sys; s = json.load(open("kept/friction.json"))["solver"]; assert not s["usable"] and "degree of freedom" in s["unusable_reason"]'
+}
+check "--keep-unusable writes it, marked, and exits 0" keeps_unusable
+python3 -c 'import json,sys; d = json.load(open(sys.argv[1])); [p.update(value=1e308) for p in d["parameters"] if p["name"] == "mu_st"]; json.dump(d, open("huge_mu_st.json", "w"))' \
+  "$SOURCE/fits/cheng2017/friction.json"
+check "friction constants that give no finite heat are refused, naming the run" \
+  exits_with 1 "v066_r1: its heat rate is not finite (from the friction law (fitted constants))" \
+  fit thermal "$SOURCE/measurements/cheng2017/thermal.toml" --friction huge_mu_st.json -o out
 
 # Shell completion and the man page, generated from the command tree.
 "$LMCAL" completion bash >completion.bash

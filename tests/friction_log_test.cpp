@@ -70,11 +70,12 @@ FrictionLog awkward_log() {
     log.run.push_back(i < 3 ? 0 : 1);
     log.guide.push_back(i % 2);
     log.time_s.push_back(i < 3 ? 0.1 * static_cast<double>(i) : 1.0 / 3.0 * static_cast<double>(i));
-    log.velocity_m_s.push_back(values[i] * 0.1);
+    // Scaled into the ranges a rig's values take (units.hpp physical_range).
+    log.velocity_m_s.push_back(values[i] * 1e-3);
     log.load_N.push_back(3000 + values[i]);
-    log.preload_um.push_back(values[(i + 1) % 6]);
+    log.preload_um.push_back(0.01 * values[(i + 1) % 6]);
     log.block_length_mm.push_back(120.2 + values[i]);
-    log.temperature_C.push_back(i == 0 ? -0.0 : 20 + values[(i + 2) % 6]);
+    log.temperature_C.push_back(i == 0 ? -0.0 : 20 + 0.01 * values[(i + 2) % 6]);
     log.friction_N.push_back(44.2 + values[(i + 3) % 6]);
     log.viscosity40_mm2_s.push_back(99 + values[i]);
     log.direction.push_back(i % 3 ? 1 : -1);

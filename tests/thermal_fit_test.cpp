@@ -242,7 +242,7 @@ TEST(ThermalFit, ARunOfAFewRecordsIsRefused) {
     fit_thermal(data, options_for_rig());
     FAIL() << "fitted a run of three records";
   } catch (const InvalidParameter& e) {
-    EXPECT_NE(std::string(e.what()).find("3 records to fit"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("3 records with a thermocouple value to fit"), std::string::npos) << e.what();
     EXPECT_EQ(e.parameter(), data.runs[0].id);
   }
 }

@@ -3,6 +3,7 @@
 // chunk boundaries. Refused input is covered by the bad-input corpus (bad_input_test.cpp).
 #include "lmcal/io/thermal_run.hpp"
 
+#include "io/csv_reader.hpp"
 #include "lmcal/error.hpp"
 #include "lmcal/io/limits.hpp"
 
@@ -186,18 +187,24 @@ TEST_F(ThermalRunTest, NumbersReadExactlyLikeStrtod) {
   unsigned state = 1;
   for (int i = 0; i < 3000; ++i) {
     state = state * 1664525u + 1013904223u;
-    const double x = (static_cast<double>(state >> 8) / 16777216.0 - 0.3) *
-                     std::pow(10.0, i % 6 - 3);  // above -273.15: a temperature
+    const double x = (static_cast<double>(state >> 8) / 16777216.0 - 0.3) * std::pow(10.0, i % 6 - 3);
     cells.push_back(fmt::format("{:.{}f}", x, i % 16));
   }
-  std::string text = "time_s,ambient1_C,tc1_C\n";
-  for (std::size_t i = 0; i < cells.size(); ++i) text += fmt::format("{},{},0\n", i, cells[i]);
-  const ThermalTrace trace = load_thermal_trace(write("numbers.csv", text));
-  ASSERT_EQ(trace.size(), cells.size());
-  for (std::size_t i = 0; i < cells.size(); ++i) {
-    EXPECT_TRUE(same_bits(trace.ambient[0].values[i], std::strtod(cells[i].c_str(), nullptr)))
-        << "'" << cells[i] << "'";
+  // Through the reader with a column of no unit and no range (a loader's columns refuse values
+  // beyond a rig's, such as 123456789012345 °C).
+  std::string text = "x\n";
+  for (const std::string& cell : cells) text += cell + "\n";
+  csv::Reader reader(write("numbers.csv", text));
+  reader.read_header();
+  const csv::ColumnSpec spec[] = {{.name = "x"}};
+  LoadReport report;
+  const std::vector<csv::Column> columns = csv::bind_header(reader, spec, report);
+  ASSERT_EQ(columns.size(), 1u);
+  for (const std::string& cell : cells) {
+    ASSERT_TRUE(reader.next());
+    EXPECT_TRUE(same_bits(reader.number(columns[0], false), std::strtod(cell.c_str(), nullptr))) << "'" << cell << "'";
   }
+  EXPECT_FALSE(reader.next());
 }
 
 TEST_F(ThermalRunTest, ErrorsDeepInALongFileHaveTheRightLine) {
@@ -217,10 +224,10 @@ TEST_F(ThermalRunTest, ErrorsDeepInALongFileHaveTheRightLine) {
 // records over 10^12 s crashed the solver), and a value that overflows in internal units.
 TEST_F(ThermalRunTest, ARunTooLongAndATimeInfiniteInSecondsAreRefusedAtTheirCell) {
   try {
-    load_thermal_trace(write("span.csv", "time_s,ambient1_C,tc1_C\n0,24,24\n5e11,24,24.1\n1e12,24,24.2\n"));
-    FAIL() << "accepted a run of 10^12 s";
+    load_thermal_trace(write("span.csv", "time_s,ambient1_C,tc1_C\n0,24,24\n5e6,24,24.1\n2e7,24,24.2\n"));
+    FAIL() << "accepted a run of 2·10^7 s";
   } catch (const InputError& e) {
-    EXPECT_EQ(e.line(), 3);
+    EXPECT_EQ(e.line(), 4);
     EXPECT_EQ(e.column(), 1);
     EXPECT_NE(std::string(e.what()).find("at most 1e+07 s"), std::string::npos) << e.what();
   }

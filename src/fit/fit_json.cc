@@ -123,6 +123,7 @@ nlohmann::json fit_json(const FitResult& fit) {
           {"solver",
            {{"converged", s.converged},
             {"usable", s.usable},
+            {"unusable_reason", s.unusable_reason},
             {"iterations", s.iterations},
             {"termination", s.termination},
             {"initial_cost", s.initial_cost},

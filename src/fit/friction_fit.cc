@@ -376,7 +376,7 @@ FrictionFitResult fit_friction(const FrictionLog& log, const FrictionFitOptions&
     out.deviance_ss = random ? variance.deviance_ss : ss_w;
     out.run_offset_ratio = random ? variance.ratio : 0.0;
   }
-  if (options.cross_validate && runs >= 2 && options.fit.loss == RobustLoss::none && final_state.jacobian.rows() > 0) {
+  if (options.cross_validate && runs >= 2 && options.fit.loss == RobustLoss::none && out.fit.solver.usable) {
     std::vector<bool> held;
     // A parameter on its bound stays there: a held-out step must not carry it across (a drag below 0).
     for (const auto& p : out.fit.parameters) held.push_back(!p.free || p.held_unidentifiable || p.at_bound);
@@ -483,7 +483,7 @@ FrictionFitResult fit_friction(const FrictionLog& log, const FrictionFitOptions&
 
   // Every run alone, from the pooled estimate, holding what the pooled fit held.
   out.runs = log.run_names;
-  if (options.per_run_fits && log.run_names.size() >= 2) {
+  if (options.per_run_fits && log.run_names.size() >= 2 && out.fit.solver.usable) {
     auto run_specs = specs;
     for (std::size_t j = 0; j < specs.size(); ++j) {
       run_specs[j].start = out.fit.parameters[j].value;

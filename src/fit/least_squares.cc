@@ -266,6 +266,15 @@ Polish linear_solve(const LeastSquaresModel& model, const ceres::CostFunction& c
   std::vector<Eigen::Index> free;
   for (std::size_t j = 0; j < specs.size(); ++j)
     if (!held[j]) free.push_back(static_cast<Eigen::Index>(j));
+  if (free.empty()) {  // nothing to solve for: a QR of no columns is not a decomposition
+    Polish out;
+    out.theta = theta;
+    out.residuals = r0;
+    out.summary.termination_type = ceres::CONVERGENCE;
+    out.summary.initial_cost = out.summary.final_cost = 0.5 * r0.squaredNorm();
+    out.summary.message = out.brief = "no free parameters: nothing to solve for";
+    return out;
+  }
   Eigen::MatrixXd Jf(J.rows(), static_cast<Eigen::Index>(free.size()));
   for (std::size_t k = 0; k < free.size(); ++k) Jf.col(static_cast<Eigen::Index>(k)) = J.col(free[k]);
   Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(Jf);
@@ -494,15 +503,20 @@ Eigen::VectorXd evaluate_residuals(const LeastSquaresModel& model, const std::ve
   const auto cost = model.cost_function(rows, loss);
   const std::size_t n = rows.empty() ? model.num_residuals() : rows.size();
   Eigen::VectorXd r(static_cast<Eigen::Index>(n));
+  const auto check = [&](bool evaluated) {
+    if (!evaluated) throw NonFiniteResiduals("the model could not be evaluated");
+    for (Eigen::Index i = 0; i < r.size(); ++i)
+      if (!std::isfinite(r[i])) throw NonFiniteResiduals(fmt::format("residual {} of {} is {}", i + 1, r.size(), r[i]));
+  };
   if (const auto* columns = dynamic_cast<const NormalEquationsCost*>(cost.get()); columns && jacobian) {
-    LMCAL_ASSERT(columns->residuals_and_jacobian(theta.data(), r, *jacobian), "residual evaluation failed");
+    check(columns->residuals_and_jacobian(theta.data(), r, *jacobian));
     return r;
   }
   Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> J(static_cast<Eigen::Index>(n),
                                                                            static_cast<Eigen::Index>(theta.size()));
   const double* parameters[] = {theta.data()};
   double* jacobians[] = {J.data()};
-  LMCAL_ASSERT(cost->Evaluate(parameters, r.data(), jacobian ? jacobians : nullptr), "residual evaluation failed");
+  check(cost->Evaluate(parameters, r.data(), jacobian ? jacobians : nullptr));
   if (jacobian) *jacobian = J;
   return r;
 }
@@ -657,6 +671,11 @@ Estimate estimate(const LeastSquaresModel& model, const std::vector<ParameterSpe
   for (std::size_t j = 0; j < p; ++j) start[j] = specs[j].start;
   const RowLoss loss{options.loss, options.loss_scale};
   const auto cost = model.cost_function({}, loss);
+  try {
+    evaluate_residuals(model, start, loss);
+  } catch (const NonFiniteResiduals& e) {
+    throw NonFiniteResiduals(std::string(e.what()) + " at the start values");
+  }
 
   // A linear model has one minimum: neither multi-start nor iterations are needed.
   const bool linear = model.linear(held) && options.loss == RobustLoss::none;
@@ -741,7 +760,17 @@ void report_solver(const Estimate& e, const FitOptions& options, FitResult& resu
   const auto& summary = e.fit.summary;
   SolverReport& s = result.solver;
   s.converged = summary.termination_type == ceres::CONVERGENCE;
-  s.usable = summary.IsSolutionUsable();
+  s.usable = summary.IsSolutionUsable() && std::isfinite(summary.final_cost);
+  if (!s.usable) {
+    s.unusable_reason = fmt::format("the solver failed: {}", summary.message);
+  } else if (result.residuals == 0) {
+    s.usable = false;
+    s.unusable_reason = "no residuals: no measured value to fit";
+  } else if (result.free_parameters > 0 && !(result.dof > 0)) {
+    s.usable = false;
+    s.unusable_reason = fmt::format("no degree of freedom left: {} residuals for {} free parameters", result.residuals,
+                                    result.free_parameters);
+  }
   s.iterations = static_cast<int>(summary.iterations.size()) - 1;
   s.termination = ceres::TerminationTypeToString(summary.termination_type);
   s.brief = e.fit.brief;
@@ -855,6 +884,41 @@ void profile_intervals(const LeastSquaresModel& model, const std::vector<Paramet
   }
 }
 
+// A fit whose residuals could not be evaluated (`why`): the start values, no uncertainty, and
+// usable = false with the reason.
+FitResult unusable_fit(const LeastSquaresModel& model, const std::vector<ParameterSpec>& specs, const std::vector<bool>& held,
+                       const std::string& why, FinalState* final_state) {
+  const auto n = static_cast<Eigen::Index>(model.num_residuals());
+  const auto p = static_cast<Eigen::Index>(specs.size());
+  FinalState state;
+  for (const auto& s : specs) state.theta.push_back(s.start);
+  state.held = held;
+  state.residuals = Eigen::VectorXd::Constant(n, kNaN);
+  state.jacobian = Eigen::MatrixXd::Zero(n, p);
+  state.bread = Eigen::MatrixXd::Zero(p, p);
+  state.covariance_message = "no covariance: the residuals are not finite";
+  FitResult result;
+  result.residuals = model.num_residuals();
+  result.free_parameters = free_indices(held).size();
+  result.dof = static_cast<double>(result.residuals) - static_cast<double>(result.free_parameters);
+  result.residual_variance = kNaN;
+  result.parameters = estimates(specs, state);
+  for (auto& e : result.parameters) e.interval = "none";
+  result.covariance = Eigen::MatrixXd::Zero(p, p);
+  result.correlation = Eigen::MatrixXd::Constant(p, p, kNaN);
+  SolverReport& s = result.solver;
+  s.converged = s.usable = false;
+  s.termination = "FAILURE";
+  s.initial_cost = s.final_cost = kNaN;
+  s.remaining_step_se = kNaN;
+  s.covariance_message = state.covariance_message;
+  s.brief = fmt::format("not fitted: {}", why);
+  s.unusable_reason = fmt::format("the residuals are not finite: {}", why);
+  result.warnings.push_back(fmt::format("the fit failed: {} (an input far outside what the model was built for?)", why));
+  if (final_state) *final_state = std::move(state);
+  return result;
+}
+
 }  // namespace
 
 // The fit as a sequence of named steps; each is a function above (uncertainty.cc for step 4).
@@ -866,7 +930,14 @@ FitResult solve_least_squares(const LeastSquaresModel& model, const std::vector<
   result.residuals = model.num_residuals();
 
   const std::vector<bool> held = held_by_design(model, specs, result.identifiability);       // 0
-  Estimate e = estimate(model, specs, options, held, result.identifiability);                 // 1-3
+  Estimate e;
+  try {
+    e = estimate(model, specs, options, held, result.identifiability);                        // 1-3
+  } catch (const NonFiniteResiduals& failure) {
+    result = unusable_fit(model, specs, held, failure.what(), final_state);
+    result.solver.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - clock_start).count();
+    return result;
+  }
   result.free_parameters = free_indices(e.state.held).size();
   result.dof = static_cast<double>(result.residuals) - static_cast<double>(result.free_parameters);
   result.residual_variance = result.dof > 0 ? 2.0 * e.fit.summary.final_cost / result.dof : kNaN;

@@ -20,6 +20,7 @@
 
 #include <Eigen/Core>
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -127,7 +128,15 @@ Eigen::VectorXd leave_group_out_step(const GroupNormalEquations& sums, std::size
 bool covariance_from_jacobian(const Eigen::MatrixXd& J, const std::vector<bool>& held, Eigen::MatrixXd& covariance,
                               std::string& message);
 
+// Thrown by evaluate_residuals when the model cannot be evaluated at θ or a residual is not
+// finite there; solve_least_squares reports it as an unusable fit (never an abort).
+class NonFiniteResiduals : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
 // Residuals r(θ) and, if `jacobian` is given, ∂r/∂θ (rows x parameters), over `rows`.
+// NonFiniteResiduals when they cannot be evaluated or one is not finite.
 Eigen::VectorXd evaluate_residuals(const LeastSquaresModel& model, const std::vector<double>& theta,
                                    const RowLoss& loss = {}, Eigen::MatrixXd* jacobian = nullptr,
                                    const std::vector<std::size_t>& rows = {});

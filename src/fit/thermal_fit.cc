@@ -143,11 +143,15 @@ Prepared prepare_run(const ThermalRun& run, const ThermalFitOptions& o) {
   const ThermalTrace& trace = run.trace;
   if (o.every < 1) throw InvalidParameter("every", 0.0, "at least 1");
   // Fewer records cannot tell the rail's heating course (hours) from the sensors' noise.
+  // A record counts when some thermocouple has a value in it.
   constexpr std::size_t kMinRecords = 10;
-  if ((trace.size() + o.every - 1) / o.every < kMinRecords)
-    throw InvalidParameter(run.id, fmt::format("{} records{} to fit: a thermal run needs at least {} to follow the rail's heating",
-                                               (trace.size() + o.every - 1) / o.every, o.every > 1 ? " kept (--every)" : "",
-                                               kMinRecords));
+  std::size_t records = 0;
+  for (std::size_t i = 0; i < trace.size(); i += o.every)
+    records += std::any_of(trace.rail.begin(), trace.rail.end(), [&](const TemperatureChannel& c) { return std::isfinite(c.values[i]); });
+  if (records < kMinRecords)
+    throw InvalidParameter(run.id, fmt::format("{} records with a thermocouple value{} to fit: a thermal run needs at least {} "
+                                               "to follow the rail's heating",
+                                               records, o.every > 1 ? " kept (--every)" : "", kMinRecords));
   const GuideSpec spec = resolved_guide(run);
   Prepared out;
   PreparedRun& pr = out.run;
@@ -276,6 +280,14 @@ Prepared prepare_run(const ThermalRun& run, const ThermalFitOptions& o) {
   const double Q = !schedule.empty() ? schedule.integral_J(0.0, duration_s) / duration_s
                    : run.heat_rate_W ? *run.heat_rate_W
                                      : friction_heat_W(pr.geometry.velocity_m_s);
+  // A heat no rail takes (friction constants far off, a law giving negative friction) would
+  // only make the rail model's numbers leave the doubles.
+  if (!kHeatRateRange.contains(Q)) {
+    throw InvalidParameter(run.id, fmt::format("its heat rate is {} (from the {}): beyond the {:g} to {:g} W a rig's rail "
+                                               "takes; check the friction constants{}",
+                                               std::isfinite(Q) ? fmt::format("{:g} W", Q) : "not finite", out.info.heat_source, kHeatRateRange.low, kHeatRateRange.high,
+                                               o.friction ? " (--friction)" : " and the run's conditions"));
+  }
   if (!schedule.empty() && std::find(o.extensions.begin(), o.extensions.end(), "coupling") != o.extensions.end())
     throw InvalidParameter(run.id, "the coupling extension cannot follow a heat schedule or a measured power");
   pr.params = rail_material_of(spec);
@@ -759,11 +771,13 @@ ThermalFitResult fit_thermal(const ThermalDataSet& data, const ThermalFitOptions
   detail::FinalState final_state;
   result.joint = detail::solve_least_squares(model, specs, o.fit, &final_state);
   result.sum_of_squares_K2 = final_state.residuals.squaredNorm();
-  add_heat_uncertainty(data, runs, model, final_state, o, result);
-  if (o.cross_validate && runs.size() >= 2 && o.fit.loss == RobustLoss::none)
+  // An unusable fit (it says why) gets nothing built on its estimate.
+  const bool usable = result.joint.solver.usable;
+  if (usable) add_heat_uncertainty(data, runs, model, final_state, o, result);
+  if (usable && o.cross_validate && runs.size() >= 2 && o.fit.loss == RobustLoss::none)
     result.cv_rmse_K = leave_one_run_out_rmse(model, result.joint, final_state);
   std::vector<double> alphas;
-  if (o.per_run_fits && runs.size() >= 2) {
+  if (usable && o.per_run_fits && runs.size() >= 2) {
     ThermalFitOptions one_run = o;  // for the spread across runs: estimates and SEs, no profiles
     one_run.fit.profile = ProfileMode::none;
     for (const auto& run : runs) {
@@ -780,7 +794,7 @@ ThermalFitResult fit_thermal(const ThermalDataSet& data, const ThermalFitOptions
   }
 
   // Source-model dependence: the same data with `paper` against `averaged`.
-  if (o.compare_sources && source_of(o) == o.source && o.source != SourceModel::moving) {
+  if (usable && o.compare_sources && source_of(o) == o.source && o.source != SourceModel::moving) {
     ThermalFitOptions other = o;
     other.source = o.source == SourceModel::paper ? SourceModel::averaged : SourceModel::paper;
     other.per_run_fits = other.compare_sources = false;

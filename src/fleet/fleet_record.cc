@@ -35,12 +35,6 @@ void add_parameters(FleetRecord& r, const char* model, const FitResult& fit) {
   }
 }
 
-void require_usable(FleetRecord& r, const char* what, const FitResult& fit) {
-  if (fit.solver.usable || r.status != "ok") return;
-  r.status = "failed";
-  r.error = fmt::format("the calibrated {} fit is not usable: {}", what, fit.solver.termination);
-}
-
 }  // namespace
 
 const FleetParameter* FleetRecord::find(std::string_view model, std::string_view name) const {
@@ -58,12 +52,14 @@ void fill_fleet_record(FleetRecord& r, const Calibration& c) {
   if (const FrictionFitResult* f = m.friction ? &*m.friction : c.friction ? &*c.friction : nullptr) {
     add_parameters(r, "friction", f->fit);
     r.friction_rmse_N = f->rmse_N;
-    require_usable(r, "friction", f->fit);
   }
   if (const ThermalFitResult* t = m.thermal ? &*m.thermal : c.thermal ? &*c.thermal : nullptr) {
     add_parameters(r, "thermal", t->joint);
     r.thermal_cv_rmse_K = t->cv_rmse_K;
-    require_usable(r, "thermal", t->joint);
+  }
+  if (auto why = unusable_headline(c); why && r.status == "ok") {
+    r.status = "failed";
+    r.error = *why;
   }
   r.friction_causes = m.friction_causes;
   r.thermal_causes = m.thermal_causes;

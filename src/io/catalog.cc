@@ -160,6 +160,13 @@ const std::vector<std::string>& guide_field_names() {
   return names;
 }
 
+std::optional<std::string> guide_field_range_problem(std::string_view name, double value) {
+  const FieldDef* field = find_field(name);
+  if (!field) throw InvalidParameter(std::string(name), "unknown guide field");
+  if (in_range(*field, value)) return std::nullopt;
+  return range_text(*field);
+}
+
 std::optional<double> field_value(const GuideSpec& spec, std::string_view name) {
   const FieldDef* field = find_field(name);
   if (!field)

@@ -293,6 +293,7 @@ double Reader::number(const Column& column, bool allow_missing) const {
   // Finite as written is not enough: 1e306 kN is infinite in newtons.
   if (!std::isfinite(value)) fail_number(column, trim(cell), "a number that stays finite in the column's internal unit");
   if (!satisfies(column.rule, value)) fail_rule(column);
+  if (column.range && !column.range->contains(value)) fail(column.cell, out_of_range_message(column.header, trim(cell), *column.range));
   return value;
 }
 
@@ -441,7 +442,8 @@ std::optional<Column> classify(const Reader& reader, std::size_t cell, std::span
                   .header = header,
                   .name = std::string(spec.name),
                   .rule = spec.rule,
-                  .hint = spec.hint};
+                  .hint = spec.hint,
+                  .range = spec.quantity ? std::optional(physical_range(*spec.quantity)) : spec.range};
     if (!spec.quantity) {
       if (header == spec.name) return column;
       continue;

@@ -46,6 +46,8 @@ struct ColumnSpec {
   bool family = false;               // any number of columns `<name><digits>_<unit>`
   Rule rule = Rule::any;
   std::string_view hint = {};  // appended to range errors, e.g. why a speed is >= 0
+  // Without a quantity: the values a rig gives (with one: the quantity's physical_range).
+  std::optional<PhysicalRange> range = {};
 };
 
 // A header cell bound to a ColumnSpec.
@@ -57,6 +59,7 @@ struct Column {
   Conversion conversion;  // file unit -> internal unit
   Rule rule = Rule::any;
   std::string_view hint;
+  std::optional<PhysicalRange> range;  // in internal units
 };
 
 class Reader {
@@ -83,7 +86,8 @@ class Reader {
   std::string_view cell(std::size_t i) const { return cells_[i]; }
   // Cell i as text: quotes removed and "" unescaped (into `scratch` only when needed).
   std::string_view text(std::size_t i, std::string& scratch) const;
-  // The number in the column's cell in internal units, checked against the column's Rule.
+  // The number in the column's cell in internal units, checked against the column's Rule and
+  // physical range.
   // An empty or NaN cell returns NaN when `allow_missing`, and throws otherwise.
   double number(const Column& column, bool allow_missing) const;
 

@@ -122,7 +122,7 @@ RunEntry read_run(const Manifest& m, const toml::table& table, const GuideCatalo
       const ConditionKey& ck = kConditionKeys[i];
       const auto conversion = manifest::unit_key(m, key, ck.base, ck.quantity);
       if (!conversion) continue;
-      const double value = manifest::converted_number_of(m, key, node, *conversion);
+      const double value = manifest::converted_number_of(m, key, node, *conversion, physical_range(ck.quantity));
       const bool ok = ck.quantity == Quantity::temperature ? value > -273.15
                       : ck.strictly_positive                ? value > 0
                                                             : value >= 0;

@@ -59,11 +59,13 @@ double number_of(const Manifest& m, const toml::key& key, const toml::node& node
   return *value;
 }
 
-double converted_number_of(const Manifest& m, const toml::key& key, const toml::node& node, const Conversion& conversion) {
-  const double value = csv::to_internal(conversion, number_of(m, key, node));
+double converted_number_of(const Manifest& m, const toml::key& key, const toml::node& node, const Conversion& conversion,
+                           const PhysicalRange& range) {
+  const double written = number_of(m, key, node);
+  const double value = csv::to_internal(conversion, written);
   if (!std::isfinite(value))
-    m.fail(node.source(), fmt::format("{} = {}: expected a number that stays finite in internal units", key.str(),
-                                      number_of(m, key, node)));
+    m.fail(node.source(), fmt::format("{} = {}: expected a number that stays finite in internal units", key.str(), written));
+  if (!range.contains(value)) m.fail(node.source(), out_of_range_message(key.str(), fmt::format("{}", written), range));
   return value;
 }
 

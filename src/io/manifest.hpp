@@ -38,7 +38,9 @@ struct Given {
 double number_of(const Manifest& m, const toml::key& key, const toml::node& node);
 // The key's number in internal units; refused at the value when the conversion overflows
 // (load_kN = 1e306 is finite as written, infinite in newtons).
-double converted_number_of(const Manifest& m, const toml::key& key, const toml::node& node, const Conversion& conversion);
+// Also refused beyond `range` (the quantity's physical_range), checked in internal units.
+double converted_number_of(const Manifest& m, const toml::key& key, const toml::node& node, const Conversion& conversion,
+                           const PhysicalRange& range);
 // A string value, checked with io::name_problem (line breaks and tabs allowed only for the
 // free text of a `description`).
 const std::string& string_of(const Manifest& m, const toml::key& key, const toml::node& node);

@@ -39,7 +39,7 @@ constexpr std::array<csv::ColumnSpec, 4> kTraceSpecs{{
      .required = true,
      .family = true,
      .rule = csv::Rule::above_absolute_zero},
-    {.name = "heat_rate_W", .rule = csv::Rule::non_negative, .hint = "a heat rate is >= 0"},
+    {.name = "heat_rate_W", .rule = csv::Rule::non_negative, .hint = "a heat rate is >= 0", .range = kHeatRateRange},
 }};
 
 // A gap is an interval longer than 1.5x the median interval (the logger's step).
@@ -86,6 +86,7 @@ struct NumberKey {
   std::optional<Quantity> quantity;
   bool required;
   Bound bound;
+  PhysicalRange unitless_range = kHeatRateRange;  // a key without a quantity: its values on a rig
 };
 enum NumberKeyIndex : std::size_t {
   kVelocity,
@@ -122,7 +123,7 @@ constexpr std::array<NumberKey, 15> kNumberKeys{{
     {"heat_rate_uncertainty_W", std::nullopt, false, Bound::non_negative},
     {"heat_rate_W", std::nullopt, false, Bound::non_negative},
     {"ambient", Quantity::temperature, false, Bound::above_absolute_zero},
-    {"h_W_m2K", std::nullopt, false, Bound::positive},
+    {"h_W_m2K", std::nullopt, false, Bound::positive, kHeatTransferRange},
     {"viscosity40", Quantity::viscosity, false, Bound::positive},
 }};
 std::string canonical_name(const NumberKey& k) {
@@ -175,7 +176,8 @@ std::optional<Conversion> number_key(const Manifest& m, const toml::key& key, co
 double bounded_number(const Manifest& m, const toml::key& key, const toml::node& node, const NumberKey& nk,
                       const Conversion& conversion) {
   const double written = number_of(m, key, node);
-  const double value = converted_number_of(m, key, node, conversion);
+  const double value =
+      converted_number_of(m, key, node, conversion, nk.quantity ? physical_range(*nk.quantity) : nk.unitless_range);
   std::string bound;
   if (!within(nk.bound, value, bound))
     m.fail(node.source(), fmt::format("{} = {}: a thermal run needs {} {}", key.str(), written, nk.base, bound));
@@ -221,7 +223,7 @@ RunKeys read_run_keys(const Manifest& m, const toml::table& table) {
   return keys;
 }
 
-// The [run.guide_overrides] table: catalog field -> value > 0.
+// The [run.guide_overrides] table: catalog field -> value > 0, in the field's physical range.
 std::map<std::string, double> read_overrides(const Manifest& m, const toml::table& table) {
   std::map<std::string, double> overrides;
   const std::vector<std::string>& fields = guide_field_names();
@@ -232,6 +234,10 @@ std::map<std::string, double> read_overrides(const Manifest& m, const toml::tabl
     }
     const double value = number_of(m, key, node);
     if (!(value > 0)) m.fail(node.source(), fmt::format("{} = {}: expected a value > 0", key.str(), value));
+    if (auto range = guide_field_range_problem(key.str(), value)) {
+      m.fail(node.source(),
+             fmt::format("{} = {:g} is not physical: expected {} as in a catalog (a typo or another unit?)", key.str(), value, *range));
+    }
     overrides.emplace(std::string(key.str()), value);
   }
   return overrides;
@@ -440,7 +446,7 @@ ThermalRun read_run(const Manifest& m, const toml::table& table) {
         m.fail(key.source(), fmt::format("sensor '{}' names no tc column of '{}' (its tc columns: {})", key.str(), file,
                                          fmt::join(known, ", ")));
       }
-      const double x_m = converted_number_of(m, key, node, keys.sensors->conversion);
+      const double x_m = converted_number_of(m, key, node, keys.sensors->conversion, physical_range(Quantity::distance_m));
       if (!run.sensor_position_m.emplace(channel->name, x_m).second) {
         m.fail(key.source(), fmt::format("duplicate position for column '{}'", channel->name));
       }

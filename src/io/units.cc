@@ -1,5 +1,7 @@
 #include "lmcal/io/units.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <array>
 #include <span>
@@ -42,6 +44,25 @@ std::span<const UnitDef> units_of(Quantity quantity) {
 }
 
 }  // namespace
+
+PhysicalRange physical_range(Quantity quantity) {
+  switch (quantity) {
+    case Quantity::time: return {-1e10, 1e10, "s"};  // seconds since any start, epoch included
+    case Quantity::velocity: return {-20, 20, "m/s"};
+    case Quantity::force: return {-1e7, 1e7, "N"};
+    case Quantity::preload: return {-1000, 1000, "µm"};
+    case Quantity::length_mm: return {-1e5, 1e5, "mm"};
+    case Quantity::distance_m: return {-1000, 1000, "m"};
+    case Quantity::temperature: return {-273.15, 1000, "°C"};
+    case Quantity::viscosity: return {1e-3, 1e6, "mm²/s"};
+  }
+  return {0, 0, ""};
+}
+
+std::string out_of_range_message(std::string_view name, std::string_view written, const PhysicalRange& range) {
+  return fmt::format("{} = {} is beyond the range of a rig's values ({:g} to {:g} {}): a typo or a wrong unit?", name, written,
+                     range.low, range.high, range.unit);
+}
 
 const std::vector<std::string>& unit_names(Quantity quantity) {
   // One list per quantity, built once; indexed by the enum's value.

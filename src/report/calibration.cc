@@ -604,6 +604,22 @@ std::string how_sure_line(const FitResult& fit) {
 
 }  // namespace
 
+std::optional<std::string> unusable_headline(const Calibration& c) {
+  const CalibratedModel& m = c.calibrated;
+  const auto check = [](const char* which, const char* model, const FitResult& fit) -> std::optional<std::string> {
+    if (fit.solver.usable) return std::nullopt;
+    return fmt::format("the {} {} fit is not usable: {}", which, model, fit.solver.unusable_reason);
+  };
+  if (m.friction) {
+    if (auto why = check("calibrated", "friction", m.friction->fit)) return why;
+  } else if (c.friction) {
+    if (auto why = check("law's", "friction", c.friction->fit)) return why;
+  }
+  if (m.thermal) return check("calibrated", "thermal", m.thermal->joint);
+  if (c.thermal) return check("paper model's", "thermal", c.thermal->joint);
+  return std::nullopt;
+}
+
 std::string calibration_summary(const Calibration& c) {
   std::string s;
   const CalibratedModel& m = c.calibrated;

@@ -148,7 +148,10 @@ struct Identifiability {
 
 struct SolverReport {
   bool converged = false;
+  // An estimate to use: the residuals were finite, the solver did not fail, and some degree of
+  // freedom is left. Otherwise `unusable_reason` says which.
   bool usable = false;
+  std::string unusable_reason;
   int iterations = 0;
   std::string termination;
   std::string brief;             // Ceres BriefReport of the polish

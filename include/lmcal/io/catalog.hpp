@@ -58,6 +58,11 @@ struct GuideSpec {
 // Names of the numeric fields of GuideSpec, as used in the TOML file and by with_overrides.
 const std::vector<std::string>& guide_field_names();
 
+// Whether `value` lies in the physical range of the field called `name` (one of
+// guide_field_names()): nullopt, or what was expected ("0.01 to 2000"). The catalog's rule, for
+// overrides given elsewhere.
+std::optional<std::string> guide_field_range_problem(std::string_view name, double value);
+
 // The value of the field called `name` (one of guide_field_names()); InvalidParameter if unknown.
 std::optional<double> field_value(const GuideSpec& spec, std::string_view name);
 

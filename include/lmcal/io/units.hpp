@@ -50,4 +50,22 @@ struct SplitName {
 };
 std::optional<SplitName> split_unit(std::string_view column, Quantity quantity);
 
+// The values a quantity takes on a real rig, in its internal unit (inclusive): beyond them, a
+// typo or a wrong unit, and the models' arithmetic could leave the doubles (a viscosity of
+// 1e-320 mm²/s, a speed of 1e308 m/s). Loaders refuse values outside (docs/formats.md#limits);
+// signs are the columns' own rules (a speed column is >= 0).
+struct PhysicalRange {
+  double low, high;
+  const char* unit;  // the internal unit, for messages: "m/s"
+  bool contains(double value) const { return value >= low && value <= high; }
+};
+PhysicalRange physical_range(Quantity quantity);
+// Of the quantities units.hpp has no units for (heat rates, heat transfer coefficients).
+inline constexpr PhysicalRange kHeatRateRange{0, 1e6, "W"};
+inline constexpr PhysicalRange kHeatTransferRange{0, 1e5, "W/(m²·K)"};
+
+// "velocity_m_s = 1e308 is beyond the range of a rig's values (-20 to 20 m/s): a typo or a
+// wrong unit?" for a value as written, `range` the quantity's.
+std::string out_of_range_message(std::string_view name, std::string_view written, const PhysicalRange& range);
+
 }  // namespace lmcal

@@ -148,6 +148,12 @@ std::string calibration_options_json(const CalibrationOptions& options);
 // the verdicts.
 std::string calibration_json(const Calibration& c);
 
+// Why the calibration's headline fits (the calibrated models', else the law fits') give no
+// answer to use, or nullopt: "the calibrated thermal fit is not usable: no degree of freedom
+// left: 12 residuals for 12 free parameters". The CLI exits with its own status then, a fleet
+// marks the set failed.
+std::optional<std::string> unusable_headline(const Calibration& c);
+
 // The headline numbers and verdicts in a few lines, for the terminal.
 std::string calibration_summary(const Calibration& c);
 
