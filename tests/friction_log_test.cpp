@@ -138,6 +138,29 @@ TEST_F(FrictionLogTest, WrittenLogLoadsBackBitForBit) {
   EXPECT_EQ(friction_log_csv(back, {"written by friction_log_test", "second line"}), text);
 }
 
+// Names a spreadsheet would run as formulas (=, +, -, @) are written with a leading apostrophe
+// (issue 23 #10), and read back as they were; so are names that start with an apostrophe.
+TEST_F(FrictionLogTest, FormulaLikeNamesAreNeutralisedInTheFileAndReadBackIntact) {
+  FrictionLog log = awkward_log();
+  log.run_names = {"=HYPERLINK(\"http://x\",\"y\")", "-r2"};
+  log.guide_names = {"@SUM(A1)", "'=already"};
+  const std::string text = friction_log_csv(log, {});
+  EXPECT_NE(text.find("\"'=HYPERLINK(\"\"http://x\"\",\"\"y\"\")\""), std::string::npos) << text;
+  EXPECT_NE(text.find("\n'-r2,"), std::string::npos) << text;
+  EXPECT_NE(text.find(",'@SUM(A1),"), std::string::npos) << text;
+  EXPECT_NE(text.find(",''=already,"), std::string::npos) << text;
+  EXPECT_EQ(text.find("\n=") , std::string::npos);
+  EXPECT_EQ(text.find(",="), std::string::npos);
+  const FrictionLog back = load_friction_log(write("formulas.csv", text));
+  EXPECT_EQ(back.run_names, log.run_names);
+  EXPECT_EQ(back.guide_names, log.guide_names);
+  // Every one-character start either way: written and read back, the same text.
+  for (const std::string name : {"'", "''", "'a", "a'", "''-", "+", "'+1", "x=1"}) {
+    log.run_names = {name, "b"};
+    EXPECT_EQ(load_friction_log(write("one.csv", friction_log_csv(log, {}))).run_names, log.run_names) << name;
+  }
+}
+
 // Samples of which only some name a guide write an empty guide cell for the others, and read
 // back as written (an empty guide cell was refused: the log lmcal wrote did not load).
 TEST_F(FrictionLogTest, ALogWhereOnlySomeSamplesNameAGuideLoadsBack) {

@@ -14,6 +14,7 @@
 #include <map>
 
 #include "io/input_file.hpp"
+#include "lmcal/io/csv_writer.hpp"
 #include "lmcal/error.hpp"
 #include "lmcal/io/limits.hpp"
 
@@ -269,15 +270,20 @@ bool Reader::next() {
 
 std::string_view Reader::text(std::size_t i, std::string& scratch) const {
   std::string_view cell = trim(cells_[i]);
-  if (cell.size() < 2 || cell.front() != '"') return cell;
-  cell = cell.substr(1, cell.size() - 2);
-  if (cell.find('"') == std::string_view::npos) return cell;
-  scratch.clear();
-  for (std::size_t k = 0; k < cell.size(); ++k) {
-    scratch += cell[k];
-    if (cell[k] == '"') ++k;  // "" -> "
+  if (cell.size() >= 2 && cell.front() == '"') {
+    cell = cell.substr(1, cell.size() - 2);
+    if (cell.find('"') != std::string_view::npos) {
+      scratch.clear();
+      for (std::size_t k = 0; k < cell.size(); ++k) {
+        scratch += cell[k];
+        if (cell[k] == '"') ++k;  // "" -> "
+      }
+      cell = scratch;
+    }
   }
-  return scratch;
+  // The apostrophe a writer puts before formula-like text ('=r1 reads as =r1).
+  if (cell.size() >= 2 && cell.front() == '\'' && csv_formula_escape_needed(cell.substr(1))) cell.remove_prefix(1);
+  return cell;
 }
 
 double Reader::number(const Column& column, bool allow_missing) const {

@@ -36,9 +36,26 @@ CsvText& CsvText::cell(double value) {
   return *this;
 }
 
+namespace {
+bool formula_start(char c) { return c == '=' || c == '+' || c == '-' || c == '@' || c == '\t' || c == '\r'; }
+}  // namespace
+
+bool csv_formula_escape_needed(std::string_view text) {
+  return !text.empty() && (formula_start(text[0]) || (text[0] == '\'' && text.size() > 1 && (formula_start(text[1]) || text[1] == '\'')));
+}
+
 CsvText& CsvText::cell(std::string_view text) {
   LMCAL_ASSERT(in_row_ < columns_, "CSV row with too many cells");
   if (in_row_++) text_ += ',';
+  // A spreadsheet would run a cell starting with = + - @ (or a tab, a CR) as a formula: such
+  // text gets a leading apostrophe, which spreadsheets show as text and lmcal's reader removes
+  // (csv::formula_escaped). So does text that starts with an apostrophe before one of those.
+  std::string escaped;
+  if (csv_formula_escape_needed(text)) {
+    escaped = "'";
+    escaped += text;
+    text = escaped;
+  }
   // Quoted where it would not read back as written: separators, quotes and line ends inside, a
   // leading '#' (a comment line), spaces at either end (trimmed when unquoted).
   const bool plain = text.find_first_of(",\"\n\r") == std::string_view::npos && !text.starts_with('#') &&

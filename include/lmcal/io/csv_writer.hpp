@@ -16,6 +16,11 @@
 
 namespace LMCAL_API lmcal {
 
+// Whether text written to a CSV cell gets a leading apostrophe: it starts with = + - @, a tab or
+// a CR (a spreadsheet would take it for a formula), or with an apostrophe before one of those
+// or another apostrophe (so that reading removes exactly the one added; docs/formats.md).
+bool csv_formula_escape_needed(std::string_view text);
+
 class CsvText {
  public:
   explicit CsvText(const std::vector<std::string>& header, const std::vector<std::string>& comments = {});
