@@ -3,7 +3,7 @@
 # reproduces it) in a real browser, headless Chromium: it loads without script errors and
 # every plot the page lists draws with a size, no text is drawn outside its plot, every
 # axis that should name runs or units shows the names, and no x tick labels overlap (the page's
-# own check, read from the DOM).
+# own check, read from the DOM); no markup from the data (run names) became elements.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 report="${1:-$root/fits/cheng2017/report.html}"  # or the report given
@@ -12,6 +12,7 @@ browser=$(command -v chromium || command -v chromium-browser || true)
 fail() { echo "FAIL: $*"; exit 1; }
 [[ -n "$browser" ]] || fail "chromium is not installed (scripts/install-deps.sh installs it)"
 [[ -f "$report" ]] || fail "$report is missing (scripts/run.sh writes it)"
+report=$(realpath "$report")
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 
@@ -30,8 +31,13 @@ done
 if grep -q 'data-errors=' "$tmp/dom.html"; then fail "script errors: $(grep -o 'data-errors="[^"]*"' "$tmp/dom.html")"; fi
 # What only the browser's fonts can tell (the page's own check): no text outside its plot, every
 # axis that should name its runs or units names them, no x tick labels running into each other.
+grep -q 'data-rendered=' "$tmp/dom.html" || fail "the page's check did not run"
 for what in clipped unnamed overlap; do
   if grep -q "data-$what=" "$tmp/dom.html"; then fail "$what: $(grep -o "data-$what=\"[^\"]*\"" "$tmp/dom.html" | head -c 600)"; fi
 done
 if grep -E 'CONSOLE|Uncaught|Failed to load resource' "$tmp/browser.log"; then fail "the browser reported errors (above)"; fi
+# Nothing from the data became markup (the page's check, from the DOM): its one script, no
+# element with an event handler, no image or frame (names such as <img src=x onerror=...> show
+# as text).
+if grep -q 'data-injected=' "$tmp/dom.html"; then fail "markup from the data: $(grep -o 'data-injected="[^"]*"' "$tmp/dom.html")"; fi
 echo "ok: the report loads, all $count plots draw, no text is clipped and every named axis shows its names"

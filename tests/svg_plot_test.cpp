@@ -2,6 +2,7 @@
 // from the output against the drawn frame), skipped non-finite and non-positive-on-log values,
 // escaping, well-formed and deterministic output.
 #include "lmcal/report/svg_plot.hpp"
+#include "report/page.hpp"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
@@ -174,11 +175,26 @@ TEST(SvgPlot, NamedTicksReplaceTheNumbersWhenTheyFit) {
   const std::string named = render_svg(plot);
   for (const char* name : {">v066<", ">v083<", ">v110<"}) EXPECT_NE(named.find(name), std::string::npos) << name;
   EXPECT_EQ(named.find(">1.5<"), std::string::npos);
+  // Names too long even upright are cut to 0.3 of the height, with "…", and still stand.
   plot.x_tick_labels.clear();
-  for (int r = 1; r <= 3; ++r) plot.x_tick_labels.emplace_back(r, std::string(200, 'x'));  // cannot fit
-  const std::string numeric = render_svg(plot);  // no tick draws them (the tooltips still name the runs)
-  EXPECT_EQ(numeric.find(">" + std::string(200, 'x') + "<"), std::string::npos);
-  EXPECT_NE(numeric.find(">2<"), std::string::npos);
+  for (int r = 1; r <= 3; ++r) plot.x_tick_labels.emplace_back(r, fmt::format("{}{}", r, std::string(200, 'x')));
+  const std::string cut = render_svg(plot);
+  const std::smatch m = [&] {
+    std::smatch found;
+    std::regex_search(cut, found, std::regex(">(2x+)…<"));
+    return found;
+  }();
+  ASSERT_FALSE(m.empty());
+  EXPECT_LE(static_cast<double>(m[1].length() + 1) * 6.2, 0.3 * plot.height_px + 1e-9);
+  EXPECT_GE(m[1].length(), 10);
+  EXPECT_EQ(cut.find(">1.5<"), std::string::npos);
+  // Too many to stand side by side even upright (14 px each): the numbers stand.
+  plot.x_tick_labels.clear();
+  plot.series.front() = {.x = {1, 500}, .y = {0.6, 0.61}, .mark = Mark::points};
+  for (int r = 1; r <= 500; ++r) plot.x_tick_labels.emplace_back(r, fmt::format("run{}", r));
+  const std::string numeric = render_svg(plot);
+  EXPECT_EQ(numeric.find(">run250<"), std::string::npos);
+  EXPECT_TRUE(std::regex_search(numeric, std::regex("class=\"x-tick\"[^>]*>[0-9]+<"))) << numeric.substr(0, 3000);
 }
 
 TEST(SvgPlot, ASeriesWithoutPointsIsALegendKeyOnly) {
@@ -415,6 +431,26 @@ TEST(SvgPlot, EscapesEveryUserString) {
   EXPECT_TRUE(ampersands_are_entities(svg));
   EXPECT_EQ(tag_balance_error(svg), "");
   EXPECT_EQ(escape_xml("a\x01\tb"), "a\tb");  // XML forbids most control characters
+  // A bidirectional control would reverse the rest of the line: shown by its name instead.
+  EXPECT_EQ(escape_xml("r1\u202Eevil\u2066x\u200F"), "r1[U+202E]evil[U+2066]x[U+200F]");
+  EXPECT_EQ(escape_xml("\u00E9\u2026\u20AC"), "\u00E9\u2026\u20AC");  // other characters untouched
+}
+
+// A table cell is text: a leading \x01 made the rest raw HTML (issue 23 #1); the shading of a
+// correlation is a member of the cell, not markup in its text.
+TEST(SvgPlot, PageTablesTakeEveryCellAsText) {
+  report::Page page;
+  page.table({"run", "<b>"}, std::vector<std::vector<std::string>>{{"\x01<img src=x onerror=alert(1)>", "a\u202Eb"}});
+  const std::string html = page.html();
+  EXPECT_EQ(html.find("<img"), std::string::npos) << html;
+  EXPECT_NE(html.find("<td>&lt;img src=x onerror=alert(1)&gt;</td>"), std::string::npos) << html;
+  EXPECT_NE(html.find("<td>a[U+202E]b</td>"), std::string::npos) << html;
+  EXPECT_NE(html.find("<th>&lt;b&gt;</th>"), std::string::npos) << html;
+  report::Page shaded;
+  shaded.table({"correlation", "k1"}, std::vector<std::vector<report::Cell>>{{"\x01<i>k1</i>", report::correlation_cell(-0.5)}});
+  EXPECT_NE(shaded.html().find("<td>&lt;i&gt;k1&lt;/i&gt;</td>"), std::string::npos) << shaded.html();
+  EXPECT_NE(shaded.html().find("<td class=\"num\" style=\"background:rgba(0,114,178,0.40)\">-0.50</td>"), std::string::npos)
+      << shaded.html();
 }
 
 TEST(SvgPlot, OneWellFormedSvgWithAGroupPerSeriesWithData) {

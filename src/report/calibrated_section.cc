@@ -230,7 +230,7 @@ void correlation_table(Page& page, const FitResult& fit, const std::vector<std::
   if (shown.size() < 2 || fit.correlation.rows() == 0) return;
   std::vector<std::string> header{"correlation"};
   for (std::size_t j : shown) header.push_back(fit.parameters[j].name);
-  std::vector<std::vector<std::string>> rows;
+  std::vector<std::vector<Cell>> rows;
   for (std::size_t i : shown) {
     rows.push_back({fit.parameters[i].name});
     for (std::size_t j : shown)

@@ -46,13 +46,20 @@ document.querySelectorAll('svg.plot').forEach(function(s){var id=s.dataset.plot,
 s.querySelectorAll('text').forEach(function(t){var r=t.getBoundingClientRect();
 if(r.width>0&&(r.left<p.left-0.5||r.right>p.right+0.5||r.top<p.top-0.5||r.bottom>p.bottom+0.5))clipped.push(id+': '+t.textContent)});
 var ticks=[].slice.call(s.querySelectorAll('text.x-tick'));
-if(s.dataset.xNames!==undefined){var shown=ticks.map(function(t){return t.textContent});
-if(s.dataset.xNames.split('|').some(function(n){return shown.indexOf(n)<0}))unnamed.push(id)}
+if(s.dataset.xNames!==undefined){var shown=ticks.map(function(t){return t.textContent}),names=s.dataset.xNames.split('|');
+var tells=function(t,n){if(t===n)return true;var p=t.slice(0,-1);return t.slice(-1)==='\u2026'&&p.length>0&&n.indexOf(p)===0&&
+names.filter(function(m){return m.indexOf(p)===0}).length===1};
+if(names.some(function(n){return !shown.some(function(t){return tells(t,n)})}))unnamed.push(id)}
 var rs=ticks.map(function(t){return t.getBoundingClientRect()}).sort(function(a,b){return a.left-b.left});
 for(var i=1;i<rs.length;i++)if(rs[i].left<rs[i-1].right){overlap.push(id);break}});
 if(clipped.length)document.body.dataset.clipped=clipped.join('; ');
 if(unnamed.length)document.body.dataset.unnamed=unnamed.join(' ');
 if(overlap.length)document.body.dataset.overlap=overlap.join(' ');
+var injected=[];document.querySelectorAll('*').forEach(function(e){for(var i=0;i<e.attributes.length;i++)
+if(/^on/i.test(e.attributes[i].name))injected.push(e.tagName+' '+e.attributes[i].name)});
+document.querySelectorAll('img,iframe,object,embed').forEach(function(e){injected.push(e.tagName)});
+if(document.scripts.length!==1)injected.push(document.scripts.length+' scripts');
+if(injected.length)document.body.dataset.injected=injected.join('; ');
 document.body.dataset.rendered=missing.length?'missing '+missing.join(' '):'all '+ids.length});
 )";
 

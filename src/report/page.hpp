@@ -17,6 +17,17 @@
 
 namespace lmcal::report {
 
+// A table cell: text, escaped when the page is built, and how lmcal draws it (a number's
+// alignment, a shade it computed). There is no way for text to become HTML.
+struct Cell {
+  std::string text;
+  bool number = false;
+  std::string background;  // a CSS colour lmcal made ("rgba(0,114,178,0.40)"), or empty
+  Cell(std::string t) : text(std::move(t)) {}
+  Cell(const char* t) : text(t) {}
+  Cell(std::string t, bool is_number, std::string shade) : text(std::move(t)), number(is_number), background(std::move(shade)) {}
+};
+
 class Page {
  public:
   Page& operator<<(std::string_view html) {
@@ -40,15 +51,15 @@ class Page {
     html_ += fmt::format("<p{}>{}</p>\n", css_class.empty() ? "" : fmt::format(" class=\"{}\"", css_class),
                          escape_xml(text));
   }
-  // A table of escaped text; a cell starting with '\x01' is raw HTML (a coloured cell).
-  void table(const std::vector<std::string>& header, const std::vector<std::vector<std::string>>& rows) {
+  // A table of text cells (escaped), or of Cells (escaped, with lmcal's shading).
+  template <typename C>
+  void table(const std::vector<std::string>& header, const std::vector<std::vector<C>>& rows) {
     html_ += "<table><thead><tr>";
     for (const auto& h : header) html_ += "<th>" + escape_xml(h) + "</th>";
     html_ += "</tr></thead><tbody>\n";
     for (const auto& row : rows) {
       html_ += "<tr>";
-      for (const auto& cell : row)
-        html_ += !cell.empty() && cell[0] == '\x01' ? cell.substr(1) : "<td>" + escape_xml(cell) + "</td>";
+      for (const auto& cell : row) html_ += td(Cell(cell));
       html_ += "</tr>\n";
     }
     html_ += "</tbody></table>\n";
@@ -57,6 +68,12 @@ class Page {
   const std::vector<std::string>& plot_ids() const { return ids_; }
 
  private:
+  static std::string td(const Cell& cell) {
+    return fmt::format("<td{}{}>{}</td>", cell.number ? " class=\"num\"" : "",
+                       cell.background.empty() ? "" : fmt::format(" style=\"background:{}\"", escape_xml(cell.background)),
+                       escape_xml(cell.text));
+  }
+
   std::string html_;
   std::vector<std::string> ids_;
 };
@@ -104,11 +121,10 @@ inline std::string flags(const ParameterEstimate& p) {
 }
 
 // A correlation coefficient as a cell shaded by its size (orange positive, blue negative).
-inline std::string correlation_cell(double r) {
-  if (!std::isfinite(r)) return "\x01<td class=\"num\">–</td>";
+inline Cell correlation_cell(double r) {
+  if (!std::isfinite(r)) return {"–", true, ""};
   const double a = std::min(1.0, std::abs(r));
-  return fmt::format("\x01<td class=\"num\" style=\"background:rgba({},{:.2f})\">{:+.2f}</td>",
-                     r >= 0 ? "230,159,0" : "0,114,178", 0.8 * a, r);
+  return {fmt::format("{:+.2f}", r), true, fmt::format("rgba({},{:.2f})", r >= 0 ? "230,159,0" : "0,114,178", 0.8 * a)};
 }
 
 // Colours shared by the series of one quantity across plots (Okabe-Ito).

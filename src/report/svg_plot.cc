@@ -48,6 +48,22 @@ double text_px(std::string_view text) {
   return kCharPx * static_cast<double>(n);
 }
 
+// `text` cut to at most `max_px`, ending in "…" where cut (at a character, not inside one).
+std::string shortened(const std::string& text, double max_px) {
+  if (text_px(text) <= max_px) return text;
+  std::string out;
+  double used = kCharPx;  // the ellipsis
+  for (std::size_t i = 0; i < text.size();) {
+    std::size_t next = i + 1;
+    while (next < text.size() && (static_cast<unsigned char>(text[next]) & 0xC0) == 0x80) ++next;
+    if (used + kCharPx > max_px) break;
+    out.append(text, i, next - i);
+    used += kCharPx;
+    i = next;
+  }
+  return out + "…";
+}
+
 // `text` broken at spaces into lines of at most `max_px` (a word longer than that stands alone).
 std::vector<std::string> wrap(const std::string& text, double max_px) {
   std::vector<std::string> lines;
@@ -295,10 +311,36 @@ std::string clip_id(std::string_view id) {
 
 }  // namespace
 
+namespace {
+
+// The length of the bidirectional control (U+202A-U+202E, U+2066-U+2069, U+200E, U+200F,
+// U+061C) that starts `text`, in bytes; 0 when none does.
+std::size_t bidi_control_length(std::string_view text) {
+  const auto byte = [&](std::size_t i) { return i < text.size() ? static_cast<unsigned char>(text[i]) : 0u; };
+  if (byte(0) == 0xD8 && byte(1) == 0x9C) return 2;
+  if (byte(0) != 0xE2) return 0;
+  if (byte(1) == 0x80 && (byte(2) == 0x8E || byte(2) == 0x8F || (byte(2) >= 0xAA && byte(2) <= 0xAE))) return 3;
+  if (byte(1) == 0x81 && byte(2) >= 0xA6 && byte(2) <= 0xA9) return 3;
+  return 0;
+}
+
+}  // namespace
+
 std::string escape_xml(std::string_view text) {
   std::string out;
   out.reserve(text.size());
-  for (const char c : text) {
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    // A bidirectional control would reorder everything after it on the page: shown as its name.
+    if (const std::size_t n = bidi_control_length(text.substr(i))) {
+      const std::string_view control = text.substr(i, n);
+      const unsigned code = n == 2 ? 0x061C
+                                   : 0x2000u + ((static_cast<unsigned char>(control[1]) & 0x3Fu) << 6) +
+                                         (static_cast<unsigned char>(control[2]) & 0x3Fu);
+      out += fmt::format("[U+{:04X}]", code);
+      i += n - 1;
+      continue;
+    }
+    const char c = text[i];
     switch (c) {
       case '&': out += "&amp;"; break;
       case '<': out += "&lt;"; break;
@@ -394,7 +436,8 @@ std::string render_svg(const Plot& plot) {
   place();
   if (has_data) x_ticks = ticks_of(ax, right - left, 75);
   // Named positions (runs, units): side by side where they fit, else turned upright (the frame
-  // rises by the longest), else the numbers stand.
+  // rises by the longest, at most 0.3 of the height: longer names are cut, "…"), else (too many
+  // to stand side by side even upright) the numbers stand.
   bool upright = false;
   if (has_data && !plot.x_tick_labels.empty()) {
     std::vector<Tick> named;
@@ -406,8 +449,12 @@ std::string render_svg(const Plot& plot) {
         longest = std::max(longest, text_px(label));
       }
     const double span = right - left;
-    upright = !named.empty() && text >= 0.95 * span && 14.0 * static_cast<double>(named.size()) < 0.95 * span &&
-              longest <= 0.3 * height;
+    upright = !named.empty() && text >= 0.95 * span && 14.0 * static_cast<double>(named.size()) < 0.95 * span;
+    const double most = 0.3 * height;
+    if (upright && longest > most) {
+      for (Tick& t : named) t.label = shortened(t.label, most);
+      longest = most;
+    }
     if (upright) {
       bottom -= longest - 8;
       place();
@@ -499,7 +546,10 @@ std::string render_svg(const Plot& plot) {
   }
   if (!plot.x_label.empty()) write_text(out, (left + right) / 2, height - 8, "middle", plot.x_label);
   if (!plot.y_label.empty()) {
-    const double x = 14, y = (top + bottom) / 2;
+    // Beside the frame's middle, but inside the plot where it is longer than the frame (its
+    // width in a browser's font: +15 %).
+    const double half = 0.575 * text_px(plot.y_label);
+    const double x = 14, y = half * 2 + 4 < height ? std::clamp((top + bottom) / 2, half + 2, height - half - 2) : height / 2;
     write_text(out, x, y, "middle", plot.y_label, fmt::format(" transform=\"rotate(-90 {} {})\"", px(x), px(y)));
   }
 

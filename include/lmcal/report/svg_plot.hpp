@@ -85,7 +85,8 @@ struct Plot {
 std::string render_svg(const Plot& plot);
 
 // Text for XML content and attribute values: & < > " ' escaped; control characters that
-// XML 1.0 forbids (all below 0x20 except tab, newline, carriage return) are dropped.
+// XML 1.0 forbids (all below 0x20 except tab, newline, carriage return) are dropped, and
+// bidirectional controls (U+202E reverses the rest of a line) are shown as "[U+202E]".
 std::string escape_xml(std::string_view text);
 
 // Ticks at multiples of a 1, 2 or 5 × 10^k step, from the last multiple ≤ lo to the first
