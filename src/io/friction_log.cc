@@ -1,6 +1,7 @@
 #include "lmcal/io/friction_log.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <array>
@@ -175,6 +176,12 @@ class FileLoader {
       if (skipped_ != 0) report_.skipped[column(kFriction)->header + " empty or NaN"] = skipped_;
       report_.rows_kept = report_.rows_read - skipped_;
       warn_signed_friction();
+    }
+    if (report_.rows_kept == 0) {  // a log of nothing is not a log: say what every row lacked
+      std::vector<std::string> why;
+      for (const auto& [reason, count] : report_.skipped) why.push_back(fmt::format("{} {}", count, reason));
+      reader_.fail_at(reader_.header_line(), 0,
+                      fmt::format("no sample kept of the {} rows read: {}", report_.rows_read, fmt::join(why, ", ")));
     }
     report_.bytes = static_cast<double>(reader_.bytes());
     log_.reports.push_back(std::move(report_));
