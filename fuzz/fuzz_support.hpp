@@ -37,6 +37,7 @@
 #include "lmcal/io/friction_log.hpp"
 #include "lmcal/io/thermal_run.hpp"
 #include "lmcal/io/units.hpp"
+#include "io/input_file.hpp"
 
 namespace lmcal::fuzz {
 
@@ -155,25 +156,46 @@ inline void check_loaded(const GuideSpec& spec) {
 }
 
 // A friction log's numbers per sample, time aside (NaN there: the file has no time column).
-inline constexpr std::array<std::pair<std::vector<double> FrictionLog::*, const char*>, 7> kFrictionColumns{{
-    {&FrictionLog::velocity_m_s, "velocity_m_s"},
-    {&FrictionLog::load_N, "load_N"},
-    {&FrictionLog::preload_um, "preload_um"},
-    {&FrictionLog::block_length_mm, "block_length_mm"},
-    {&FrictionLog::temperature_C, "temperature_C"},
-    {&FrictionLog::friction_N, "friction_N"},
-    {&FrictionLog::viscosity40_mm2_s, "viscosity40_mm2_s"},
+struct FrictionColumn {
+  std::vector<double> FrictionLog::*values;
+  const char* name;
+  Quantity quantity;
+};
+inline constexpr std::array<FrictionColumn, 7> kFrictionColumns{{
+    {&FrictionLog::velocity_m_s, "velocity_m_s", Quantity::velocity},
+    {&FrictionLog::load_N, "load_N", Quantity::force},
+    {&FrictionLog::preload_um, "preload_um", Quantity::preload},
+    {&FrictionLog::block_length_mm, "block_length_mm", Quantity::length_mm},
+    {&FrictionLog::temperature_C, "temperature_C", Quantity::temperature},
+    {&FrictionLog::friction_N, "friction_N", Quantity::force},
+    {&FrictionLog::viscosity40_mm2_s, "viscosity40_mm2_s", Quantity::viscosity},
 }};
+
+// ... and within the range of a rig's values (units.hpp physical_range), NaN aside.
+inline void in_range(const std::vector<double>& values, std::string_view field, const PhysicalRange& range) {
+  for (const double v : values)
+    if (!std::isnan(v) && !range.contains(v)) finding(fmt::format("{} = {} (beyond {:g} to {:g}) got past the loader", field, v, range.low, range.high));
+}
+
+// Names fit for outputs (io::name_problem), or a finding.
+inline void printable_names(const std::vector<std::string>& names, std::string_view what) {
+  for (const std::string& name : names)
+    if (auto problem = io::name_problem(name)) finding(fmt::format("{} '{}' got past the loader: {}", what, io::printable(name), *problem));
+}
 
 inline void check_loaded(const FrictionLog& log) {
   const std::size_t n = log.size();
   if (log.time_s.size() != n || log.run.size() != n || log.guide.size() != n || log.direction.size() != n)
     finding("friction log columns of different lengths");
   finite(log.time_s, "time_s", true);
-  for (const auto& [column, name] : kFrictionColumns) {
+  in_range(log.time_s, "time_s", physical_range(Quantity::time));
+  for (const auto& [column, name, quantity] : kFrictionColumns) {
     if ((log.*column).size() != n) finding("friction log columns of different lengths");
     finite(log.*column, name);
+    in_range(log.*column, name, physical_range(quantity));
   }
+  printable_names(log.run_names, "run name");
+  printable_names(log.guide_names, "guide name");
   for (std::size_t i = 0; i < n; ++i) {
     if (log.run[i] >= log.run_names.size() || log.guide[i] >= log.guide_names.size())
       finding("friction log sample with a run or guide index out of range");
@@ -194,12 +216,16 @@ inline void check_loaded(const FrictionLog& log) {
 
 inline void check_loaded(const ThermalTrace& trace) {
   finite(trace.time_s, "time_s");
+  in_range(trace.time_s, "time_s", physical_range(Quantity::time));
   finite(trace.heat_rate_W, "heat_rate_W");
+  in_range(trace.heat_rate_W, "heat_rate_W", kHeatRateRange);
   if (!trace.heat_rate_W.empty() && trace.heat_rate_W.size() != trace.size()) finding("heat_rate_W of another length");
   for (const auto* group : {&trace.ambient, &trace.rail})
     for (const TemperatureChannel& c : *group) {
       if (c.values.size() != trace.size()) finding("temperature channel of another length than time_s");
       finite(c.values, c.name, true);  // NaN: a missing sample
+      in_range(c.values, c.name, physical_range(Quantity::temperature));
+      printable_names({c.name}, "column name");
     }
 }
 
@@ -243,8 +269,8 @@ inline void check_round_trip(const FrictionLog& log) {
   if (std::none_of(log.time_s.begin(), log.time_s.end(), [](double t) { return std::isnan(t); }))
     expect_same(log.time_s, back.time_s, "time_s");
   else
-    expect_same(std::vector<double>(log.size(), std::nan("")), back.time_s, "time_s (none written)");
-  for (const auto& [column, name] : kFrictionColumns) expect_same(log.*column, back.*column, name);
+  for (const FrictionColumn& c : kFrictionColumns) expect_same(log.*c.values, back.*c.values, c.name);
+  for (const auto& [column, name, quantity] : kFrictionColumns) expect_same(log.*column, back.*column, name);
 }
 
 // Channels compared by name without the unit: the writer converts "tc1_K" to "tc1_C".

@@ -284,6 +284,22 @@ TEST_F(RawFriction, APositionThatGoesBackWithinAPlateauIsRefusedAtItsCell) {
   EXPECT_TRUE(test::says(e, "monotone between reversals"));
 }
 
+// Positions that move 100 mm a millisecond: a plateau at 100 m/s, beyond a rig's speeds (the speed
+// column's range), refused at its first kept sample rather than fitted.
+TEST_F(RawFriction, APlateauFasterThanARigRunsIsRefusedAtItsFirstSample) {
+  std::vector<std::string> rows;
+  for (int k = 0; k < 30; ++k) rows.push_back(fmt::format("a,{},{},20,1000,2.5,120.2,24", 0.001 * k, 100 * k));
+  const auto file = write("fast.csv", raw_csv(rows));
+  RawFrictionOptions o;
+  o.settling_s = 0;
+  o.min_plateau_samples = 10;
+  const InputError e = test::refusal([&] { load_friction_log(file, o); });
+  EXPECT_EQ(e.line(), 2);
+  EXPECT_EQ(e.column(), 5);  // the position cell
+  EXPECT_TRUE(test::says(e, "run 'a': the plateau's velocity_m_s = 100 is beyond the range of a rig's values (-20 to 20 m/s)"))
+      << e.what();
+}
+
 TEST_F(RawFriction, ARunWithNoLongEnoughPlateauIsRefused) {
   const auto file = write("short.csv", raw_csv(plateau_rows()));
   RawFrictionOptions o;

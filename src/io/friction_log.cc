@@ -452,6 +452,12 @@ class FileLoader {
       for (std::size_t i = 0; i < s.fate.size(); ++i) {
         if (s.fate[i] != raw::Fate::kept) continue;
         const double v = s.plateaus[s.plateau[i]].velocity_m_s;
+        // A plateau's speed comes from positions over time: held to the range a column's is.
+        if (const PhysicalRange range = physical_range(Quantity::velocity); !range.contains(v)) {
+          csv::fail_at_cell(file_.path, r.line[i], motion_->cell,
+                            fmt::format("run '{}': {}", name,
+                                        out_of_range_message("the plateau's velocity_m_s", fmt::format("{:g}", v), range)));
+        }
         const SampleSetup& setup = r.setups[r.setup[i]];
         FrictionConditions<double> c = setup.conditions;
         c.velocity_m_s = std::abs(v);
