@@ -249,13 +249,19 @@ std::vector<std::string> plateau_rows(double t0 = 0, double x0_mm = 0) {
   return rows;
 }
 
+// Options that keep every sample of a plateau of at least `min_samples`.
+RawFrictionOptions keep_all(std::size_t min_samples) {
+  RawFrictionOptions o;
+  o.settling_s = 0;
+  o.min_plateau_samples = min_samples;
+  return o;
+}
+
 TEST_F(RawFriction, RepeatedTimesAreRefusedOrAveragedAsAsked) {
   std::vector<std::string> rows = plateau_rows();
   rows.insert(rows.begin() + 10, "a,0.9,9,22,1000,2.5,120.2,24");  // line 12 repeats line 11's time
   const auto file = write("dup.csv", raw_csv(rows));
-  RawFrictionOptions o;
-  o.settling_s = 0;
-  o.min_plateau_samples = 10;
+  RawFrictionOptions o = keep_all(10);
   {
     const InputError e = test::refusal([&] { load_friction_log(file, o); });
     EXPECT_EQ(e.line(), 12);
@@ -275,10 +281,7 @@ TEST_F(RawFriction, APositionThatGoesBackWithinAPlateauIsRefusedAtItsCell) {
   std::vector<std::string> rows = plateau_rows();
   rows[20] = "a,2,18.5,20,1000,2.5,120.2,24";  // line 22: behind line 21's 19 mm
   const auto file = write("back.csv", raw_csv(rows));
-  RawFrictionOptions o;
-  o.settling_s = 0;
-  o.min_plateau_samples = 5;
-  const InputError e = test::refusal([&] { load_friction_log(file, o); });
+  const InputError e = test::refusal([&] { load_friction_log(file, keep_all(5)); });
   EXPECT_EQ(e.line(), 22);
   EXPECT_EQ(e.column(), 5);  // the position cell
   EXPECT_TRUE(test::says(e, "monotone between reversals"));
@@ -290,10 +293,7 @@ TEST_F(RawFriction, APlateauFasterThanARigRunsIsRefusedAtItsFirstSample) {
   std::vector<std::string> rows;
   for (int k = 0; k < 30; ++k) rows.push_back(fmt::format("a,{},{},20,1000,2.5,120.2,24", 0.001 * k, 100 * k));
   const auto file = write("fast.csv", raw_csv(rows));
-  RawFrictionOptions o;
-  o.settling_s = 0;
-  o.min_plateau_samples = 10;
-  const InputError e = test::refusal([&] { load_friction_log(file, o); });
+  const InputError e = test::refusal([&] { load_friction_log(file, keep_all(10)); });
   EXPECT_EQ(e.line(), 2);
   EXPECT_EQ(e.column(), 5);  // the position cell
   EXPECT_TRUE(test::says(e, "run 'a': the plateau's velocity_m_s = 100 is beyond the range of a rig's values (-20 to 20 m/s)"))
