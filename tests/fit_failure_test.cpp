@@ -15,21 +15,23 @@
 namespace lmcal {
 namespace {
 
-// y = a·x + b at x = 0..n-1; the residual is NaN where a > nan_above.
+// y = a·x + b at x = 0..n-1; the residual is NaN where a > nan_above. Unless `a_seen`, the
+// model leaves a out (a column of zeros).
 class Line : public detail::LeastSquaresModel {
  public:
-  Line(std::size_t n, double nan_above) : n_(n), nan_above_(nan_above) {}
+  Line(std::size_t n, double nan_above, bool a_seen = true) : n_(n), nan_above_(nan_above), a_seen_(a_seen) {}
   std::size_t num_residuals() const override { return n_; }
   bool linear(const std::vector<bool>&) const override { return !std::isfinite(nan_above_); }
   std::unique_ptr<ceres::CostFunction> cost_function(const std::vector<std::size_t>& rows,
                                                      const detail::RowLoss&) const override {
-    return std::make_unique<Cost>(rows.empty() ? all() : rows, nan_above_);
+    return std::make_unique<Cost>(rows.empty() ? all() : rows, nan_above_, a_seen_ ? 1.0 : 0.0);
   }
 
  private:
   class Cost : public ceres::CostFunction {
    public:
-    Cost(std::vector<std::size_t> rows, double nan_above) : rows_(std::move(rows)), nan_above_(nan_above) {
+    Cost(std::vector<std::size_t> rows, double nan_above, double seen)
+        : rows_(std::move(rows)), nan_above_(nan_above), seen_(seen) {
       set_num_residuals(static_cast<int>(rows_.size()));
       mutable_parameter_block_sizes()->push_back(2);
     }
@@ -38,9 +40,9 @@ class Line : public detail::LeastSquaresModel {
       for (std::size_t k = 0; k < rows_.size(); ++k) {
         const auto x = static_cast<double>(rows_[k]);
         const double y = 2 * x + 1 + (k % 2 == 0 ? 0.1 : -0.1);
-        r[k] = a > nan_above_ ? std::numeric_limits<double>::quiet_NaN() : a * x + b - y;
+        r[k] = a > nan_above_ ? std::numeric_limits<double>::quiet_NaN() : seen_ * a * x + b - y;
         if (J && J[0]) {
-          J[0][2 * k] = x;
+          J[0][2 * k] = seen_ * x;
           J[0][2 * k + 1] = 1;
         }
       }
@@ -49,7 +51,7 @@ class Line : public detail::LeastSquaresModel {
 
    private:
     std::vector<std::size_t> rows_;
-    double nan_above_;
+    double nan_above_, seen_;
   };
   std::vector<std::size_t> all() const {
     std::vector<std::size_t> rows(n_);
@@ -58,6 +60,7 @@ class Line : public detail::LeastSquaresModel {
   }
   std::size_t n_;
   double nan_above_;
+  bool a_seen_;
 };
 
 std::vector<detail::ParameterSpec> specs(double a_start, bool free = true) {
@@ -106,6 +109,19 @@ TEST(FitFailure, NothingFreeIsNoSolveAndAUsableEvaluation) {
   EXPECT_EQ(fit.dof, 20);
   EXPECT_EQ(fit.parameter("a").value, 2);
   EXPECT_NEAR(state.residuals.squaredNorm(), 10 * (0.6 * 0.6 + 0.4 * 0.4), 1e-9);  // b held at 0.5: -0.5 ∓ 0.1
+}
+
+// A linear model whose Jacobian has a column of zeros (a parameter the data do not see: α
+// without heat) took the polish fallback, which left the residuals out, and the covariance
+// read past them (SIGSEGV, issue 22).
+TEST(FitFailure, AParameterTheDataDoNotSeeIsHeldAndTheRestFitted) {
+  detail::FinalState state;
+  const FitResult fit = detail::solve_least_squares(Line(20, kNever, /*a_seen=*/false), specs(1), {}, &state);
+  EXPECT_TRUE(fit.solver.usable) << fit.solver.unusable_reason;
+  EXPECT_TRUE(fit.parameter("a").held_unidentifiable);
+  EXPECT_EQ(state.residuals.size(), 20);
+  EXPECT_TRUE(std::isfinite(fit.parameter("b").se));
+  EXPECT_GT(fit.parameter("b").se, 0);
 }
 
 TEST(FitFailure, NoDegreeOfFreedomLeftIsUnusable) {

@@ -247,6 +247,29 @@ TEST(ThermalFit, ARunOfAFewRecordsIsRefused) {
   }
 }
 
+// No heat in any run (issue 22: SIGSEGV when α alone was free; with offsets, minutes of profile
+// searches): α cannot be told, and the fit says so before it starts.
+TEST(ThermalFit, NoHeatInAnyRunIsRefusedAsAlphaNotIdentifiable) {
+  auto rig = clean_rig(3600);
+  rig.velocity_m_s = {0.066, 0.11};
+  auto data = generate_thermal_dataset(rig, {}, "cold").set;
+  for (ThermalRun& run : data.runs) run.mean_friction_N = 0.0;
+  ThermalFitOptions o = options_for_rig();
+  o.heat = HeatInput::measured_friction;
+  try {
+    fit_thermal(data, o);
+    FAIL() << "fitted α without heat";
+  } catch (const InvalidParameter& e) {
+    EXPECT_EQ(e.parameter(), "alpha");
+    EXPECT_NE(std::string(e.what()).find("not identifiable: no heat (every run's heat rate is 0 W"), std::string::npos) << e.what();
+  }
+  // One run with heat is enough: the other's zero heat only informs its own sensors.
+  data.runs[1].mean_friction_N = 40.0;
+  const ThermalFitResult fit = fit_thermal(data, o);
+  EXPECT_TRUE(fit.joint.solver.usable) << fit.joint.solver.unusable_reason;
+  EXPECT_FALSE(fit.joint.parameter("alpha").held_unidentifiable);
+}
+
 // A sensor is labelled by its name, not by the unit its column was written in: a column
 // tc1_K (loaded into °C) is "tc1" beside measured_C in the samples and in its offset's name.
 TEST(ThermalFit, SensorsAreLabelledWithoutTheirColumnsUnit) {

@@ -298,8 +298,10 @@ Polish linear_solve(const LeastSquaresModel& model, const ceres::CostFunction& c
       return out;
     }
   }
+  // (The residuals too: a rank-deficient J, say a parameter the data do not see, came here
+  // without them and crashed the covariance that reads them.)
   Polish out = polish(cost, specs, held, theta);
-  evaluate_residuals(model, out.theta, loss, &J);
+  out.residuals = evaluate_residuals(model, out.theta, loss, &J);
   return out;
 }
 }  // namespace
@@ -818,6 +820,9 @@ std::vector<ParameterEstimate> estimates(const std::vector<ParameterSpec>& specs
   return out;
 }
 
+// Refits a profile search may spend on one side of one parameter.
+constexpr int kMaxProfileFits = 24;
+
 // Step 5: profile-likelihood intervals where the linear interval is unreliable (or everywhere,
 // if asked): {θ_j : S(θ_j) − S_min <= k_j · ½ s² F(conf; 1, dof)}, k_j = max(1, chosen / iid
 // variance of θ_j), so that the profile widens as the chosen covariance does.
@@ -837,7 +842,9 @@ void profile_intervals(const LeastSquaresModel& model, const std::vector<Paramet
     if (state.held[j]) continue;
     const bool truncated = e.at_bound || e.ci_low < e.lower || e.ci_high > e.upper;
     const bool unreliable = truncated || (!linear && (!std::isfinite(e.se) || e.se > 0.3 * relative_scale(specs[j], e.value)));
-    if (options.profile == ProfileMode::automatic && !unreliable) continue;
+    // A run's nuisance parameter (an offset, a start temperature) is not quoted: `auto` spends no
+    // refits on its profile.
+    if (options.profile == ProfileMode::automatic && (!unreliable || specs[j].per_run)) continue;
     const double iid_se = iid ? iid->se[j] : kNaN;
     const double inflation = std::isfinite(e.se) && iid_se > 0 ? std::max(1.0, std::pow(e.se / iid_se, 2)) : 1.0;
     const double threshold = base_threshold * inflation;
@@ -850,16 +857,22 @@ void profile_intervals(const LeastSquaresModel& model, const std::vector<Paramet
       e.profile_curve.push_back({value, x / threshold});
       return x;
     };
+    // Each side in at most kMaxProfileFits refits (each a whole fit: minutes for a large thermal
+    // model otherwise): doubling steps out from the estimate until the cost rises past the
+    // threshold, then bisection to 1e-3 of the bracket. NaN: the side did not close.
     auto bound_side = [&](double direction) {
       const double limit = direction > 0 ? specs[j].upper : specs[j].lower;
       double step = std::isfinite(e.se) && e.se > 0 ? t * e.se : 0.1 * (specs[j].upper - specs[j].lower);
       double inside = e.value;
-      for (int k = 0; k < 40; ++k) {
+      int fits = 0;
+      while (fits < kMaxProfileFits) {
         const double trial = std::clamp(e.value + direction * step, specs[j].lower, specs[j].upper);
+        ++fits;
         if (excess(trial) > threshold) {
           double a = inside, b = trial;  // a inside, b outside: bisect
-          for (int m = 0; m < 30 && std::abs(b - a) > 1e-6 * std::abs(step); ++m) {
+          while (fits < kMaxProfileFits && std::abs(b - a) > 1e-3 * std::abs(trial - e.value)) {
             const double mid = 0.5 * (a + b);
+            ++fits;
             (excess(mid) > threshold ? b : a) = mid;
           }
           return 0.5 * (a + b);
@@ -868,11 +881,18 @@ void profile_intervals(const LeastSquaresModel& model, const std::vector<Paramet
         inside = trial;
         step *= 2;
       }
-      return limit;
+      return kNaN;
     };
     e.profile_curve = {{e.value, 0.0}};
     e.profile_low = bound_side(-1);
     e.profile_high = bound_side(+1);
+    if (!std::isfinite(e.profile_low) || !std::isfinite(e.profile_high)) {
+      result.warnings.push_back(fmt::format("the profile of {} did not close within {} refits a side: its {} interval is quoted",
+                                            e.name, kMaxProfileFits, e.interval));
+      e.profile_low = e.profile_high = kNaN;
+      e.profile_curve.clear();
+      continue;
+    }
     // The search crowds its points at the edges; half-way in and a half beyond draw the shape.
     for (const double edge : {e.profile_low, e.profile_high}) {
       excess(e.value + 0.5 * (edge - e.value));

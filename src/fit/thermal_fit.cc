@@ -763,6 +763,13 @@ ThermalFitResult fit_thermal(const ThermalDataSet& data, const ThermalFitOptions
     result.runs.push_back(p.info);
     rises.push_back(std::move(p.rise_K));
   }
+  // α is the share of a heat: with none in any run, nothing tells it (and every search for it
+  // ran to its bounds).
+  if (std::all_of(result.runs.begin(), result.runs.end(), [](const RunInfo& r) { return r.heat_rate_W == 0; })) {
+    throw InvalidParameter("alpha", fmt::format("not identifiable: no heat (every run's heat rate is 0 W, from the {}); "
+                                                "α is the share of the friction heat that enters the rail",
+                                                result.runs.front().heat_source));
+  }
 
   // Joint fit, and every run alone.
   auto [layout, specs] = layout_for(runs, o);
