@@ -270,6 +270,21 @@ TEST(ThermalFit, NoHeatInAnyRunIsRefusedAsAlphaNotIdentifiable) {
   EXPECT_FALSE(fit.joint.parameter("alpha").held_unidentifiable);
 }
 
+// Every thermocouple cell missing (NaN) gave 0 residuals, dof -1 and α at its start value 0.600
+// [nan, nan] called usable (issue 23 #8): such a run has no record to fit.
+TEST(ThermalFit, ARunWithoutAnyThermocoupleValueIsRefused) {
+  auto rig = clean_rig(3600);
+  rig.velocity_m_s = {0.11};
+  auto data = generate_thermal_dataset(rig, {}, "blank").set;
+  for (TemperatureChannel& c : data.runs.at(0).trace.rail) std::fill(c.values.begin(), c.values.end(), std::nan(""));
+  try {
+    fit_thermal(data, options_for_rig());
+    FAIL() << "fitted a run without a thermocouple value";
+  } catch (const InvalidParameter& e) {
+    EXPECT_NE(std::string(e.what()).find("0 records with a thermocouple value to fit"), std::string::npos) << e.what();
+  }
+}
+
 // A sensor is labelled by its name, not by the unit its column was written in: a column
 // tc1_K (loaded into °C) is "tc1" beside measured_C in the samples and in its offset's name.
 TEST(ThermalFit, SensorsAreLabelledWithoutTheirColumnsUnit) {
