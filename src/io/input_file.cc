@@ -82,9 +82,6 @@ std::string read_text_file(const std::filesystem::path& file, std::string_view w
   return text;
 }
 
-}  // namespace lmcal::io
-
-namespace lmcal::io {
 
 namespace {
 

@@ -1,5 +1,6 @@
 // Private: every input file is opened through here, so that a folder, a device (/dev/zero),
-// a pipe or an oversized file is refused before a byte is read.
+// a pipe or an oversized file is refused before a byte is read; and the check of every name
+// that reaches an output (UTF-8, no control or bidirectional characters).
 #pragma once
 
 #include <cstdint>
@@ -23,12 +24,8 @@ std::uintmax_t check_input_file(const std::filesystem::path& file, std::uintmax_
 // The whole of a regular text file of at most kMaxTextBytes (limits.hpp), checked as above.
 std::string read_text_file(const std::filesystem::path& file, std::string_view what);
 
-// "4 GiB", "64 MiB", "1.5 kB": a byte count for messages.
+// "4 GiB", "64 MiB", "1.5 KiB" (or "12 bytes"): a byte count for messages.
 std::string byte_size(std::uintmax_t bytes);
-
-}  // namespace lmcal::io
-
-namespace lmcal::io {
 
 // What makes `name` (a run, guide, sensor or folder name) unfit to carry into outputs, or
 // nullopt: bytes that are not UTF-8 (JSON cannot hold them), control characters (a terminal
