@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "io/input_file.hpp"
+#include "io/toml_text.hpp"
 #include "lmcal/error.hpp"
 #include "lmcal/fit/statistics.hpp"
 
@@ -96,17 +97,6 @@ std::vector<ModelParameter> parameters_of(const FitResult& fit) {
   return out;
 }
 
-// A TOML basic string: quotes, backslashes and control characters escaped.
-std::string quoted(const std::string& s) {
-  std::string out = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\') out += '\\';
-    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) out += fmt::format("\\u{:04X}", static_cast<unsigned char>(c));
-    else out += c;
-  }
-  return out + "\"";
-}
-
 // The shortest text that reads back as the same double (-0 keeps its sign: "-0" would be an integer).
 std::string number(double v) {
   if (std::isnan(v)) return "nan";
@@ -117,14 +107,14 @@ std::string number(double v) {
 
 std::string string_list(const std::vector<std::string>& items) {
   std::vector<std::string> q;
-  for (const auto& i : items) q.push_back(quoted(i));
+  for (const auto& i : items) q.push_back(manifest::toml_string(i));
   return "[" + fmt::format("{}", fmt::join(q, ", ")) + "]";
 }
 
 void write_parameters(std::string& out, const char* table, const std::vector<ModelParameter>& parameters) {
   for (const auto& p : parameters)
     out += fmt::format("[[{}.parameter]]\nname = {}\nunit = {}\nvalue = {}\nse = {}\nci95 = [{}, {}]\nheld = {}\n\n", table,
-                       quoted(p.name), quoted(p.unit), number(p.value), number(p.se), number(p.ci_low), number(p.ci_high),
+                       manifest::toml_string(p.name), manifest::toml_string(p.unit), number(p.value), number(p.se), number(p.ci_low), number(p.ci_high),
                        p.held);
 }
 
@@ -602,27 +592,27 @@ std::string model_file_toml(const ModelFile& m) {
       "# lmcal calibrated model: the published friction law and rail model with the causes the diagnoses\n"
       "# accepted, refitted to the measurements. Every parameter with its standard error and 95 % interval.\n"
       "# Use it: lmcal simulate friction --model FILE, lmcal simulate thermal --model FILE\n";
-  out += fmt::format("kind = \"lmcal calibrated model\"\nlmcal_version = {}\nset = {}\ncommand = {}\n\n", quoted(m.lmcal_version),
-                     quoted(m.set), string_list(m.command));
-  for (const auto& [file, hash] : m.inputs) out += fmt::format("[[input]]\nfile = {}\nsha256 = {}\n\n", quoted(file), quoted(hash));
+  out += fmt::format("kind = \"lmcal calibrated model\"\nlmcal_version = {}\nset = {}\ncommand = {}\n\n", manifest::toml_string(m.lmcal_version),
+                     manifest::toml_string(m.set), string_list(m.command));
+  for (const auto& [file, hash] : m.inputs) out += fmt::format("[[input]]\nfile = {}\nsha256 = {}\n\n", manifest::toml_string(file), manifest::toml_string(hash));
   if (m.has_friction) {
     out += fmt::format(
         "[friction]\n# the friction law (Eqs. 3-7) with these effects added\ncauses = {}\ncovariance = {}\n"
         "reference_temperature_C = {}\nviscosity40_mm2_s = {}\n\n",
-        string_list(m.friction_causes), quoted(m.friction_covariance), number(m.constants.T_ref_C), number(m.constants.nu_ref_mm2_s));
+        string_list(m.friction_causes), manifest::toml_string(m.friction_covariance), number(m.constants.T_ref_C), number(m.constants.nu_ref_mm2_s));
     write_parameters(out, "friction", m.friction_parameters);
     for (std::size_t t = 0; t < m.friction_terms.size(); ++t) {
       const FrictionTerm& term = m.friction_terms[t];
       std::vector<std::string> factors, seen;
       for (const auto& f : term.factors) factors.push_back(factor_text(f));
       for (const auto& r : term.seen)
-        seen.push_back(fmt::format("{{ covariate = {}, min = {}, max = {} }}", quoted(term_covariate_name(r.covariate)),
+        seen.push_back(fmt::format("{{ covariate = {}, min = {}, max = {} }}", manifest::toml_string(term_covariate_name(r.covariate)),
                                    number(r.min), number(r.max)));
       out += fmt::format(
           "[[friction.term]]\n# empirical: learned from the residuals, not a named cause; beyond `seen` an "
           "extrapolation\nsymbol = {}\nfactors = {}\ncoefficient = {}\n",
-          quoted(term.symbol(t + 1)), string_list(factors), quoted(fmt::format("term{}", t + 1)));
-      if (term.has_scale()) out += fmt::format("scale = {}\n", quoted(fmt::format("term{}_scale", t + 1)));
+          manifest::toml_string(term.symbol(t + 1)), string_list(factors), manifest::toml_string(fmt::format("term{}", t + 1)));
+      if (term.has_scale()) out += fmt::format("scale = {}\n", manifest::toml_string(fmt::format("term{}_scale", t + 1)));
       out += fmt::format("seen = [{}]\n\n", fmt::join(seen, ", "));
     }
     write_covariance(out, "friction", m.friction_covariance_matrix, nullptr);
@@ -631,8 +621,8 @@ std::string model_file_toml(const ModelFile& m) {
   if (m.has_thermal) {
     out += fmt::format("[thermal]\n# the rail model (Eqs. 11-15) with these mechanisms added; alpha belongs to this source model\n"
                        "source = {}\nmechanisms = {}\ncovariance = {}\nheat_uncertainty = {}\n",
-                       quoted(std::string(to_string(m.source))), string_list(m.mechanisms), quoted(m.thermal_covariance),
-                       quoted(m.heat_uncertainty));
+                       manifest::toml_string(std::string(to_string(m.source))), string_list(m.mechanisms), manifest::toml_string(m.thermal_covariance),
+                       manifest::toml_string(m.heat_uncertainty));
     if (!m.reading_terms.empty())
       out += "# fitted with an empirical term on the thermocouple readings (learned from the residuals, not a named\n"
              "# cause): it describes the readings, not the rail, and is not applied when the rail is simulated\n"

@@ -116,6 +116,13 @@ bool is_bidi_control(char32_t code) {
 
 }  // namespace
 
+std::optional<BidiControl> bidi_control_at(std::string_view text) {
+  if (text.empty()) return std::nullopt;
+  const Character c = decode(text);
+  if (!c.code || !is_bidi_control(*c.code)) return std::nullopt;
+  return BidiControl{*c.code, c.length};
+}
+
 std::optional<std::string> name_problem(std::string_view name, bool free_text) {
   long character = 1;
   for (std::size_t at = 0; at < name.size(); ++character) {

@@ -34,6 +34,14 @@ std::string byte_size(std::uintmax_t bytes);
 // `free_text` allows line breaks and tabs (a description).
 std::optional<std::string> name_problem(std::string_view name, bool free_text = false);
 
+// The bidirectional control that starts `text` (its code point and length in bytes), or nullopt:
+// for escapers that show it by name (the report's escape_xml).
+struct BidiControl {
+  char32_t code;
+  std::size_t length;
+};
+std::optional<BidiControl> bidi_control_at(std::string_view text);
+
 // `text` safe to print: bytes that are not UTF-8 as \xE9, control and bidirectional
 // characters as \u001B; everything else as it is.
 std::string printable(std::string_view text);

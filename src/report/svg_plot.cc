@@ -1,5 +1,7 @@
 #include "lmcal/report/svg_plot.hpp"
 
+#include "io/input_file.hpp"
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -311,33 +313,14 @@ std::string clip_id(std::string_view id) {
 
 }  // namespace
 
-namespace {
-
-// The length of the bidirectional control (U+202A-U+202E, U+2066-U+2069, U+200E, U+200F,
-// U+061C) that starts `text`, in bytes; 0 when none does.
-std::size_t bidi_control_length(std::string_view text) {
-  const auto byte = [&](std::size_t i) { return i < text.size() ? static_cast<unsigned char>(text[i]) : 0u; };
-  if (byte(0) == 0xD8 && byte(1) == 0x9C) return 2;
-  if (byte(0) != 0xE2) return 0;
-  if (byte(1) == 0x80 && (byte(2) == 0x8E || byte(2) == 0x8F || (byte(2) >= 0xAA && byte(2) <= 0xAE))) return 3;
-  if (byte(1) == 0x81 && byte(2) >= 0xA6 && byte(2) <= 0xA9) return 3;
-  return 0;
-}
-
-}  // namespace
-
 std::string escape_xml(std::string_view text) {
   std::string out;
   out.reserve(text.size());
   for (std::size_t i = 0; i < text.size(); ++i) {
     // A bidirectional control would reorder everything after it on the page: shown as its name.
-    if (const std::size_t n = bidi_control_length(text.substr(i))) {
-      const std::string_view control = text.substr(i, n);
-      const unsigned code = n == 2 ? 0x061C
-                                   : 0x2000u + ((static_cast<unsigned char>(control[1]) & 0x3Fu) << 6) +
-                                         (static_cast<unsigned char>(control[2]) & 0x3Fu);
-      out += fmt::format("[U+{:04X}]", code);
-      i += n - 1;
+    if (const auto control = io::bidi_control_at(text.substr(i))) {
+      out += fmt::format("[U+{:04X}]", static_cast<unsigned>(control->code));
+      i += control->length - 1;
       continue;
     }
     const char c = text[i];
