@@ -414,8 +414,13 @@ void add_friction_constant_options(CLI::App& app, FrictionConstantOptions& o) {
   add_assignments(app, "--start", o.start, "Start value: --start mu_st=1 (default: the paper's)");
   app.add_option("--bound", o.bounds, "Bounds: --bound k1=0:1 (repeatable)");
   app.add_option("--run-offsets", o.run_offsets,
-                 "The load cell's zero per run: none, fixed (free, profiled) or random (a run intercept whose variance "
-                 "is estimated; keeps what changes only between runs informative)");
+                 "The load cell's zero per run: auto (random with two runs or more and no robust loss; the default), none, "
+                 "fixed (free, profiled) or random (a run intercept whose variance is estimated; keeps what changes only "
+                 "between runs informative)");
+  app.add_option("--law-temperature", o.temperature,
+                 "The temperature the law sees: block-mean (the default: each run's mean logged temperature at one setting, "
+                 "which averages the thermometer's noise out instead of flattening the law's temperature dependence) or "
+                 "logged (each sample's own)");
 }
 
 void apply_friction_constant_options(const FrictionConstantOptions& o, FrictionFitOptions& f) {
@@ -436,11 +441,16 @@ void apply_friction_constant_options(const FrictionConstantOptions& o, FrictionF
     const auto range = parse_list("--bound", item.substr(eq + 1, colon - eq - 1) + "," + item.substr(colon + 1));
     f.bounds[friction_constant_index("--bound", item.substr(0, eq))] = {range[0], range[1]};
   }
-  if (o.run_offsets == "none") f.run_offsets = RunOffsets::none;
+  if (o.run_offsets == "auto") f.run_offsets = RunOffsets::automatic;
+  else if (o.run_offsets == "none") f.run_offsets = RunOffsets::none;
   else if (o.run_offsets == "fixed") f.run_offsets = RunOffsets::fixed;
   else if (o.run_offsets == "random") f.run_offsets = RunOffsets::random;
   else if (!o.run_offsets.empty())
-    throw InvalidParameter("--run-offsets", "unknown model '" + o.run_offsets + "'; expected none, fixed or random");
+    throw InvalidParameter("--run-offsets", "unknown model '" + o.run_offsets + "'; expected auto, none, fixed or random");
+  if (o.temperature == "block-mean") f.temperature = FrictionTemperature::block_mean;
+  else if (o.temperature == "logged") f.temperature = FrictionTemperature::logged;
+  else if (!o.temperature.empty())
+    throw InvalidParameter("--law-temperature", "unknown choice '" + o.temperature + "'; expected block-mean or logged");
 }
 
 }  // namespace lmcal::cli

@@ -205,13 +205,15 @@ CLI::Option* add_choice(CLI::App& app, const std::string& name, Enum& target, co
 }
 
 // The friction constants a command fits, holds and starts from: --free, --fix, --start,
-// --bound, and --run-offsets (how the load cell's zero moves between runs).
+// --bound, --run-offsets (how the load cell's zero moves between runs) and --law-temperature (the
+// temperature the law is evaluated at).
 struct FrictionConstantOptions {
   std::vector<std::string> free;        // empty: all seven
   std::map<std::string, double> fixed;  // held at these values
   std::map<std::string, double> start;
   std::vector<std::string> bounds;      // NAME=LO:HI
-  std::string run_offsets;              // none, fixed, random; empty: the command's default
+  std::string run_offsets;              // auto, none, fixed, random; empty: the command's default
+  std::string temperature;              // logged, block-mean; empty: the command's default
 };
 void add_friction_constant_options(CLI::App& app, FrictionConstantOptions& o);
 // Into `f` (InvalidParameter naming the option for an unknown constant or a bad bound).

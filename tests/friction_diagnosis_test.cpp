@@ -92,14 +92,15 @@ TEST(FrictionDiagnosis, ReportedGainIsCloseToTheTruthsGain) {
   const auto made = generate_friction_log(rig, effects);
   const auto d = diagnose(made.log);
   ASSERT_EQ(d.accepted.size(), 1u);
-  // The true law and effect at the logged conditions: its error is the rig's noise (load
-  // cell, and the logged temperature's).
+  // The true law and effect at the conditions the fits see (each block's mean logged
+  // temperature): its error is the rig's noise (load cell, and what is left of the logged
+  // temperature's).
   double ss = 0;
   FrictionEffects<double> truth_effects;
   truth_effects.of<SealDrag>() = 80;
-  for (std::size_t i = 0; i < made.log.size(); ++i)
-    ss += std::pow(made.log.friction_N[i] -
-                       friction_force_with_effects_N(paper_friction_constants(), truth_effects, made.log.conditions(i)),
+  const FrictionLog seen = with_block_mean_temperature(made.log);
+  for (std::size_t i = 0; i < seen.size(); ++i)
+    ss += std::pow(seen.friction_N[i] - friction_force_with_effects_N(paper_friction_constants(), truth_effects, seen.conditions(i)),
                    2);
   const double truth_rmse = std::sqrt(ss / static_cast<double>(made.log.size()));
   const double truth_gain = 100 * (1 - truth_rmse / d.cv_rmse_before_N);
@@ -131,12 +132,17 @@ FrictionRigConfig one_setup_per_run(std::uint64_t seed) {
 }
 
 // Per-run zero offsets used to erase everything that changes only between runs: a
-// temperature-dependent Coulomb term in one-setup runs is named, with its interval.
+// temperature-dependent Coulomb term in one-setup runs is named, with its interval. Two
+// sweeps of the 18 setups: with one, only the 18 runs' levels see the term (the fit sees each
+// run's mean logged temperature), and its direction beside k1 is at the edge of what they
+// determine (relative SE 0.53 against the 0.5 that counts as identified).
 TEST(FrictionDiagnosis, OneSetupPerRunStillShowsWhatChangesBetweenRuns) {
   for (std::uint64_t seed : {1, 2, 3}) {
     RigEffects effects;
     set_rig_effect(effects, "coulomb_temperature", 0.08);
-    const auto d = diagnose(generate_friction_log(one_setup_per_run(seed), effects).log);
+    FrictionRigConfig rig = one_setup_per_run(seed);
+    rig.runs = 2;
+    const auto d = diagnose(generate_friction_log(rig, effects).log);
     ASSERT_FALSE(d.accepted.empty()) << "seed " << seed << ": " << d.summary;
     EXPECT_EQ(d.accepted.front().effect, "coulomb_temperature") << "seed " << seed << ": " << d.summary;
     EXPECT_LE(d.accepted.front().ci_low, 0.08) << d.summary;

@@ -223,8 +223,8 @@ TEST(ThermalFit, ReportsEquationTwoBetweenAmbientSensorsAndRepeats) {
   const auto data = generate_thermal_dataset(rig, {}, "r").set;
   const auto result = fit_thermal(data, options_for_rig());
   ASSERT_EQ(result.repeat_differences.size(), 1u);
-  EXPECT_EQ(result.repeat_differences[0].first, "v110_r1/v110_r2");
-  EXPECT_LT(result.repeat_differences[0].second, 1.0);  // same conditions, clean: α agrees
+  EXPECT_EQ(result.repeat_differences[0].runs, "v110_r1/v110_r2");
+  EXPECT_LT(result.repeat_differences[0].percent, 1.0);  // same conditions, clean: α agrees
   for (const auto& run : result.runs) EXPECT_NEAR(run.ambient_difference_percent, 0.0, 1e-9);  // unbiased sensors
 }
 

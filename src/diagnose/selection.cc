@@ -363,7 +363,9 @@ nlohmann::json candidate_json(const CandidateScore& c, const std::string& unit) 
                         {"cv_shape_gain_percent", number(c.cv_shape_gain_percent)},
                         {"accepted", c.accepted},
                         {"reason", c.reason},
-                        {"tied_with", c.tied_with}};
+                        {"tied_with", c.tied_with},
+                        {"alpha", number(c.alpha)},
+                        {"alpha_ci95", {number(c.alpha_low), number(c.alpha_high)}}};
 }
 
 nlohmann::json verdict_json(const std::string& verdict, const std::string& summary,
@@ -454,6 +456,15 @@ ParameterShift parameter_shift(const ParameterEstimate& baseline, const Paramete
   // physical reason: it is reported, but not as a shift.
   const bool free = baseline.free && extended.free && !baseline.held_unidentifiable && !extended.held_unidentifiable;
   return {baseline.name, baseline.value, extended.value, low(baseline), high(baseline), low(extended), high(extended), free};
+}
+
+std::pair<double, double> candidate_alpha_range(const std::vector<std::vector<CandidateScore>>& rounds) {
+  double low = std::numeric_limits<double>::infinity(), high = -low;
+  for (const auto& round : rounds)
+    for (const auto& c : round)
+      if (std::isfinite(c.alpha)) low = std::min(low, c.alpha), high = std::max(high, c.alpha);
+  if (low > high) return {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN()};
+  return {low, high};
 }
 
 }  // namespace lmcal

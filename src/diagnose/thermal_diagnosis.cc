@@ -292,6 +292,8 @@ ThermalDiagnosis diagnose_thermal(const ThermalDataSet& data, const ThermalDiagn
     m.k = fit.joint.free_parameters;
     m.cv_rmse = fit.cv_rmse_K;
     for (const auto& s : fit.samples) m.fitted.push_back(s.simulated_C);
+    if (const ParameterEstimate& a = fit.joint.parameter("alpha"); fit.joint.solver.usable)
+      c.alpha = a.value, c.alpha_low = a.ci_low, c.alpha_high = a.ci_high;
     if (!fit.joint.solver.usable) m.problem = "the fit did not converge: " + fit.joint.solver.termination;
     for (const auto& issue : fit.joint.identifiability.issues) m.problem = "not identifiable: " + issue.why;
     if (!effect.empty()) {

@@ -286,8 +286,52 @@ FrictionEffects<double> FrictionFitResult::effects() const {
   return e;
 }
 
-FrictionFitResult fit_friction(const FrictionLog& log, const FrictionFitOptions& options) {
-  if (log.size() == 0) throw InvalidParameter("log", "the friction log has no samples");
+const char* to_string(RunOffsets offsets) {
+  switch (offsets) {
+    case RunOffsets::automatic: return "auto";
+    case RunOffsets::none: return "none";
+    case RunOffsets::fixed: return "fixed";
+    case RunOffsets::random: return "random";
+  }
+  return "?";
+}
+
+const char* to_string(FrictionTemperature temperature) {
+  return temperature == FrictionTemperature::block_mean ? "block-mean" : "logged";
+}
+
+// Blocks: the samples of one run at one setting (guide, preload, load, temperature to 1 K).
+FrictionLog with_block_mean_temperature(const FrictionLog& logged) {
+  using Block = std::tuple<std::uint32_t, std::uint32_t, double, double, double>;
+  const auto block_of = [&](std::size_t i) {
+    return Block{logged.run[i], logged.guide.empty() ? 0 : logged.guide[i], logged.preload_um[i], logged.load_N[i],
+                 std::round(logged.temperature_C[i])};
+  };
+  std::map<Block, std::size_t> index;
+  std::vector<double> sum, count;
+  std::vector<std::size_t> block(logged.size());
+  for (std::size_t i = 0; i < logged.size(); ++i) {
+    // A log holds each setting for a stretch of samples: look up only where it changes.
+    if (i == 0 || block_of(i) != block_of(i - 1)) {
+      const auto [it, inserted] = index.try_emplace(block_of(i), sum.size());
+      if (inserted) sum.push_back(0), count.push_back(0);
+      block[i] = it->second;
+    } else {
+      block[i] = block[i - 1];
+    }
+    sum[block[i]] += logged.temperature_C[i];
+    count[block[i]] += 1;
+  }
+  FrictionLog out = logged;
+  for (std::size_t i = 0; i < out.size(); ++i) out.temperature_C[i] = sum[block[i]] / count[block[i]];
+  return out;
+}
+
+FrictionFitResult fit_friction(const FrictionLog& logged, const FrictionFitOptions& options) {
+  if (logged.size() == 0) throw InvalidParameter("log", "the friction log has no samples");
+  FrictionLog smoothed;
+  if (options.temperature == FrictionTemperature::block_mean) smoothed = with_block_mean_temperature(logged);
+  const FrictionLog& log = options.temperature == FrictionTemperature::block_mean ? smoothed : logged;
   // The law is friction in motion against the conditions: with nothing moving, or nothing
   // varied, none of it can be fitted (the fit would report an exact, meaningless agreement).
   const auto varies = [&](const std::vector<double>& column) {
@@ -306,9 +350,13 @@ FrictionFitResult fit_friction(const FrictionLog& log, const FrictionFitOptions&
 
   FrictionFitResult out;
   out.sigma_N = sample_sigmas(log, options.weighting);
-  if (options.run_offsets != RunOffsets::none && options.fit.loss != RobustLoss::none)
-    throw InvalidParameter("run_offsets", "per-run offsets and a robust loss cannot be combined");
   const std::size_t runs = log.run_names.size();
+  const RunOffsets offsets = options.run_offsets != RunOffsets::automatic ? options.run_offsets
+                             : runs >= 2 && options.fit.loss == RobustLoss::none ? RunOffsets::random
+                                                                                  : RunOffsets::none;
+  if (offsets != RunOffsets::none && options.fit.loss != RobustLoss::none)
+    throw InvalidParameter("run_offsets", "per-run offsets and a robust loss cannot be combined");
+  out.run_offsets = offsets;
   const TermSeries series = term_series(log);
   for (const auto& term : options.terms)
     for (const auto& f : term.factors)
@@ -324,10 +372,10 @@ FrictionFitResult fit_friction(const FrictionLog& log, const FrictionFitOptions&
   }
   std::vector<std::size_t> run_of(log.size());
   for (std::size_t i = 0; i < log.size(); ++i) run_of[i] = log.run[i];
-  if (options.run_offsets == RunOffsets::fixed) data.run_shrink.assign(runs, 1.0);
+  if (offsets == RunOffsets::fixed) data.run_shrink.assign(runs, 1.0);
   // Random offsets: start from the given λ (0: without them), then alternate the constants (warm-started)
   // and λ (maximum likelihood given the constants) until the whitening settles.
-  if (options.run_offsets == RunOffsets::random) {
+  if (offsets == RunOffsets::random) {
     std::vector<double> count(runs, 0.0);
     for (std::size_t i = 0; i < log.size(); ++i) count[log.run[i]] += 1;
     const double lambda = std::max(options.run_offset_ratio_start, 0.0);
@@ -335,7 +383,7 @@ FrictionFitResult fit_friction(const FrictionLog& log, const FrictionFitOptions&
   }
   const FrictionModel model(data, slots);
   detail::FinalState final_state;
-  const bool random = options.run_offsets == RunOffsets::random && runs >= 2;
+  const bool random = offsets == RunOffsets::random && runs >= 2;
   auto run_specs = specs;
   auto warm_start = [&] {
     for (std::size_t j = 0; j < run_specs.size(); ++j)
@@ -346,9 +394,11 @@ FrictionFitResult fit_friction(const FrictionLog& log, const FrictionFitOptions&
   FitOptions pass_options = options.fit;
   if (random) pass_options.bootstrap = 0, pass_options.profile = ProfileMode::none;
   RunOffsetVariance variance;
+  SolverReport multi_start;  // the first pass's: the later ones start from its estimate
   for (int pass = 1;; ++pass) {
     out.fit = detail::solve_least_squares(model, run_specs, pass_options, &final_state);
     out.variance_passes = pass;
+    if (pass == 1) multi_start = out.fit.solver;
     if (!random || !out.fit.solver.converged) break;  // refining τ² of a fit that did not converge buys nothing
     variance = run_offset_variance(unwhitened(final_state.residuals, run_of, data.run_shrink), run_of, runs);
     std::vector<double> shrink(runs);
@@ -367,6 +417,11 @@ FrictionFitResult fit_friction(const FrictionLog& log, const FrictionFitOptions&
     FitOptions final_options = options.fit;
     final_options.starts = 0;
     out.fit = detail::solve_least_squares(model, run_specs, final_options, &final_state);
+  }
+  if (out.variance_passes > 1 || out.fit.solver.starts < multi_start.starts) {
+    SolverReport& s = out.fit.solver;
+    s.starts = multi_start.starts, s.starts_agreed = multi_start.starts_agreed;
+    s.start_costs = multi_start.start_costs, s.start_residuals = multi_start.start_residuals;
   }
   {
     const std::vector<double> raw = unwhitened(final_state.residuals, run_of, data.run_shrink);
@@ -430,7 +485,7 @@ FrictionFitResult fit_friction(const FrictionLog& log, const FrictionFitOptions&
   for (std::size_t r = 0; r < runs; ++r) {
     const double mean = run_count[r] > 0 ? run_sum[r] / run_count[r] : kNaN;
     out.run_mean_residual_N.push_back(mean);
-    const double share = options.run_offsets == RunOffsets::fixed ? 1.0
+    const double share = offsets == RunOffsets::fixed ? 1.0
                          : random ? run_count[r] * variance.ratio / (1 + run_count[r] * variance.ratio)
                                   : 0.0;
     out.run_offset_N.push_back(share * mean);
@@ -494,7 +549,7 @@ FrictionFitResult fit_friction(const FrictionLog& log, const FrictionFitOptions&
     run_options.starts = 1;
     run_options.profile = ProfileMode::none;
     std::vector<std::vector<double>> values(specs.size(), std::vector<double>(log.run_names.size(), kNaN));
-    std::vector<std::vector<double>> half_widths = values;
+    std::vector<std::vector<double>> half_widths = values, ses = values;
     for (std::uint32_t r = 0; r < log.run_names.size(); ++r) {
       FrictionData run_data{&log, {}, {}, options.start.T_ref_C, data.run_shrink};
       run_data.terms = &options.terms;
@@ -511,6 +566,7 @@ FrictionFitResult fit_friction(const FrictionLog& log, const FrictionFitOptions&
         if (run_specs[j].free && !run_fit.parameters[j].held_unidentifiable) {
           values[j][r] = run_fit.parameters[j].value;
           half_widths[j][r] = 0.5 * (run_fit.parameters[j].ci_high - run_fit.parameters[j].ci_low);
+          ses[j][r] = run_fit.parameters[j].se;
         }
     }
     const double runs = static_cast<double>(log.run_names.size());
@@ -520,10 +576,15 @@ FrictionFitResult fit_friction(const FrictionLog& log, const FrictionFitOptions&
       s.parameter = specs[j].name;
       s.per_run = values[j];
       s.per_run_half_width_95 = half_widths[j];
+      s.per_run_se = ses[j];
       s.spread = spread(values[j], options.fit.confidence);
       s.pooled_se = out.fit.parameters[j].se;
       s.ratio = s.spread.sd / (s.pooled_se * std::sqrt(runs));
-      s.wider_than_pooled = s.ratio > 3;
+      for (const RunHeterogeneity& h : out.fit.uncertainty.heterogeneity)
+        if (h.parameter == s.parameter) {
+          s.q = h.q, s.p = h.p_value, s.p_holm = h.p_holm;
+          s.wider_than_pooled = h.significant;
+        }
       out.spread.push_back(s);
     }
   }
@@ -553,9 +614,11 @@ const char* to_string(RobustLoss l) {
 }
 
 nlohmann::json run_offsets_json(const FrictionFitResult& r, const FrictionFitOptions& o) {
-  const char* model = o.run_offsets == RunOffsets::random  ? "random (a run intercept of variance tau^2, ML, GLS)"
-                      : o.run_offsets == RunOffsets::fixed ? "fixed (one free offset per run, profiled)"
-                                                           : "none";
+  const std::string model = fmt::format("{}{}",
+                                        r.run_offsets == RunOffsets::random  ? "random (a run intercept of variance tau^2, ML, GLS)"
+                                        : r.run_offsets == RunOffsets::fixed ? "fixed (one free offset per run, profiled)"
+                                                                             : "none",
+                                        o.run_offsets == RunOffsets::automatic ? "; chosen automatically" : "");
   nlohmann::json per_run = nlohmann::json::object();
   for (std::size_t k = 0; k < r.runs.size() && k < r.run_offset_N.size(); ++k)
     per_run[r.runs[k]] = {{"offset_N", number(r.run_offset_N[k])}, {"mean_residual_N", number(r.run_mean_residual_N[k])}};
@@ -569,9 +632,12 @@ std::string friction_fit_json(const FrictionFitResult& r, const FrictionFitOptio
   nlohmann::json spread = nlohmann::json::array();
   for (const auto& s : r.spread) {
     nlohmann::json per_run = nlohmann::json::array();
+    nlohmann::json per_run_se = nlohmann::json::array();
     for (double v : s.per_run) per_run.push_back(number(v));
+    for (double v : s.per_run_se) per_run_se.push_back(number(v));
     spread.push_back({{"parameter", s.parameter},
                       {"per_run", per_run},
+                      {"per_run_se", per_run_se},
                       {"n", s.spread.n},
                       {"mean", number(s.spread.mean)},
                       {"sd_eq1", number(s.spread.sd)},
@@ -580,6 +646,9 @@ std::string friction_fit_json(const FrictionFitResult& r, const FrictionFitOptio
                       {"max", number(s.spread.max)},
                       {"pooled_se", number(s.pooled_se)},
                       {"ratio_to_pooled", number(s.ratio)},
+                      {"cochran_q", number(s.q)},
+                      {"p", number(s.p)},
+                      {"p_holm", number(s.p_holm)},
                       {"wider_than_pooled", s.wider_than_pooled}});
   }
   nlohmann::json inputs = nlohmann::json::array();
@@ -597,6 +666,7 @@ std::string friction_fit_json(const FrictionFitResult& r, const FrictionFitOptio
         {"loss_scale", o.fit.loss_scale},
         {"starts", o.fit.starts},
         {"effects", o.effects},
+        {"temperature", to_string(o.temperature)},
         {"reference_temperature_C", o.start.T_ref_C}}},
       {"runs", r.runs},
       {"run_offsets", run_offsets_json(r, o)},
@@ -707,12 +777,14 @@ std::string friction_fit_summary(const FrictionFitResult& r) {
     s += fmt::format("run offsets: random, tau = {:.3g} N (variance {:.3g} x the noise's, {} alternating fits)\n",
                      r.run_offset_sd_N, r.run_offset_ratio, r.variance_passes);
   if (!r.spread.empty()) {
-    s += fmt::format("spread across {} runs (Eq. 1 sigma; ratio = sigma / (pooled SE * sqrt(runs)), ~1 if only noise):\n",
+    s += fmt::format("spread across {} runs (Eq. 1 sigma; ratio = sigma / (pooled SE * sqrt(runs)), ~1 if only noise; "
+                     "p: the pooled fit's test of heterogeneity between runs, Holm across the constants):\n",
                      r.runs.size());
     for (const auto& sp : r.spread)
-      s += fmt::format("  {:<20} mean {:>11.5g}  sigma {:>9.3g}  [{:.5g}, {:.5g}]  min {:.5g} max {:.5g}  ratio {:.2f}{}\n",
+      s += fmt::format("  {:<20} mean {:>11.5g}  sigma {:>9.3g}  [{:.5g}, {:.5g}]  min {:.5g} max {:.5g}  ratio {:.2f}  p {:.2g}{}\n",
                        sp.parameter, sp.spread.mean, sp.spread.sd, sp.spread.low, sp.spread.high, sp.spread.min,
-                       sp.spread.max, sp.ratio, sp.wider_than_pooled ? "  WIDER: the model misses something run to run" : "");
+                       sp.spread.max, sp.ratio, sp.p_holm,
+                       sp.wider_than_pooled ? "  WIDER: the runs differ beyond what the model explains" : "");
   }
   for (const auto& w : f.warnings) s += "warning: " + w + "\n";
   return s;

@@ -9,6 +9,7 @@
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <numeric>
 
 #include "io/file_kind.hpp"
 #include "io/json_input.hpp"
@@ -588,6 +589,60 @@ std::optional<Eigen::MatrixXd> heat_jacobian(const ThermalModel& model, const st
 }
 
 // Step 2 of the two-stage fit: the heat's uncertainty into the joint fit's covariance.
+// α's variance as the runs make it. The joint α weighs each run by its information (1/SE²
+// of the run's own i.i.d. fit): α̂ ≈ Σ c_r α_r, and α_r = α + u_r + e_r, where e_r is the run's
+// own error (its quoted SE, without an error common to all runs) and u_r what differs between
+// runs unseen by any record (the heat reaching the rail: τ, REML, of the per-run α). So
+// Var(α̂) = Σ c_r² (SE_r² + τ²), plus what is common to all runs (the heat's stated
+// uncertainty), with t(runs − 1). A cluster-robust covariance estimates the same, but with a
+// few runs carrying most of the information it falls well short (SD/SE 1.8 at 8 runs).
+// Replaces α's SE (the correlations kept) only where it is larger than the quoted one.
+void widen_to_the_runs(ThermalFitResult& result, double confidence) {
+  const RandomEffects& re = result.alpha_runs;
+  FitResult& joint = result.joint;
+  if (re.k < 3 || re.k != result.per_run.size() || !std::isfinite(re.tau) || joint.covariance.rows() == 0) return;
+  std::size_t a = 0;
+  while (a < joint.parameters.size() && joint.parameters[a].name != "alpha") ++a;
+  if (a == joint.parameters.size() || joint.parameters[a].interval == "none") return;
+  std::vector<double> info, own;
+  for (const FitResult& run : result.per_run) {
+    std::size_t j = 0;
+    while (j < run.parameters.size() && run.parameters[j].name != "alpha") ++j;
+    const CovarianceSummary* iid = run.uncertainty.find("iid");
+    if (j == run.parameters.size() || !iid || !(iid->se[j] > 0)) return;
+    const Eigen::MatrixXd& given = run.uncertainty.covariance_given_input;
+    const auto k = static_cast<Eigen::Index>(j);
+    own.push_back(given.rows() > k ? given(k, k) : run.parameters[j].se * run.parameters[j].se);
+    info.push_back(1 / (iid->se[j] * iid->se[j]));
+  }
+  const double total_info = std::accumulate(info.begin(), info.end(), 0.0);
+  double runs_variance = 0;
+  for (std::size_t r = 0; r < info.size(); ++r) runs_variance += std::pow(info[r] / total_info, 2) * (own[r] + re.tau * re.tau);
+  const auto ja = static_cast<Eigen::Index>(a);
+  Uncertainty& u = joint.uncertainty;
+  const double quoted = joint.covariance(ja, ja);
+  const double given = u.covariance_given_input.rows() > ja ? u.covariance_given_input(ja, ja) : quoted;
+  const double common = std::max(quoted - given, 0.0);  // the heat's stated, common uncertainty
+  if (!(runs_variance > given)) return;
+  const double variance = runs_variance + common, dof = static_cast<double>(re.k - 1);
+  const double d = std::sqrt(variance / quoted);
+  joint.covariance.row(ja) *= d;
+  joint.covariance.col(ja) *= d;
+  ParameterEstimate& p = joint.parameters[a];
+  p.se = std::sqrt(variance);
+  // Welch-Satterthwaite with the common part known (ν = ∞).
+  p.dof = std::min(1e7, variance * variance / (runs_variance * runs_variance / dof));
+  const double t = student_t_quantile(1 - (1 - confidence) / 2, p.dof);
+  p.ci_low = p.value - t * p.se;
+  p.ci_high = p.value + t * p.se;
+  u.reason += "; alpha's SE from the runs as replicates (notes)";
+  u.notes.push_back(fmt::format(
+      "alpha's SE from the runs as replicates: sqrt(sum c_r^2 (SE_r^2 + tau^2)){} = {:.3g} (c_r: each run's share of the "
+      "joint fit's information; tau = {:.3g} between runs, REML of the {} runs' own alpha), t with {:.1f} dof; the "
+      "covariance quoted for the other parameters is {}",
+      common > 0 ? " plus the heat's common uncertainty" : "", p.se, re.tau, re.k, p.dof, u.method));
+}
+
 void add_heat_uncertainty(const ThermalDataSet& data, const std::vector<PreparedRun>& runs, const ThermalModel& model,
                           const detail::FinalState& state, const ThermalFitOptions& o, ThermalFitResult& result) {
   const HeatUncertainty heat = heat_uncertainty(runs, result.runs, data, o);
@@ -792,12 +847,26 @@ ThermalFitResult fit_thermal(const ThermalDataSet& data, const ThermalFitOptions
       alphas.push_back(result.per_run.back().parameter("alpha").value);
     }
     result.alpha_spread = spread(alphas, o.fit.confidence);
-    // Eq. 2 between repeated runs at the same conditions.
+    std::vector<Estimate> estimates;
+    std::vector<double> se;
+    for (const FitResult& run : result.per_run) {
+      const ParameterEstimate& a = run.parameter("alpha");
+      se.push_back(a.se);
+      if (std::isfinite(a.value) && std::isfinite(a.se) && a.se > 0) estimates.push_back({a.value, a.se});
+    }
+    if (estimates.size() >= 2) result.alpha_runs = random_effects(estimates, o.fit.confidence);
+    if (o.fit.runs_replicate && o.fit.covariance == CovarianceMethod::automatic) widen_to_the_runs(result, o.fit.confidence);
+    const double tau2 = std::isfinite(result.alpha_runs.tau) ? result.alpha_runs.tau * result.alpha_runs.tau : 0.0;
+    // Eq. 2 between repeated runs at the same conditions, and how far apart they are against
+    // what a run's α is known to.
     for (std::size_t a = 0; a < runs.size(); ++a)
       for (std::size_t b = a + 1; b < runs.size(); ++b)
         if (data.runs[a].velocity_m_s == data.runs[b].velocity_m_s && data.runs[a].load_N == data.runs[b].load_N &&
-            data.runs[a].guide == data.runs[b].guide)
-          result.repeat_differences.emplace_back(runs[a].id + "/" + runs[b].id, percent_difference(alphas[a], alphas[b]));
+            data.runs[a].guide == data.runs[b].guide) {
+          const double d = alphas[a] - alphas[b], within = se[a] * se[a] + se[b] * se[b];
+          result.repeat_differences.push_back({runs[a].id + "/" + runs[b].id, percent_difference(alphas[a], alphas[b]),
+                                               d / std::sqrt(within + 2 * tau2), d / std::sqrt(within)});
+        }
   }
 
   // Source-model dependence: the same data with `paper` against `averaged`.
@@ -1024,7 +1093,22 @@ std::string thermal_fit_json(const ThermalFitResult& r, const ThermalFitOptions&
                         {"max_error_K", number(g.max_error_K)},
                         {"max_error_percent", number(g.max_error_percent)}});
   nlohmann::json repeats = nlohmann::json::array();
-  for (const auto& [pair, d] : r.repeat_differences) repeats.push_back({{"runs", pair}, {"alpha_percent_difference_eq2", number(d)}});
+  for (const auto& d : r.repeat_differences)
+    repeats.push_back({{"runs", d.runs},
+                       {"alpha_percent_difference_eq2", number(d.percent)},
+                       {"z", number(d.z)},
+                       {"z_within_run_se_only", number(d.z_within)}});
+  const RandomEffects& re = r.alpha_runs;
+  const nlohmann::json random_effects_json = {{"runs", re.k},
+                                              {"mean", number(re.mean)},
+                                              {"se", number(re.mean_se)},
+                                              {"ci95", {number(re.mean_low), number(re.mean_high)}},
+                                              {"tau", number(re.tau)},
+                                              {"tau_ci95", {number(re.tau_low), number(re.tau_high)}},
+                                              {"cochran_q", number(re.q)},
+                                              {"q_p", number(re.q_p)},
+                                              {"i_squared", number(re.i2)},
+                                              {"method", re.method}};
   nlohmann::json in = nlohmann::json::array();
   for (const auto& [file, hash] : inputs) in.push_back({{"file", file}, {"sha256", hash}});
   const auto& s = r.alpha_spread;
@@ -1053,7 +1137,8 @@ std::string thermal_fit_json(const ThermalFitResult& r, const ThermalFitOptions&
                         {"ci95", {number(s.low), number(s.high)}},
                         {"half_width", number(s.half_width)},
                         {"min", number(s.min)},
-                        {"max", number(s.max)}}},
+                        {"max", number(s.max)},
+                        {"random_effects", random_effects_json}}},
                       {"repeats", repeats},
                       {"source_comparison",
                        {{"other_source", r.other_source},
@@ -1134,7 +1219,16 @@ std::string thermal_fit_summary(const ThermalFitResult& r) {
     else
       s += fmt::format("alpha across runs: {:.3f} ± {:.3f} (mean ± 95 % t half-width; spread of runs (Eq. 1 sigma) {:.4f}, n {}, min {:.3f}, max {:.3f})\n",
                        sp.mean, sp.half_width, sp.sd, sp.n, sp.min, sp.max);
-    for (const auto& [pair, d] : r.repeat_differences) s += fmt::format("  repeats {}: alpha differs {:.1f} % (Eq. 2)\n", pair, d);
+    const RandomEffects& re = r.alpha_runs;
+    if (re.k >= 2 && re.tau > 0)
+      s += fmt::format("  the runs' alpha differ beyond their own SEs by tau = {:.3g} (REML; Cochran's Q = {:.3g} on {} runs, p = "
+                       "{:.2g}, I2 = {:.0f} %): a run's alpha is known to sqrt(SE^2 + tau^2), not to its own SE; random-effects "
+                       "mean {:.4f}, 95 % [{:.4f}, {:.4f}] (Hartung-Knapp)\n",
+                       re.tau, re.q, re.k, re.q_p, 100 * re.i2, re.mean, re.mean_low, re.mean_high);
+    for (const auto& d : r.repeat_differences)
+      s += fmt::format("  repeats {}: alpha differs {:.1f} % (Eq. 2); z = {:.2f} against sqrt(SE1^2 + SE2^2 + 2 tau^2) ({:.2f} "
+                       "against their own SEs alone)\n",
+                       d.runs, d.percent, d.z, d.z_within);
   }
   s += "goodness per sensor (joint fit):\n";
   for (const auto& g : r.goodness)

@@ -142,6 +142,13 @@ Choice choose(const FitOptions& o, const Uncertainty& u, const CovarianceEstimat
             fmt::format("the runs disagree beyond their own noise about {}: cluster-robust by run (t with {} dof), "
                         "each SE at least the within-run (HAC) one",
                         disagree, u.runs - 1)};
+  if (o.runs_replicate && cluster && cluster->ok && u.runs >= 3)
+    return {floored(*cluster, *hac),
+            fmt::format("the runs are the replicates (what differs between runs unseen, such as the heat reaching the rail, "
+                        "is in no run's own residuals; the test between runs finds no significant difference, but with {} "
+                        "runs it has little power): cluster-robust by run (t with {} dof), each SE at least the within-run "
+                        "(HAC) one",
+                        u.runs, u.runs - 1)};
   std::string reason = fmt::format("residuals within runs have lag-1 autocorrelation {:.2f} ({:.0f} effective independent rows): "
                        "Newey-West within runs",
                        u.lag1_autocorrelation, u.effective_sample_size);
@@ -151,6 +158,10 @@ Choice choose(const FitOptions& o, const Uncertainty& u, const CovarianceEstimat
                           disagree, u.runs);
   else if (u.runs >= 2)
     reason += "; no run disagrees with the others beyond that within-run noise";
+  if (o.runs_replicate && u.runs < 3)
+    reason += fmt::format("; what differs between runs unseen (such as the heat reaching the rail) needs at least 3 runs to "
+                          "be measured: with {} it is NOT in the intervals",
+                          u.runs);
   return {*hac, reason};
 }
 

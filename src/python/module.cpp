@@ -375,7 +375,14 @@ void set_friction_options(FrictionFitOptions& f, const py::dict& o) {
   if (o.contains("effects")) f.effects = o["effects"].cast<std::vector<std::string>>();
   if (o.contains("run_offsets"))
     f.run_offsets = choose<RunOffsets>("run_offsets", o["run_offsets"].cast<std::string>(),
-                                       {{"none", RunOffsets::none}, {"fixed", RunOffsets::fixed}, {"random", RunOffsets::random}});
+                                       {{"auto", RunOffsets::automatic},
+                                        {"none", RunOffsets::none},
+                                        {"fixed", RunOffsets::fixed},
+                                        {"random", RunOffsets::random}});
+  if (o.contains("law_temperature"))
+    f.temperature = choose<FrictionTemperature>(
+        "law_temperature", o["law_temperature"].cast<std::string>(),
+        {{"block-mean", FrictionTemperature::block_mean}, {"logged", FrictionTemperature::logged}});
   if (o.contains("weights"))
     f.weighting = choose<FrictionWeighting>("weights", o["weights"].cast<std::string>(),
                                             {{"none", FrictionWeighting::none},

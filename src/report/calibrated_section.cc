@@ -95,6 +95,13 @@ void thermal_model(Page& page, const Calibration& c) {
                                        : ""));
   parameter_table(page, t.joint);
   if (const std::string heat = heat_share(t); !heat.empty()) page.paragraph(heat);
+  if (c.thermal_diagnosis)
+    if (const auto [low, high] = candidate_alpha_range(c.thermal_diagnosis->rounds); std::isfinite(low))
+      page.paragraph(fmt::format(
+          "α is conditional on this model: its interval says how well these runs fix α if the model is right. The models "
+          "the diagnosis tried put α between {} and {} (each candidate's α is in the diagnosis's tables): a mechanism left "
+          "out moves α by more than any interval shows.",
+          num(low), num(high)));
   caveats(page, t.joint);
 }
 

@@ -462,10 +462,6 @@ const char* covariance_name(CovarianceMethod m) {
   return "?";
 }
 
-const char* run_offsets_name(RunOffsets r) {
-  return r == RunOffsets::random ? "random" : r == RunOffsets::fixed ? "fixed" : "none";
-}
-
 nlohmann::json uncertainty_options_json(const FitOptions& f) {
   const char* profile = f.profile == ProfileMode::all ? "all" : f.profile == ProfileMode::none ? "none" : "auto";
   return {{"covariance", covariance_name(f.covariance)}, {"bootstrap", f.bootstrap}, {"profile", profile}, {"starts", f.starts}, {"seed", f.seed}};
@@ -479,7 +475,7 @@ nlohmann::json friction_options_json(const FrictionFitOptions& f) {
                                                          {"start", fittable_constant(start, j)},
                                                          {"bounds", {f.bounds[j].first, f.bounds[j].second}}};
   }
-  return {{"constants", constants}, {"run_offsets", run_offsets_name(f.run_offsets)}, {"fit", uncertainty_options_json(f.fit)}};
+  return {{"constants", constants}, {"run_offsets", to_string(f.run_offsets)}, {"temperature", to_string(f.temperature)}, {"fit", uncertainty_options_json(f.fit)}};
 }
 
 nlohmann::json thermal_options_json(const ThermalFitOptions& t) {
@@ -638,6 +634,10 @@ std::string calibration_summary(const Calibration& c) {
     const auto& share = m.thermal->joint.uncertainty.input_variance_share;
     if (!share.empty() && std::isfinite(share[0]))
       s += fmt::format("    the heat's uncertainty is {:.0f} % of alpha's variance ({})\n", 100 * share[0], m.thermal->heat_uncertainty);
+    if (c.thermal_diagnosis)
+      if (const auto [low, high] = candidate_alpha_range(c.thermal_diagnosis->rounds); std::isfinite(low))
+        s += fmt::format("    alpha is conditional on this model: the models the diagnosis tried put it between {:.3f} and {:.3f}\n",
+                         low, high);
   }
   s += "the published models, for comparison (conditional on a model the diagnosis rejects where it names a cause):\n";
   if (c.friction)

@@ -315,14 +315,19 @@ void friction_section(Page& page, const Calibration& c) {
 }
 
 void candidate_tables(Page& page, const std::vector<std::vector<CandidateScore>>& rounds, const char* unit) {
+  const bool alpha = std::isfinite(candidate_alpha_range(rounds).first);
   for (std::size_t r = 0; r < rounds.size(); ++r) {
     std::vector<std::vector<std::string>> rows;
-    for (const auto& cand : rounds[r])
+    for (const auto& cand : rounds[r]) {
       rows.push_back({cand.effect, num(cand.value) + (cand.unit.empty() || cand.unit == "1" ? "" : " " + cand.unit), bracket(cand.ci_low, cand.ci_high),
                       p_value(cand.lrt_p), num(cand.cv_rmse), fmt::format("{:+.2f} %", cand.cv_gain_percent),
                       (cand.accepted ? "accepted: " : "") + cand.reason});
+      if (alpha) rows.back().insert(rows.back().begin() + 3, num(cand.alpha) + " " + bracket(cand.alpha_low, cand.alpha_high));
+    }
     page.paragraph(fmt::format("Candidates, step {} (held-out RMSE in {}, gain against the model so far):", r + 1, unit));
-    page.table({"cause", "estimate", "95 % interval", "LRT p", "held-out RMSE", "gain", "decision"}, rows);
+    std::vector<std::string> header{"cause", "estimate", "95 % interval", "LRT p", "held-out RMSE", "gain", "decision"};
+    if (alpha) header.insert(header.begin() + 3, "α of that model");
+    page.table(header, rows);
   }
 }
 

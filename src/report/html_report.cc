@@ -87,12 +87,7 @@ void brief(Page& page, const Calibration& c) {
                           escape_xml(report::without_verdict(c.thermal_diagnosis->summary)));
     // The runs' own α disagreeing beyond their intervals (the per-run plot) is structure the
     // verdict must not hide: Cochran's Q of the per-run fits.
-    std::vector<Estimate> per_run;
-    for (const FitResult& run : c.thermal->per_run) {
-      const ParameterEstimate& a = run.parameter("alpha");
-      if (std::isfinite(a.value) && std::isfinite(a.se) && a.se > 0) per_run.push_back({a.value, a.se});
-    }
-    const RandomEffects runs = per_run.size() >= 3 ? random_effects(per_run) : RandomEffects{};
+    const RandomEffects& runs = c.thermal->alpha_runs;
     if (runs.k >= 3 && runs.q_p < 0.05)
       page << fmt::format(
           " <span class=\"warning\">But the runs' own α differ beyond their intervals (Cochran's Q = {} on {} runs, "

@@ -8,6 +8,7 @@
 #include <functional>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "lmcal/fit/fit_result.hpp"
@@ -47,7 +48,13 @@ struct CandidateScore {
   // Candidates of the same round whose change to the fit cannot be told from this one's
   // (the changes they make to the fitted values correlate above 0.99): a tie, named together.
   std::vector<std::string> tied_with;
+  // Thermal: α of the model with this candidate in (NaN for friction): α is conditional on
+  // the model, and these show how far the candidates move it.
+  double alpha = std::numeric_limits<double>::quiet_NaN();
+  double alpha_low = std::numeric_limits<double>::quiet_NaN(), alpha_high = std::numeric_limits<double>::quiet_NaN();
 };
+// The range of α over the candidate models of every round (thermal; NaN when none has one).
+std::pair<double, double> candidate_alpha_range(const std::vector<std::vector<CandidateScore>>& rounds);
 
 // Lack of fit against pure error: do the model's residuals exceed the noise? Friction: the
 // condition means (after the run levels) against the spread of repeated conditions across

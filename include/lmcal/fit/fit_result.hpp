@@ -56,6 +56,11 @@ struct FitOptions {
   CovarianceMethod covariance = CovarianceMethod::automatic;
   double heterogeneity_p = 0.05;
   std::size_t bootstrap = 999;  // cluster-bootstrap replicates (0: none)
+  // The run is the unit of replication: something differs between runs that no record of a
+  // run sees (the heat reaching the rail of a thermal run), so with three runs or more the
+  // automatic choice is cluster-robust by run even when the runs do not disagree significantly
+  // (a test with few runs has little power; the t quantile with runs − 1 dof pays for them).
+  bool runs_replicate = false;
 };
 
 // One point of a parameter's profile: the parameter held at `value`, the others refitted;

@@ -44,7 +44,22 @@ enum class FrictionWeighting {
 // The named friction effects a fit may add, with their parameter names and units.
 const std::vector<std::string>& friction_effect_names();
 
-enum class RunOffsets { none, fixed, random };
+// automatic: random with two runs or more and no robust loss, none otherwise.
+enum class RunOffsets { automatic, none, fixed, random };
+const char* to_string(RunOffsets offsets);  // "auto", "none", "fixed", "random"
+
+// The temperature the law is evaluated at, per sample:
+//   logged:     as logged;
+//   block_mean: the mean of the logged temperature over each block a run holds at one setting
+//               (run, guide, preload, load, temperature to 1 K). A thermometer's noise is a
+//               classical error: taken as exact it flattens the law's temperature dependence
+//               (β biased toward 0, μv up). The block's mean replaces it by an error the law
+//               is not biased by (a Berkson error: a drift within the block stays unbiased),
+//               and at its mean the noise is averaged down.
+enum class FrictionTemperature { logged, block_mean };
+const char* to_string(FrictionTemperature temperature);  // "logged", "block-mean"
+// The log as a block_mean fit sees it: each temperature replaced by its block's mean.
+FrictionLog with_block_mean_temperature(const FrictionLog& logged);
 
 struct FrictionFitOptions {
   FitOptions fit;
@@ -69,8 +84,12 @@ struct FrictionFitOptions {
   //           is then lost to the offsets;
   //   random: a random run intercept of variance τ², estimated by maximum likelihood with the
   //           constants (alternating, at most `max_variance_passes` fits): generalised least
-  //           squares, so what changes between runs stays informative, weighed against τ².
-  RunOffsets run_offsets = RunOffsets::none;
+  //           squares, so what changes between runs stays informative, weighed against τ²;
+  //   automatic (the default): random with two runs or more and no robust loss, else none.
+  // Without offsets the covariance takes a load-cell zero that moves between runs for noise:
+  // the constants carried by the level between runs (f0, k1) get intervals far too narrow.
+  RunOffsets run_offsets = RunOffsets::automatic;
+  FrictionTemperature temperature = FrictionTemperature::block_mean;
   int max_variance_passes = 4;
   double run_offset_ratio_start = 0;  // random offsets: λ of the first fit (a related model's, to save passes)
 };
@@ -88,11 +107,21 @@ struct RunSpread {
   std::string parameter;
   std::vector<double> per_run;  // one value per run (NaN where a run's fit failed)
   std::vector<double> per_run_half_width_95;  // each run's own 95 % half-width (its fit's linear interval)
+  std::vector<double> per_run_se;             // each run's own SE (its fit's quoted covariance)
   Spread spread;                // Eq. 1 σ, t interval of the mean, min, max
   double pooled_se = 0;
   // σ_runs / (SE_pooled · √runs): about 1 when the runs differ only by noise the model
-  // explains; far above 1 (> 3) means the model misses something that differs by run.
+  // explains (a descriptive ratio; the flag below is the test).
   double ratio = 0;
+  // The pooled fit's test of heterogeneity between runs (Uncertainty::heterogeneity: each
+  // run's score against the within-run covariance, χ²(runs − 1), Holm across the constants):
+  // the runs differ beyond what the model explains when it is significant. Its Q and p are
+  // those of the pooled model, so the run's share of the random offsets is in them (a test of
+  // the runs' own estimates against their own SEs rejects too often: a run's SE, from a few
+  // thousand autocorrelated samples, is about 15 % too small).
+  double q = std::numeric_limits<double>::quiet_NaN();
+  double p = std::numeric_limits<double>::quiet_NaN();
+  double p_holm = std::numeric_limits<double>::quiet_NaN();
   bool wider_than_pooled = false;
 };
 
@@ -113,6 +142,7 @@ struct FrictionFitResult {
   double run_offset_sd_N = 0;     // τ of random offsets (ML; 0 otherwise)
   double run_offset_ratio = 0;    // λ = τ²/σ² of the whitened residuals
   int variance_passes = 0;        // fits the random offsets took
+  RunOffsets run_offsets = RunOffsets::none;  // the model used (automatic resolved)
   // -2 log-likelihood of the fit as n log(deviance_ss / n), σ² profiled: the residual sum of
   // squares (whitened, offsets out) for none and fixed offsets, and with the random offsets'
   // determinant Σ log(1 + n_r λ) folded in for random ones. Comparable between models fitted

@@ -32,6 +32,7 @@
 #include <vector>
 
 #include "lmcal/fit/fit_result.hpp"
+#include "lmcal/fit/population.hpp"
 #include "lmcal/fit/statistics.hpp"
 #include "lmcal/io/thermal_run.hpp"
 #include "lmcal/models/friction_effects.hpp"
@@ -83,7 +84,10 @@ struct ThermalSensorTerm {
 };
 
 struct ThermalFitOptions {
-  FitOptions fit{.starts = 0};  // α is bounded and (without h) linear: no multi-start needed
+  // α is bounded and (without h) linear: no multi-start needed. Each run's heat reaching the
+  // rail has its own error (the logged friction, the law at the run's conditions), which no
+  // record of the run sees: the runs are the replicates α's interval must come from.
+  FitOptions fit{.starts = 0, .runs_replicate = true};
   SourceModel source = SourceModel::averaged;
   TimeScheme scheme = TimeScheme::crank_nicolson;
   int half_rail_segments = 100;
@@ -180,7 +184,18 @@ struct ThermalFitResult {
   std::vector<FitResult> per_run;   // each run alone
   std::vector<RunInfo> runs;
   Spread alpha_spread;              // over the per-run α
-  std::vector<std::pair<std::string, double>> repeat_differences;  // Eq. 2 of α between repeats ("v110_r1/v110_r2")
+  // The per-run α as a random-effects population (population.hpp): each run's within-run SE,
+  // and τ, how much the runs' α differ beyond them (REML, with Cochran's Q and I²). The heat
+  // reaching each rail has its own error that no record of the run sees, so a run's α is known
+  // to √(SE² + τ²), not to its own SE (which a comparison of repeats must use).
+  RandomEffects alpha_runs;
+  struct RepeatDifference {
+    std::string runs;         // "v110_r1/v110_r2"
+    double percent = 0;       // Eq. 2 of their α
+    double z = 0;             // their difference over √(SE₁² + SE₂² + 2τ²)
+    double z_within = 0;      // the same over √(SE₁² + SE₂²): their own SEs only
+  };
+  std::vector<RepeatDifference> repeat_differences;  // between runs at the same conditions
   std::vector<SensorGoodness> goodness;
   double max_error_percent = 0;
   struct CurvePoint {

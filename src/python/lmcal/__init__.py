@@ -462,7 +462,7 @@ def _command(function: str, options: dict) -> list:
 def fit_friction(log, *, free: Optional[Sequence[str]] = None, fixed: Optional[Mapping[str, float]] = None,
                  start: Optional[Mapping[str, float]] = None, bounds: Optional[Mapping[str, tuple]] = None,
                  effects: Optional[Sequence[str]] = None, run_offsets: Optional[str] = None,
-                 loss: Optional[str] = None, loss_scale: Optional[float] = None, weights: Optional[str] = None,
+                 law_temperature: Optional[str] = None, loss: Optional[str] = None, loss_scale: Optional[float] = None, weights: Optional[str] = None,
                  starts: Optional[int] = None, seed: Optional[int] = None, profile: Optional[str] = None,
                  covariance: Optional[str] = None, bootstrap: Optional[int] = None, run_fits: Optional[bool] = None,
                  cross_validate: Optional[bool] = None, name: str = "friction") -> FrictionFit:
@@ -470,13 +470,13 @@ def fit_friction(log, *, free: Optional[Sequence[str]] = None, fixed: Optional[M
     files, a manifest, or columns. Options as the command's flags (None: its default):
     free (constants to fit; default all seven), fixed/start (name -> value), bounds
     (name -> (low, high)), effects (named effects on top of the law), run_offsets
-    ('none', 'fixed', 'random'), loss ('none', 'huber', 'cauchy') and loss_scale, weights
+    ('auto', 'none', 'fixed', 'random'), law_temperature ('block-mean', 'logged'), loss ('none', 'huber', 'cauchy') and loss_scale, weights
     ('none', 'per-run', 'per-condition'), starts and seed (multi-start), profile ('auto',
     'all', 'none'), covariance ('auto', 'iid', 'hac', 'cluster', 'bootstrap'), bootstrap
     (replicates), run_fits (per-run fits for the spread across runs), cross_validate."""
     log = load_friction_log(log)
     options = _given(free=free, fixed=fixed, start=start, bounds=bounds, effects=effects, run_offsets=run_offsets,
-                     loss=loss, loss_scale=loss_scale, weights=weights, starts=starts, seed=seed, profile=profile,
+                     law_temperature=law_temperature, loss=loss, loss_scale=loss_scale, weights=weights, starts=starts, seed=seed, profile=profile,
                      covariance=covariance, bootstrap=bootstrap, run_fits=run_fits, cross_validate=cross_validate)
     return FrictionFit(_lmcal.fit_friction(log._h, options, name, _command("fit_friction", options)))
 
