@@ -80,6 +80,11 @@ check "fit summary reports the spread across runs" grep -q 'spread across 3 runs
 check "one preload class: k1/k2 named unidentifiable" grep -q 'NOT IDENTIFIABLE: one preload class' fit.txt
 check "unknown constant refused" refused "unknown constant 'k3'" fit friction fitdata/friction.csv -o out --fix k3=1
 check "bad loss refused" refused "unknown loss 'l1'" fit friction fitdata/friction.csv -o out --loss l1
+check "by default the run offsets are random, chosen automatically" grep -q '"model": "random (.*); chosen automatically"' fitout/f.json
+check "by default the law sees each block's mean logged temperature" grep -q '"temperature": "block-mean"' fitout/f.json
+check "a robust loss turns the automatic run offsets off" bash -c '"$0" fit friction fitdata/friction.csv -o fitout --name huber --loss huber >/dev/null &&
+  grep -q "\"model\": \"none; chosen automatically\"" fitout/huber.json' "$LMCAL"
+check "an unknown law temperature is refused" refused "--law-temperature: unknown choice 'nominal'" fit friction fitdata/friction.csv -o out --law-temperature nominal
 
 # --- friction diagnosis ------------------------------------------------------------------------
 "$LMCAL" generate friction -o drag --runs 3 --guides "SRN 35C" --effect seal_drag=100 >/dev/null

@@ -5,6 +5,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
+#include <set>
+#include <tuple>
 
 #include "fit/friction_model.hpp"
 #include "support/finite_differences.hpp"
@@ -198,6 +201,50 @@ TEST(FrictionFit, SpreadAcrossRunsUsesEquationOneAndFlagsRunToRunDifferences) {
     EXPECT_LT(s.ratio, 2.5) << s.parameter;
   }
   EXPECT_EQ(clean.fit.uncertainty.method, "hac") << clean.fit.uncertainty.reason;
+}
+
+// A thermometer's noise is a classical error in a covariate: taken as exact it flattens the
+// law's temperature dependence (β biased toward 0). The default fit sees each block's mean
+// logged temperature (one run at one setting) instead: every sample of a block gets the mean
+// of the block's logged values, blocks of other runs or settings keep their own, and β comes
+// out where it is, where the logged temperature (noise 0.5 K here) puts it several SEs low.
+TEST(FrictionFit, TheLawSeesEachBlocksMeanLoggedTemperatureNotTheThermometersNoise) {
+  auto rig = compact_rig(31, 4);
+  rig.temperature_noise_K = 0.5;
+  const FrictionLog log = generate_friction_log(rig, {}).log;
+  const FrictionLog seen = with_block_mean_temperature(log);
+  ASSERT_EQ(seen.size(), log.size());
+  // The rig holds each setting at a set point (its temperatures), one run after another:
+  // every sample of a (run, guide, preload, load, set point) block sees the block's mean.
+  std::map<std::tuple<std::uint32_t, std::uint32_t, double, double, double>, std::pair<double, double>> blocks;
+  const auto set_point = [&](std::size_t i) {
+    double nearest = rig.temperature_C.front();
+    for (double t : rig.temperature_C)
+      if (std::abs(t - log.temperature_C[i]) < std::abs(nearest - log.temperature_C[i])) nearest = t;
+    return std::tuple{log.run[i], log.guide[i], log.preload_um[i], log.load_N[i], nearest};
+  };
+  for (std::size_t i = 0; i < log.size(); ++i) {
+    auto& [sum, count] = blocks[set_point(i)];
+    sum += log.temperature_C[i], count += 1;
+  }
+  for (std::size_t i = 0; i < log.size(); ++i) {
+    const auto& [sum, count] = blocks[set_point(i)];
+    EXPECT_NEAR(seen.temperature_C[i], sum / count, 1e-12) << "sample " << i;
+  }
+  // A temperature that drifts over a block is cut into 1 K bins: none is more than 0.5 K from its mean.
+  FrictionLog drifting = log;
+  for (std::size_t i = 0; i < drifting.size(); ++i) drifting.temperature_C[i] = 20 + 20 * static_cast<double>(i) / static_cast<double>(log.size());
+  const FrictionLog binned = with_block_mean_temperature(drifting);
+  for (std::size_t i = 0; i < drifting.size(); ++i) ASSERT_LE(std::abs(binned.temperature_C[i] - drifting.temperature_C[i]), 0.5);
+
+  FrictionFitOptions o;
+  o.fit.bootstrap = 0;
+  const auto fit = fit_friction(log, o);
+  const ParameterEstimate& beta = fit.fit.parameter("beta_per_K");
+  EXPECT_TRUE(covers(beta, truth(5))) << beta.value << " ± " << beta.se;
+  o.temperature = FrictionTemperature::logged;
+  const ParameterEstimate logged = fit_friction(log, o).fit.parameter("beta_per_K");
+  EXPECT_LT(logged.value, truth(5) - 3 * logged.se) << "the noise taken as exact flattens β: " << logged.value;
 }
 
 // Clean, independent data: the chosen covariance is the within-run sandwich, and it keeps the

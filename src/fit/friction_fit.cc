@@ -11,6 +11,7 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <set>
+#include <span>
 #include <numeric>
 #include <tuple>
 #include <unordered_map>
@@ -300,30 +301,55 @@ const char* to_string(FrictionTemperature temperature) {
   return temperature == FrictionTemperature::block_mean ? "block-mean" : "logged";
 }
 
-// Blocks: the samples of one run at one setting (guide, preload, load, temperature to 1 K).
+// Blocks: the samples of one run at one setting. Within a run, guide, preload and load, the
+// logged temperatures sorted fall into set points wherever they are more than
+// max(kSetPointGap_K, 5σ) apart, σ the thermometer's noise (from the median difference of
+// successive samples, robust to the set points' steps). A set point spanning more than
+// max(kSetPointWidth_K, 8σ) drifts beyond its noise: it is cut into 1 K bins, so that no sample
+// is more than 0.5 K from what its bin's mean stands for.
+constexpr double kSetPointGap_K = 1.0, kSetPointWidth_K = 3.0;
+
+double successive_noise(const std::vector<std::size_t>& in_time, const std::vector<double>& T) {
+  std::vector<double> step;
+  for (std::size_t k = 1; k < in_time.size(); ++k) step.push_back(std::abs(T[in_time[k]] - T[in_time[k - 1]]));
+  if (step.empty()) return 0;
+  std::nth_element(step.begin(), step.begin() + static_cast<std::ptrdiff_t>(step.size() / 2), step.end());
+  return 1.4826 * step[step.size() / 2] / std::sqrt(2.0);  // |N(0, 2σ²)|'s median is 0.954σ
+}
+
 FrictionLog with_block_mean_temperature(const FrictionLog& logged) {
-  using Block = std::tuple<std::uint32_t, std::uint32_t, double, double, double>;
-  const auto block_of = [&](std::size_t i) {
-    return Block{logged.run[i], logged.guide.empty() ? 0 : logged.guide[i], logged.preload_um[i], logged.load_N[i],
-                 std::round(logged.temperature_C[i])};
-  };
-  std::map<Block, std::size_t> index;
-  std::vector<double> sum, count;
-  std::vector<std::size_t> block(logged.size());
-  for (std::size_t i = 0; i < logged.size(); ++i) {
-    // A log holds each setting for a stretch of samples: look up only where it changes.
-    if (i == 0 || block_of(i) != block_of(i - 1)) {
-      const auto [it, inserted] = index.try_emplace(block_of(i), sum.size());
-      if (inserted) sum.push_back(0), count.push_back(0);
-      block[i] = it->second;
-    } else {
-      block[i] = block[i - 1];
-    }
-    sum[block[i]] += logged.temperature_C[i];
-    count[block[i]] += 1;
-  }
+  using Setting = std::tuple<std::uint32_t, std::uint32_t, double, double>;
+  std::map<Setting, std::vector<std::size_t>> settings;
+  for (std::size_t i = 0; i < logged.size(); ++i)
+    settings[{logged.run[i], logged.guide.empty() ? 0 : logged.guide[i], logged.preload_um[i], logged.load_N[i]}].push_back(i);
   FrictionLog out = logged;
-  for (std::size_t i = 0; i < out.size(); ++i) out.temperature_C[i] = sum[block[i]] / count[block[i]];
+  const auto& T = logged.temperature_C;
+  const auto assign_mean = [&](std::span<const std::size_t> members) {
+    double sum = 0;
+    for (std::size_t i : members) sum += T[i];
+    for (std::size_t i : members) out.temperature_C[i] = sum / static_cast<double>(members.size());
+  };
+  for (auto& [setting, members] : settings) {
+    const double noise = successive_noise(members, T);  // members in time (log) order
+    const double gap = std::max(kSetPointGap_K, 5 * noise), width = std::max(kSetPointWidth_K, 8 * noise);
+    std::stable_sort(members.begin(), members.end(), [&](std::size_t a, std::size_t b) { return T[a] < T[b]; });
+    for (std::size_t begin = 0; begin < members.size();) {
+      std::size_t end = begin + 1;
+      while (end < members.size() && T[members[end]] - T[members[end - 1]] <= gap) ++end;
+      const std::span<const std::size_t> point(members.data() + begin, end - begin);
+      if (T[point.back()] - T[point.front()] <= width) {
+        assign_mean(point);
+      } else {
+        for (std::size_t k = 0; k < point.size();) {
+          std::size_t j = k + 1;
+          while (j < point.size() && std::round(T[point[j]]) == std::round(T[point[k]])) ++j;
+          assign_mean(point.subspan(k, j - k));
+          k = j;
+        }
+      }
+      begin = end;
+    }
+  }
   return out;
 }
 

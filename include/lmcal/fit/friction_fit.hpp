@@ -51,7 +51,9 @@ const char* to_string(RunOffsets offsets);  // "auto", "none", "fixed", "random"
 // The temperature the law is evaluated at, per sample:
 //   logged:     as logged;
 //   block_mean: the mean of the logged temperature over each block a run holds at one setting
-//               (run, guide, preload, load, temperature to 1 K). A thermometer's noise is a
+//               (run, guide, preload, load, and a set point: logged temperatures within
+//               max(1 K, 5σ) of each other, σ the thermometer's noise; cut into 1 K bins
+//               where they drift over more than max(3 K, 8σ)). A thermometer's noise is a
 //               classical error: taken as exact it flattens the law's temperature dependence
 //               (β biased toward 0, μv up). The block's mean replaces it by an error the law
 //               is not biased by (a Berkson error: a drift within the block stays unbiased),
