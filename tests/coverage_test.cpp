@@ -155,6 +155,7 @@ TEST(Coverage, FrictionConstantsWithTheDefaultsWhenEachRunHoldsOneSetup) {
 // runs carry most of the information).
 TEST(Coverage, AlphaWithTheDefaultsWhenEachRunsHeatDiffers) {
   Tally alpha{"alpha", 0.6};
+  std::size_t pairs = 0, apart = 0, apart_within = 0;
   const std::size_t n = replicates(40);
   for (std::size_t b = 0; b < n; ++b) {
     ThermalRigConfig rig;
@@ -170,9 +171,22 @@ TEST(Coverage, AlphaWithTheDefaultsWhenEachRunsHeatDiffers) {
     const auto fit = fit_thermal(generate_thermal_dataset(rig, {}, "coverage").set, o);
     ASSERT_TRUE(fit.joint.solver.usable);
     alpha.add(fit.joint.parameter("alpha"));
+    ASSERT_EQ(fit.repeat_differences.size(), 4u);
+    for (const auto& d : fit.repeat_differences) {
+      ++pairs;
+      apart += std::abs(d.z) > 1.96 ? 1 : 0;
+      apart_within += std::abs(d.z_within) > 1.96 ? 1 : 0;
+    }
   }
-  std::cout << fmt::format("alpha with the defaults, {} replicates of 8 runs:\n", n);
+  std::cout << fmt::format("alpha with the defaults, {} replicates of 8 runs; repeats |z| > 1.96 in {} of {} pairs "
+                           "({} against their own SEs alone):\n",
+                           n, apart, pairs, apart_within);
   expect_honest(alpha);
+  // Eq. 2 of repeats against what a run's α is known to, √(SE₁² + SE₂² + 2τ²): about 5 % apart
+  // beyond 1.96 (the audit: 86-100 % against the runs' own SEs).
+  const double share = static_cast<double>(apart) / static_cast<double>(pairs);
+  EXPECT_LE(share, 0.05 + 2 * std::sqrt(0.0475 / static_cast<double>(pairs))) << "repeats called different on clean data";
+  EXPECT_GT(apart_within, pairs / 2) << "the runs' own SEs miss the heat's error (else the check above means nothing)";
 }
 
 // Four runs at two speeds, 3 h at 15 s; the heat from the measured mean friction, whose load
