@@ -635,6 +635,12 @@ void widen_to_the_runs(ThermalFitResult& result, double confidence) {
   const double t = student_t_quantile(1 - (1 - confidence) / 2, p.dof);
   p.ci_low = p.value - t * p.se;
   p.ci_high = p.value + t * p.se;
+  // A profile interval (a bound inside it) widens about the estimate by the same factor, and
+  // stays within the bounds.
+  if (p.interval == "profile") {
+    if (std::isfinite(p.profile_low)) p.profile_low = std::max(p.lower, p.value - d * (p.value - p.profile_low));
+    if (std::isfinite(p.profile_high)) p.profile_high = std::min(p.upper, p.value + d * (p.profile_high - p.value));
+  }
   u.reason += "; alpha's SE from the runs as replicates (notes)";
   u.notes.push_back(fmt::format(
       "alpha's SE from the runs as replicates: sqrt(sum c_r^2 (SE_r^2 + tau^2)){} = {:.3g} (c_r: each run's share of the "

@@ -212,7 +212,9 @@ void spread_section(Page& page, const FrictionFitResult& f) {
   page.paragraph(
       "Each run fitted alone. The spread of repeats (Eq. 1 σ) is the runs' standard deviation; the interval is the "
       "Student-t 95 % interval of their mean. The ratio σ_runs / (SE_pooled √runs) is about 1 when the runs differ by "
-      "noise only.");
+      "noise only. p: the pooled fit's test of heterogeneity between runs (each run's score against the within-run "
+      "covariance, χ²(runs − 1)), Holm-adjusted across the constants; below 0.05 the runs differ beyond what the model "
+      "explains.");
   std::vector<std::vector<std::string>> rows;
   for (const auto& sp : f.spread) {
     const auto& pooled = f.fit.parameter(sp.parameter);
@@ -222,10 +224,11 @@ void spread_section(Page& page, const FrictionFitResult& f) {
                              : sp.spread.n < runs ? fmt::format("{} of {} runs' fits estimated it", sp.spread.n, runs)
                                                   : "";
     rows.push_back({sp.parameter, num(pooled.value), num(pooled.se, 3), num(sp.spread.mean), num(sp.spread.sd, 3),
-                    bracket(sp.spread.low, sp.spread.high), num(sp.spread.min), num(sp.spread.max), num(sp.ratio, 3), note});
+                    bracket(sp.spread.low, sp.spread.high), num(sp.spread.min), num(sp.spread.max), num(sp.ratio, 3),
+                    p_value(sp.p_holm), sp.wider_than_pooled ? "the runs differ beyond the model" + (note.empty() ? "" : "; " + note) : note});
   }
   page.table({"parameter", "pooled", "SE", "run mean", "spread of repeats (Eq. 1 σ)", "95 % interval of the mean", "min",
-              "max", "ratio", "note"},
+              "max", "ratio", "p (Holm)", "note"},
              rows);
   friction_run_figures(page, f, "friction-spread-");
 }
