@@ -10,9 +10,9 @@
 #include <cmath>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <numeric>
 #include <set>
 #include <span>
-#include <numeric>
 #include <tuple>
 #include <unordered_map>
 
@@ -307,6 +307,8 @@ const char* to_string(FrictionTemperature temperature) {
 // successive samples, robust to the set points' steps). A set point spanning more than
 // max(kSetPointWidth_K, 8σ) drifts beyond its noise: it is cut into 1 K bins, so that no sample
 // is more than 0.5 K from what its bin's mean stands for.
+namespace {
+
 constexpr double kSetPointGap_K = 1.0, kSetPointWidth_K = 3.0;
 
 double successive_noise(const std::vector<std::size_t>& in_time, const std::vector<double>& T) {
@@ -316,6 +318,8 @@ double successive_noise(const std::vector<std::size_t>& in_time, const std::vect
   std::nth_element(step.begin(), step.begin() + static_cast<std::ptrdiff_t>(step.size() / 2), step.end());
   return 1.4826 * step[step.size() / 2] / std::sqrt(2.0);  // |N(0, 2σ²)|'s median is 0.954σ
 }
+
+}  // namespace
 
 FrictionLog with_block_mean_temperature(const FrictionLog& logged) {
   using Setting = std::tuple<std::uint32_t, std::uint32_t, double, double>;
