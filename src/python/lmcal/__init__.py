@@ -541,14 +541,14 @@ def calibrate(folder, *, output_dir=None, diagnose: Optional[bool] = None, catal
               starts: Optional[int] = None, seed: Optional[int] = None, free: Optional[Sequence[str]] = None,
               fixed: Optional[Mapping[str, float]] = None, start: Optional[Mapping[str, float]] = None,
               bounds: Optional[Mapping[str, tuple]] = None, run_offsets: Optional[str] = None,
-              raw: Optional[Mapping[str, Any]] = None) -> Calibration:
+              law_temperature: Optional[str] = None, raw: Optional[Mapping[str, Any]] = None) -> Calibration:
     """The whole calibration of a measurement folder (``lmcal calibrate``): fits, spread,
     diagnoses, the calibrated model and the report. With ``output_dir`` its files are written
     there too. ``progress(step_or_detail, done, total)`` is called as it goes."""
     options = _given(diagnose=diagnose, catalog=catalog, raw=raw)
     options["uncertainty"] = _given(covariance=covariance, bootstrap=bootstrap)
     options["friction"] = _given(starts=starts, seed=seed, free=free, fixed=fixed, start=start, bounds=bounds,
-                                 run_offsets=run_offsets)
+                                 run_offsets=run_offsets, law_temperature=law_temperature)
     result = Calibration(_lmcal.calibrate(os.fspath(folder), options, progress))
     if output_dir is not None:
         result.write(output_dir)
