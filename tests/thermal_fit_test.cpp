@@ -230,6 +230,43 @@ TEST(ThermalFit, ReportsEquationTwoBetweenAmbientSensorsAndRepeats) {
 
 // A run too short to follow the rail's heating is refused, naming the run (three records
 // fitted α 0.753 [0.398, 1.108]).
+// Each run's heat reaching the rail 5 % off what its logged friction says: no record of the
+// run sees it, only the runs' spread does. With the defaults the cluster covariance is quoted
+// (the runs are the replicates), and α's SE is what the runs make it, Σ c_r² (SE_r² + τ²) with
+// c_r each run's share of the information (1/SE² of its i.i.d. fit) and τ the REML spread of
+// the per-run α, the t dof near runs − 1; repeats are compared against √(SE₁² + SE₂² + 2τ²).
+TEST(ThermalFit, TheRunsAreAlphasReplicates) {
+  ThermalRigConfig rig;
+  rig.velocity_m_s = {0.05, 0.066, 0.083, 0.11};
+  rig.repeats = 2;
+  rig.heat_variation = 0.05;
+  rig.seed = 41;
+  ThermalFitOptions o;
+  o.compare_sources = false;
+  o.curve_points = 0;
+  o.fit.bootstrap = 0;
+  const auto fit = fit_thermal(generate_thermal_dataset(rig, {}, "replicates").set, o);
+  const Uncertainty& u = fit.joint.uncertainty;
+  EXPECT_EQ(u.method, "cluster") << u.reason;
+  EXPECT_NE(u.reason.find("the runs are the replicates"), std::string::npos) << u.reason;
+  const RandomEffects& re = fit.alpha_runs;
+  ASSERT_EQ(re.k, 8u);
+  EXPECT_GT(re.tau, 0.01) << "5 % heat error per run at α 0.6";
+  double info = 0;
+  for (const auto& run : fit.per_run) info += std::pow(run.uncertainty.find("iid")->se[0], -2);
+  double variance = 0;
+  for (const auto& run : fit.per_run)
+    variance += std::pow(std::pow(run.uncertainty.find("iid")->se[0], -2) / info, 2) *
+                (std::pow(run.parameter("alpha").se, 2) + re.tau * re.tau);
+  const ParameterEstimate& alpha = fit.joint.parameter("alpha");
+  EXPECT_NEAR(alpha.se, std::sqrt(variance), 1e-12 * alpha.se);
+  EXPECT_GT(alpha.se, u.find("cluster")->se[0]);
+  EXPECT_NEAR(alpha.dof, 7.0, 1e-9);
+  EXPECT_LT(alpha.ci_low, alpha.value - 2.3 * alpha.se) << "t(7)";
+  ASSERT_EQ(fit.repeat_differences.size(), 4u);
+  for (const auto& d : fit.repeat_differences) EXPECT_LT(std::abs(d.z), std::abs(d.z_within)) << d.runs;
+}
+
 TEST(ThermalFit, ARunOfAFewRecordsIsRefused) {
   auto rig = clean_rig(3600);
   rig.velocity_m_s = {0.11};
