@@ -17,7 +17,10 @@
 //
 // Runs are fitted jointly (one α for all) and one by one; the per-run α give the spread
 // across runs as the paper reports it (mean, Eq. 1 σ, 95 % t interval), and Eq. 2 compares
-// the two ambient sensors and repeated runs at the same conditions.
+// the two ambient sensors and repeated runs at the same conditions. The runs are α's
+// replicates: with three or more, α's SE is at least Σ c_r² (SE_r² + τ²) over the per-run
+// fits (c_r each run's share of the joint fit's information, τ their spread beyond their own
+// SEs), t with runs − 1 dof; the other parameters quote the cluster covariance.
 //
 // Trap: α belongs to the source model it was fitted with (`paper` puts L1/Lb1 times the
 // power into the rail, so its α is about Lb1/L1 times the `averaged` one).
@@ -187,7 +190,7 @@ struct ThermalFitResult {
   // The per-run α as a random-effects population (population.hpp): each run's within-run SE,
   // and τ, how much the runs' α differ beyond them (REML, with Cochran's Q and I²). The heat
   // reaching each rail has its own error that no record of the run sees, so a run's α is known
-  // to √(SE² + τ²), not to its own SE (which a comparison of repeats must use).
+  // to √(SE² + τ²), not to its own SE: a comparison of repeats must use the former.
   RandomEffects alpha_runs;
   struct RepeatDifference {
     std::string runs;         // "v110_r1/v110_r2"
