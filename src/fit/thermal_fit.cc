@@ -588,67 +588,79 @@ std::optional<Eigen::MatrixXd> heat_jacobian(const ThermalModel& model, const st
   return E;
 }
 
-// Step 2 of the two-stage fit: the heat's uncertainty into the joint fit's covariance.
-// α's variance as the runs make it. The joint α weighs each run by its information (1/SE²
-// of the run's own i.i.d. fit): α̂ ≈ Σ c_r α_r, and α_r = α + u_r + e_r, where e_r is the run's
-// own error (its quoted SE, without an error common to all runs) and u_r what differs between
-// runs unseen by any record (the heat reaching the rail: τ, REML, of the per-run α). So
-// Var(α̂) = Σ c_r² (SE_r² + τ²), plus what is common to all runs (the heat's stated
+// A global parameter's variance as the runs make it (α above all: the heat reaching each rail
+// has its own error, which no record of the run sees). The joint fit weighs each run by its
+// information (1/SE² of the run's own i.i.d. fit): θ̂ ≈ Σ c_r θ_r, and θ_r = θ + u_r + e_r, where
+// e_r is the run's own error (its quoted SE, without an error common to all runs) and u_r what
+// differs between runs unseen by any record (τ, REML, of the per-run θ). So
+// Var(θ̂) = Σ c_r² (SE_r² + τ²), plus what is common to all runs (the heat's stated
 // uncertainty), with t(runs − 1). A cluster-robust covariance estimates the same, but with a
-// few runs carrying most of the information it falls well short (SD/SE 1.8 at 8 runs).
-// Replaces α's SE (the correlations kept) only where it is larger than the quoted one.
+// few runs carrying most of the information it falls well short (α: SD/SE 1.8 at 8 runs).
+// Replaces a parameter's SE (the correlations kept) only where it is larger than the quoted
+// one; a parameter that some run's own fit did not estimate keeps the quoted one.
 void widen_to_the_runs(ThermalFitResult& result, double confidence) {
-  const RandomEffects& re = result.alpha_runs;
   FitResult& joint = result.joint;
-  if (re.k < 3 || re.k != result.per_run.size() || !std::isfinite(re.tau) || joint.covariance.rows() == 0) return;
-  std::size_t a = 0;
-  while (a < joint.parameters.size() && joint.parameters[a].name != "alpha") ++a;
-  if (a == joint.parameters.size() || joint.parameters[a].interval == "none") return;
-  std::vector<double> info, own;
-  for (const FitResult& run : result.per_run) {
-    std::size_t j = 0;
-    while (j < run.parameters.size() && run.parameters[j].name != "alpha") ++j;
-    const CovarianceSummary* iid = run.uncertainty.find("iid");
-    if (j == run.parameters.size() || !iid || !(iid->se[j] > 0)) return;
-    const Eigen::MatrixXd& given = run.uncertainty.covariance_given_input;
-    const auto k = static_cast<Eigen::Index>(j);
-    own.push_back(given.rows() > k ? given(k, k) : run.parameters[j].se * run.parameters[j].se);
-    info.push_back(1 / (iid->se[j] * iid->se[j]));
-  }
-  const double total_info = std::accumulate(info.begin(), info.end(), 0.0);
-  double runs_variance = 0;
-  for (std::size_t r = 0; r < info.size(); ++r) runs_variance += std::pow(info[r] / total_info, 2) * (own[r] + re.tau * re.tau);
-  const auto ja = static_cast<Eigen::Index>(a);
+  const std::size_t runs = result.per_run.size();
+  if (runs < 3 || joint.covariance.rows() == 0) return;
   Uncertainty& u = joint.uncertainty;
-  const double quoted = joint.covariance(ja, ja);
-  const double given = u.covariance_given_input.rows() > ja ? u.covariance_given_input(ja, ja) : quoted;
-  const double common = std::max(quoted - given, 0.0);  // the heat's stated, common uncertainty
-  if (!(runs_variance > given)) return;
-  const double variance = runs_variance + common, dof = static_cast<double>(re.k - 1);
-  const double d = std::sqrt(variance / quoted);
-  joint.covariance.row(ja) *= d;
-  joint.covariance.col(ja) *= d;
-  ParameterEstimate& p = joint.parameters[a];
-  p.se = std::sqrt(variance);
-  // Welch-Satterthwaite with the common part known (ν = ∞).
-  p.dof = std::min(1e7, variance * variance / (runs_variance * runs_variance / dof));
-  const double t = student_t_quantile(1 - (1 - confidence) / 2, p.dof);
-  p.ci_low = p.value - t * p.se;
-  p.ci_high = p.value + t * p.se;
-  // A profile interval (a bound inside it) widens about the estimate by the same factor, and
-  // stays within the bounds.
-  if (p.interval == "profile") {
-    if (std::isfinite(p.profile_low)) p.profile_low = std::max(p.lower, p.value - d * (p.value - p.profile_low));
-    if (std::isfinite(p.profile_high)) p.profile_high = std::min(p.upper, p.value + d * (p.profile_high - p.value));
+  std::vector<std::string> widened;
+  for (std::size_t a = 0; a < joint.parameters.size(); ++a) {
+    ParameterEstimate& p = joint.parameters[a];
+    if (p.per_run || !p.free || p.held_unidentifiable || p.interval == "none") continue;
+    std::vector<Estimate> estimates;
+    std::vector<double> info, own;
+    for (const FitResult& run : result.per_run) {
+      std::size_t j = 0;
+      while (j < run.parameters.size() && run.parameters[j].name != p.name) ++j;
+      const CovarianceSummary* iid = run.uncertainty.find("iid");
+      if (j == run.parameters.size() || run.parameters[j].held_unidentifiable || !iid || !(iid->se[j] > 0)) break;
+      const ParameterEstimate& q = run.parameters[j];
+      if (!std::isfinite(q.value) || !(q.se > 0)) break;
+      const Eigen::MatrixXd& given = run.uncertainty.covariance_given_input;
+      const auto k = static_cast<Eigen::Index>(j);
+      own.push_back(given.rows() > k ? given(k, k) : q.se * q.se);
+      info.push_back(1 / (iid->se[j] * iid->se[j]));
+      estimates.push_back({q.value, q.se});
+    }
+    if (estimates.size() != runs) continue;
+    const RandomEffects re = random_effects(estimates, confidence);
+    if (!std::isfinite(re.tau)) continue;
+    const double total_info = std::accumulate(info.begin(), info.end(), 0.0);
+    double runs_variance = 0;
+    for (std::size_t r = 0; r < runs; ++r) runs_variance += std::pow(info[r] / total_info, 2) * (own[r] + re.tau * re.tau);
+    const auto ja = static_cast<Eigen::Index>(a);
+    const double quoted = joint.covariance(ja, ja);
+    const double given = u.covariance_given_input.rows() > ja ? u.covariance_given_input(ja, ja) : quoted;
+    const double common = std::max(quoted - given, 0.0);  // the heat's stated, common uncertainty
+    if (!(runs_variance > given) || !(quoted > 0)) continue;
+    const double variance = runs_variance + common, dof = static_cast<double>(runs - 1);
+    const double d = std::sqrt(variance / quoted);
+    joint.covariance.row(ja) *= d;
+    joint.covariance.col(ja) *= d;
+    p.se = std::sqrt(variance);
+    // Welch-Satterthwaite with the common part known (ν = ∞).
+    p.dof = std::min(1e7, variance * variance / (runs_variance * runs_variance / dof));
+    const double t = student_t_quantile(1 - (1 - confidence) / 2, p.dof);
+    p.ci_low = p.value - t * p.se;
+    p.ci_high = p.value + t * p.se;
+    // A profile interval (a bound inside it) widens about the estimate by the same factor, and
+    // stays within the bounds.
+    if (p.interval == "profile") {
+      if (std::isfinite(p.profile_low)) p.profile_low = std::max(p.lower, p.value - d * (p.value - p.profile_low));
+      if (std::isfinite(p.profile_high)) p.profile_high = std::min(p.upper, p.value + d * (p.profile_high - p.value));
+    }
+    widened.push_back(fmt::format("{} {:.3g} (tau {:.3g}, t with {:.1f} dof)", p.name, p.se, re.tau, p.dof));
   }
-  u.reason += "; alpha's SE from the runs as replicates (notes)";
+  if (widened.empty()) return;  // (scaling a row and column keeps the correlations)
+  u.reason += fmt::format("; the SE of {} from the runs as replicates (notes)", widened.size() == 1 ? "one parameter" : "some parameters");
   u.notes.push_back(fmt::format(
-      "alpha's SE from the runs as replicates: sqrt(sum c_r^2 (SE_r^2 + tau^2)){} = {:.3g} (c_r: each run's share of the "
-      "joint fit's information; tau = {:.3g} between runs, REML of the {} runs' own alpha), t with {:.1f} dof; the "
-      "covariance quoted for the other parameters is {}",
-      common > 0 ? " plus the heat's common uncertainty" : "", p.se, re.tau, re.k, p.dof, u.method));
+      "SEs from the runs as replicates, sqrt(sum c_r^2 (SE_r^2 + tau^2)) plus any uncertainty common to all runs (c_r: each "
+      "run's share of the joint fit's information; tau: the spread of the {} runs' own estimates beyond their SEs, REML): {}; "
+      "the others quote {}",
+      runs, fmt::join(widened, "; "), u.method));
 }
 
+// Step 2 of the two-stage fit: the heat's uncertainty into the joint fit's covariance.
 void add_heat_uncertainty(const ThermalDataSet& data, const std::vector<PreparedRun>& runs, const ThermalModel& model,
                           const detail::FinalState& state, const ThermalFitOptions& o, ThermalFitResult& result) {
   const HeatUncertainty heat = heat_uncertainty(runs, result.runs, data, o);

@@ -18,9 +18,10 @@
 // Runs are fitted jointly (one α for all) and one by one; the per-run α give the spread
 // across runs as the paper reports it (mean, Eq. 1 σ, 95 % t interval), and Eq. 2 compares
 // the two ambient sensors and repeated runs at the same conditions. The runs are α's
-// replicates: with three or more, α's variance is at least Σ c_r² (SE_r² + τ²) over the per-run
-// fits (c_r each run's share of the joint fit's information, τ their spread beyond their own
-// SEs), t with runs − 1 dof; the other parameters quote the cluster covariance.
+// replicates: with three or more, the cluster covariance is quoted, and the variance of α (and
+// of any other global parameter every run's own fit estimates) is at least Σ c_r² (SE_r² + τ²)
+// over the per-run fits (c_r each run's share of the joint fit's information, τ their spread
+// beyond their own SEs), t with runs − 1 dof.
 //
 // Trap: α belongs to the source model it was fitted with (`paper` puts L1/Lb1 times the
 // power into the rail, so its α is about Lb1/L1 times the `averaged` one).
