@@ -48,6 +48,9 @@ void setup_predict(CLI::App& app, const std::vector<std::string>& argv) {
   predict->add_option("--segments", o->prediction.half_rail_segments, "Rail model segments (half rail)")->capture_default_str();
   predict->add_option("--time-step", o->prediction.time_step_s, "Rail model time step, s")->capture_default_str();
   predict->add_option("--catalog", o->catalog_file, kCatalogHelp);
+  predict->add_flag("--any-guide", o->prediction.any_guide,
+                    "Predict a duty on another guide than the model was calibrated on (refused otherwise; noted in the outputs)")
+      ->capture_default_str();
   predict->callback([o, &argv] { run_predict(*o, argv); });
 }
 

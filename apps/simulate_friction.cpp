@@ -61,6 +61,14 @@ void run_simulate_friction(const FrictionSweepOptions& o, const std::vector<std:
                 bool outside = false;
                 for (const auto& term : law.terms) empirical_N += steady_term_N(term, c, with_effects_N, &outside);
                 const double friction_N = with_effects_N + empirical_N;
+                // The last check before the row leaves: validate() keeps the conditions in a rig's
+                // ranges, but a model's constants may still take the law out of the doubles.
+                for (double x : {f.viscosity_mm2_s, f.total_N(), with_effects_N, friction_N, friction_N * V})
+                  if (!std::isfinite(x))
+                    throw InvalidParameter("--velocity", V,
+                                           fmt::format("a condition where the friction law is finite (at load {} N, {} °C, "
+                                                       "preload {} um, block {} mm it gives {} N)",
+                                                       P, T, pc, Lb, friction_N));
                 csv.cell(spec.model).cell(V).cell(P).cell(pc).cell(Lb).cell(T).cell(direction).cell(f.viscosity_mm2_s);
                 csv.cell(f.coulomb_N).cell(f.stribeck_N).cell(f.viscous_N).cell(with_effects_N - f.total_N());
                 if (!law.terms.empty()) csv.cell(empirical_N).cell(outside ? 1 : 0);

@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <iostream>
 
@@ -18,8 +19,10 @@
 #include "progress.hpp"
 #include "lmcal/error.hpp"
 #include "lmcal/io/atomic_file.hpp"
+#include "lmcal/io/units.hpp"
 #include "lmcal/models/friction_effects.hpp"
 #include "lmcal/models/rail_thermal.hpp"
+#include "lmcal/predict/prediction.hpp"
 
 namespace lmcal::cli {
 
@@ -259,7 +262,8 @@ void run_simulate_thermal(const ThermalSweepOptions& o, const std::vector<std::s
   require_positive("--dt", o.time_step_s);
   require_positive("--duration", o.duration_s);
   require_positive("--output-every", o.output_every_s);
-  if (!std::isnan(o.heat_rate_W)) require_non_negative("--heat-rate", o.heat_rate_W);
+  if (!std::isnan(o.heat_rate_W)) require_in_range("--heat-rate", o.heat_rate_W, 0.0, kHeatRateRange.high);
+  for (double V : o.velocity_m_s) require_in_range("--velocity", V, 0.0, physical_range(Quantity::velocity).high);
   if (!std::isnan(o.stop_s) && !(o.stop_s > 0 && o.stop_s < o.duration_s))
     throw InvalidParameter("--stop", o.stop_s, "a time within the run (0 < stop < --duration)");
   const std::optional<LoadedModel> model = LoadedModel::read(o.model, "thermal");
@@ -312,11 +316,25 @@ void run_simulate_thermal(const ThermalSweepOptions& o, const std::vector<std::s
     const RailSolution<double>& sol = solutions[k];
     const SteadyState steady = steady_state(c, numerics, ambient.at(o.duration_s), rail, law);
     const RailSolution<double> ref = o.reference ? references[k] : RailSolution<double>{};
+    // The last check before the case's numbers leave: the run, its steady state and the reference.
+    RailSolution<double> steady_as_run;
+    steady_as_run.profiles_C = {steady.temperature_C};
+    steady_as_run.heat_rate_W = {steady.heat_rate_W};
+    for (const RailSolution<double>* run : std::array<const RailSolution<double>*, 3>{&sol, &steady_as_run, &ref}) {
+      const std::string runaway =
+          runaway_of(*run, fmt::format("velocity_m_s = {}, load_N = {}, stroke_m = {}, heat_rate_W = {}", c.velocity_m_s,
+                                       c.load_N, c.stroke_m, c.heat_rate_W));
+      if (!runaway.empty()) throw InvalidParameter(fmt::format("case {}", k), runaway);
+    }
 
     // heat_rate_W: Q_f at that time (it follows the rail with a coupled heat rate).
     auto case_cells = [&](CsvText& csv, double heat_rate_W) {
-      csv.cell(double(k)).cell(c.guide).cell(c.velocity_m_s).cell(c.load_N).cell(c.preload_um);
-      csv.cell(c.block_length_mm).cell(c.contact_length_mm).cell(c.stroke_m).cell(heat_rate_W);
+      // A given heat rate needs no preload or block length: their cells are empty (not NaN).
+      const auto used = [&](double v) -> CsvText& { return std::isnan(v) ? csv.cell("") : csv.cell(v); };
+      csv.cell(double(k)).cell(c.guide).cell(c.velocity_m_s).cell(c.load_N);
+      used(c.preload_um);
+      used(c.block_length_mm);
+      csv.cell(c.contact_length_mm).cell(c.stroke_m).cell(heat_rate_W);
     };
     std::vector<double> max_error(o.sensors_m.size(), 0.0);
     for (std::size_t t = 0; t < outputs.output_times_s.size(); ++t)
@@ -344,8 +362,10 @@ void run_simulate_thermal(const ThermalSweepOptions& o, const std::vector<std::s
     for (std::size_t s = 0; s < o.sensors_m.size(); ++s)
       at_end += fmt::format("{}{:.2f}", s ? " " : "", sol.temperature_C(outputs.output_times_s.size() - 1, s));
     progress.clear();
-    std::cout << fmt::format("{:>4}  {:<8} {:>7.3f} {:>6.0f} {:>7.1f} {:>6.3f} {:>7.3f}  {:>8.2f}  {}\n", k, c.guide,
-                             c.velocity_m_s, c.load_N, c.block_length_mm, c.stroke_m, c.heat_rate_W,
+    std::cout << fmt::format("{:>4}  {:<8} {:>7.3f} {:>6.0f} {:>7} {:>6.3f} {:>7.3f}  {:>8.2f}  {}\n", k, c.guide,
+                             c.velocity_m_s, c.load_N,
+                             std::isnan(c.block_length_mm) ? std::string("-") : fmt::format("{:.1f}", c.block_length_mm),
+                             c.stroke_m, c.heat_rate_W,
                              peak - ambient.at(o.duration_s), at_end);
     if (!std::isnan(o.stop_s))
       std::cout << fmt::format("      the block stops at {:g} s: no heat from then on; the steady state is the running block's\n",

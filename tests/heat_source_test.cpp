@@ -47,6 +47,22 @@ TEST(HeatSource, AveragedShapeCarriesExactlyThePowerAsATrapezoid) {
   EXPECT_NEAR(sum(static_source_weights(SourceModel::averaged, kMotion, uniform_faces(0, 0.3, 300))), 0.5, 1e-12);
 }
 
+TEST(HeatSource, AveragedShapeOfAVanishingStrokeIsTheContactWindowAtTheCentre) {
+  // The stroke's mean of the window tends to the window at the centre: finite, the whole power,
+  // the same as a short stroke's (5e-324 m gave 0/0 through the closed form's cancellation).
+  const auto faces = uniform_faces(-0.3, 0.3, 600);
+  const auto shape = [&](double stroke_m) {
+    return static_source_weights(SourceModel::averaged, {.stroke_m = stroke_m, .contact_length_m = 0.0822, .velocity_m_s = 0.11}, faces);
+  };
+  const auto tiny = shape(5e-324), short_stroke = shape(1e-5);
+  for (double w : tiny) EXPECT_TRUE(std::isfinite(w));
+  EXPECT_NEAR(sum(tiny), 1.0, 1e-12);
+  for (std::size_t i = 0; i < tiny.size(); ++i) EXPECT_NEAR(tiny[i], short_stroke[i], 1e-4) << "volume " << i;
+  // Either side of the switch to the limit (1e-6 of the contact length) the shapes agree.
+  const auto below = shape(0.99e-6 * 0.0822), above = shape(1.01e-6 * 0.0822);
+  for (std::size_t i = 0; i < below.size(); ++i) EXPECT_NEAR(below[i], above[i], 1e-6) << "volume " << i;
+}
+
 TEST(HeatSource, PaperShapePutsL1OverLb1TimesThePowerIntoTheRail) {
   const auto faces = uniform_faces(-0.3, 0.3, 77);  // stroke ends fall inside volumes
   EXPECT_NEAR(sum(static_source_weights(SourceModel::paper, kMotion, faces)), 0.2 / 0.0822, 1e-12);

@@ -3,6 +3,8 @@
 #include <fmt/format.h>
 #include <toml++/toml.h>
 
+#include <Eigen/Eigenvalues>
+
 #include <algorithm>
 #include <cmath>
 
@@ -10,6 +12,7 @@
 #include "io/toml_text.hpp"
 #include "lmcal/error.hpp"
 #include "lmcal/fit/statistics.hpp"
+#include "lmcal/io/units.hpp"
 
 namespace lmcal {
 
@@ -184,10 +187,29 @@ double finite_at(const std::string& file, const toml::table& t, const char* key)
   return v;
 }
 
+// Refuses `value` (at `where`) outside [low, high]: a parameter beyond it makes the model
+// describe nothing real (an h of 1e300 W/m²K pins the rail to the ambient).
+void require_within(const std::string& file, const toml::source_region& where, const std::string& name, double value,
+                    double low, double high, std::string_view unit) {
+  if (!(value >= low && value <= high))
+    fail(file, where, fmt::format("{} = {}: expected a value in [{:g}, {:g}]{}{}", name, value, low, high, unit.empty() ? "" : " ",
+                                  unit));
+}
+
+// The number `key` of `t`, within the range of a rig's values of `quantity` (units.hpp).
+double within_at(const std::string& file, const toml::table& t, const char* key, Quantity quantity) {
+  const double v = finite_at(file, t, key);
+  const PhysicalRange range = physical_range(quantity);
+  require_within(file, t.get(key)->source(), key, v, range.low, range.high, range.unit);
+  return v;
+}
+
 std::string string_at(const std::string& file, const toml::table& t, const char* key) {
   const toml::node* n = t.get(key);
   const auto* s = n ? n->as_string() : nullptr;
   if (!s) fail(file, n ? n->source() : t.source(), fmt::format("expected a text '{}'", key));
+  // Every text of a model file reaches terminals, JSON and the report: the one name check.
+  if (auto problem = io::name_problem(s->get())) fail(file, n->source(), fmt::format("{}: {}", key, *problem));
   return s->get();
 }
 
@@ -203,6 +225,9 @@ std::vector<std::pair<std::string, toml::source_region>> strings_at(const std::s
   for (const auto& item : *a) {
     const auto* s = item.as_string();
     if (!s) fail(file, item.source(), fmt::format("key '{}': expected a text", key));
+    // The command's arguments may hold tabs and line breaks, never an escape.
+    if (auto problem = io::name_problem(s->get(), std::string_view(key) == "command"))
+      fail(file, item.source(), fmt::format("key '{}': {}", key, *problem));
     for (const auto& done : out)
       if (distinct && done.first == s->get())
         fail(file, item.source(), fmt::format("key '{}': '{}' is listed twice", key, done.first));
@@ -295,6 +320,23 @@ Eigen::MatrixXd read_matrix(const std::string& file, const toml::table& t, const
   const double scale = m.diagonal().cwiseAbs().maxCoeff();
   if ((m - m.transpose()).cwiseAbs().maxCoeff() > 1e-9 * scale || (m.diagonal().array() < 0).any())
     fail(file, node->source(), fmt::format("[{}] {}: expected a covariance (symmetric, variances >= 0)", table, key));
+  // Positive semidefinite, judged on the correlation matrix D^-1/2 C D^-1/2 (a zero variance
+  // scaled by 1): its eigenvalues lie in [0, n] whatever the parameters' units, so one tolerance
+  // serves every file. A covariance lmcal wrote carries round-off of n·eps·(its condition) there,
+  // and a singular one (a parameter fixed by the others) an eigenvalue of about -1e-16; -1e-8 is
+  // far above both and far below what moves a draw (a direction with variance 1e-8 of the
+  // parameters' own). Below it, the draws' square root would clamp the negative directions and
+  // the band could exclude the estimate.
+  const Eigen::VectorXd d = m.diagonal().unaryExpr([](double v) { return v > 0 ? 1 / std::sqrt(v) : 1.0; });
+  const Eigen::MatrixXd correlation = d.asDiagonal() * m * d.asDiagonal();
+  const double smallest = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(correlation, Eigen::EigenvaluesOnly).eigenvalues()(0);
+  if (smallest < -1e-8)
+    fail(file, node->source(),
+         fmt::format("[{}] {}: not a covariance: it is not positive semidefinite (the smallest eigenvalue of its correlation "
+                     "matrix is {:.3g}, of the matrix {:.3g}; at least -1e-8 expected): a parameter's covariances exceed "
+                     "what its variances allow",
+                     table, key, smallest,
+                     Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(m, Eigen::EigenvaluesOnly).eigenvalues()(0)));
   return m;
 }
 
@@ -412,8 +454,8 @@ void read_friction(const std::string& file, const toml::table& f, ModelFile& m) 
       fail(file, where, fmt::format("unknown friction effect '{}' in causes; expected one of {}", name, known_list(effects)));
   m.friction_causes = names_of(causes);
   m.friction_covariance = f.get("covariance") ? string_at(file, f, "covariance") : "";
-  if (f.get("reference_temperature_C")) m.constants.T_ref_C = finite_at(file, f, "reference_temperature_C");
-  if (f.get("viscosity40_mm2_s")) m.constants.nu_ref_mm2_s = finite_at(file, f, "viscosity40_mm2_s");
+  if (f.get("reference_temperature_C")) m.constants.T_ref_C = within_at(file, f, "reference_temperature_C", Quantity::temperature);
+  if (f.get("viscosity40_mm2_s")) m.constants.nu_ref_mm2_s = within_at(file, f, "viscosity40_mm2_s", Quantity::viscosity);
   const auto parameters = read_parameters(file, f, "friction");
   const std::vector<std::string> term_parameters = read_terms(file, f, m);
   const std::vector<std::string> constants(kFrictionConstantNames.begin(), kFrictionConstantNames.end());
@@ -422,7 +464,11 @@ void read_friction(const std::string& file, const toml::table& f, ModelFile& m) 
     const auto cause = std::find(m.friction_causes.begin(), m.friction_causes.end(), r.p.name);
     const auto term = std::find(term_parameters.begin(), term_parameters.end(), r.p.name);
     if (c != constants.end()) fittable_constant(m.constants, static_cast<std::size_t>(c - constants.begin())) = r.p.value;
-    else if (cause != m.friction_causes.end()) m.effects[*find_friction_effect(r.p.name)] = r.p.value;
+    else if (cause != m.friction_causes.end()) {
+      const FrictionEffectInfo& info = FrictionEffectLibrary::infos[*find_friction_effect(r.p.name)];
+      require_within(file, r.value_at, r.p.name, r.p.value, info.lower, info.upper, info.unit);
+      m.effects[*find_friction_effect(r.p.name)] = r.p.value;
+    }
     else if (term != term_parameters.end()) set_term_parameter(m.friction_terms, r.p.name, r.p.value);
     else
       fail(file, r.name_at,
@@ -486,8 +532,14 @@ void read_thermal(const std::string& file, const toml::table& t, ModelFile& m) {
       m.alpha = r.p.value;
     } else if (r.p.name == "h_W_m2K") {
       if (!(r.p.value > 0)) fail(file, r.value_at, fmt::format("h_W_m2K = {}: expected a value > 0", r.p.value));
+      require_within(file, r.value_at, r.p.name, r.p.value, 0, kHeatTransferRange.high, kHeatTransferRange.unit);
       m.h_W_m2K = r.p.value;
     } else {
+      // A mechanism's parameter: within the bounds its fit has (the library's).
+      for (const auto& e : library)
+        for (std::size_t j = 0; j < e.parameters.size() && j < e.parameter_bounds.size(); ++j)
+          if (e.parameters[j] == r.p.name)
+            require_within(file, r.value_at, r.p.name, r.p.value, e.parameter_bounds[j].first, e.parameter_bounds[j].second, "");
       m.mechanism_parameters.emplace_back(r.p.name, r.p.value);
     }
   }
@@ -513,12 +565,15 @@ void read_thermal(const std::string& file, const toml::table& t, ModelFile& m) {
                     .block_length_mm = finite_at(file, *r, "block_length_mm"),
                     .velocity_m_s = finite_at(file, *r, "velocity_m_s"),
                     .temperature_C = finite_at(file, *r, "temperature_C")};
-    h.viscosity40_mm2_s = finite_at(file, *r, "viscosity40_mm2_s");
+    h.viscosity40_mm2_s = within_at(file, *r, "viscosity40_mm2_s", Quantity::viscosity);
     h.heat_rate_W = finite_at(file, *r, "heat_rate_W");
+    require_within(file, r->get("heat_rate_W")->source(), "heat_rate_W", h.heat_rate_W, kHeatRateRange.low, kHeatRateRange.high,
+                   kHeatRateRange.unit);
     try {
       validate(h.conditions);
     } catch (const InvalidParameter& e) {
-      fail(file, r->source(), std::string("[[thermal.heat_reference]]: ") + e.what());
+      const toml::node* at = r->get(e.parameter());
+      fail(file, at ? at->source() : r->source(), std::string("[[thermal.heat_reference]]: ") + e.what());
     }
     m.heat_references.push_back(h);
   }
@@ -592,8 +647,10 @@ std::string model_file_toml(const ModelFile& m) {
       "# lmcal calibrated model: the published friction law and rail model with the causes the diagnoses\n"
       "# accepted, refitted to the measurements. Every parameter with its standard error and 95 % interval.\n"
       "# Use it: lmcal simulate friction --model FILE, lmcal simulate thermal --model FILE\n";
-  out += fmt::format("kind = \"lmcal calibrated model\"\nlmcal_version = {}\nset = {}\ncommand = {}\n\n", manifest::toml_string(m.lmcal_version),
-                     manifest::toml_string(m.set), string_list(m.command));
+  out += fmt::format("kind = \"lmcal calibrated model\"\nlmcal_version = {}\nset = {}\n", manifest::toml_string(m.lmcal_version),
+                     manifest::toml_string(m.set));
+  if (!m.guide.empty()) out += fmt::format("guide = {}\n", manifest::toml_string(m.guide));
+  out += fmt::format("command = {}\n\n", string_list(m.command));
   for (const auto& [file, hash] : m.inputs) out += fmt::format("[[input]]\nfile = {}\nsha256 = {}\n\n", manifest::toml_string(file), manifest::toml_string(hash));
   if (m.has_friction) {
     out += fmt::format(
@@ -645,6 +702,13 @@ std::string model_file_toml(const ModelFile& m) {
   return out;
 }
 
+std::string calibrated_guide(const ThermalDataSet& data) {
+  if (data.runs.empty()) return "";
+  for (const auto& run : data.runs)
+    if (run.guide != data.runs.front().guide) return "";
+  return data.runs.front().guide;
+}
+
 ModelFile read_model_file(const std::filesystem::path& path) {
   const std::string file = path.string();
   const std::string text = io::read_text_file(path, "the model file");
@@ -659,7 +723,7 @@ ModelFile read_model_file(const std::filesystem::path& path) {
   if (!kind || kind->value_or(std::string_view{}) != kKind)
     fail(file, kind ? kind->source() : toml::source_region{{1, 1}, {1, 1}, {}},
          fmt::format("expected kind = \"{}\" (a model.toml written by lmcal calibrate)", kKind));
-  only_keys(file, root, "the model file", {"kind", "lmcal_version", "set", "command", "input", "friction", "thermal"});
+  only_keys(file, root, "the model file", {"kind", "lmcal_version", "set", "guide", "command", "input", "friction", "thermal"});
   ModelFile m;
   m.lmcal_version = root.get("lmcal_version") ? string_at(file, root, "lmcal_version") : "";
   // Another major version may mean other parameters or units: refused, not misread.
@@ -670,6 +734,7 @@ ModelFile read_model_file(const std::filesystem::path& path) {
                      "this version",
                      m.lmcal_version, LMCAL_VERSION));
   m.set = root.get("set") ? string_at(file, root, "set") : "";
+  m.guide = root.get("guide") ? string_at(file, root, "guide") : "";
   m.command = names_of(strings_at(file, root, "command", false));
   for (const toml::table* i : tables_at(file, root, "input", "input")) {
     only_keys(file, *i, "[[input]]", {"file", "sha256"});

@@ -7,6 +7,7 @@
 #include "io/file_kind.hpp"
 #include "io/input_file.hpp"
 #include "lmcal/error.hpp"
+#include "lmcal/version.hpp"
 
 namespace lmcal::io {
 
@@ -93,6 +94,27 @@ bool JsonFile::flag(const nlohmann::json& parent, const std::string& key, const 
   return it->get<bool>();
 }
 
+namespace {
+
+// A file of another layout (schema_version) or another major version of lmcal may have other
+// fields or units: refused, not misread, as a model file of another major version is. A file
+// without them (written before they were recorded) is read as it is.
+void require_this_layout(const JsonFile& f) {
+  if (const auto it = f.root.find("schema_version"); it != f.root.end() && !(it->is_number_integer() && *it == kOutputSchemaVersion))
+    f.fail("schema_version", fmt::format("{}: written in another layout than this lmcal's ({}); rerun it with lmcal {}",
+                                         it->dump(), kOutputSchemaVersion, LMCAL_VERSION));
+  const auto version = f.root.find("lmcal_version");
+  if (version == f.root.end()) return;
+  if (!version->is_string()) f.fail("lmcal_version", "expected a string, found " + json_type(*version));
+  const auto major = [](std::string_view v) { return v.substr(0, v.find('.')); };
+  const std::string written = version->get<std::string>();
+  if (major(written) != major(LMCAL_VERSION))
+    f.fail("lmcal_version", fmt::format("{}: written by another major version of lmcal (this is {}); rerun it with this version",
+                                        nlohmann::json(written).dump(), LMCAL_VERSION));
+}
+
+}  // namespace
+
 JsonFile read_json_file(const std::filesystem::path& file, const std::string& expected) {
   const std::string text = read_text_file(file, expected);
   JsonFile out{file.string(), {}};
@@ -108,6 +130,7 @@ JsonFile read_json_file(const std::filesystem::path& file, const std::string& ex
     throw InputError(out.file, 0, 0, "a number beyond the range of a double: expected " + expected);
   }
   if (!out.root.is_object()) throw InputError(out.file, 0, 0, fmt::format("expected {}, found {}", expected, json_type(out.root)));
+  require_this_layout(out);
   return out;
 }
 

@@ -3,6 +3,7 @@
 #include <string>
 
 #include "lmcal/error.hpp"
+#include "lmcal/io/units.hpp"
 #include "lmcal/models/friction_effects.hpp"
 
 namespace lmcal {
@@ -19,12 +20,16 @@ void validate(const FrictionConstants<double>& k) {
   require_in_range("T_ref_C", k.T_ref_C, -273.15, 1000.0);
 }
 
+// The signs are the law's (a speed, a load); the upper ends are the loaders' ranges of a rig's
+// values (units.hpp physical_range), beyond which the law's terms leave the doubles: a speed of
+// 1e308 m/s makes the viscous term inf and the total NaN.
 void validate(const FrictionConditions<double>& c) {
-  require_non_negative("load_N", c.load_N);
-  require_non_negative("preload_um", c.preload_um);
+  require_in_range("load_N", c.load_N, 0.0, physical_range(Quantity::force).high);
+  require_in_range("preload_um", c.preload_um, 0.0, physical_range(Quantity::preload).high);
   require_positive("block_length_mm", c.block_length_mm);
-  require_non_negative("velocity_m_s", c.velocity_m_s);
-  require_in_range("temperature_C", c.temperature_C, -273.15, 1000.0);
+  require_in_range("block_length_mm", c.block_length_mm, 0.0, physical_range(Quantity::length_mm).high);
+  require_in_range("velocity_m_s", c.velocity_m_s, 0.0, physical_range(Quantity::velocity).high);
+  require_in_range("temperature_C", c.temperature_C, -273.15, physical_range(Quantity::temperature).high);
 }
 
 }  // namespace lmcal

@@ -72,6 +72,11 @@ std::vector<double> static_source_weights(SourceModel model, const BlockMotion& 
       // Uniform P/w on |x| <= L1/2: overlap of [a, b] with [-L1/2, L1/2].
       const double overlap = std::max(0.0, std::min(b, half_stroke) - std::max(a, -half_stroke));
       weights[i] = overlap / w;
+    } else if (motion.stroke_m < 1e-6 * w) {
+      // The stroke's mean of the window's overlap, as the stroke shrinks: the overlap at the
+      // centre (within L1/w of it). The closed form below loses eps·|x|/L1 to cancellation and
+      // gives 0/0 for a stroke of 5e-324 m.
+      weights[i] = std::max(0.0, std::min(b, 0.5 * w) - std::max(a, -0.5 * w)) / w;
     } else {
       weights[i] = window_overlap_integral(a, b, w, -half_stroke, half_stroke) / (w * motion.stroke_m);
     }

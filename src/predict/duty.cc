@@ -259,6 +259,8 @@ DutyCycle load_duty_cycle(const std::filesystem::path& path, const GuideCatalog*
     s.viscosity40_mm2_s = own.viscosity40_mm2_s.value_or(99.0);
     if (s.velocity_m_s > 0) {
       s.stroke_m = needed(own.stroke_m, nullptr, "stroke_m");
+    s.line = static_cast<long>(t.source().begin.line);
+    s.column = static_cast<long>(t.source().begin.column);
       const double contact_m = *d.guide.contact_length_mm * 1e-3;
       if (s.stroke_m + contact_m > d.rail_length_m)
         m.fail(t.source(), fmt::format("[[segment]]: stroke {} m plus the block's contact length {} m is longer than the rail "

@@ -17,6 +17,7 @@
 #include "lmcal/io/csv_writer.hpp"
 #include "lmcal/error.hpp"
 #include "lmcal/fit/thermal_fit.hpp"
+#include "lmcal/io/units.hpp"
 #include "lmcal/models/friction_effects.hpp"
 
 namespace lmcal {
@@ -76,6 +77,27 @@ double thermal_elongation_m(const std::vector<double>& x, const std::vector<doub
   LMCAL_ASSERT(x.size() == T.size() && x.size() == ref.size() && !x.empty(), "one temperature per node");
   if (b < a) return -thermal_elongation_m(x, T, ref, expansion_per_K, b, a);
   return weighted_rise(elongation_weights(x, a, b), T, ref, expansion_per_K);
+}
+
+std::string runaway_of(const RailSolution<double>& sol, const std::string& inputs) {
+  const PhysicalRange range = physical_range(Quantity::temperature);
+  double worst = 0;
+  bool finite = true;
+  const auto see = [&](double T) {
+    finite = finite && std::isfinite(T);
+    if (std::isfinite(T) && std::abs(T) > std::abs(worst)) worst = T;
+  };
+  for (const auto& profile : sol.profiles_C)
+    for (double T : profile) see(T);
+  for (double T : sol.sensor_temperature_C) see(T);
+  for (double T : sol.source_temperature_C) see(T);
+  for (double q : sol.heat_rate_W) finite = finite && std::isfinite(q);
+  if (finite && range.contains(worst)) return "";
+  return fmt::format("{} drives the rail to {}, beyond the temperatures of a rig ({:g} to {:g} °C): the model's heat runs "
+                     "away there (the friction law's Stribeck term grows as the oil thins), so it predicts nothing real; "
+                     "lower the speed or the load, or check the oil's viscosity",
+                     inputs, finite ? fmt::format("{:.4g} °C", worst) : std::string("no finite temperature"), range.low,
+                     range.high);
 }
 
 namespace {
@@ -223,6 +245,16 @@ AmbientTrace segment_ambient(const AmbientTrace& a, double t0, double t1) {
   return out;
 }
 
+// Refuses a segment whose rail predicts nothing real (runaway_of), at its table in the duty file.
+void require_physical(const DutyCycle& duty, const DutySegment& s, const RailSolution<double>& sol) {
+  const std::string message =
+      runaway_of(sol, fmt::format("{} (velocity_m_s = {}, load_N = {}, stroke_m = {}, viscosity40_mm2_s = {})", s.name,
+                                  s.velocity_m_s, s.load_N, s.stroke_m, s.viscosity40_mm2_s));
+  if (message.empty()) return;
+  if (s.line > 0) throw InputError(duty.file, s.line, s.column, message);
+  throw InvalidParameter("duty", message);
+}
+
 Trajectory simulate_duty(const ModelFile& m, const DutyCycle& duty, const Draw& d, const PredictionOptions& o,
                          const std::vector<double>& times, std::vector<std::string>* segment_at) {
   const GuideSpec& g = duty.guide;
@@ -283,6 +315,7 @@ Trajectory simulate_duty(const ModelFile& m, const DutyCycle& duty, const Draw& 
       sol = simulate_rail_with_mechanisms(geometry, numerics, outputs, params, ambient, constants, d.effects, conditions,
                                           mechanisms, d.mechanism_values);
     }
+    require_physical(duty, s, sol);
     // The reference of the elongation: the rail at the duty's start (uniform). The integrals'
     // weights on this segment's grid, once (a scale position before the fixed point: negative).
     const std::vector<double> reference(sol.node_positions_m.size(), initial_C);
@@ -364,6 +397,22 @@ void flag_ranges(const ModelFile& m, const DutyCycle& duty, double max_rail_C, P
   check(m.friction_range_of("temperature_C"), "the duty", "temperature_C", max_rail_C, "friction");
 }
 
+// The last check before a prediction leaves: every number of every band finite (a draw or a
+// segment that was not is refused or left out above; this one names what slipped through).
+void require_finite_bands(const Prediction& p) {
+  const auto check = [](const Band& b, const std::string& quantity) {
+    for (const std::vector<double>* v : {&b.value, &b.low, &b.high})
+      for (double x : *v)
+        if (!std::isfinite(x)) throw InvalidParameter(quantity, x, "a finite prediction (the model gave none here)");
+  };
+  for (const Band& b : p.temperature_C) check(b, "temperature_C");
+  for (const Band& b : p.scale_error_um) check(b, "scale_error_um");
+  check(p.elongation_um, "elongation_um");
+  check(p.friction_N, "friction_N");
+  check(p.heat_rate_W, "heat_rate_W");
+  check(p.profile_C, "end profile temperature_C");
+}
+
 }  // namespace
 
 Prediction predict(const ModelFile& m, const DutyCycle& duty, const PredictionOptions& o) {
@@ -377,6 +426,15 @@ Prediction predict(const ModelFile& m, const DutyCycle& duty, const PredictionOp
   require_positive("time_step_s", o.time_step_s);
 
   const DrawSet set = make_draws(m, o);
+  const bool other_guide = !m.guide.empty() && m.guide != duty.guide.model;
+  // The names as JSON strings: quoted, a control character escaped (they reach a terminal).
+  const auto quoted = [](const std::string& name) { return nlohmann::json(name).dump(); };
+  if (other_guide && !o.any_guide)
+    throw InvalidParameter("guide", fmt::format("the duty runs on {} but the model was calibrated on {}: its α, h and friction "
+                                                "constants are that guide's rail and block; calibrate on {}, or predict anyway "
+                                                "with --any-guide",
+                                                quoted(duty.guide.model), quoted(m.guide), quoted(duty.guide.model)));
+
   const std::vector<double> times = output_times(duty);
   Prediction p;
   p.time_s = times;
@@ -406,6 +464,10 @@ Prediction predict(const ModelFile& m, const DutyCycle& duty, const PredictionOp
   p.method = set.method;
   p.notes = set.notes;
   if (n_failed > 0)
+  if (other_guide)
+    p.notes.push_back(fmt::format("the model was calibrated on {}, the duty runs on {} (--any-guide): its α, h and friction "
+                                  "constants are carried over to a guide they were not fitted on",
+                                  quoted(m.guide), quoted(duty.guide.model)));
     p.notes.push_back(fmt::format("{} of {} draws were not physical and were left out (first: {})", n_failed, draws.size(), first_failure));
 
   for (std::size_t q = 0; q < duty.positions_m.size(); ++q)
@@ -419,6 +481,7 @@ Prediction predict(const ModelFile& m, const DutyCycle& duty, const PredictionOp
   p.profile_C = band_of(point, ran, o.confidence, [](const Trajectory& t) -> const std::vector<double>& { return t.profile_C; });
   flag_ranges(m, duty, point.max_rail_C, p);
   return p;
+  require_finite_bands(p);
 }
 
 namespace {
@@ -448,7 +511,7 @@ std::string prediction_json(const Prediction& p, const DutyCycle& duty, const Mo
       {"kind", "prediction"},
       {"lmcal_version", LMCAL_VERSION}, {"schema_version", kOutputSchemaVersion},
       {"command", command},
-      {"model", {{"set", model.set}, {"lmcal_version", model.lmcal_version}, {"command", model.command}}},
+      {"model", {{"set", model.set}, {"guide", model.guide}, {"lmcal_version", model.lmcal_version}, {"command", model.command}}},
       {"duty",
        {{"file", duty.file},
         {"guide", duty.guide.model},

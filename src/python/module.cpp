@@ -37,6 +37,7 @@
 #include "lmcal/io/friction_log.hpp"
 #include "lmcal/io/hash.hpp"
 #include "lmcal/io/thermal_run.hpp"
+#include "lmcal/io/units.hpp"
 #include "lmcal/models/friction_effects.hpp"
 #include "lmcal/models/heat_source.hpp"
 #include "lmcal/models/rail_thermal.hpp"
@@ -602,6 +603,10 @@ py::array_t<double> friction_law(const std::map<std::string, double>& constants,
     FrictionConstants<double> ki = k;
     ki.nu_ref_mm2_s = viscosity.at(i);
     f(i) = friction_force_with_effects_N(ki, e, c);
+    // The last check before the array leaves: the constants given may still take the law out of the doubles.
+    if (!std::isfinite(f(i)))
+      throw InvalidParameter("velocity_m_s", v.at(i),
+                             fmt::format("a condition where the friction law is finite (row {} gives {} N)", i, f(i)));
   }
   return out;
 }
@@ -625,6 +630,7 @@ py::dict simulate_thermal_py(const py::dict& o) {
   params.h_W_m2K = number("h_W_m2K");
   params.initial_temperature_C = initial_C;
   const double V = number("velocity_m_s");
+  require_in_range("velocity_m_s", V, 0.0, physical_range(Quantity::velocity).high);
   if (o["heat_rate_W"].is_none()) {
     FrictionConditions<double> c{.load_N = number("load_N"),
                                  .preload_um = given_or_catalog("preload_um", &GuideSpec::preload_um),
@@ -655,6 +661,10 @@ py::dict simulate_thermal_py(const py::dict& o) {
     py::gil_scoped_release release;
     s = simulate_rail(geometry, numerics, outputs, params, ambient);
   }
+  // The last check before the arrays leave.
+  if (const std::string runaway = runaway_of(s, fmt::format("velocity_m_s = {}, heat_rate_W = {}", V, params.heat_rate_W));
+      !runaway.empty())
+    throw InvalidParameter("simulate_thermal", runaway);
   py::dict d;
   d["time_s"] = array(s.output_times_s);
   d["sensor_x_m"] = array(s.sensor_positions_m);

@@ -162,6 +162,7 @@ ModelFile calibrated_model_file(const Calibration& c) {
   ModelFile file = model_file_of(m.friction ? &*m.friction : nullptr, m.friction_options, m.thermal ? &*m.thermal : nullptr,
                                  m.thermal_options);
   file.set = c.set.name;
+  if (c.thermal_data) file.guide = calibrated_guide(*c.thermal_data);
   file.command = c.command;
   file.inputs = c.inputs;
   return file;

@@ -312,6 +312,39 @@ def test_bad_options_name_the_option():
         lmcal.load_thermal_dataset(os.path.join(SOURCE, "no_such_manifest.toml"))
 
 
+def test_bad_option_types_name_the_argument_and_what_was_expected():
+    log = lmcal.load_friction_log(good_columns())
+    with pytest.raises(TypeError, match=r"fixed\['k1'\]: expected a number, got str 'abc'"):
+        lmcal.fit_friction(log, fixed={"k1": "abc"})
+    with pytest.raises(TypeError, match=r"bounds\['k1'\]: expected a \(low, high\) pair"):
+        lmcal.fit_friction(log, bounds={"k1": 3.0})
+    with pytest.raises(TypeError, match="start: expected a dict"):
+        lmcal.fit_friction(log, start=[("k1", 0.3)])
+
+
+def test_a_run_name_that_is_not_text_is_a_value_error_naming_it():
+    c = good_columns()
+    c["run"] = np.array(["r\udc80"] * 4, dtype=object)
+    with pytest.raises(ValueError, match=r"column 'run', row 0: .* is not valid text"):
+        lmcal.load_friction_log(c)
+    data = lmcal.load_thermal_dataset(THERMAL_TOML)
+    with pytest.raises(ValueError, match="run: .* is not valid text"):
+        data.with_trace("v\udc80", {"time_s": [0.0, 1.0], "ambient_C": [24.0, 24.0]})
+
+
+def test_numbers_that_leave_are_finite_or_refused(tmp_path):
+    with pytest.raises(lmcal.InvalidParameterError, match="velocity_m_s = 1e\\+308"):
+        lmcal.simulate_thermal(velocity_m_s=1e308)
+    with pytest.raises(lmcal.InvalidParameterError, match="velocity_m_s"):
+        lmcal.simulate_friction(velocity_m_s=1e308, load_N=3000, preload_um=4, block_length_mm=120.2, temperature_C=26)
+    duty = tmp_path / "fast.toml"
+    duty.write_text('guide = "SRN 35C"\nrail_length_m = 0.6\nambient_C = 24\nload_N = 3000\npreload_um = 4\n'
+                    'stroke_m = 0.2\n[[segment]]\nduration_h = 1\nvelocity_m_s = 3\n')
+    with pytest.raises(lmcal.InputError, match="drives the rail to") as e:
+        lmcal.predict(os.path.join(SOURCE, "fits", "cheng2017", "model.toml"), duty, samples=20)
+    assert e.value.line == 7
+
+
 def test_the_example_runs(tmp_path):
     example = os.path.join(SOURCE, "examples", "python", "fit_friction_dataframe.py")
     env = dict(os.environ, MPLBACKEND="Agg")

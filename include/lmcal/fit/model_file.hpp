@@ -6,6 +6,7 @@
 // read it.
 //
 //   kind = "lmcal calibrated model"
+//   guide = "SRN 35C"   # optional: the guide calibrated (a duty on another is refused by predict)
 //   [friction]   causes = [...], covariance = "...", reference_temperature_C, viscosity40_mm2_s
 //   [[friction.parameter]]  name, unit, value, se, ci95 = [low, high], held
 //   [[friction.term]]       an empirical term (not a named cause): symbol, factors =
@@ -69,6 +70,9 @@ struct HeatReference {
 
 struct ModelFile {
   std::string set, lmcal_version;
+  // The catalog guide the calibration ran on ("SRN 35C"; empty: not recorded, or several): α, h
+  // and the friction constants are that guide's rail and block (lmcal predict refuses another).
+  std::string guide;
   std::vector<std::string> command;
   std::vector<std::pair<std::string, std::string>> inputs;  // file -> sha256
 
@@ -112,6 +116,8 @@ struct ModelFile {
 std::string model_file_toml(const ModelFile& model);
 ModelFile model_file_of(const FrictionFitResult* friction, const FrictionFitOptions& friction_options,
                         const ThermalFitResult* thermal, const ThermalFitOptions& thermal_options);
+// The guide every run of `data` ran on (ModelFile::guide); empty when they differ.
+std::string calibrated_guide(const ThermalDataSet& data);
 // Reads a model file; InputError (file, line, column, what was expected) on bad input.
 ModelFile read_model_file(const std::filesystem::path& file);
 

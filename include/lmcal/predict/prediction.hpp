@@ -58,6 +58,7 @@ struct DutySegment {
   double load_N = 0;
   double stroke_m = 0;
   double preload_um = 0, block_length_mm = 0, viscosity40_mm2_s = 99;
+  long line = 0, column = 0;  // its [[segment]] table in the duty file (0: not from a file)
 };
 
 enum class ScaleMounting { end, centre };
@@ -101,6 +102,9 @@ struct PredictionOptions {
   int half_rail_segments = 100;
   double time_step_s = 30;
 };
+  // A duty on another guide than the model was calibrated on (ModelFile::guide) is refused: α,
+  // h and the friction constants are that guide's rail and block. True: predicted anyway, noted.
+  bool any_guide = false;
 
 // A predicted quantity over time: the model's value at its estimates and the band.
 struct Band {
@@ -145,3 +149,9 @@ double thermal_elongation_m(const std::vector<double>& x_m, const std::vector<do
                             const std::vector<double>& reference_C, double expansion_per_K, double a_m, double b_m);
 
 }  // namespace lmcal
+// Why a simulated rail predicts nothing real, or empty: a temperature or heat rate that is not
+// finite, or a temperature beyond a rig's (units.hpp physical_range, to 1000 °C), where the
+// friction law's heat runs away (its Stribeck term grows as the oil thins, and a coupled heat
+// follows the rail). `inputs` names what drove it ("segment 1 (velocity_m_s = 3, …)").
+std::string runaway_of(const RailSolution<double>& solution, const std::string& inputs);
+

@@ -24,6 +24,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+import numbers
 import os
 from collections.abc import Mapping
 from typing import Any, Callable, Optional, Sequence
@@ -59,6 +60,45 @@ def _column_items(data) -> list:
     raise TypeError(f"expected a dict of columns or a pandas DataFrame, got {type(data).__name__}")
 
 
+def _text(value: str, what: str) -> str:
+    """``value`` if lmcal can take it as text (UTF-8); ValueError naming ``what`` otherwise (a
+    lone surrogate from a mis-decoded file, say)."""
+    try:
+        value.encode("utf-8")
+    except UnicodeEncodeError as e:
+        raise ValueError(f"{what}: {value!r} is not valid text ({e.reason} at character {e.start}); "
+                         "expected text that can be written as UTF-8") from None
+    return value
+
+
+def _number_map(given, argument: str, pairs: bool = False):
+    """``given`` (name -> number, or with ``pairs`` name -> (low, high)) checked: TypeError naming
+    ``argument`` and the entry for anything else, before it reaches the C++ core."""
+    if given is None:
+        return None
+    if not isinstance(given, Mapping):
+        raise TypeError(f"{argument}: expected a dict of constant names to "
+                        f"{'(low, high) pairs' if pairs else 'numbers'}, got {type(given).__name__}")
+
+    def number(name, v):
+        if isinstance(v, bool) or not isinstance(v, numbers.Real):
+            raise TypeError(f"{argument}[{name!r}]: expected a number, got {type(v).__name__} {v!r}")
+        return float(v)
+
+    out = {}
+    for name, v in given.items():
+        if not isinstance(name, str):
+            raise TypeError(f"{argument}: expected constant names as keys, got {type(name).__name__} {name!r}")
+        _text(name, argument)
+        if pairs:
+            if not isinstance(v, (tuple, list)) or len(v) != 2:
+                raise TypeError(f"{argument}[{name!r}]: expected a (low, high) pair, got {v!r}")
+            out[name] = (number(name, v[0]), number(name, v[1]))
+        else:
+            out[name] = number(name, v)
+    return out
+
+
 def _prepare_columns(data, missing_allowed=lambda name: False) -> tuple[list, list]:
     """Names and values for the CSV loader: equal lengths, numbers as float64 without NaN
     (except in columns where ``missing_allowed(name)``: a missing sample) or infinity, text as
@@ -79,9 +119,10 @@ def _prepare_columns(data, missing_allowed=lambda name: False) -> tuple[list, li
             longest = max(lengths, key=lengths.get)
             raise ValueError(f"column '{name}' has {a.shape[0]} rows, column '{longest}' has {rows}: "
                              "every column needs one value per row")
-        names.append(name)
+        names.append(_text(name, "a column's name") if isinstance(name, str) else name)
         if name in _TEXT_COLUMNS or a.dtype.kind in "OUS":
-            columns.append(["" if v is None else str(v) for v in a.tolist()])
+            columns.append([_text("" if v is None else str(v), f"column '{name}', row {row}")
+                            for row, v in enumerate(a.tolist())])
             continue
         if a.dtype.kind not in "iuf":
             raise ValueError(f"column '{name}': expected numbers, got values of dtype {a.dtype}")
@@ -185,7 +226,7 @@ class ThermalDataSet:
         columns of its file: time_s, the ambient and tc… columns) instead of its file. NaN in a
         temperature column is a missing sample, as an empty cell in the file."""
         names, values = _prepare_columns(columns, missing_allowed=lambda name: not name.startswith("time"))
-        return ThermalDataSet(_lmcal.thermal_with_trace(self._h, run, names, values))
+        return ThermalDataSet(_lmcal.thermal_with_trace(self._h, _text(run, "run"), names, values))
 
     def __repr__(self) -> str:
         return f"<lmcal.ThermalDataSet '{self.name}': {len(self.runs)} runs>"
@@ -475,6 +516,7 @@ def fit_friction(log, *, free: Optional[Sequence[str]] = None, fixed: Optional[M
     'all', 'none'), covariance ('auto', 'iid', 'hac', 'cluster', 'bootstrap'), bootstrap
     (replicates), run_fits (per-run fits for the spread across runs), cross_validate."""
     log = load_friction_log(log)
+    fixed, start, bounds = _number_map(fixed, "fixed"), _number_map(start, "start"), _number_map(bounds, "bounds", pairs=True)
     options = _given(free=free, fixed=fixed, start=start, bounds=bounds, effects=effects, run_offsets=run_offsets,
                      law_temperature=law_temperature, loss=loss, loss_scale=loss_scale, weights=weights, starts=starts, seed=seed, profile=profile,
                      covariance=covariance, bootstrap=bootstrap, run_fits=run_fits, cross_validate=cross_validate)
