@@ -393,7 +393,7 @@ for args in "--velocity 0" "--velocity 20" "--load 0" "--load 1e7" "--temperatur
   check "simulate friction --model $args: finite or refused" \
     finite_or_refused "friction --model $args" bound/f.csv bound/f.csv.json -- simulate friction --model "$MODEL" -o bound/f.csv $args
 done
-for args in "--velocity 0" "--velocity 20" "--velocity 3" "--load 0" "--load 1e7" "--stroke 5e-324" "--stroke 0.5" \
+for args in "--velocity 0" "--velocity 20" "--velocity 3" "--load 0" "--load 1e7" "--stroke 5e-324" "--stroke 0.5" "--source moving --stroke 1e-9" \
             "--heat-rate 0" "--heat-rate 1e6" "--h 1e5" "--ambient -273.15" "--ambient 1000" "--alpha 0" "--alpha 1"; do
   for model in "" "--model $MODEL"; do
     [[ -n $model && ( $args == --h* || $args == --alpha* ) ]] && continue  # the model's own

@@ -86,6 +86,38 @@ TEST(HeatSource, MovingSweepDepositsExactlyPowerTimesStepAndAveragesToTheTrapezo
   for (int i = 0; i < 600; ++i) EXPECT_NEAR(whole[i] / (10 * period), averaged[i], 1e-12) << i;
 }
 
+TEST(HeatSource, MovingSweepOfManyCyclesEqualsItsLegsSweptOneByOne) {
+  // One step of 7.3 cycles from mid-leg (its whole cycles taken as the averaged shape) against
+  // steps shorter than a leg (each swept exactly): the same energy in every volume.
+  const auto faces = uniform_faces(-0.3, 0.3, 600);
+  const double period = 2 * kMotion.stroke_m / kMotion.velocity_m_s;
+  const double t0 = 0.5, t1 = t0 + 7.3 * period;
+  const auto spread = [&](const SweepEnergy& e, std::vector<double>& into) {
+    for (std::size_t k = 0; k < e.energy_s.size(); ++k) into[e.first + k] += e.energy_s[k];
+  };
+  std::vector<double> at_once(600, 0.0), by_legs(600, 0.0);
+  SweepEnergy sweep;
+  moving_source_energy(kMotion, faces, t0, t1, sweep);
+  spread(sweep, at_once);
+  for (double t = t0; t < t1; t += 0.37) {
+    moving_source_energy(kMotion, faces, t, std::min(t + 0.37, t1), sweep);
+    spread(sweep, by_legs);
+  }
+  for (int i = 0; i < 600; ++i) EXPECT_NEAR(at_once[i], by_legs[i], 1e-11) << "volume " << i;
+}
+
+TEST(HeatSource, MovingSweepOfAStrokeFarShorterThanTheStepIsTheAveragedShapeAtOnce) {
+  // 1e-9 m at 0.11 m/s is 3e10 legs in a 600 s step: swept as whole cycles, not leg by leg.
+  const auto faces = uniform_faces(-0.3, 0.3, 600);
+  const BlockMotion tiny{.stroke_m = 1e-9, .contact_length_m = 0.0822, .velocity_m_s = 0.11};
+  SweepEnergy sweep;
+  moving_source_energy(tiny, faces, 0.0, 600.0, sweep);
+  EXPECT_NEAR(sum(sweep.energy_s), 600.0, 1e-9);
+  const auto averaged = static_source_weights(SourceModel::averaged, tiny, faces);
+  for (std::size_t k = 0; k < sweep.energy_s.size(); ++k)
+    EXPECT_NEAR(sweep.energy_s[k], 600.0 * averaged[sweep.first + k], 1e-6) << "volume " << sweep.first + k;
+}
+
 TEST(HeatSource, BlockOscillatesOverTheStroke) {
   EXPECT_DOUBLE_EQ(block_centre_m(kMotion, 0.0), -0.1);
   EXPECT_NEAR(block_centre_m(kMotion, 0.2 / 0.11), 0.1, 1e-12);

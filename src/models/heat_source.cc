@@ -92,13 +92,27 @@ void moving_source_energy(const BlockMotion& motion, const std::vector<double>& 
   LMCAL_ASSERT(V > 0 && L1 > 0 && t1_s >= t0_s, "moving source needs V > 0, L1 > 0, t1 >= t0");
 
   // Split the path s = V t at the turning points (multiples of L1); on each leg the
-  // centre moves linearly, so the sweep integral is exact.
+  // centre moves linearly, so the sweep integral is exact. Whole back-and-forth cycles after the
+  // first leg sweep the window over the stroke twice each: exactly the averaged shape for their
+  // time (`bulk_path`), so a stroke far shorter than V·Δt costs two legs, not V·Δt/L1 of them
+  // (a stroke of 1e-9 m took minutes a step; beyond 2^52 cycles the last part cycle is dropped).
   struct Leg { double c0, c1; };
   std::vector<Leg> legs;
   const double s1 = V * t1_s;
   double s = V * t0_s;
   double lo = centre_at_path(s, L1), hi = lo;
+  double bulk_path = 0;
   do {
+    if (!legs.empty() && bulk_path == 0) {
+      const double cycles = std::floor((s1 - s) / (2 * L1));
+      if (cycles >= 1) {
+        bulk_path = cycles < 0x1p52 ? cycles * 2 * L1 : s1 - s;
+        s += bulk_path;
+        lo = std::min(lo, -0.5 * L1);
+        hi = std::max(hi, 0.5 * L1);
+        if (s >= s1) break;
+      }
+    }
     double turn = (std::floor(s / L1) + 1) * L1;
     if (turn <= s) turn += L1;  // guards against s/L1 rounding down at a turning point
     const double s_end = std::min(turn, s1);
@@ -122,6 +136,12 @@ void moving_source_energy(const BlockMotion& motion, const std::vector<double>& 
   // Per leg, G(y) = ∫ |[c - w/2, c + w/2] ∩ (-∞, y]| dc at every face; a volume receives the
   // difference of G at its faces (one evaluation per face instead of two per volume).
   const double scale = 1.0 / (w * V);
+  if (bulk_path > 0 && last > first) {
+    const std::vector<double> range(faces.begin() + static_cast<std::ptrdiff_t>(first),
+                                    faces.begin() + static_cast<std::ptrdiff_t>(last) + 1);
+    const std::vector<double> averaged = static_source_weights(SourceModel::averaged, motion, range);
+    for (std::size_t i = 0; i < averaged.size(); ++i) out.energy_s[i] += bulk_path / V * averaged[i];
+  }
   for (const Leg& leg : legs) {
     const double sign = leg.c1 >= leg.c0 ? scale : -scale;
     double below = window_cumulative(leg.c0, leg.c1, w, faces[first]);
