@@ -4,6 +4,8 @@
 #include <utility>
 #include <vector>
 
+#include "lmcal/io/limits.hpp"
+
 namespace lmcal::cli {
 
 void CalibrationCliOptions::add_to(CLI::App& app) {
@@ -14,7 +16,7 @@ void CalibrationCliOptions::add_to(CLI::App& app) {
   // multi-start search.
   add_friction_constant_options(app, constants);
   starts = app.add_option("--starts", c.friction.fit.starts, "Multi-start local searches of the friction fits")
-               ->check(at_least(1))
+               ->check(up_to_limit(1, io::kMaxStarts))
                ->capture_default_str();
   seed = app.add_option("--seed", c.friction.fit.seed, "Seed of the multi-start sequence")->capture_default_str();
   // The guides' catalog and the raw load-cell logs' segmentation.

@@ -4,6 +4,7 @@
 #include "output_mode.hpp"
 
 #include "lmcal/io/hash.hpp"
+#include "lmcal/io/limits.hpp"
 
 #include <fmt/format.h>
 
@@ -317,7 +318,9 @@ void add_uncertainty_options(CLI::App& app, FitOptions& fit) {
               {"hac", CovarianceMethod::hac},
               {"cluster", CovarianceMethod::cluster},
               {"bootstrap", CovarianceMethod::bootstrap}});
-  app.add_option("--bootstrap", fit.bootstrap, "Cluster-bootstrap replicates (runs resampled; 0: none)")->capture_default_str();
+  app.add_option("--bootstrap", fit.bootstrap, "Cluster-bootstrap replicates (runs resampled; 0: none)")
+      ->check(up_to_limit(0, static_cast<double>(io::kMaxBootstrapReplicates)))
+      ->capture_default_str();
   add_choice(app, "--profile", fit.profile, "Profile-likelihood intervals: auto (where the linear one is unreliable), all or none",
              "MODE", {{"auto", ProfileMode::automatic}, {"all", ProfileMode::all}, {"none", ProfileMode::none}});
 }
@@ -349,6 +352,18 @@ void add_list(CLI::App& app, const char* name, std::vector<double>& values, cons
 
 std::vector<double> or_catalog(const std::vector<double>& given, const GuideSpec& spec,
                                std::optional<double> GuideSpec::*field, const char* name) {
+CLI::Validator up_to_limit(double low, double high) {
+  return CLI::Validator(
+      [low, high](std::string& text) -> std::string {
+        double v = 0;
+        if (!CLI::detail::lexical_cast(text, v) || !std::isfinite(v)) return fmt::format("expected a number, got '{}'", text);
+        if (v >= low && v <= high) return "";
+        return fmt::format("{} is {} {:g}: expected a value from {:g} to {:g} (docs/formats.md#limits)", text,
+                           v < low ? "below" : "above", v < low ? low : high, low, high);
+      },
+      "");
+}
+
   if (!given.empty()) return given;
   return {require(spec, field, name)};
 }
@@ -361,7 +376,9 @@ void ThermalModelOptions::add_to(CLI::App& app, ThermalFitOptions& fit) {
   const auto numeric = [&](CLI::Option* option, auto member) {
     numeric_.emplace_back(option, [member](const ThermalFitOptions& from, ThermalFitOptions& to) { to.*member = from.*member; });
   };
-  numeric(app.add_option("--segments", fit.half_rail_segments, "Segments on the half rail")->capture_default_str(),
+  numeric(app.add_option("--segments", fit.half_rail_segments, "Segments on the half rail")
+              ->check(up_to_limit(1, io::kMaxRailSegments))
+              ->capture_default_str(),
           &ThermalFitOptions::half_rail_segments);
   numeric(app.add_option("--dt", fit.time_step_s, "Time step, s")->capture_default_str(), &ThermalFitOptions::time_step_s);
   numeric(app.add_option("--every", fit.every, "Fit every n-th record (the paper kept every 120th)")->capture_default_str(),

@@ -256,3 +256,6 @@ CLI::Validator inside(double low, double high);  // exclusive
 void add_list(CLI::App& app, const char* name, std::vector<double>& values, const char* help);
 
 }  // namespace lmcal::cli
+// Inclusive, `high` a size limit of docs/formats.md#limits: "1e9 is above 1000: expected a value
+// from 1 to 1000 (docs/formats.md#limits)".
+CLI::Validator up_to_limit(double low, double high);

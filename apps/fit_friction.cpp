@@ -15,6 +15,7 @@
 #include "lmcal/error.hpp"
 #include "lmcal/fit/friction_fit.hpp"
 #include "lmcal/io/hash.hpp"
+#include "lmcal/io/limits.hpp"
 
 namespace lmcal::cli {
 
@@ -53,7 +54,8 @@ FrictionFitOptions to_fit_options(const FitFrictionOptions& o) {
   else if (o.weights == "per-run") f.weighting = FrictionWeighting::per_run;
   else if (o.weights == "per-condition") f.weighting = FrictionWeighting::per_condition;
   else throw InvalidParameter("--weights", "unknown weighting '" + o.weights + "'; expected none, per-run or per-condition");
-  if (o.starts < 1) throw InvalidParameter("--starts", o.starts, "at least 1");
+  if (o.starts < 1 || o.starts > io::kMaxStarts)
+    throw InvalidParameter("--starts", o.starts, fmt::format("from 1 to {} (docs/formats.md#limits)", io::kMaxStarts));
   f.fit.covariance = o.uncertainty.covariance;
   f.fit.bootstrap = o.uncertainty.bootstrap;
   f.fit.profile = o.uncertainty.profile;
@@ -64,6 +66,7 @@ FrictionFitOptions to_fit_options(const FitFrictionOptions& o) {
 }
 
 void run_fit_friction(const FitFrictionOptions& o, const std::vector<std::string>& argv) {
+  require_writable_output(o.output_dir);
   const FrictionFitOptions options = to_fit_options(o);
   const FrictionInput input = load_friction_input(o.files, o.input);
   const FrictionLog& log = input.log;

@@ -10,7 +10,21 @@
 #include "output_mode.hpp"
 #include "usage.hpp"
 #include "lmcal/error.hpp"
+#include "lmcal/io/config_file.hpp"
 #include "lmcal/version.hpp"
+
+namespace {
+
+// The --config file, checked before CLI11 reads it (it would read /dev/zero until memory ran out,
+// and merge two [calibrate] tables without a word).
+void check_config_files(const std::vector<std::string>& args) {
+  for (std::size_t i = 1; i < args.size() && args[i] != "--"; ++i) {
+    if (args[i] == "--config" && i + 1 < args.size()) lmcal::io::check_config_file(args[i + 1]);
+    else if (args[i].starts_with("--config=")) lmcal::io::check_config_file(args[i].substr(std::string_view("--config=").size()));
+  }
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   // As outputs record it: "lmcal …", not where the binary happens to be.
@@ -55,6 +69,7 @@ int main(int argc, char** argv) {
     app.parse(argc, argv);
     if (mode.json && gate && !gate->print_machine_output()) {
       std::cerr << "lmcal: error: --json: this command writes no JSON output\n";
+    check_config_files(args);
       return lmcal::cli::kExitUsage;
     }
   } catch (const CLI::ParseError& e) {

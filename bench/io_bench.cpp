@@ -4,7 +4,8 @@
 //   - a friction log of 1 M samples with all eleven columns;
 //   - a raw load-cell run of 1 M samples at 1 kHz (time_s, position_mm, force_N; its conditions
 //     in a friction manifest), from the virtual rig: loading includes deriving v and a and
-//     cutting the run into plateaus. Target: >= 150 MB/s.
+//     cutting the run into plateaus. Target: >= 150 MB/s;
+//   - user guide catalogs of 10^3 to 10^5 guides (the limit): linear, 10^5 in under 2 s.
 // The files are generated once into a temporary folder (removed at exit). Throughput is
 // reported as bytes/s of CSV text. Target: >= 200 MB/s for the thermal log.
 // Run: build/bench/lmcal_io_bench
@@ -17,6 +18,7 @@
 #include <string>
 #include <unistd.h>
 
+#include "lmcal/io/catalog.hpp"
 #include "lmcal/io/friction_log.hpp"
 #include "lmcal/io/thermal_run.hpp"
 #include "lmcal/rig/virtual_rig.hpp"
@@ -164,5 +166,24 @@ void BM_LoadRawFrictionLog(benchmark::State& state) {
   state.counters["file_MB"] = static_cast<double>(fs::file_size(csv)) / 1e6;
 }
 BENCHMARK(BM_LoadRawFrictionLog)->Unit(benchmark::kMillisecond)->MinTime(3.0);
+
+// A user catalog of N guides (five keys each, 88 bytes a guide), loaded from its file: the
+// duplicate check must stay linear (issue 36: 10^5 guides took over 120 s when every model was
+// compared with every earlier one). Target: 10^5 guides, the limit, in under 2 s.
+void BM_LoadCatalog(benchmark::State& state) {
+  const auto count = static_cast<std::size_t>(state.range(0));
+  const fs::path file = scratch().path() / ("catalog_" + std::to_string(count) + ".toml");
+  std::string text;
+  for (std::size_t i = 0; i < count; ++i)
+    text += "[[guide]]\nmodel = \"G" + std::to_string(i) + "\"\nblock_length_mm = 97\narea_m2 = 1.5e-4\nconductivity_W_mK = 18\n";
+  write(file, text);
+  for (auto _ : state) {
+    const lmcal::GuideCatalog catalog = lmcal::load_catalog(file);
+    benchmark::DoNotOptimize(catalog.guides.data());
+  }
+  state.SetBytesProcessed(state.iterations() * static_cast<std::int64_t>(text.size()));
+  state.counters["guides"] = static_cast<double>(count);
+}
+BENCHMARK(BM_LoadCatalog)->Arg(1000)->Arg(10'000)->Arg(100'000)->Unit(benchmark::kMillisecond);
 
 }  // namespace

@@ -1,10 +1,11 @@
 // The bad-input corpus (tests/data/bad/; loaders: friction and thermal CSVs, thermal manifests,
-// friction fit JSONs as --friction reads them): every file there must be refused with exactly the
+// friction fit JSONs as --friction reads them, duty files): every file there must be refused with exactly the
 // message tests/data/bad/expected.txt gives for it, and every file must be listed there.
 #include "lmcal/error.hpp"
 #include "lmcal/fit/thermal_fit.hpp"
 #include "lmcal/io/friction_log.hpp"
 #include "lmcal/io/thermal_run.hpp"
+#include "lmcal/predict/prediction.hpp"
 
 #include <gtest/gtest.h>
 
@@ -68,7 +69,10 @@ std::string load_message(const std::string& loader, const std::string& file) {
     } else if (loader == "thermal") {
       load_thermal_trace(file);
     } else if (loader == "manifest") {
-      load_thermal_dataset(file);
+      // The corpus's manifests use the runs of tests/data/good/: their root is tests/data.
+      load_thermal_dataset(file, nullptr, InputScope{.root = ".."});
+    } else if (loader == "duty") {
+      load_duty_cycle(file);
     } else if (loader == "fitjson") {
       ThermalFitOptions options;
       read_friction_fit(file, options);

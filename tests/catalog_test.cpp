@@ -3,6 +3,7 @@
 #include "lmcal/io/catalog.hpp"
 
 #include "lmcal/error.hpp"
+#include "lmcal/io/limits.hpp"
 
 #include <gtest/gtest.h>
 
@@ -221,6 +222,33 @@ TEST(Catalog, NonPositiveOrNonFiniteValueRejected) {
 TEST(Catalog, DuplicateModelRejected) {
   // Duplicates are found ignoring case and spaces, as `find` matches.
   expect_input_error("[[guide]]\nmodel = \"SRN 35C\"\n[[guide]]\nmodel = \"srn35c\"\n", 4, 9, "duplicate model");
+}
+
+// `count` guides "G0", "G1", …, five lines each (the [[guide]] of guide i opens line 5i + 1).
+std::string many_guides(std::size_t count) {
+  std::string text;
+  for (std::size_t i = 0; i < count; ++i)
+    text += "[[guide]]\nmodel = \"G" + std::to_string(i) + "\"\nblock_length_mm = 97\narea_m2 = 1.5e-4\nconductivity_W_mK = 18\n";
+  return text;
+}
+
+TEST(Catalog, AsManyGuidesAsTheLimitLoadAndOneMoreIsRefusedAtIt) {
+  // Issue 36: 10^5 guides took over 120 s (every model compared with every earlier one); the
+  // time is measured in bench/io_bench.cpp (BM_LoadCatalog), here only the outcome.
+  std::string text = many_guides(io::kMaxCatalogEntries);
+  const GuideCatalog c = parse_catalog(text, "big.toml");
+  ASSERT_EQ(c.guides.size(), io::kMaxCatalogEntries);
+  EXPECT_EQ(c.find("g99999").model, "G99999");
+  text += "[[guide]]\nmodel = \"one more\"\n";
+  try {
+    parse_catalog(text, "big.toml");
+    ADD_FAILURE() << "a catalog beyond kMaxCatalogEntries was accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.line(), static_cast<long>(5 * io::kMaxCatalogEntries + 1)) << e.what();
+    EXPECT_NE(std::string(e.what()).find("at most 100000"), std::string::npos) << e.what();
+  }
+  // A duplicate at the end is still found, naming the first.
+  expect_input_error(many_guides(1000) + "[[guide]]\nmodel = \"g 17\"\n", 5002, 9, "duplicate model 'g 17' (same as 'G17'");
 }
 
 TEST(Catalog, UnknownKeyRejected) {

@@ -505,6 +505,24 @@ keeps_unusable() {
     python3 -c 'import json,sys; s = json.load(open("kept/friction.json"))["solver"]; assert not s["usable"] and "degree of freedom" in s["unusable_reason"]'
 }
 check "--keep-unusable writes it, marked, and exits 0" keeps_unusable
+# Issue 36: every size bounded before the work starts (docs/formats.md#limits).
+check "a config file is a file: /dev/zero refused before a byte is read" \
+  timeout 20 bash -c "! '$LMCAL' --config /dev/zero calibrate x 2>stderr.txt && grep -qF '/dev/zero: cannot open config file: this is a device' stderr.txt"
+printf '[calibrate]\nstarts = 4\n\n[ calibrate ]\nh = 6\n' >config_twice.toml
+check "a config file's table given twice is refused at the second" \
+  exits_with 1 "config_twice.toml:4:1: [calibrate] given twice (first at line 1): one table per command" --config config_twice.toml calibrate x
+check "--segments beyond the limit refused before the fit (was SIGABRT)" \
+  exits_with 2 "--segments: 1000000000 is above 10000: expected a value from 1 to 10000 (docs/formats.md#limits)" \
+  fit thermal "$SOURCE/measurements/cheng2017/thermal.toml" --segments 1000000000
+check "--bootstrap beyond the limit refused" exits_with 2 "--bootstrap: 1e9 is above 100000" calibrate x --bootstrap 1e9
+check "--starts beyond the limit refused (calibrate)" exits_with 2 "--starts: 1e9 is above 1000" calibrate x --starts 1e9
+check "--starts beyond the limit refused (fit friction)" \
+  refused "--starts = 1000000000 is invalid: expected from 1 to 1000" fit friction "$SOURCE/measurements/cheng2017/friction.csv" --starts 1000000000 -o out
+check "simulate thermal --segments beyond the limit refused" refused "from 1 to 100000 segments" simulate thermal -o out/t --segments 1000000000
+check "predict --samples beyond the limit refused" \
+  refused "samples = 4000000000 is invalid: expected at most 100000 draws" predict "$SOURCE/fits/cheng2017/model.toml" "$SOURCE/examples/duty/two_shifts.toml" -o out --samples 4000000000
+check "predict refuses what its estimate says would not fit in memory, before a draw" \
+  timeout 20 bash -c "! '$LMCAL' predict '$SOURCE/fits/cheng2017/model.toml' '$SOURCE/examples/duty/two_shifts.toml' -o out --samples 100000 2>stderr.txt && grep -qF 'memory beyond 4 GiB' stderr.txt"
 python3 -c 'import json,sys; d = json.load(open(sys.argv[1])); [p.update(value=1e308) for p in d["parameters"] if p["name"] == "mu_st"]; json.dump(d, open("huge_mu_st.json", "w"))' \
   "$SOURCE/fits/cheng2017/friction.json"
 check "friction constants that give no finite heat are refused, naming the run" \

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "lmcal/error.hpp"
+#include "lmcal/io/limits.hpp"
 #include "lmcal/fit/friction_fit.hpp"
 #include "lmcal/fit/thermal_fit.hpp"
 #include "lmcal/rig/virtual_rig.hpp"
@@ -253,6 +254,59 @@ TEST_F(PredictTest, BadDutiesAreRefusedNamingTheField) {
   refused(head + "[scale]\nmounting = \"middle\"\n[[segment]]\nduration_s = 60\n", "mounting = \"middle\"");
   refused(head, "expected [[segment]] tables");
   refused("rail_length_m = 0.6\nambient_C = 24\n[[segment]]\nduration_s = 60\n", "expected guide");
+}
+
+TEST_F(PredictTest, ADutysSizesAreBoundedBeforeItIsLaidOutOrRun) {
+  // Issue 36: 10^8 segments laid out before the duration check (9 GB), 10^4 positions (55 s,
+  // 5.4 GB), 10^6 outputs (> 6 GB); a quantity given twice in a table, the last one won.
+  const auto refused = [&](const std::string& text, const std::string& expected) {
+    try {
+      load_duty_cycle(write("big.toml", text));
+      ADD_FAILURE() << "accepted: " << expected;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
+      EXPECT_GT(e.line(), 0) << e.what();
+    }
+  };
+  const std::string head = "guide = \"SRN 35C\"\nrail_length_m = 0.6\nambient_C = 24\nload_N = 3000\nstroke_m = 0.2\n";
+  const std::string idle = "[[segment]]\nduration_s = 1\n";
+  refused(head + "repeat = 100000\n" + idle + idle, "2 segments × repeat 100000 = 200000 segments: at most 100000");
+  std::string positions = "positions_m = [0";
+  for (std::size_t i = 0; i < io::kMaxDutyPositions; ++i) positions += ", 0";
+  refused(head + positions + "]\n" + idle, "positions_m: 1001 positions: at most 1000");
+  refused(head + "output_every_s = 1\n[[segment]]\nduration_h = 300\n", "gives 1080000 outputs: at most 1000000");
+  refused(head + "[[segment]]\nduration_s = 60\nduration_min = 1\n", "duplicate key 'duration_min': 'duration_s' already gives duration");
+  refused(head + "rail_length_mm = 900\n" + idle, "duplicate key 'rail_length_mm': 'rail_length_m' already gives rail_length");
+
+  const auto invalid_parameter_message = [](auto&& f) -> std::string {
+    try {
+      f();
+    } catch (const InvalidParameter& e) {
+      return e.what();
+    }
+    return "(accepted)";
+  };
+  // Within each size, the product is estimated before a draw is allocated: 1000 positions
+  // every minute for 100 days, 200 draws would hold some 350 GB.
+  const DutyCycle wide = load_duty_cycle(write("wide.toml", head + positions.substr(0, positions.size() - 3) +
+                                                               "]\noutput_every_s = 60\n[[segment]]\nduration_h = 2400\n"));
+  ASSERT_EQ(wide.positions_m.size(), io::kMaxDutyPositions);
+  EXPECT_GT(prediction_cost(wide, {}).bytes, 1e11);
+  const std::string message = invalid_parameter_message([&] { predict(bundled(), wide, {}); });
+  EXPECT_NE(message.find("memory beyond 4 GiB"), std::string::npos) << message;
+  // Time: a day at a 0.1 ms step.
+  const DutyCycle day = duty("[[segment]]\nduration_h = 24\nvelocity_m_s = 0.11\n");
+  EXPECT_NE(invalid_parameter_message([&] { check_prediction_size(day, {.time_step_s = 1e-4}); }).find("beyond 3 CPU hours"),
+            std::string::npos);
+  EXPECT_NE(invalid_parameter_message([&] { check_prediction_size(day, {.samples = 4'000'000'000}); }).find("at most 100000 draws"),
+            std::string::npos);
+  EXPECT_NE(invalid_parameter_message([&] { check_prediction_size(day, {.half_rail_segments = 1'000'000'000}); }).find("at most 10000"),
+            std::string::npos);
+  // The bundled example is well inside: seconds, megabytes.
+  const DutyCycle example = load_duty_cycle(fs::path(LMCAL_SOURCE_DIR) / "examples/duty/two_shifts.toml");
+  EXPECT_NO_THROW(check_prediction_size(example, {}));
+  EXPECT_LT(prediction_cost(example, {}).cpu_s, 10);
+  EXPECT_LT(prediction_cost(example, {}).bytes, 1e8);
 }
 
 TEST_F(PredictTest, AModelOfAnotherMajorVersionIsRefused) {

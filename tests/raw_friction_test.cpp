@@ -13,6 +13,7 @@
 #include "lmcal/error.hpp"
 #include "lmcal/fit/friction_fit.hpp"
 #include "lmcal/io/friction_log.hpp"
+#include "lmcal/io/limits.hpp"
 #include "lmcal/models/friction_effects.hpp"
 #include "lmcal/rig/virtual_rig.hpp"
 #include "support/refusal.hpp"
@@ -233,6 +234,27 @@ TEST(RawSegmentation, LocalSlopeIsExactOnAQuadratic) {
   }
   const auto v = raw::local_slope(t, x, 7);
   for (double vi : v) EXPECT_NEAR(vi, 2.0, 1e-6);
+}
+
+TEST(RawSegmentation, TheVelocityWindowIsBoundedBeforeTheFilterRuns) {
+  // Issue 36: velocity_window = 299999 filtered for 85 s (samples × window).
+  RawFrictionOptions o;
+  o.velocity_window = 299'999;
+  EXPECT_THROW(o.validate(), InvalidParameter);
+  o.velocity_window = io::kMaxVelocityWindow;
+  EXPECT_NO_THROW(o.validate());
+  // 2.1·10^6 samples × 10001 is beyond kMaxFilterWork: refused at once, the filter not run.
+  raw::RunSamples run;
+  run.time_s.resize(2'100'000);
+  std::iota(run.time_s.begin(), run.time_s.end(), 0.0);
+  run.motion = run.force_N = run.time_s;
+  try {
+    raw::segment(run, raw::Motion::position_m, o);
+    FAIL() << "a filter of 2.1e10 operations was run";
+  } catch (const raw::SampleError& e) {
+    EXPECT_EQ(e.sample, 0u);
+    EXPECT_NE(std::string(e.what()).find("velocity_window = 10001"), std::string::npos) << e.what();
+  }
 }
 
 std::string raw_csv(const std::vector<std::string>& rows) {

@@ -15,6 +15,7 @@
 
 #include "batched_autodiff.hpp"
 #include "lmcal/error.hpp"
+#include "lmcal/io/limits.hpp"
 #include "lmcal/fit/statistics.hpp"
 
 namespace lmcal {
@@ -436,6 +437,8 @@ struct MultiStart {
 
 MultiStart multi_start(const LeastSquaresModel& model, const std::vector<ParameterSpec>& specs,
                        const std::vector<bool>& held, const std::vector<double>& start, const FitOptions& options) {
+  if (options.starts > io::kMaxStarts)
+    throw InvalidParameter("starts", options.starts, fmt::format("at most {} (docs/formats.md#limits)", io::kMaxStarts));
   MultiStart out{start, 0, 0, {}, {}, 0};
   std::vector<int> free;
   for (std::size_t j = 0; j < specs.size(); ++j)

@@ -16,6 +16,7 @@
 #include "lmcal/error.hpp"
 #include "lmcal/io/catalog.hpp"
 #include "lmcal/io/csv_writer.hpp"
+#include "lmcal/io/limits.hpp"
 #include "lmcal/io/units.hpp"
 #include "fit_json.hpp"
 #include "friction_model.hpp"
@@ -826,6 +827,10 @@ std::vector<double> thermal_sensor_term_sum(const ThermalDataSet& data, const Th
 
 ThermalFitResult fit_thermal(const ThermalDataSet& data, const ThermalFitOptions& o) {
   if (data.runs.empty()) throw InvalidParameter("runs", "the data set has no runs");
+  // Every residual evaluation steps every run's rail: bounded before the first.
+  if (o.half_rail_segments > io::kMaxRailSegments)
+    throw InvalidParameter("half_rail_segments", o.half_rail_segments,
+                           fmt::format("at most {} for a fit (docs/formats.md#limits)", io::kMaxRailSegments));
   validate(numerics_of(o));
   ThermalFitResult result;
   std::vector<PreparedRun> runs;

@@ -196,6 +196,7 @@ class ThermalCost final : public ceres::CostFunction {
     // Runs are independent simulations writing disjoint rows: one thread each (OpenMP).
     const auto runs = static_cast<long>(model_.runs().size());
     std::vector<char> ok(static_cast<std::size_t>(runs), 1);
+    std::exception_ptr failure;  // anything else (std::bad_alloc) leaves the region, then is rethrown
 #pragma omp parallel for schedule(dynamic)
     for (long i = 0; i < runs; ++i) {
       const auto run = static_cast<std::size_t>(i);
@@ -213,8 +214,12 @@ class ThermalCost final : public ceres::CostFunction {
         ok[run] = good;
       } catch (const InvalidParameter&) {
         ok[run] = 0;
+      } catch (...) {
+#pragma omp critical(lmcal_thermal_cost)
+        if (!failure) failure = std::current_exception();
       }
     }
+    if (failure) std::rethrow_exception(failure);
     if (std::find(ok.begin(), ok.end(), 0) != ok.end()) return false;
     std::size_t row = model_.rows().size();
     // Prior rows of the heat scales, after the data rows.

@@ -2,6 +2,7 @@
 
 #include "io/input_file.hpp"
 #include "lmcal/error.hpp"
+#include "lmcal/io/limits.hpp"
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -11,6 +12,7 @@
 #include <array>
 #include <cctype>
 #include <cmath>
+#include <unordered_map>
 
 namespace lmcal {
 
@@ -195,22 +197,25 @@ GuideCatalog parse_catalog(std::string_view toml_text, const std::string& source
 
   GuideCatalog catalog;
   catalog.source = source_name;
+  std::unordered_map<std::string, std::size_t> seen;  // model_key → index in catalog.guides
   for (const std::string_view kind : {"guide", "bar"}) {
     const toml::node* node = root.get(kind);
     if (!node) continue;
     const toml::array* entries = node->as_array();
     if (!entries) throw error_at(source_name, node->source(), fmt::format("expected [[{}]] tables", kind));
+    if (catalog.guides.size() + entries->size() > io::kMaxCatalogEntries)
+      throw error_at(source_name, (*entries)[io::kMaxCatalogEntries - catalog.guides.size()].source(),
+                     fmt::format("more than {} [[guide]] and [[bar]] tables: at most {} (docs/formats.md#limits)",
+                                 io::kMaxCatalogEntries, io::kMaxCatalogEntries));
     for (const toml::node& element : *entries) {
       const auto* table = element.as_table();
       if (!table) throw error_at(source_name, element.source(), fmt::format("expected each {0} to be a [[{0}]] table", kind));
       GuideSpec spec = parse_guide(*table, kind, source_name);
-      const std::string key = model_key(spec.model);
-      const auto duplicate = std::find_if(catalog.guides.begin(), catalog.guides.end(),
-                                          [&](const GuideSpec& g) { return model_key(g.model) == key; });
-      if (duplicate != catalog.guides.end()) {
+      const auto [duplicate, added] = seen.try_emplace(model_key(spec.model), catalog.guides.size());
+      if (!added) {
         throw error_at(source_name, table->get(kind == "bar" ? kNameKey : kModelKey)->source(),
                        fmt::format("duplicate {} '{}' (same as '{}', ignoring case and spaces)", kind == "bar" ? "name" : "model", spec.model,
-                                   duplicate->model));
+                                   catalog.guides[duplicate->second].model));
       }
       catalog.guides.push_back(std::move(spec));
     }

@@ -7,9 +7,12 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <map>
 #include <memory>
+#include <sstream>
 
 #include "lmcal/error.hpp"
+#include "lmcal/io/config_file.hpp"
 #include "lmcal/io/limits.hpp"
 
 namespace lmcal::io {
@@ -160,6 +163,24 @@ std::string printable(std::string_view text) {
 
 void check_path_name(const std::filesystem::path& path, std::string_view what) {
   if (auto problem = name_problem(path.string())) throw InputError(printable(path.string()), 0, 0, fmt::format("{}: {}", what, *problem));
+}
+
+void check_config_file(const std::filesystem::path& file) {
+  std::istringstream text(read_text_file(file, "config file"));
+  std::map<std::string, long> tables;  // [name] → the line it opens at
+  long line = 0;
+  for (std::string row; std::getline(text, row);) {
+    ++line;
+    const auto open = row.find_first_not_of(" \t");
+    if (open == std::string::npos || row[open] != '[' || row.compare(open, 2, "[[") == 0) continue;
+    const auto close = row.find(']', open);
+    if (close == std::string::npos) continue;  // the parser tells what is wrong
+    std::string name = row.substr(open + 1, close - open - 1);
+    std::erase_if(name, [](char c) { return c == ' ' || c == '\t'; });
+    if (const auto [first, added] = tables.emplace(name, line); !added)
+      throw InputError(printable(file.string()), line, static_cast<long>(open) + 1,
+                       fmt::format("[{}] given twice (first at line {}): one table per command", printable(name), first->second));
+  }
 }
 
 }  // namespace lmcal::io

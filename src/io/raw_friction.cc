@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "lmcal/error.hpp"
+#include "lmcal/io/limits.hpp"
 
 namespace lmcal {
 
@@ -41,8 +42,9 @@ void RawFrictionOptions::validate() const {
     throw InvalidParameter("velocity_tolerance", velocity_tolerance, "between 0 and 1");
   if (min_plateau_samples < 2)
     throw InvalidParameter("min_plateau_samples", static_cast<double>(min_plateau_samples), ">= 2");
-  if (velocity_window < 3 || velocity_window % 2 == 0)
-    throw InvalidParameter("velocity_window", static_cast<double>(velocity_window), "an odd number >= 3");
+  if (velocity_window < 3 || velocity_window % 2 == 0 || velocity_window > io::kMaxVelocityWindow)
+    throw InvalidParameter("velocity_window", static_cast<double>(velocity_window),
+                           fmt::format("an odd number from 3 to {} (docs/formats.md#limits)", io::kMaxVelocityWindow));
   if (!(moving_mass_kg >= 0)) throw InvalidParameter("moving_mass_kg", moving_mass_kg, ">= 0");
 }
 
@@ -224,6 +226,12 @@ double friction_N(const RunSamples& run, const Segmented& s, const RawFrictionOp
 }
 
 Segmented segment(const RunSamples& run, Motion motion, const RawFrictionOptions& o) {
+  // The filter's cost, samples × window, before it runs.
+  const double work = static_cast<double>(run.time_s.size()) * static_cast<double>(o.velocity_window);
+  if (work > io::kMaxFilterWork)
+    throw SampleError(0, fmt::format("{} samples filtered over velocity_window = {} take {:.2g} operations: at most {:.2g} "
+                                     "(docs/formats.md#limits); a shorter window or a shorter log",
+                                     run.time_s.size(), o.velocity_window, work, io::kMaxFilterWork));
   Segmented s;
   // The velocity as the classification sees it: filtered over the window either way (a drive's
   // velocity feedback is noisy too); a plateau's own velocity is the unfiltered one's mean.

@@ -17,6 +17,7 @@
 #include <string>
 
 #include "lmcal/error.hpp"
+#include "lmcal/io/limits.hpp"
 
 // The templates the public header declares are defined and instantiated here: in the
 // exported namespace, or a shared liblmcal would hide the instantiations.
@@ -89,8 +90,9 @@ void validate(const RailGeometry& g) {
 }
 
 void validate(const RailNumerics& n) {
-  if (n.half_rail_segments < 1)
-    throw InvalidParameter("half_rail_segments", n.half_rail_segments, "at least 1 segment");
+  if (n.half_rail_segments < 1 || n.half_rail_segments > io::kMaxRailModelSegments)
+    throw InvalidParameter("half_rail_segments", n.half_rail_segments,
+                           fmt::format("from 1 to {} segments (docs/formats.md#limits)", io::kMaxRailModelSegments));
   require_positive("time_step_s", n.time_step_s);
 }
 

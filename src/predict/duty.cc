@@ -4,10 +4,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <numeric>
+#include <thread>
 
+#include "io/input_file.hpp"
 #include "io/manifest.hpp"
 #include "lmcal/error.hpp"
+#include "lmcal/io/limits.hpp"
 #include "lmcal/predict/prediction.hpp"
 
 namespace lmcal {
@@ -38,20 +42,29 @@ constexpr NumberKey kAmbient{"ambient", Quantity::temperature, -50, 200, false, 
 constexpr NumberKey kInitial{"initial", Quantity::temperature, -50, 200, false, "a temperature in [-50, 200] °C"};
 constexpr NumberKey kOutputEvery{"output_every", Quantity::time, 0, 1e7, true, "an interval > 0 s"};
 
+// The keys a table gave, by quantity: two keys for one (rail_length_m and rail_length_mm) are
+// refused at the later one, as in the manifests.
+using GivenKeys = std::map<std::string_view, std::optional<manifest::Given>>;
+
 // The value of `key` if it gives `spec` (its name with a unit), in internal units.
-std::optional<double> read_number(const Manifest& m, const toml::key& key, const toml::node& node, const NumberKey& spec) {
+std::optional<double> read_number(const Manifest& m, const toml::key& key, const toml::node& node, const NumberKey& spec,
+                                  GivenKeys& given) {
   const auto conversion = manifest::unit_key(m, key, spec.base, spec.quantity);
   if (!conversion) return std::nullopt;
+  manifest::remember(m, given[spec.base], {&key, &node}, spec.base);
   const double v = conversion->apply(manifest::number_of(m, key, node));
   const bool ok = (spec.low_open ? v > spec.low : v >= spec.low) && v <= spec.high && std::isfinite(v);
   if (!ok) m.fail(node.source(), fmt::format("{} = {}: expected {}", key.str(), manifest::number_of(m, key, node), spec.expected));
   return v;
 }
 
-// A list of positions (m from the rail centre) within the rail.
+// A list of positions (m from the rail centre) within the rail, at most kMaxDutyPositions.
 std::vector<double> positions_of(const Manifest& m, const toml::key& key, const toml::node& node) {
   const auto* a = node.as_array();
   if (!a || a->empty()) m.fail(node.source(), fmt::format("{}: expected a list of positions in m, e.g. [0, 0.1]", key.str()));
+  if (a->size() > io::kMaxDutyPositions)
+    m.fail(node.source(), fmt::format("{}: {} positions: at most {} (docs/formats.md#limits)", key.str(), a->size(),
+                                      io::kMaxDutyPositions));
   std::vector<double> out;
   for (const auto& item : *a) out.push_back(manifest::number_of(m, key, item));
   return out;
@@ -68,13 +81,13 @@ struct SegmentDefaults {
 };
 
 // A key a segment may inherit from the top level, read into `d`; false for another key.
-bool read_default(const Manifest& m, const toml::key& key, const toml::node& node, SegmentDefaults& d) {
+bool read_default(const Manifest& m, const toml::key& key, const toml::node& node, SegmentDefaults& d, GivenKeys& given) {
   std::optional<double> v;
-  if ((v = read_number(m, key, node, kLoad))) d.load_N = v;
-  else if ((v = read_number(m, key, node, kStroke))) d.stroke_m = v;
-  else if ((v = read_number(m, key, node, kPreload))) d.preload_um = v;
-  else if ((v = read_number(m, key, node, kBlockLength))) d.block_length_mm = v;
-  else if ((v = read_number(m, key, node, kViscosity))) d.viscosity40_mm2_s = v;
+  if ((v = read_number(m, key, node, kLoad, given))) d.load_N = v;
+  else if ((v = read_number(m, key, node, kStroke, given))) d.stroke_m = v;
+  else if ((v = read_number(m, key, node, kPreload, given))) d.preload_um = v;
+  else if ((v = read_number(m, key, node, kBlockLength, given))) d.block_length_mm = v;
+  else if ((v = read_number(m, key, node, kViscosity, given))) d.viscosity40_mm2_s = v;
   else return false;
   return true;
 }
@@ -170,6 +183,7 @@ DutyCycle load_duty_cycle(const std::filesystem::path& path, const GuideCatalog*
   long repeat = 1;
   const toml::node* trace_node = nullptr;
   const toml::node* positions_node = nullptr;
+  GivenKeys given;
   for (const auto& [key, node] : root) {
     const std::string_view k = key.str();
     std::optional<double> v;
@@ -183,11 +197,11 @@ DutyCycle load_duty_cycle(const std::filesystem::path& path, const GuideCatalog*
       if (!i || i->get() < 1 || i->get() > 100000) m.fail(node.source(), "repeat: expected a whole number in [1, 100000]");
       repeat = i->get();
     } else if (k == "scale" || k == "segment") continue;
-    else if ((v = read_number(m, key, node, kRailLength))) rail_length = v;
-    else if ((v = read_number(m, key, node, kAmbient))) ambient = v;
-    else if ((v = read_number(m, key, node, kInitial))) initial = v;
-    else if ((v = read_number(m, key, node, kOutputEvery))) every = v;
-    else if (!read_default(m, key, node, defaults))
+    else if ((v = read_number(m, key, node, kRailLength, given))) rail_length = v;
+    else if ((v = read_number(m, key, node, kAmbient, given))) ambient = v;
+    else if ((v = read_number(m, key, node, kInitial, given))) initial = v;
+    else if ((v = read_number(m, key, node, kOutputEvery, given))) every = v;
+    else if (!read_default(m, key, node, defaults, given))
       m.fail(key.source(), fmt::format("unknown key '{}'; expected {}", k, kTopKeys));
   }
   if (!guide_node) m.fail(root.source(), "expected guide = \"...\" (a model of the catalog, e.g. \"SRN 35C\")");
@@ -207,6 +221,9 @@ DutyCycle load_duty_cycle(const std::filesystem::path& path, const GuideCatalog*
     if (ambient) m.fail(trace_node->source(), "ambient_trace and ambient_C both given: one or the other");
     const auto* a = trace_node->as_array();
     if (!a || a->empty()) m.fail(trace_node->source(), "ambient_trace: expected [[t_s, T_C], ...]");
+    if (a->size() > io::kMaxAmbientTracePoints)
+      m.fail(trace_node->source(), fmt::format("ambient_trace: {} points: at most {} (docs/formats.md#limits)", a->size(),
+                                               io::kMaxAmbientTracePoints));
     for (const auto& item : *a) {
       const auto* pair = item.as_array();
       if (!pair || pair->size() != 2) m.fail(item.source(), "ambient_trace: expected [t_s, T_C] pairs");
@@ -233,18 +250,26 @@ DutyCycle load_duty_cycle(const std::filesystem::path& path, const GuideCatalog*
   const toml::node* list_node = root.get("segment");
   const auto* list = list_node ? list_node->as_array() : nullptr;
   if (!list || list->empty()) m.fail(list_node ? list_node->source() : root.source(), "expected [[segment]] tables");
+  // Sizes before the segments are read or laid out: each repeat is simulated for every draw.
+  if (list->size() * static_cast<std::size_t>(repeat) > io::kMaxDutySegments)
+    m.fail(root.get("repeat") ? root.get("repeat")->source() : list_node->source(),
+           fmt::format("{} segments × repeat {} = {} segments: at most {} (docs/formats.md#limits)", list->size(), repeat,
+                       list->size() * static_cast<std::size_t>(repeat), io::kMaxDutySegments));
   std::vector<DutySegment> one_cycle;
   for (const auto& item : *list) {
     const toml::table& t = manifest::table_of(m, item, "[[segment]]");
     DutySegment s;
+    s.line = static_cast<long>(t.source().begin.line);
+    s.column = static_cast<long>(t.source().begin.column);
     s.duration_s = NAN;
     SegmentDefaults own = defaults;
+    GivenKeys given_here;
     for (const auto& [key, node] : t) {
       std::optional<double> v;
-      if ((v = read_number(m, key, node, kDuration))) s.duration_s = *v;
-      else if ((v = read_number(m, key, node, kVelocity))) s.velocity_m_s = *v;
+      if ((v = read_number(m, key, node, kDuration, given_here))) s.duration_s = *v;
+      else if ((v = read_number(m, key, node, kVelocity, given_here))) s.velocity_m_s = *v;
       else if (key.str() == "name") s.name = manifest::string_of(m, key, node);
-      else if (!read_default(m, key, node, own))
+      else if (!read_default(m, key, node, own, given_here))
         m.fail(key.source(), fmt::format("unknown key '{}' in [[segment]]; expected {}", key.str(), kSegmentKeys));
     }
     if (std::isnan(s.duration_s)) m.fail(t.source(), "[[segment]]: expected duration_s (any time unit: duration_min, duration_h)");
@@ -259,8 +284,6 @@ DutyCycle load_duty_cycle(const std::filesystem::path& path, const GuideCatalog*
     s.viscosity40_mm2_s = own.viscosity40_mm2_s.value_or(99.0);
     if (s.velocity_m_s > 0) {
       s.stroke_m = needed(own.stroke_m, nullptr, "stroke_m");
-    s.line = static_cast<long>(t.source().begin.line);
-    s.column = static_cast<long>(t.source().begin.column);
       const double contact_m = *d.guide.contact_length_mm * 1e-3;
       if (s.stroke_m + contact_m > d.rail_length_m)
         m.fail(t.source(), fmt::format("[[segment]]: stroke {} m plus the block's contact length {} m is longer than the rail "
@@ -271,20 +294,67 @@ DutyCycle load_duty_cycle(const std::filesystem::path& path, const GuideCatalog*
     }
     one_cycle.push_back(s);
   }
+  // The duration and the outputs from one cycle, before the repeats are laid out.
+  const double cycle = std::accumulate(one_cycle.begin(), one_cycle.end(), 0.0,
+                                       [](double t, const DutySegment& s) { return t + s.duration_s; });
+  const double duration = cycle * static_cast<double>(repeat);
+  if (duration > 1e7) m.fail(root.source(), fmt::format("the duty lasts {} s: at most 1e7 s (116 days)", duration));
+  if (duration / d.output_every_s > static_cast<double>(io::kMaxDutyOutputs))
+    m.fail(root.get("output_every_s") ? root.get("output_every_s")->source() : root.source(),
+           fmt::format("output_every_s = {} gives {} outputs: at most {} (docs/formats.md#limits)", d.output_every_s,
+                       duration / d.output_every_s, io::kMaxDutyOutputs));
+  d.segments.reserve(one_cycle.size() * static_cast<std::size_t>(repeat));
   for (long r = 0; r < repeat; ++r)
     for (const DutySegment& s : one_cycle) {
       d.segments.push_back(s);
       if (d.segments.back().name.empty()) d.segments.back().name = fmt::format("segment {}", d.segments.size());
     }
-  const double duration = d.duration_s();
-  if (duration > 1e7) m.fail(root.source(), fmt::format("the duty lasts {} s: at most 1e7 s (116 days)", duration));
-  if (duration / d.output_every_s > 1e6)
-    m.fail(root.get("output_every_s") ? root.get("output_every_s")->source() : root.source(),
-           fmt::format("output_every_s = {} gives {} outputs: at most 1e6", d.output_every_s, duration / d.output_every_s));
-  if (d.ambient.time_s.size() > 1 && (d.ambient.time_s.front() > 0 || d.ambient.time_s.back() < duration))
+  const double laid_out = d.duration_s();
+  if (d.ambient.time_s.size() > 1 && (d.ambient.time_s.front() > 0 || d.ambient.time_s.back() < laid_out))
     m.fail(trace_node->source(), fmt::format("ambient_trace covers [{}, {}] s; the duty runs [0, {}] s", d.ambient.time_s.front(),
-                                             d.ambient.time_s.back(), duration));
+                                             d.ambient.time_s.back(), laid_out));
   return d;
+}
+
+PredictionCost prediction_cost(const DutyCycle& duty, const PredictionOptions& o) {
+  // Measured with lmcal predict on the bundled model (docs/formats.md#limits): 2.5 ns per rail
+  // node and time step, 70 µs per segment's set-up, 2.5 ns per node and quantity at an
+  // output; each draw holds its outputs (8 bytes a value, half again for the bands), each
+  // thread one segment's profiles.
+  const double nodes = 2.0 * std::max(o.half_rail_segments, 1) + 1;
+  const double outputs = duty.duration_s() / duty.output_every_s + static_cast<double>(duty.segments.size());
+  const double quantities = static_cast<double>(duty.positions_m.size() + duty.scale.positions_m.size() + 3);
+  const double segments = static_cast<double>(duty.segments.size());
+  const double steps = duty.duration_s() / o.time_step_s + segments;
+  const double draws = static_cast<double>(o.samples) + 1;
+  const double threads = std::max(1u, std::thread::hardware_concurrency());
+  const double scale_positions = static_cast<double>(duty.scale.positions_m.size());
+  const double per_draw_s = 70e-6 * segments + 2.5e-9 * nodes * (steps + outputs * (scale_positions + 2)) +
+                            2e-9 * segments * static_cast<double>(duty.ambient.time_s.size());
+  return {.cpu_s = draws * per_draw_s, .bytes = outputs * (12 * draws * quantities + 8 * nodes * threads)};
+}
+
+void check_prediction_size(const DutyCycle& duty, const PredictionOptions& o) {
+  if (o.samples > io::kMaxPredictionSamples)
+    throw InvalidParameter("samples", static_cast<double>(o.samples),
+                           fmt::format("at most {} draws (docs/formats.md#limits)", io::kMaxPredictionSamples));
+  if (o.half_rail_segments > io::kMaxRailSegments)
+    throw InvalidParameter("half_rail_segments", o.half_rail_segments,
+                           fmt::format("at most {} (docs/formats.md#limits)", io::kMaxRailSegments));
+  require_positive("time_step_s", o.time_step_s);
+  const PredictionCost cost = prediction_cost(duty, o);
+  const auto refuse = [&](std::string_view what) {
+    throw InvalidParameter(
+        "duty", fmt::format("{}: {} segments, {:.3g} outputs at {} positions, {} draws of a {}-segment rail at {} s steps "
+                            "would take some {:.2g} CPU hours and {}: {} (docs/formats.md#limits); fewer --samples, a longer "
+                            "output_every_s, fewer positions or a longer --time-step",
+                            duty.file, duty.segments.size(), duty.duration_s() / duty.output_every_s,
+                            duty.positions_m.size() + duty.scale.positions_m.size(), o.samples, o.half_rail_segments,
+                            o.time_step_s, cost.cpu_s / 3600, io::byte_size(static_cast<std::uintmax_t>(std::min(cost.bytes, 1e18))), what));
+  };
+  if (cost.bytes > static_cast<double>(io::kMaxPredictionBytes))
+    refuse(fmt::format("memory beyond {}", io::byte_size(io::kMaxPredictionBytes)));
+  if (cost.cpu_s > io::kMaxPredictionCpu_s) refuse(fmt::format("beyond {:g} CPU hours", io::kMaxPredictionCpu_s / 3600));
 }
 
 }  // namespace lmcal

@@ -423,6 +423,7 @@ Prediction predict(const ModelFile& m, const DutyCycle& duty, const PredictionOp
   if (o.samples < 20) throw InvalidParameter("samples", static_cast<double>(o.samples), "at least 20 draws for a band");
   require_in_range("confidence", o.confidence, 0.5, 0.999);
   if (o.half_rail_segments < 4) throw InvalidParameter("half_rail_segments", o.half_rail_segments, "at least 4");
+  check_prediction_size(duty, o);  // before any draw is allocated
   require_positive("time_step_s", o.time_step_s);
 
   const DrawSet set = make_draws(m, o);

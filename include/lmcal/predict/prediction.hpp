@@ -105,6 +105,19 @@ struct PredictionOptions {
   // A duty on another guide than the model was calibrated on (ModelFile::guide) is refused: α,
   // h and the friction constants are that guide's rail and block. True: predicted anyway, noted.
   bool any_guide = false;
+};
+
+// What predicting `duty` with `options` costs, estimated before anything is allocated: CPU
+// seconds on one core and bytes held at once.
+struct PredictionCost {
+  double cpu_s = 0, bytes = 0;
+};
+PredictionCost prediction_cost(const DutyCycle& duty, const PredictionOptions& options);
+
+// InvalidParameter when the draws, the rail's segments or the estimate exceed the limits of
+// docs/formats.md#limits (kMaxPredictionSamples, kMaxRailSegments, kMaxPredictionBytes,
+// kMaxPredictionCpu_s): "duty: d.toml: 100000 segments, … would take some 9.1 CPU hours …".
+void check_prediction_size(const DutyCycle& duty, const PredictionOptions& options);
 
 // A predicted quantity over time: the model's value at its estimates and the band.
 struct Band {

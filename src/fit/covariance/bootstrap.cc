@@ -6,12 +6,15 @@
 // same estimate as two copies). Parameters no drawn run determines (the offsets of a run not
 // drawn) are left out of that replicate.
 #include <cmath>
+#include <exception>
 #include <fmt/format.h>
 #include <limits>
 
 #include <Eigen/Dense>
 
 #include "covariance.hpp"
+#include "lmcal/error.hpp"
+#include "lmcal/io/limits.hpp"
 
 namespace lmcal::detail {
 
@@ -56,6 +59,9 @@ BootstrapResult cluster_bootstrap(const ScoreInputs& in, std::size_t replicates,
   e.description = fmt::format("cluster bootstrap: {} replicates of the {} runs drawn with replacement, one Newton step "
                               "from the estimate each{}",
                               replicates, G, external_draws ? ", the external input resampled with them" : "");
+  if (replicates > io::kMaxBootstrapReplicates)
+    throw InvalidParameter("bootstrap", static_cast<double>(replicates),
+                           fmt::format("at most {} replicates (docs/formats.md#limits)", io::kMaxBootstrapReplicates));
   out.draws = Eigen::MatrixXd::Constant(static_cast<Eigen::Index>(replicates), m, kNaN);
   if (G < 2 || replicates < 2) {
     e.note = "needs at least two runs";
@@ -76,8 +82,9 @@ BootstrapResult cluster_bootstrap(const ScoreInputs& in, std::size_t replicates,
   }
 
   const auto count = static_cast<long>(replicates);
+  std::exception_ptr failure;  // a replicate's std::bad_alloc leaves the region, then is rethrown
 #pragma omp parallel for schedule(static)
-  for (long b = 0; b < count; ++b) {
+  for (long b = 0; b < count; ++b) try {
     std::uint64_t state = seed * 0x2545F4914F6CDD1DULL + static_cast<std::uint64_t>(b);
     Eigen::MatrixXd Hb = Eigen::MatrixXd::Zero(m, m);
     Eigen::VectorXd gb = Eigen::VectorXd::Zero(m);
@@ -102,7 +109,11 @@ BootstrapResult cluster_bootstrap(const ScoreInputs& in, std::size_t replicates,
     const Eigen::VectorXd step = ldlt.solve(-gd);
     if (!step.allFinite()) continue;
     for (Eigen::Index a = 0; a < d; ++a) out.draws(b, determined[a]) = step[a];
+  } catch (...) {
+#pragma omp critical(lmcal_bootstrap)
+    if (!failure) failure = std::current_exception();
   }
+  if (failure) std::rethrow_exception(failure);
 
   // Covariance over the replicates that determined both parameters.
   e.covariance = Eigen::MatrixXd::Constant(m, m, kNaN);
