@@ -61,7 +61,10 @@ class StepTimes {
 
 void run_calibrate(CalibrateOptions& o) {
   const CalibrationSet set = find_calibration_set(o.set);
-  const CalibrationOptions options = o.calibration.resolve();
+  CalibrationOptions options = o.calibration.resolve();
+  options.inputs.allow_outside = input_scope().allow_outside;
+  const std::filesystem::path dir = o.output_dir.empty() ? std::filesystem::path("fits") / set.name : std::filesystem::path(o.output_dir);
+  require_writable_output(dir);
   TerminalProgress progress;
   StepTimes times;
   const Calibration c = calibrate(set, options,
@@ -74,7 +77,6 @@ void run_calibrate(CalibrateOptions& o) {
   progress.clear();
   require_usable(unusable_headline(c), o.keep_unusable);
   times.start("writing the outputs");
-  const std::filesystem::path dir = o.output_dir.empty() ? std::filesystem::path("fits") / set.name : std::filesystem::path(o.output_dir);
   const std::string written = write_outputs(dir, calibration_outputs(c), calibration_output_names());
   times.stop();
   progress.clear();

@@ -73,7 +73,7 @@ void check_thermal(const std::vector<std::string>& files, const std::string& cat
       continue;
     }
     const std::optional<GuideCatalog> catalog = user_catalog(catalog_file);
-    const ThermalDataSet set = load_thermal_dataset(file, catalog ? &*catalog : nullptr);
+    const ThermalDataSet set = load_thermal_dataset(file, catalog ? &*catalog : nullptr, input_scope());
     std::cout << fmt::format("thermal data set '{}': {}\n", set.name, plural(set.runs.size(), "run"));
     for (const auto& run : set.runs) {
       const GuideSpec spec = resolved_guide(run);

@@ -15,6 +15,7 @@
 
 #include "lmcal/error.hpp"
 #include "lmcal/io/atomic_file.hpp"
+#include "lmcal/io/printable.hpp"
 
 namespace lmcal::cli {
 
@@ -56,6 +57,22 @@ void require_usable(const std::optional<std::string>& why, bool keep) {
 }
 
 std::string plural(std::size_t n, std::string_view noun) { return fmt::format("{} {}{}", n, noun, n == 1 ? "" : "s"); }
+
+InputScope& input_scope() {
+  static InputScope scope;
+  return scope;
+}
+
+std::string filesystem_message(const std::filesystem::filesystem_error& e) {
+  std::string paths;
+  for (const auto* p : {&e.path1(), &e.path2()})
+    if (!p->empty()) paths += (paths.empty() ? "" : " -> ") + io::printable(p->string());
+  return fmt::format("{}: {}", paths.empty() ? std::string("file system") : paths, e.code().message());
+}
+
+void require_writable_output(const std::filesystem::path& folder) {
+  if (auto problem = output_folder_problem(folder)) throw InvalidParameter("-o", *problem);
+}
 
 std::string write_outputs(const std::filesystem::path& dir, std::vector<std::pair<std::string, std::string>> files,
                           const std::vector<std::string>& replaced) {
@@ -250,7 +267,7 @@ FrictionInput load_friction_input(const std::vector<std::string>& files, const F
   if (files.size() != 1)
     throw InvalidParameter("files", "give one friction manifest (.toml), or CSV logs, not both or several manifests");
   FrictionDataSet set = load_friction_dataset(files.front(), catalog ? &*catalog : nullptr, options.parsed(),
-                                              options.raw_given());
+                                              options.raw_given(), input_scope());
   in.inputs.emplace_back(files.front(), sha256_file(files.front()));
   for (const auto& file : set.files) in.inputs.emplace_back(file.string(), sha256_file(file));
   in.raw = set.raw;
@@ -335,6 +352,18 @@ CLI::Validator at_least(double low) {
       "");
 }
 
+CLI::Validator up_to_limit(double low, double high) {
+  return CLI::Validator(
+      [low, high](std::string& text) -> std::string {
+        double v = 0;
+        if (!CLI::detail::lexical_cast(text, v) || !std::isfinite(v)) return fmt::format("expected a number, got '{}'", text);
+        if (v >= low && v <= high) return "";
+        return fmt::format("{} is {} {:g}: expected a value from {:g} to {:g} (docs/formats.md#limits)", text,
+                           v < low ? "below" : "above", v < low ? low : high, low, high);
+      },
+      "");
+}
+
 CLI::Validator inside(double low, double high) {
   return CLI::Validator(
       [low, high](std::string& text) -> std::string {
@@ -352,18 +381,6 @@ void add_list(CLI::App& app, const char* name, std::vector<double>& values, cons
 
 std::vector<double> or_catalog(const std::vector<double>& given, const GuideSpec& spec,
                                std::optional<double> GuideSpec::*field, const char* name) {
-CLI::Validator up_to_limit(double low, double high) {
-  return CLI::Validator(
-      [low, high](std::string& text) -> std::string {
-        double v = 0;
-        if (!CLI::detail::lexical_cast(text, v) || !std::isfinite(v)) return fmt::format("expected a number, got '{}'", text);
-        if (v >= low && v <= high) return "";
-        return fmt::format("{} is {} {:g}: expected a value from {:g} to {:g} (docs/formats.md#limits)", text,
-                           v < low ? "below" : "above", v < low ? low : high, low, high);
-      },
-      "");
-}
-
   if (!given.empty()) return given;
   return {require(spec, field, name)};
 }

@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include "lmcal/io/csv_writer.hpp"
+#include "lmcal/io/input_scope.hpp"
 
 #include <filesystem>
 #include <cctype>
@@ -32,6 +33,17 @@ std::string write_outputs(const std::filesystem::path& dir, std::vector<std::pai
 
 // "1 run", "3 runs".
 std::string plural(std::size_t n, std::string_view noun);
+
+// Where every command's loaders may read the files that manifests, duty files and fleet.toml
+// name: inside their own folder, or anywhere with the global flag --allow-outside-root.
+InputScope& input_scope();
+
+// "PATH: reason" for a file system error (printable paths, without the library's prefix).
+std::string filesystem_message(const std::filesystem::filesystem_error& e);
+
+// Refuses (InvalidParameter naming -o) an output folder, or the folder of an output file, that lmcal could not
+// write into (not a folder, read-only, nearly full), before the command computes anything.
+void require_writable_output(const std::filesystem::path& folder);
 
 // Version, command line and time-independent facts every output carries alongside.
 nlohmann::json run_record(const std::vector<std::string>& argv);
@@ -251,11 +263,11 @@ FrictionInput load_friction_input(const std::vector<std::string>& files, const F
 // value of at least 0" (CLI11's own print the type's limits).
 CLI::Validator at_least(double low);
 CLI::Validator inside(double low, double high);  // exclusive
+// Inclusive, `high` a size limit of docs/formats.md#limits: "1e9 is above 1000: expected a value
+// from 1 to 1000 (docs/formats.md#limits)".
+CLI::Validator up_to_limit(double low, double high);
 
 // A list option parsed with parse_list.
 void add_list(CLI::App& app, const char* name, std::vector<double>& values, const char* help);
 
 }  // namespace lmcal::cli
-// Inclusive, `high` a size limit of docs/formats.md#limits: "1e9 is above 1000: expected a value
-// from 1 to 1000 (docs/formats.md#limits)".
-CLI::Validator up_to_limit(double low, double high);

@@ -109,10 +109,11 @@ void print(const ThermalDiagnosis& d) {
 }
 
 void run_diagnose_thermal(DiagnoseThermalOptions& o, const std::vector<std::string>& argv) {
+  require_writable_output(o.output_dir);
   std::vector<std::pair<std::string, std::string>> inputs;
   o.model.apply(o.diagnosis.fit, inputs);
   const std::optional<GuideCatalog> catalog = user_catalog(o.catalog_file);
-  const ThermalDataSet data = load_thermal_dataset(o.manifest, catalog ? &*catalog : nullptr);
+  const ThermalDataSet data = load_thermal_dataset(o.manifest, catalog ? &*catalog : nullptr, input_scope());
   inputs.emplace_back(o.manifest, sha256_file(o.manifest));
   for (const auto& run : data.runs) inputs.emplace_back(run.file.string(), sha256_file(run.file));
   const ThermalDiagnosis d = with_progress("thermal diagnosis", [&](const Progress& progress) {
@@ -127,6 +128,7 @@ void run_diagnose_thermal(DiagnoseThermalOptions& o, const std::vector<std::stri
 }
 
 void run_diagnose_friction(DiagnoseFrictionOptions& o, const std::vector<std::string>& argv) {
+  require_writable_output(o.output_dir);
   apply_friction_constant_options(o.constants, o.diagnosis.fit);
   const FrictionInput input = load_friction_input(o.files, o.input);
   const FrictionLog& log = input.log;

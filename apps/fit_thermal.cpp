@@ -33,11 +33,12 @@ struct FitThermalOptions {
 };
 
 void run_fit_thermal(FitThermalOptions& o, const std::vector<std::string>& argv) {
+  require_writable_output(o.output_dir);
   ThermalFitOptions& f = o.fit;
   std::vector<std::pair<std::string, std::string>> inputs;
   o.model.apply(f, inputs);
   const std::optional<GuideCatalog> catalog = user_catalog(o.catalog_file);
-  const ThermalDataSet data = load_thermal_dataset(o.manifest, catalog ? &*catalog : nullptr);
+  const ThermalDataSet data = load_thermal_dataset(o.manifest, catalog ? &*catalog : nullptr, input_scope());
   inputs.emplace_back(o.manifest, sha256_file(o.manifest));
   if (!data.catalog_file.empty()) inputs.emplace_back(data.catalog_file.string(), sha256_file(data.catalog_file));
   for (const auto& run : data.runs) inputs.emplace_back(run.file.string(), sha256_file(run.file));

@@ -63,6 +63,8 @@ void run_fleet_command(FleetCliOptions& o) {
   if (!o.shard.empty()) std::tie(options.shard, options.shards) = parse_shard(o.shard);
   if (o.summarize && !o.shard.empty()) throw InvalidParameter("--summarize", "summarizes every shard: give it without --shard");
   options.output_dir = o.output_dir.empty() ? fs::path("fits") / fs::weakly_canonical(o.root).filename() : fs::path(o.output_dir);
+  options.calibration.inputs.allow_outside = input_scope().allow_outside;
+  require_writable_output(options.output_dir);
 #ifdef LMCAL_WITH_MPI
   // Under mpirun every rank runs this: MPI starts first, and only rank 0 writes the summary.
   std::optional<MpiSession> mpi;
@@ -70,7 +72,7 @@ void run_fleet_command(FleetCliOptions& o) {
   const bool distributed = mpi && mpi->size() > 1;
   if (distributed && o.summarize && mpi->rank() != 0) return;
 #endif
-  const Fleet fleet = discover_fleet(o.root, options.output_dir);
+  const Fleet fleet = discover_fleet(o.root, options.output_dir, input_scope().allow_outside);
   if (o.summarize) {
     write_summary(fleet, options, read_fleet_records(fleet, options), o.root);
     return;

@@ -9,7 +9,9 @@
 #include <fmt/format.h>
 
 #include <filesystem>
+#include <fstream>
 #include <iostream>
+#include <iterator>
 
 #include "cli_common.hpp"
 #include "progress.hpp"
@@ -122,6 +124,13 @@ void run_generate_thermal(GenerateOptions& o, const std::vector<std::string>& ar
   for (ThermalRun& run : placed.runs) {
     run.file = dir / run.file;
     out.add(run.file, thermal_trace_csv(run.trace, comments));
+  }
+  // A self-contained set: the user's catalog travels with it as catalog.toml (a manifest reads
+  // only files inside its own folder).
+  if (!placed.catalog_file.empty()) {
+    std::ifstream in(o.catalog_file, std::ios::binary);
+    placed.catalog_file = dir / "catalog.toml";
+    out.add(placed.catalog_file, std::string(std::istreambuf_iterator<char>(in), {}));
   }
   out.add(dir / "thermal.toml", thermal_manifest_toml(placed, dir));
   out.add(dir / "thermal_truth.json", made.truth_json);

@@ -46,6 +46,9 @@ int main(int argc, char** argv) {
                         "Errors only: no summary, no progress");
   app.add_flag_function("-v,--verbose", [&mode](std::int64_t) { mode.verbosity = lmcal::cli::Verbosity::verbose; },
                         "Progress as lines even in a pipe or a log, and each step's wall time");
+  app.add_flag("--allow-outside-root", lmcal::cli::input_scope().allow_outside,
+               "Read the files manifests, duty files and fleet.toml name even outside their own folder (or the fleet's "
+               "ROOT); refused by default, so that a folder someone else wrote cannot make lmcal read other files");
   app.add_flag("--json", mode.json, "Print the command's main JSON output (calibration.json, friction.json, …) on stdout "
                                     "instead of the summary");
   // After the options, before the command runs: stdout silenced for -q and --json.
@@ -66,10 +69,10 @@ int main(int argc, char** argv) {
   lmcal::cli::setup_plan(app, args);
   lmcal::cli::setup_completion(app);
   try {
+    check_config_files(args);
     app.parse(argc, argv);
     if (mode.json && gate && !gate->print_machine_output()) {
       std::cerr << "lmcal: error: --json: this command writes no JSON output\n";
-    check_config_files(args);
       return lmcal::cli::kExitUsage;
     }
   } catch (const CLI::ParseError& e) {
@@ -82,6 +85,13 @@ int main(int argc, char** argv) {
     return lmcal::cli::kExitInput;
   } catch (const lmcal::InvalidParameter& e) {
     std::cerr << "lmcal: error: " << e.what() << "\n";
+    return lmcal::cli::kExitInput;
+  } catch (const std::bad_alloc&) {  // a size within the limits that still did not fit this machine
+    std::cerr << "lmcal: error: out of memory: the inputs or options ask for more than this machine has "
+                 "(docs/formats.md#limits lists what each size costs)\n";
+    return lmcal::cli::kExitInput;
+  } catch (const std::filesystem::filesystem_error& e) {  // the system refused a file or folder: not lmcal's fault
+    std::cerr << "lmcal: error: " << lmcal::cli::filesystem_message(e) << "\n";
     return lmcal::cli::kExitInput;
   } catch (const std::exception& e) {
     std::cerr << "lmcal: error: internal failure, please report it with the command: " << e.what() << "\n";

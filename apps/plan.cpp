@@ -32,6 +32,7 @@ struct PlanFrictionOptions {
 };
 
 void run_plan_friction(const PlanFrictionOptions& o, const std::vector<std::string>& argv) {
+  require_writable_output(o.output_dir);
   FrictionFitOptions fit_options;
   apply_friction_constant_options(o.constants, fit_options);
   fit_options.effects = o.effects;
@@ -69,10 +70,11 @@ struct PlanThermalOptions {
 };
 
 void run_plan_thermal(const PlanThermalOptions& o, const std::vector<std::string>& argv) {
+  require_writable_output(o.output_dir);
   const auto model = LoadedModel::read(o.model, "thermal");
   if (!model) throw InvalidParameter("--model", "a thermal plan needs the calibrated model (model.toml of lmcal calibrate)");
   const auto catalog = user_catalog(o.catalog_file);
-  const ThermalDataSet data = load_thermal_dataset(o.manifest, catalog ? &*catalog : nullptr);
+  const ThermalDataSet data = load_thermal_dataset(o.manifest, catalog ? &*catalog : nullptr, input_scope());
   ThermalCandidateGrid grid = o.grid;
   for (double h : o.duration_h) grid.duration_s.push_back(3600 * h);
   const ThermalPlan plan = with_progress("thermal plan", [&](const Progress&) {

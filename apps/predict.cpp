@@ -25,7 +25,7 @@ struct PredictOptions {
 void run_predict(const PredictOptions& o, const std::vector<std::string>& argv) {
   const ModelFile model = read_model_file(o.model);
   const auto catalog = user_catalog(o.catalog_file);
-  const DutyCycle duty = load_duty_cycle(o.duty, catalog ? &*catalog : nullptr);
+  const DutyCycle duty = load_duty_cycle(o.duty, catalog ? &*catalog : nullptr, input_scope());
   const Prediction p = with_progress("prediction", [&](const Progress&) { return predict(model, duty, o.prediction); });
   const std::vector<std::pair<std::string, std::string>> inputs = {{o.model, sha256_file(o.model)}, {o.duty, sha256_file(o.duty)}};
   const std::string written = write_outputs(o.output_dir, {{"prediction.json", with_output_record(prediction_json(p, duty, model, argv), argv, &inputs, &output_mode().options)},

@@ -58,11 +58,16 @@ class OutputSetTest : public test::TempFolderTest {
   }
   // Over the old set: the new one committed in a child that raises `signal` at `step`; returns
   // how the child ended.
-  int commit_stopped_at(int step, int signal) const {
+  // `elsewhere`: the signal lands on another thread of the child (a fleet's other job).
+  int commit_stopped_at(int step, int signal, bool elsewhere = false) const {
     fs::remove_all(dir_);
     fs::create_directories(dir_);
     write_old();
     stop_at = {step, signal};
+    if (elsewhere)
+      return commit_in_child([](int k) {
+        if (k == stop_at.first) std::thread([] { ::raise(stop_at.second); }).join();
+      });
     return commit_in_child([](int k) {
       if (k == stop_at.first) ::raise(stop_at.second);
     });
@@ -105,6 +110,15 @@ TEST_F(OutputSetTest, CtrlCDuringTheCommitWaitsUntilItIsOver) {
   for (int k : {2, 51, 101}) {
     SCOPED_TRACE(testing::Message() << "SIGINT at step " << k);
     const int status = commit_stopped_at(k, SIGINT);
+    ASSERT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGINT) << "Ctrl-C is delivered once the set is in place";
+    EXPECT_EQ(folder(), expected("new", false)) << "no temporary left, nothing old mixed in";
+  }
+}
+
+TEST_F(OutputSetTest, CtrlCOnAnotherThreadAlsoWaitsUntilTheCommitIsOver) {
+  for (int k : {2, 51, 101}) {
+    SCOPED_TRACE(testing::Message() << "SIGINT on another thread at step " << k);
+    const int status = commit_stopped_at(k, SIGINT, true);
     ASSERT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGINT) << "Ctrl-C is delivered once the set is in place";
     EXPECT_EQ(folder(), expected("new", false)) << "no temporary left, nothing old mixed in";
   }

@@ -296,6 +296,18 @@ check "a non-monotone position is refused at its line" refused "back.csv:400:" f
 check "and says why" grep -q "position must be monotone between reversals" stderr.txt
 printf 'file = "back.csv"\n[[run]]\nid = "a"\nload_N = 1000\nload_kN = 1\n' >twice.toml
 check "a manifest refuses a key given twice" refused "twice.toml:5:1: duplicate key 'load_kN'" check friction twice.toml
+# Files a manifest names stay inside its folder: refused at the key, nothing of the file echoed.
+mkdir -p inner && cp back.csv inner/
+printf 'file = "/etc/passwd"\n' >inner/passwd.toml
+check "a manifest naming /etc/passwd is refused at its key" \
+  refused "inner/passwd.toml:1:8: file '/etc/passwd' is outside inner" check friction inner/passwd.toml
+check "and nothing of it is echoed" bash -c '! grep -q "root:" stderr.txt'
+printf 'file = "../back.csv"\n[[run]]\nid = "a"\nguide = "SRN 35C"\nload_N = 1000\npreload_um = 2.5\ntemperature_C = 24\n' >inner/up.toml
+check "a manifest naming ../ is refused" refused "file '../back.csv' is outside inner" fit friction inner/up.toml -o out
+"$LMCAL" --allow-outside-root check friction inner/up.toml >/dev/null 2>up.txt
+check "--allow-outside-root reads it (and refuses what it holds)" grep -q "back.csv:400:" up.txt
+check "an output folder under a file is refused before the fit" \
+  refused "-o: cannot write outputs there: " fit friction "$SOURCE/measurements/cheng2017/friction.csv" -o back.csv/out
 
 # --- thermal runs as rigs produce them: a heater switched off, no ambient sensor, a user's bar ---
 "$LMCAL" generate thermal -o heater --heater 4 --heater-off 7200 --duration 10800 --record-every 60 \
@@ -493,18 +505,6 @@ check "a config file's unknown key is refused where it is" \
   exits_with 2 "options.toml:3:1: unknown key 'calibrate.lrtp'; did you mean 'calibrate.lrt-p'?" --config options.toml calibrate x
 check "a missing folder is an input error (1)" exits_with 1 "nowhere: expected a measurement folder" calibrate nowhere
 check "a device is refused before a byte is read" exits_with 1 "/dev/zero: cannot open file: this is a device" check friction /dev/zero
-printf 'run,velocity_m_s,load_N,preload_um,block_length_mm,temperature_C,friction_N\na,0.01,3000,4,120,25,20\na,0.1,3000,4,120,30,30\nb,0.05,1000,4,120,25,15\nb,0.2,2000,4,120,35,35\nc,0.02,3000,8,120,28,25\n' >five_rows.csv
-unusable_writes_nothing() {
-  exits_with 4 "the friction fit is not usable: no degree of freedom left: 5 residuals for 7 free parameters; nothing was written" \
-    fit friction five_rows.csv -o unusable && test ! -e unusable
-}
-check "a fit with no degree of freedom left exits 4, writing nothing" unusable_writes_nothing
-keeps_unusable() {
-  "$LMCAL" fit friction five_rows.csv -o kept --keep-unusable >/dev/null 2>stderr.txt &&
-    grep -q "lmcal: warning: the friction fit is not usable" stderr.txt &&
-    python3 -c 'import json,sys; s = json.load(open("kept/friction.json"))["solver"]; assert not s["usable"] and "degree of freedom" in s["unusable_reason"]'
-}
-check "--keep-unusable writes it, marked, and exits 0" keeps_unusable
 # Issue 36: every size bounded before the work starts (docs/formats.md#limits).
 check "a config file is a file: /dev/zero refused before a byte is read" \
   timeout 20 bash -c "! '$LMCAL' --config /dev/zero calibrate x 2>stderr.txt && grep -qF '/dev/zero: cannot open config file: this is a device' stderr.txt"
@@ -523,6 +523,18 @@ check "predict --samples beyond the limit refused" \
   refused "samples = 4000000000 is invalid: expected at most 100000 draws" predict "$SOURCE/fits/cheng2017/model.toml" "$SOURCE/examples/duty/two_shifts.toml" -o out --samples 4000000000
 check "predict refuses what its estimate says would not fit in memory, before a draw" \
   timeout 20 bash -c "! '$LMCAL' predict '$SOURCE/fits/cheng2017/model.toml' '$SOURCE/examples/duty/two_shifts.toml' -o out --samples 100000 2>stderr.txt && grep -qF 'memory beyond 4 GiB' stderr.txt"
+printf 'run,velocity_m_s,load_N,preload_um,block_length_mm,temperature_C,friction_N\na,0.01,3000,4,120,25,20\na,0.1,3000,4,120,30,30\nb,0.05,1000,4,120,25,15\nb,0.2,2000,4,120,35,35\nc,0.02,3000,8,120,28,25\n' >five_rows.csv
+unusable_writes_nothing() {
+  exits_with 4 "the friction fit is not usable: no degree of freedom left: 5 residuals for 7 free parameters; nothing was written" \
+    fit friction five_rows.csv -o unusable && test ! -e unusable
+}
+check "a fit with no degree of freedom left exits 4, writing nothing" unusable_writes_nothing
+keeps_unusable() {
+  "$LMCAL" fit friction five_rows.csv -o kept --keep-unusable >/dev/null 2>stderr.txt &&
+    grep -q "lmcal: warning: the friction fit is not usable" stderr.txt &&
+    python3 -c 'import json,sys; s = json.load(open("kept/friction.json"))["solver"]; assert not s["usable"] and "degree of freedom" in s["unusable_reason"]'
+}
+check "--keep-unusable writes it, marked, and exits 0" keeps_unusable
 python3 -c 'import json,sys; d = json.load(open(sys.argv[1])); [p.update(value=1e308) for p in d["parameters"] if p["name"] == "mu_st"]; json.dump(d, open("huge_mu_st.json", "w"))' \
   "$SOURCE/fits/cheng2017/friction.json"
 check "friction constants that give no finite heat are refused, naming the run" \

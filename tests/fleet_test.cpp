@@ -100,6 +100,48 @@ TEST_F(FleetTest, BadLayoutsAreRefusedBeforeAnyWorkNamingTheEntry) {
   EXPECT_NE(refusal().find("holds no measurements"), std::string::npos) << refusal();
 }
 
+TEST_F(FleetTest, EveryFolderStaysInsideTheRootUnlessAllowed) {
+  set("a");
+  write("B/unit/friction.csv", "time_s\n");  // a sibling fleet's set
+  auto fleet_file = [&](const std::string& folder) { write("root/fleet.toml", "[[set]]\nfolder = \"" + folder + "\"\n"); };
+  fleet_file("../B/unit");
+  EXPECT_NE(refusal().find("fleet.toml:2:10: folder '../B/unit' is outside"), std::string::npos) << refusal();
+  fleet_file((dir_ / "B/unit").string());
+  EXPECT_NE(refusal().find("fleet.toml:2:10: folder '/"), std::string::npos) << refusal();
+  EXPECT_NE(refusal().find("is outside"), std::string::npos) << refusal();
+  // No oracle: a folder outside that does not exist is refused with the same words.
+  fleet_file("../B/missing");
+  EXPECT_NE(refusal().find("folder '../B/missing' is outside"), std::string::npos) << refusal();
+  fs::create_directory_symlink(dir_ / "B/unit", root() / "link");
+  fleet_file("link");
+  EXPECT_NE(refusal().find("is outside"), std::string::npos) << refusal();
+  EXPECT_NE(refusal().find("through a symbolic link"), std::string::npos) << refusal();
+  fs::remove(root() / "fleet.toml");
+  EXPECT_NE(refusal().find("link: this folder is outside"), std::string::npos) << "the walk too: " << refusal();
+
+  // Allowed: read, but named so that its outputs stay under OUT.
+  fleet_file("../B/unit");
+  const Fleet fleet = discover_fleet(root(), {}, true);
+  ASSERT_EQ(fleet.sets.size(), 1u);
+  EXPECT_EQ(fleet.sets[0].id, "outside" + fs::weakly_canonical(dir_ / "B/unit").generic_string());
+}
+
+TEST_F(FleetTest, LoopsLongNamesAndLinksToItselfAreRefusedNotThrown) {
+  set("a");
+  fs::create_symlink("loop", root() / "loop");           // a link to itself under ROOT
+  fs::create_directory_symlink("..", root() / "a/up");  // a loop back up
+  EXPECT_EQ(refusal(), "") << "links that lead nowhere or back are not followed";
+  EXPECT_EQ(discover_fleet(root()).sets.size(), 1u);
+  write("root/fleet.toml", "[[set]]\nfolder = \"a/" + std::string(300, 'x') + "\"\n");
+  EXPECT_NE(refusal().find("fleet.toml:2:10: folder 'a/xxx"), std::string::npos) << refusal();
+  fs::remove(root() / "fleet.toml");
+  fs::create_symlink("fleet.toml", root() / "fleet.toml");
+  EXPECT_NE(refusal().find("Too many levels of symbolic links"), std::string::npos) << refusal();
+  fs::remove(root() / "fleet.toml");
+  write("root/b\x1b]0;pwned\x07/friction.csv", "time_s\n");
+  EXPECT_NE(refusal().find("control character"), std::string::npos) << "a folder name with an escape: " << refusal();
+}
+
 TEST(FleetDate, OnlyRealDaysParse) {
   EXPECT_EQ(parse_fleet_date("1970-01-02"), 1);
   EXPECT_EQ(parse_fleet_date("2024-02-29"), parse_fleet_date("2024-02-28").value() + 1);

@@ -77,4 +77,46 @@ check "a bad shard is refused" refused "--shard" fleet fleet --shard 2/2 -o out
 check "--summarize with --shard is refused" refused "--summarize" fleet fleet --shard 0/2 --summarize -o out
 check "--summarize without results names what is missing" refused "68 of 68 sets have no up-to-date results" fleet fleet --summarize -o out
 
+# --- a hostile fleet.toml: it cannot read, write into or delete a sibling folder ------------
+# The sibling: a set calibrated into its own folder (model.toml, report.html, … beside the logs).
+mkdir -p sibling/unit && cp fleet/u05/friction.csv sibling/unit/
+"$LMCAL" calibrate sibling/unit -o sibling/unit >/dev/null 2>&1
+check "the sibling holds its results" test -s sibling/unit/model.toml -a -s sibling/unit/report.html
+snapshot() { (cd sibling && find . -type f -print0 | sort -z | xargs -0 sha256sum); }
+snapshot >sibling_before.txt
+mkdir -p hostile/own && printf 'not,a,log\n1,2\n' >hostile/own/friction.csv   # a set that fails
+printf '[[set]]\nfolder = "own"\n[[set]]\nfolder = "../sibling/unit"\n' >hostile/fleet.toml
+check "a fleet.toml folder outside ROOT is refused at its line" \
+  refused "hostile/fleet.toml:4:10: folder '../sibling/unit' is outside hostile" fleet hostile -o out
+printf '[[set]]\nfolder = "%s/sibling/unit"\n' "$work" >hostile/fleet.toml
+check "an absolute folder outside ROOT is refused" refused "is outside hostile" fleet hostile -o out
+ln -s ../sibling/unit hostile/link
+printf '[[set]]\nfolder = "link"\n' >hostile/fleet.toml
+check "a link out of ROOT is refused" refused "through a symbolic link" fleet hostile -o out
+rm hostile/fleet.toml
+check "found by the walk, too" refused "hostile/link: this folder is outside hostile" fleet hostile -o out
+rm hostile/link
+# A set's manifest naming the sibling's log, and a log that links to /etc/passwd: the set fails,
+# and the record says why without a byte of either file.
+mkdir -p hostile/reader && printf 'file = "../../sibling/unit/friction.csv"\n' >hostile/reader/friction.toml
+mkdir -p hostile/linker && ln -s /etc/passwd hostile/linker/friction.csv
+# -o such that OUT/own is a folder of the sibling's: its files are not this set's to remove.
+mkdir -p victim/own && cp sibling/unit/model.toml sibling/unit/report.html victim/own/
+"$LMCAL" fleet hostile -o victim >hostile.txt 2>&1
+check "the hostile sets fail and the fleet finishes" grep -q "3 sets: 3 calibrated, 0 up to date (skipped), 3 failed" hostile.txt
+check "the manifest's file outside its folder is refused" \
+  grep -q "friction.toml:1:8: file '../../sibling/unit/friction.csv' is outside" victim/reader/fleet_set.json
+check "the link to /etc/passwd is refused, not read" grep -q "linker/friction.csv: is outside hostile through a symbolic link" victim/linker/fleet_set.json
+check "no content of /etc/passwd in any output" bash -c '! grep -rq "root:" victim'
+check "OUT/own's files, not written by this set, stay" cmp -s victim/own/model.toml sibling/unit/model.toml
+snapshot >sibling_after.txt
+check "the sibling is byte-identical afterwards" cmp -s sibling_before.txt sibling_after.txt
+# With --allow-outside-root the sibling is read, and its outputs still go under -o.
+printf '[[set]]\nfolder = "../sibling/unit"\n' >hostile/fleet.toml
+"$LMCAL" --allow-outside-root fleet hostile -o allowed >/dev/null 2>&1
+check "--allow-outside-root reads it, writing under OUT/outside/…" test -s "allowed/outside$(cd sibling/unit && pwd -P)/model.toml"
+snapshot >sibling_after.txt
+check "and the sibling is still byte-identical" cmp -s sibling_before.txt sibling_after.txt
+check "an output folder that cannot be made is refused before any work" refused "fleet.toml is not a folder" fleet hostile -o hostile/fleet.toml/out
+
 finish fleet_test.sh

@@ -108,7 +108,7 @@ class TempFile {
 // A model with awkward numbers: not short in decimal, tiny, huge, subnormal, negative zero.
 ModelFile awkward_model() {
   ModelFile m;
-  m.set = "set with \"quotes\", a \\ and a\ttab";
+  m.set = "set with \"quotes\", a \\ and an ü";  // a set is a folder's name: no tab or escape (set_escape.toml)
   m.lmcal_version = "0.1.0";
   m.command = {"lmcal", "calibrate", "measurements/cheng2017"};
   m.inputs = {{"measurements/cheng2017/friction.csv", std::string(64, 'a')}};

@@ -204,12 +204,16 @@ double within_at(const std::string& file, const toml::table& t, const char* key,
   return v;
 }
 
+// Keys whose text is a description or a command line: line breaks and tabs allowed, never an
+// escape. Every other text is a name.
+bool is_free_text(std::string_view key) { return key == "command" || key == "covariance" || key == "heat_uncertainty"; }
+
 std::string string_at(const std::string& file, const toml::table& t, const char* key) {
   const toml::node* n = t.get(key);
   const auto* s = n ? n->as_string() : nullptr;
   if (!s) fail(file, n ? n->source() : t.source(), fmt::format("expected a text '{}'", key));
   // Every text of a model file reaches terminals, JSON and the report: the one name check.
-  if (auto problem = io::name_problem(s->get())) fail(file, n->source(), fmt::format("{}: {}", key, *problem));
+  if (auto problem = io::name_problem(s->get(), is_free_text(key))) fail(file, n->source(), fmt::format("{}: {}", key, *problem));
   return s->get();
 }
 
@@ -225,8 +229,7 @@ std::vector<std::pair<std::string, toml::source_region>> strings_at(const std::s
   for (const auto& item : *a) {
     const auto* s = item.as_string();
     if (!s) fail(file, item.source(), fmt::format("key '{}': expected a text", key));
-    // The command's arguments may hold tabs and line breaks, never an escape.
-    if (auto problem = io::name_problem(s->get(), std::string_view(key) == "command"))
+    if (auto problem = io::name_problem(s->get(), is_free_text(key)))
       fail(file, item.source(), fmt::format("key '{}': {}", key, *problem));
     for (const auto& done : out)
       if (distinct && done.first == s->get())

@@ -32,8 +32,8 @@ namespace {
 
 bool holds_measurements(const fs::path& dir) {
   std::error_code ec;
-  for (const auto& entry : fs::directory_iterator(dir, ec))
-    if (entry.is_regular_file() && is_measurement_file(entry.path())) return true;
+  for (auto it = fs::directory_iterator(dir, ec); !ec && it != fs::directory_iterator(); it.increment(ec))
+    if (it->is_regular_file(ec) && is_measurement_file(it->path())) return true;
   return false;
 }
 
@@ -46,10 +46,22 @@ std::string relative_id(const fs::path& path, const fs::path& base) {
   return normal(path).lexically_relative(normal(base)).generic_string();
 }
 
+bool escapes(const std::string& relative) { return relative.empty() || *fs::path(relative).begin() == ".."; }
+
 bool is_inside(const fs::path& path, const fs::path& folder) {
   if (folder.empty()) return false;
-  const std::string rel = relative_id(path, folder);
-  return rel == "." || (!rel.empty() && !rel.starts_with(".."));
+  return !escapes(relative_id(path, folder));
+}
+
+// The id of the set in `dir`: the folder relative to the root. A folder outside the root (read
+// only with --allow-outside-root) is named "outside/<its absolute path>", so that its outputs,
+// OUT/<id>, still go under OUT. `problem` gets the reason when the id cannot name outputs (not
+// UTF-8, a control character).
+std::string set_id(const fs::path& dir, const fs::path& root, std::optional<std::string>& problem) {
+  std::string id = relative_id(dir, root);
+  if (escapes(id)) id = "outside" + fs::absolute(dir).lexically_normal().generic_string();
+  if (auto p = io::name_problem(id)) problem = fmt::format("folder name {}: {}", io::printable(id), *p);
+  return id;
 }
 
 // A folder name that is a date: "YYYY-MM-DD" and a real day.
@@ -68,31 +80,39 @@ void infer_unit_and_date(FleetSet& s, const fs::path& root) {
   }
 }
 
-std::vector<FleetSet> walk_folders(const fs::path& root, const fs::path& exclude) {
+std::vector<FleetSet> walk_folders(const fs::path& root, const fs::path& exclude, bool allow_outside) {
   std::vector<FleetSet> sets;
   auto consider = [&](const fs::path& dir) {
     if (!holds_measurements(dir)) return;
-    FleetSet s{.id = relative_id(dir, root), .dir = dir};
+    std::optional<std::string> problem;
+    FleetSet s{.id = set_id(dir, root, problem), .dir = dir};
+    if (problem) throw InputError(io::printable(dir.string()), 0, 0, *problem);
     infer_unit_and_date(s, root);
     sets.push_back(std::move(s));
   };
   consider(root);
   std::error_code ec;
+  // Links to folders are not followed down (a loop cannot trap the walk), and one that leads
+  // outside ROOT is refused before anything in it is read.
   for (auto it = fs::recursive_directory_iterator(root, fs::directory_options::skip_permission_denied, ec);
        it != fs::recursive_directory_iterator(); it.increment(ec)) {
-    if (ec) throw InputError(root.string(), 0, 0, "cannot list folder: " + ec.message());
-    if (!it->is_directory()) continue;
+    if (ec) throw InputError(io::printable(root.string()), 0, 0, "cannot list folder: " + ec.message());
+    std::error_code kind;
+    if (!it->is_directory(kind)) continue;  // a file, or a link that leads nowhere (a loop, a missing target)
     if (it->path().filename().string().starts_with(".") || is_inside(it->path(), exclude)) {
       it.disable_recursion_pending();
       continue;
     }
+    if (it->is_symlink(kind))
+      if (auto problem = outside_scope(it->path(), root, {.root = root, .allow_outside = allow_outside}))
+        throw InputError(io::printable(it->path().string()), 0, 0, fmt::format("this folder {}", *problem));
     consider(it->path());
   }
   return sets;
 }
 
 // fleet.toml: the sets, each with its unit, axis, machine and date.
-std::vector<FleetSet> read_fleet_file(const fs::path& root, const fs::path& file) {
+std::vector<FleetSet> read_fleet_file(const fs::path& root, const fs::path& file, bool allow_outside) {
   const manifest::Manifest m{.file = file.string(), .folder = root};
   const toml::table top = m.parse();
   for (const auto& [key, node] : top)
@@ -109,7 +129,11 @@ std::vector<FleetSet> read_fleet_file(const fs::path& root, const fs::path& file
       const std::string k(key.str());
       if (k == "folder") {
         folder = &node;
-        s.dir = root / manifest::string_of(m, key, node);
+        const std::string& name = manifest::string_of(m, key, node);
+        s.dir = root / name;
+        // Before the folder is looked at: whether it exists outside ROOT is not ours to tell.
+        if (auto problem = outside_scope(s.dir, root, {.root = root, .allow_outside = allow_outside}))
+          m.fail(node.source(), fmt::format("folder '{}' {}", name, *problem));
       } else if (k == "unit" || k == "axis" || k == "machine") {
         std::string& field = k == "unit" ? s.unit : k == "axis" ? s.axis : s.machine;
         field = manifest::string_of(m, key, node);
@@ -126,11 +150,17 @@ std::vector<FleetSet> read_fleet_file(const fs::path& root, const fs::path& file
       }
     }
     if (!folder) m.fail(t.source(), "expected folder = \"...\" (the set's folder, relative to the fleet's root)");
-    if (!fs::is_directory(s.dir)) m.fail(folder->source(), fmt::format("folder {} does not exist", s.dir.string()));
+    std::error_code ec;
+    if (!fs::is_directory(s.dir, ec))
+      m.fail(folder->source(), fmt::format("folder {} does not exist{}", io::printable(s.dir.string()), ec ? " (" + ec.message() + ")" : ""));
+    if (fs::directory_iterator(s.dir, ec); ec)
+      m.fail(folder->source(), fmt::format("folder {} cannot be read: {}", io::printable(s.dir.string()), ec.message()));
     if (!holds_measurements(s.dir))
-      m.fail(folder->source(),
-             fmt::format("folder {} holds no measurements (friction*.csv, friction*.toml, thermal*.toml)", s.dir.string()));
-    s.id = relative_id(s.dir, root);
+      m.fail(folder->source(), fmt::format("folder {} holds no measurements (friction*.csv, friction*.toml, thermal*.toml)",
+                                           io::printable(s.dir.string())));
+    std::optional<std::string> problem;
+    s.id = set_id(s.dir, root, problem);
+    if (problem) m.fail(folder->source(), *problem);
     if (s.unit.empty()) {
       const std::string date = s.date;
       infer_unit_and_date(s, root);
@@ -152,8 +182,11 @@ bool is_lmcal_output(const std::string& name) {
   return is_calibration_output(name) || name == kFleetRecordFile || name.ends_with(".tmp");
 }
 
+InputScope scope_of(const Fleet& fleet) { return {.root = fleet.root, .allow_outside = fleet.allow_outside_root}; }
+
 // Every file of the set's folder (and below) that may be an input: all but lmcal's outputs,
-// hidden files and the output folder. Relative to the root, sorted.
+// hidden files, the output folder and links out of the root (never read, not even hashed).
+// Relative to the root, sorted.
 std::vector<std::string> folder_files(const Fleet& fleet, const FleetSet& s, const fs::path& output_dir) {
   std::vector<std::string> files;
   std::error_code ec;
@@ -165,10 +198,38 @@ std::vector<std::string> folder_files(const Fleet& fleet, const FleetSet& s, con
       if (it->is_directory()) it.disable_recursion_pending();
       continue;
     }
-    if (it->is_regular_file() && !is_lmcal_output(name)) files.push_back(relative_id(it->path(), fleet.root));
+    std::error_code kind;
+    if (it->is_regular_file(kind) && !is_lmcal_output(name) && !outside_scope(it->path(), fleet.root, scope_of(fleet)))
+      files.push_back(relative_id(it->path(), fleet.root));
   }
   std::sort(files.begin(), files.end());
   return files;
+}
+
+// OUT/<id>: under OUT whatever the id (discovery derives ids that cannot climb out; this
+// guards the invariant for fleets built by hand).
+fs::path set_output_folder(const fs::path& output_dir, const FleetSet& s) {
+  if (escapes(s.id) || fs::path(s.id).is_absolute())
+    throw InvalidParameter("set id", fmt::format("'{}' would write outside the output folder", io::printable(s.id)));
+  return output_dir / s.id;
+}
+
+// The files an earlier run of set `id` wrote in `out`, as its record lists them: what this run
+// may remove. None when there is no record of this set there (the folder is someone else's).
+// A record of an lmcal that did not list them: the names a calibration writes.
+std::vector<std::string> earlier_outputs(const fs::path& out, const std::string& id) {
+  try {
+    const fs::path file = out / kFleetRecordFile;
+    std::error_code ec;
+    if (!fs::is_regular_file(file, ec)) return {};
+    const FleetRecord earlier = parse_fleet_record(io::read_text_file(file, "fleet record"), file.string());
+    if (earlier.id != id) return {};
+    std::vector<std::string> names = earlier.outputs.value_or(calibration_output_names());
+    std::erase_if(names, [](const std::string& name) { return !is_calibration_output(name); });  // a plain name of ours only
+    return names;
+  } catch (const std::exception&) {
+    return {};  // unreadable: nothing of it is trusted
+  }
 }
 
 // The OpenMP team size of this thread's parallel regions, for a scope (the caller's setting back after).
@@ -202,15 +263,18 @@ std::optional<int> parse_fleet_date(std::string_view text) {
   return static_cast<int>(std::chrono::sys_days(day).time_since_epoch().count());
 }
 
-Fleet discover_fleet(const fs::path& root, const fs::path& exclude) {
-  if (!fs::is_directory(root)) throw InputError(root.string(), 0, 0, "expected the fleet's folder (a folder of measurement folders)");
-  Fleet fleet{.root = root};
+Fleet discover_fleet(const fs::path& root, const fs::path& exclude, bool allow_outside_root) {
+  std::error_code ec;
+  if (!fs::is_directory(root, ec))
+    throw InputError(io::printable(root.string()), 0, 0, "expected the fleet's folder (a folder of measurement folders)");
+  io::check_path_name(fs::absolute(root), "folder name");
+  Fleet fleet{.root = root, .allow_outside_root = allow_outside_root};
   const fs::path file = root / "fleet.toml";
-  if (fs::exists(file)) {
-    fleet.sets = read_fleet_file(root, file);
+  if (fs::symlink_status(file, ec).type() != fs::file_type::not_found) {  // a link to itself is read, and refused
+    fleet.sets = read_fleet_file(root, file, allow_outside_root);
     fleet.source = "fleet.toml";
   } else {
-    fleet.sets = walk_folders(root, exclude);
+    fleet.sets = walk_folders(root, exclude, allow_outside_root);
     fleet.source = "folders";
   }
   if (fleet.sets.empty())
@@ -228,7 +292,7 @@ std::string fleet_options_hash(const CalibrationOptions& options) {
 std::optional<std::string> up_to_date_record(const Fleet& fleet, std::size_t index, const FleetOptions& options,
                                              const std::string& options_hash) {
   const FleetSet& s = fleet.sets.at(index);
-  const fs::path out = options.output_dir / s.id;
+  const fs::path out = set_output_folder(options.output_dir, s);
   const fs::path file = out / kFleetRecordFile;
   if (!fs::is_regular_file(file)) return std::nullopt;
   std::string text;
@@ -242,6 +306,7 @@ std::optional<std::string> up_to_date_record(const Fleet& fleet, std::size_t ind
       if (!recorded.contains(f)) return std::nullopt;  // a file added since
     for (const auto& [f, hash] : recorded) {
       const fs::path p = fleet.root / f;
+      if (outside_scope(p, fleet.root, scope_of(fleet))) return std::nullopt;  // not read to compare
       if (!fs::is_regular_file(p) || sha256_file(p) != hash) return std::nullopt;
     }
   } catch (const std::exception&) {
@@ -255,25 +320,34 @@ FleetSetOutcome run_fleet_set(const Fleet& fleet, std::size_t index, const Fleet
   if (auto record = up_to_date_record(fleet, index, options, options_hash))
     return {.record = *record, .computed = false, .failed = parse_fleet_record(*record).status != "ok"};
   const FleetSet& s = fleet.sets.at(index);
-  const fs::path out = options.output_dir / s.id;
+  const fs::path out = set_output_folder(options.output_dir, s);
   FleetRecord r{.id = s.id, .unit = s.unit, .axis = s.axis, .machine = s.machine, .date = s.date,
                 .lmcal_version = LMCAL_VERSION, .options_sha256 = options_hash};
   OutputSet files;
   std::set<std::string> inputs;
+  r.outputs.emplace();
   try {
     for (const std::string& f : folder_files(fleet, s, options.output_dir)) inputs.insert(f);
-    const Calibration c = calibrate(find_calibration_set(s.dir), options.calibration);
+    CalibrationOptions calibration = options.calibration;
+    calibration.inputs = scope_of(fleet);
+    calibration.inputs.allow_outside |= options.calibration.inputs.allow_outside;
+    const Calibration c = calibrate(find_calibration_set(s.dir), calibration);
     for (const auto& [file, hash] : c.inputs) inputs.insert(relative_id(file, fleet.root));
-    for (const auto& [name, text] : calibration_outputs(c)) files.add(out / name, text);
+    for (const auto& [name, text] : calibration_outputs(c)) {
+      files.add(out / name, text);
+      r.outputs->push_back(name);
+    }
     fill_fleet_record(r, c);
   } catch (const std::exception& e) {
     r.status = "failed";
-    r.error = e.what();
+    r.error = dynamic_cast<const std::bad_alloc*>(&e) ? "out of memory while calibrating this set (docs/formats.md#limits)"
+                                                      : e.what();
     files = OutputSet();
+    r.outputs->clear();
   }
-  // Outputs of an earlier calibration that this one did not write (a failed set writes none)
-  // would now mislead: removed in the same commit.
-  for (const std::string& name : calibration_output_names()) files.remove(out / name);
+  // Outputs of an earlier calibration of this set that this one did not write (a failed set
+  // writes none) would now mislead: removed in the same commit. Only those its record lists.
+  for (const std::string& name : earlier_outputs(out, s.id)) files.remove(out / name);
   for (const std::string& f : inputs) {
     std::error_code ec;
     r.inputs.emplace_back(f, fs::is_regular_file(fleet.root / f, ec) ? sha256_file(fleet.root / f) : "missing");

@@ -93,6 +93,7 @@ std::string fleet_record_json(const FleetRecord& r) {
                {"thermal_cv_rmse_K", number(r.thermal_cv_rmse_K)},
                {"warnings", r.warnings},
                {"inputs", inputs},
+               {"outputs", r.outputs.value_or(std::vector<std::string>{})},
                {"options_sha256", r.options_sha256}};
   return j.dump(2) + "\n";
 }
@@ -127,6 +128,7 @@ FleetRecord parse_fleet_record(std::string_view text, const std::string& file) {
     r.thermal_cv_rmse_K = number(j.at("thermal_cv_rmse_K"));
     r.warnings = j.at("warnings").get<std::vector<std::string>>();
     for (const json& i : j.at("inputs")) r.inputs.emplace_back(i.at("file").get<std::string>(), i.at("sha256").get<std::string>());
+    if (j.contains("outputs")) r.outputs = j.at("outputs").get<std::vector<std::string>>();
     r.options_sha256 = j.at("options_sha256").get<std::string>();
     return r;
   } catch (const json::exception& e) {

@@ -6,17 +6,21 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
+#include <atomic>
 #include <cerrno>
 #include <cstring>
 #include <fmt/format.h>
 
 #include <fstream>
 #include <list>
+#include <mutex>
 #include <iterator>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <stdexcept>
 
+#include "io/input_file.hpp"
 #include "lmcal/error.hpp"
 
 namespace lmcal {
@@ -88,22 +92,38 @@ class FolderLock {
   Descriptor fd_;
 };
 
-// SIGINT, SIGTERM and SIGHUP held back while alive, then delivered: a commit is not cut short
-// by Ctrl-C. (A thread other than the committing one may still take them; the journal covers that.)
+// SIGINT, SIGTERM and SIGHUP held back while any commit of the process is alive, then
+// delivered: a commit is not cut short by Ctrl-C, whichever thread the signal lands on (a
+// process-wide disposition; blocking the committing thread alone let the fleet's other threads
+// take it). The first commit in swaps in a handler that records the signal, the last one out
+// puts the previous handlers back and raises what was recorded.
 class SignalsHeld {
  public:
   SignalsHeld() {
-    sigset_t held;
-    sigemptyset(&held);
-    for (int s : {SIGINT, SIGTERM, SIGHUP}) sigaddset(&held, s);
-    pthread_sigmask(SIG_BLOCK, &held, &saved_);
+    const std::lock_guard lock(mutex_);
+    if (active_++ > 0) return;
+    struct sigaction defer {};
+    defer.sa_handler = [](int signal) { pending_ = signal; };
+    defer.sa_flags = SA_RESTART;  // the commit's writes and fsyncs go on
+    sigfillset(&defer.sa_mask);
+    for (std::size_t i = 0; i < kSignals.size(); ++i) ::sigaction(kSignals[i], &defer, &saved_[i]);
   }
-  ~SignalsHeld() { pthread_sigmask(SIG_SETMASK, &saved_, nullptr); }
+  ~SignalsHeld() {
+    const std::lock_guard lock(mutex_);
+    if (--active_ > 0) return;
+    for (std::size_t i = 0; i < kSignals.size(); ++i) ::sigaction(kSignals[i], &saved_[i], nullptr);
+    if (const int signal = pending_.exchange(0)) ::raise(signal);
+  }
   SignalsHeld(const SignalsHeld&) = delete;
   SignalsHeld& operator=(const SignalsHeld&) = delete;
 
  private:
-  sigset_t saved_;
+  static constexpr std::array<int, 3> kSignals{SIGINT, SIGTERM, SIGHUP};
+  static inline std::mutex mutex_;
+  static inline int active_ = 0;
+  static inline std::array<struct sigaction, 3> saved_{};
+  static inline std::atomic<int> pending_{0};  // lock-free: safe in a signal handler
+  static_assert(std::atomic<int>::is_always_lock_free);
 };
 
 bool is_temporary(const std::string& name) {
@@ -244,6 +264,22 @@ void write_file_atomically(const fs::path& path, const std::string& contents) {
   OutputSet set;
   set.add(path, contents);
   set.commit();
+}
+
+std::optional<std::string> output_folder_problem(const fs::path& folder, std::uintmax_t needed_bytes) {
+  std::error_code ec;
+  fs::path existing = fs::absolute(folder.empty() ? fs::path(".") : folder, ec).lexically_normal();
+  while (!ec && !fs::exists(existing, ec) && existing.has_relative_path()) existing = existing.parent_path();
+  if (ec) return fmt::format("cannot write outputs there: {}", ec.message());
+  if (!fs::is_directory(existing, ec))
+    return fmt::format("cannot write outputs there: {} is not a folder", io::printable(existing.string()));
+  if (::access(existing.c_str(), W_OK | X_OK) != 0)
+    return fmt::format("cannot write outputs into {}: {}", io::printable(existing.string()), std::strerror(errno));
+  const fs::space_info space = fs::space(existing, ec);
+  if (!ec && space.available < needed_bytes)
+    return fmt::format("only {} free in {}; the outputs need about {}", io::byte_size(space.available),
+                       io::printable(existing.string()), io::byte_size(needed_bytes));
+  return std::nullopt;
 }
 
 void recover_outputs(const fs::path& folder) {

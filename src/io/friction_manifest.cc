@@ -169,8 +169,9 @@ RunEntry read_run(const Manifest& m, const toml::table& table, const GuideCatalo
 }  // namespace
 
 FrictionDataSet load_friction_dataset(const fs::path& manifest_file, const GuideCatalog* user_catalog,
-                                      const RawFrictionOptions& raw, const std::vector<std::string>& raw_given) {
-  const Manifest m{manifest_file.string(), manifest_file.parent_path()};
+                                      const RawFrictionOptions& raw, const std::vector<std::string>& raw_given,
+                                      const InputScope& scope) {
+  const Manifest m{manifest_file.string(), manifest_file.parent_path(), scope};
   const toml::table root = m.parse();
   FrictionDataSet set;
   set.manifest = manifest_file;

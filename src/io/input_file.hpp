@@ -9,6 +9,8 @@
 #include <string>
 #include <string_view>
 
+#include "lmcal/io/printable.hpp"
+
 namespace lmcal::io {
 
 // Why `file` cannot be read as a regular file (symlinks followed), or nullopt, with its size
@@ -42,9 +44,7 @@ struct BidiControl {
 };
 std::optional<BidiControl> bidi_control_at(std::string_view text);
 
-// `text` safe to print: bytes that are not UTF-8 as \xE9, control and bidirectional
-// characters as \u001B; everything else as it is.
-std::string printable(std::string_view text);
+// printable(text): lmcal/io/printable.hpp.
 
 // Throws InputError naming `path` (printably) when name_problem finds something in it:
 // every path lmcal reads may end up in a JSON record. `what`: "file name", "folder name".

@@ -41,6 +41,7 @@ toml::table Manifest::parse() const {
 
 fs::path Manifest::existing_file(const toml::node& where, const std::string& name) const {
   const fs::path path = folder / name;
+  if (auto problem = outside_scope(path, folder, scope)) fail(where.source(), fmt::format("file '{}' {}", name, *problem));
   std::error_code ec;
   if (!fs::exists(path, ec)) {
     fail(where.source(),

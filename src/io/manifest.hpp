@@ -11,6 +11,7 @@
 #include <string_view>
 
 #include "io/toml_text.hpp"
+#include "lmcal/io/input_scope.hpp"
 #include "lmcal/io/units.hpp"
 
 namespace lmcal::manifest {
@@ -18,11 +19,13 @@ namespace lmcal::manifest {
 struct Manifest {
   std::string file;                 // as errors name it
   std::filesystem::path folder;     // the files it names are relative to it
+  InputScope scope;                 // and must lie inside the scope's root (by default `folder`)
 
   [[noreturn]] void fail(const toml::source_region& where, const std::string& what) const;
   // The manifest's TOML; a syntax error is an InputError at its line and column.
   toml::table parse() const;
-  // `name` relative to the folder; an InputError at `where` when it is not a file.
+  // `name` relative to the folder; an InputError at `where` when it is outside the scope
+  // (checked before anything is opened) or not a file.
   std::filesystem::path existing_file(const toml::node& where, const std::string& name) const;
 };
 

@@ -582,10 +582,11 @@ GuideSpec resolved_guide(const ThermalRun& run) {
   return with_overrides(builtin_catalog().find(run.guide), run.guide_overrides);
 }
 
-ThermalDataSet load_thermal_dataset(const fs::path& manifest, const GuideCatalog* user_catalog) {
+ThermalDataSet load_thermal_dataset(const fs::path& manifest, const GuideCatalog* user_catalog, const InputScope& scope) {
   Manifest m;
   m.file = manifest.string();
   m.folder = manifest.parent_path();
+  m.scope = scope;
   const toml::table root = m.parse();
 
   ThermalDataSet set;

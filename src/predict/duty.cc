@@ -36,7 +36,7 @@ constexpr NumberKey kLoad{"load", Quantity::force, 0, 1e6, false, "a load in [0,
 constexpr NumberKey kStroke{"stroke", Quantity::distance_m, 0, 100, true, "a stroke > 0 m"};
 constexpr NumberKey kPreload{"preload", Quantity::preload, 0, 1000, false, "a preload in [0, 1000] µm"};
 constexpr NumberKey kBlockLength{"block_length", Quantity::length_mm, 0, 10000, true, "a block length > 0 mm"};
-constexpr NumberKey kViscosity{"viscosity40", Quantity::viscosity, 0, 1e5, true, "a viscosity > 0 mm²/s"};
+constexpr NumberKey kViscosity{"viscosity40", Quantity::viscosity, 1e-3, 1e5, false, "a viscosity in [1e-3, 1e5] mm²/s"};
 constexpr NumberKey kRailLength{"rail_length", Quantity::distance_m, 0, 100, true, "a rail length in (0, 100] m"};
 constexpr NumberKey kAmbient{"ambient", Quantity::temperature, -50, 200, false, "a temperature in [-50, 200] °C"};
 constexpr NumberKey kInitial{"initial", Quantity::temperature, -50, 200, false, "a temperature in [-50, 200] °C"};
@@ -171,8 +171,8 @@ DutyCycle duty_of_runs(const ThermalDataSet& data, double ambient_C) {
   return d;
 }
 
-DutyCycle load_duty_cycle(const std::filesystem::path& path, const GuideCatalog* user_catalog) {
-  const Manifest m{path.string(), path.parent_path()};
+DutyCycle load_duty_cycle(const std::filesystem::path& path, const GuideCatalog* user_catalog, const InputScope& scope) {
+  const Manifest m{path.string(), path.parent_path(), scope};
   const toml::table root = m.parse();
   DutyCycle d;
   d.file = path.string();

@@ -426,7 +426,6 @@ Prediction predict(const ModelFile& m, const DutyCycle& duty, const PredictionOp
   check_prediction_size(duty, o);  // before any draw is allocated
   require_positive("time_step_s", o.time_step_s);
 
-  const DrawSet set = make_draws(m, o);
   const bool other_guide = !m.guide.empty() && m.guide != duty.guide.model;
   // The names as JSON strings: quoted, a control character escaped (they reach a terminal).
   const auto quoted = [](const std::string& name) { return nlohmann::json(name).dump(); };
@@ -436,6 +435,7 @@ Prediction predict(const ModelFile& m, const DutyCycle& duty, const PredictionOp
                                                 "with --any-guide",
                                                 quoted(duty.guide.model), quoted(m.guide), quoted(duty.guide.model)));
 
+  const DrawSet set = make_draws(m, o);
   const std::vector<double> times = output_times(duty);
   Prediction p;
   p.time_s = times;
@@ -445,14 +445,21 @@ Prediction predict(const ModelFile& m, const DutyCycle& duty, const PredictionOp
 
   std::vector<Trajectory> draws(set.draws.size() - 1);
   std::vector<std::string> failed(draws.size());
+  std::exception_ptr fatal;  // not a draw's physics (out of memory): leaves the loop, then rethrown
 #pragma omp parallel for schedule(dynamic)
   for (std::size_t i = 0; i < draws.size(); ++i) {
     try {
       draws[i] = simulate_duty(m, duty, set.draws[i + 1], o, times, nullptr);
-    } catch (const std::exception& e) {
+    } catch (const InputError& e) {
       failed[i] = e.what();
+    } catch (const InvalidParameter& e) {
+      failed[i] = e.what();
+    } catch (...) {
+#pragma omp critical(lmcal_prediction_fatal)
+      if (!fatal) fatal = std::current_exception();
     }
   }
+  if (fatal) std::rethrow_exception(fatal);
   std::vector<Trajectory> ran;
   std::size_t n_failed = 0;
   std::string first_failure;
@@ -464,11 +471,11 @@ Prediction predict(const ModelFile& m, const DutyCycle& duty, const PredictionOp
   p.samples = ran.size();
   p.method = set.method;
   p.notes = set.notes;
-  if (n_failed > 0)
   if (other_guide)
     p.notes.push_back(fmt::format("the model was calibrated on {}, the duty runs on {} (--any-guide): its α, h and friction "
                                   "constants are carried over to a guide they were not fitted on",
                                   quoted(m.guide), quoted(duty.guide.model)));
+  if (n_failed > 0)
     p.notes.push_back(fmt::format("{} of {} draws were not physical and were left out (first: {})", n_failed, draws.size(), first_failure));
 
   for (std::size_t q = 0; q < duty.positions_m.size(); ++q)
@@ -481,8 +488,8 @@ Prediction predict(const ModelFile& m, const DutyCycle& duty, const PredictionOp
   p.profile_x_m = point.profile_x_m;
   p.profile_C = band_of(point, ran, o.confidence, [](const Trajectory& t) -> const std::vector<double>& { return t.profile_C; });
   flag_ranges(m, duty, point.max_rail_C, p);
-  return p;
   require_finite_bands(p);
+  return p;
 }
 
 namespace {

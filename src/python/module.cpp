@@ -168,13 +168,13 @@ FrictionData load_friction_files(const std::vector<std::string>& files, const py
 }
 
 FrictionData load_friction_manifest(const std::string& manifest, const std::optional<std::string>& catalog,
-                                    const py::dict& raw_given) {
+                                    const py::dict& raw_given, bool allow_outside_root) {
   std::vector<std::string> given;
   const RawFrictionOptions raw = raw_options(raw_given, &given);
   FrictionData data;
   py::gil_scoped_release release;
   const auto user = user_catalog(catalog);
-  FrictionDataSet set = load_friction_dataset(manifest, user ? &*user : nullptr, raw, given);
+  FrictionDataSet set = load_friction_dataset(manifest, user ? &*user : nullptr, raw, given, {.allow_outside = allow_outside_root});
   data.inputs.emplace_back(manifest, sha256_file(manifest));
   for (const auto& f : set.files) data.inputs.emplace_back(f.string(), sha256_file(f));
   data.log = std::make_shared<FrictionLog>(std::move(set.log));
@@ -270,11 +270,12 @@ struct ThermalData {
   Inputs inputs;
 };
 
-ThermalData load_thermal(const std::string& manifest, const std::optional<std::string>& catalog) {
+ThermalData load_thermal(const std::string& manifest, const std::optional<std::string>& catalog, bool allow_outside_root) {
   ThermalData data;
   py::gil_scoped_release release;
   const auto user = user_catalog(catalog);
-  auto set = std::make_shared<ThermalDataSet>(load_thermal_dataset(manifest, user ? &*user : nullptr));
+  auto set = std::make_shared<ThermalDataSet>(
+      load_thermal_dataset(manifest, user ? &*user : nullptr, {.allow_outside = allow_outside_root}));
   data.inputs.emplace_back(manifest, sha256_file(manifest));
   if (!set->catalog_file.empty()) data.inputs.emplace_back(set->catalog_file.string(), sha256_file(set->catalog_file));
   for (const auto& run : set->runs) data.inputs.emplace_back(run.file.string(), sha256_file(run.file));
@@ -552,6 +553,7 @@ CalibrationHandle calibrate_py(const std::string& folder, const py::dict& o, con
   if (o.contains("catalog") && !o["catalog"].is_none()) options.catalog_file = o["catalog"].cast<std::string>();
   if (o.contains("raw")) options.raw = raw_options(o["raw"].cast<py::dict>(), &options.raw_given);
   if (o.contains("diagnose")) options.diagnose = o["diagnose"].cast<bool>();
+  if (o.contains("allow_outside_root")) options.inputs.allow_outside = o["allow_outside_root"].cast<bool>();
   // One setting, every step that has it (as `lmcal calibrate` applies its options).
   py::dict friction = o.contains("friction") ? o["friction"].cast<py::dict>() : py::dict();
   set_friction_options(options.friction, friction);
@@ -682,13 +684,13 @@ py::dict simulate_thermal_py(const py::dict& o) {
 
 // `lmcal predict MODEL DUTY`: prediction.json's text, the summary, and the bands as arrays.
 py::dict predict_py(const std::string& model_file, const std::string& duty_file, std::size_t samples, std::uint64_t seed,
-                    const std::vector<std::string>& command) {
+                    const std::vector<std::string>& command, bool allow_outside_root) {
   std::string json, summary;
   Prediction p;
   {
     py::gil_scoped_release release;
     const ModelFile model = read_model_file(model_file);
-    const DutyCycle duty = load_duty_cycle(duty_file);
+    const DutyCycle duty = load_duty_cycle(duty_file, nullptr, {.allow_outside = allow_outside_root});
     p = predict(model, duty, {.samples = samples, .seed = seed});
     json = prediction_json(p, duty, model, command);
     summary = prediction_summary(p);

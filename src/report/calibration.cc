@@ -258,6 +258,14 @@ Calibration calibrate(const CalibrationSet& set, const CalibrationOptions& optio
   };
 
   start("loading the measurements");
+  // The set's own files, too, must resolve inside the scope: a friction.csv that links to
+  // /etc/shadow is refused before it is opened.
+  const InputScope scope{.root = options.inputs.root_for(set.dir), .allow_outside = options.inputs.allow_outside};
+  std::vector<fs::path> own_files = set.friction_logs;
+  for (const auto& manifest : {set.friction_manifest, set.thermal_manifest})
+    if (manifest) own_files.push_back(*manifest);
+  for (const fs::path& file : own_files)
+    if (auto problem = outside_scope(file, set.dir, scope)) throw InputError(io::printable(file.string()), 0, 0, *problem);
   for (const auto& file : set.ignored_files)
     c.notes.push_back(fmt::format("{} not read: it is an output of lmcal calibrate, not a measurement", file.string()));
   const std::optional<GuideCatalog> catalog =
@@ -265,7 +273,7 @@ Calibration calibrate(const CalibrationSet& set, const CalibrationOptions& optio
   if (catalog) c.inputs.emplace_back(options.catalog_file, sha256_file(options.catalog_file));
   if (set.friction_manifest) {
     FrictionDataSet data = load_friction_dataset(*set.friction_manifest, catalog ? &*catalog : nullptr, options.raw,
-                                                 options.raw_given);
+                                                 options.raw_given, scope);
     c.inputs.emplace_back(set.friction_manifest->string(), sha256_file(*set.friction_manifest));
     for (const auto& file : data.files) c.inputs.emplace_back(file.string(), sha256_file(file));
     for (const auto& file : set.friction_logs)
@@ -279,7 +287,7 @@ Calibration calibrate(const CalibrationSet& set, const CalibrationOptions& optio
     c.friction_log = load_friction_logs(set.friction_logs, options.raw);
   }
   if (thermal) {
-    c.thermal_data = load_thermal_dataset(*set.thermal_manifest, catalog ? &*catalog : nullptr);
+    c.thermal_data = load_thermal_dataset(*set.thermal_manifest, catalog ? &*catalog : nullptr, scope);
     c.inputs.emplace_back(set.thermal_manifest->string(), sha256_file(*set.thermal_manifest));
     for (const auto& run : c.thermal_data->runs) c.inputs.emplace_back(run.file.string(), sha256_file(run.file));
   }
@@ -511,7 +519,7 @@ nlohmann::json raw_options_json(const RawFrictionOptions& r) {
 }
 
 nlohmann::json options_json(const CalibrationOptions& o) {
-  return {{"diagnose", o.diagnose},
+  nlohmann::json j{{"diagnose", o.diagnose},
           {"catalog", o.catalog_file.empty() ? "<built-in>" : o.catalog_file},
           {"raw_friction", raw_options_json(o.raw)},
           {"friction", friction_options_json(o.friction)},
@@ -524,6 +532,9 @@ nlohmann::json options_json(const CalibrationOptions& o) {
            {{"fit", thermal_options_json(o.thermal_diagnosis.fit)},
             {"min_cv_gain_percent", o.thermal_diagnosis.min_cv_gain_percent},
             {"lrt_p", o.thermal_diagnosis.lrt_p}}}};
+  // Only when given: it changes what may be read (a set refused without it), never a result.
+  if (o.inputs.allow_outside) j["allow_outside_root"] = true;
+  return j;
 }
 
 // How the calibrated model differs from the published one, every value with its interval.

@@ -332,6 +332,24 @@ def test_a_run_name_that_is_not_text_is_a_value_error_naming_it():
         data.with_trace("v\udc80", {"time_s": [0.0, 1.0], "ambient_C": [24.0, 24.0]})
 
 
+def test_a_manifests_files_stay_inside_its_folder_unless_allowed(tmp_path):
+    (tmp_path / "set").mkdir()
+    (tmp_path / "shared.csv").write_text("not a log\n")
+    manifest = tmp_path / "set" / "friction.toml"
+    manifest.write_text('file = "../shared.csv"\n')
+    with pytest.raises(lmcal.InputError, match="file '../shared.csv' is outside") as e:
+        lmcal.load_friction_log(manifest)
+    assert (e.value.line, e.value.column) == (1, 8)
+    # Allowed, the file is read (and refused for what it holds).
+    with pytest.raises(lmcal.InputError) as e:
+        lmcal.load_friction_log(manifest, allow_outside_root=True)
+    assert "shared.csv" in str(e.value) and "is outside" not in str(e.value)
+    (tmp_path / "set" / "friction.csv").symlink_to(tmp_path / "shared.csv")
+    manifest.unlink()
+    with pytest.raises(lmcal.InputError, match="through a symbolic link"):
+        lmcal.calibrate(tmp_path / "set")
+
+
 def test_numbers_that_leave_are_finite_or_refused(tmp_path):
     with pytest.raises(lmcal.InvalidParameterError, match="velocity_m_s = 1e\\+308"):
         lmcal.simulate_thermal(velocity_m_s=1e308)

@@ -7,7 +7,8 @@
 //     fleet.toml                 optional: names each set's unit, date, machine and axis
 //
 //   OUT/<set>/…                  each set's outputs as `lmcal calibrate` writes them, and
-//   OUT/<set>/fleet_set.json     the set's record (below), written last, in the same commit
+//   OUT/<set>/fleet_set.json     the set's record (below), written last, in the same commit;
+//                                it lists the files the set wrote: the only ones a later run removes
 //   OUT/fleet.json, fleet.csv, fleet.html   the population (fleet_summary.hpp)
 //
 // fleet.toml lists the sets (then only those are calibrated):
@@ -35,7 +36,8 @@
 //   const auto summary = lmcal::summarize_fleet(fleet, run.records);
 //
 // Trap: the inputs are hashed by their path relative to ROOT; a set whose manifest names a file
-// outside ROOT is still checked, by that file's path relative to ROOT ("../shared/trace.csv").
+// beside it under ROOT is checked by that path ("shared/trace.csv"); one outside ROOT is refused
+// unless allow_outside_root.
 #pragma once
 
 #include "lmcal/export.hpp"
@@ -66,15 +68,19 @@ std::optional<int> parse_fleet_date(std::string_view text);
 
 struct Fleet {
   std::filesystem::path root;
-  std::vector<FleetSet> sets;  // in order of id
-  std::string source;          // "fleet.toml" or "folders"
+  bool allow_outside_root = false;  // the sets' folders and files may lie outside root
+  std::vector<FleetSet> sets;       // in order of id
+  std::string source;               // "fleet.toml" or "folders"
 };
 
 // The sets under `root`; `exclude` (the output folder, if inside root) is not searched. An
 // InputError, before any work, for a root without measurement folders, a fleet.toml entry
 // naming a missing folder or one without measurements, two entries for one folder or for one
-// unit, axis and date, or a bad date.
-Fleet discover_fleet(const std::filesystem::path& root, const std::filesystem::path& exclude = {});
+// unit, axis and date, or a bad date. Every folder, and every file a set's manifests name, must
+// resolve inside root (a fleet.toml `folder = "../B"`, a link out of root: refused, input_scope.hpp)
+// unless `allow_outside_root`; such a set's id is "outside/<absolute path>".
+Fleet discover_fleet(const std::filesystem::path& root, const std::filesystem::path& exclude = {},
+                     bool allow_outside_root = false);
 
 inline constexpr const char* kFleetRecordFile = "fleet_set.json";
 

@@ -16,6 +16,7 @@
 #include "lmcal/export.hpp"
 
 #include <cmath>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -47,6 +48,9 @@ struct FleetRecord {
   double friction_rmse_N = NAN;     // the calibrated law's residual RMSE
   double thermal_cv_rmse_K = NAN;   // the calibrated rail model's held-out RMSE
   std::vector<std::string> warnings;
+  // The files the set wrote into its output folder besides this record: the only ones a later
+  // run of the set may remove (nullopt: a record of an lmcal before 0.2 that did not list them).
+  std::optional<std::vector<std::string>> outputs;
 
   const FleetParameter* find(std::string_view model, std::string_view name) const;
 };

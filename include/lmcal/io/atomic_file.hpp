@@ -26,7 +26,9 @@
 
 #include "lmcal/export.hpp"
 
+#include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -50,6 +52,16 @@ class OutputSet {
 };
 
 void write_file_atomically(const std::filesystem::path& path, const std::string& contents);
+
+// Free space a command's outputs need, roughly: a calibration's report and samples of a large log.
+inline constexpr std::uintmax_t kMinFreeOutputBytes = std::uintmax_t{64} << 20;
+
+// Why outputs could not be committed into `folder` (created by the commit if missing), or
+// nullopt: the nearest folder on its path that exists is not a folder, is not writable, or has
+// less than `needed_bytes` free. For a check before a long computation: a read-only or full
+// disk is told at once, not after it.
+std::optional<std::string> output_folder_problem(const std::filesystem::path& folder,
+                                                 std::uintmax_t needed_bytes = kMinFreeOutputBytes);
 
 // Finishes what a killed commit left in `folder`: completes a journaled commit and removes
 // temporaries no commit will use. Takes the folder's lock; nothing to do returns at once.

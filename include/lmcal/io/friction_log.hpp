@@ -43,6 +43,7 @@
 #include <vector>
 
 #include "lmcal/io/catalog.hpp"
+#include "lmcal/io/input_scope.hpp"
 #include "lmcal/io/load_report.hpp"
 #include "lmcal/models/friction.hpp"
 
@@ -174,10 +175,11 @@ struct FrictionDataSet {
 };
 // `user_catalog` (a --catalog given on the command line) wins over the manifest's `catalog`;
 // `raw` set by the caller (flags) wins over the manifest's [raw] table key by key when
-// `raw_given` names them ("force_sign", "moving_mass_kg", ...).
+// `raw_given` names them ("force_sign", "moving_mass_kg", ...). The files it names must lie
+// inside `scope` (input_scope.hpp: by default the manifest's folder).
 FrictionDataSet load_friction_dataset(const std::filesystem::path& manifest, const GuideCatalog* user_catalog = nullptr,
                                       const RawFrictionOptions& raw = {},
-                                      const std::vector<std::string>& raw_given = {});
+                                      const std::vector<std::string>& raw_given = {}, const InputScope& scope = {});
 
 // Writes a log in the canonical units (the inverse of load_friction_log), with the given
 // '#' comment lines first.

@@ -71,6 +71,7 @@
 #include <vector>
 
 #include "lmcal/io/catalog.hpp"
+#include "lmcal/io/input_scope.hpp"
 #include "lmcal/io/load_report.hpp"
 
 namespace LMCAL_API lmcal {
@@ -144,8 +145,10 @@ struct ThermalDataSet {
 };
 
 // `user_catalog` (the command line's) wins over the manifest's `catalog` key; its source names
-// the file recorded in catalog_file.
-ThermalDataSet load_thermal_dataset(const std::filesystem::path& manifest, const GuideCatalog* user_catalog = nullptr);
+// the file recorded in catalog_file. The files it names must lie inside `scope` (input_scope.hpp:
+// by default the manifest's folder).
+ThermalDataSet load_thermal_dataset(const std::filesystem::path& manifest, const GuideCatalog* user_catalog = nullptr,
+                                    const InputScope& scope = {});
 // The manifest text for a data set (file paths written relative to `folder`).
 std::string thermal_manifest_toml(const ThermalDataSet& set, const std::filesystem::path& folder);
 

@@ -92,8 +92,9 @@ DutyCycle duty_of_runs(const ThermalDataSet& data, double ambient_C);
 
 // Reads a duty cycle; InputError naming the file, line, column and the field for a missing,
 // unknown or non-physical value (a negative duration, a speed or load out of range, a scale off
-// the rail, …).
-DutyCycle load_duty_cycle(const std::filesystem::path& file, const GuideCatalog* user_catalog = nullptr);
+// the rail, …). Its `catalog` must lie inside `scope` (input_scope.hpp: by default the duty's folder).
+DutyCycle load_duty_cycle(const std::filesystem::path& file, const GuideCatalog* user_catalog = nullptr,
+                          const InputScope& scope = {});
 
 struct PredictionOptions {
   std::size_t samples = 200;  // parameter draws for the band
@@ -101,7 +102,6 @@ struct PredictionOptions {
   std::uint64_t seed = 1;
   int half_rail_segments = 100;
   double time_step_s = 30;
-};
   // A duty on another guide than the model was calibrated on (ModelFile::guide) is refused: α,
   // h and the friction constants are that guide's rail and block. True: predicted anyway, noted.
   bool any_guide = false;
@@ -149,6 +149,12 @@ struct Prediction {
 
 Prediction predict(const ModelFile& model, const DutyCycle& duty, const PredictionOptions& options = {});
 
+// Why a simulated rail predicts nothing real, or empty: a temperature or heat rate that is not
+// finite, or a temperature beyond a rig's (units.hpp physical_range, to 1000 °C), where the
+// friction law's heat runs away (its Stribeck term grows as the oil thins, and a coupled heat
+// follows the rail). `inputs` names what drove it ("segment 1 (velocity_m_s = 3, …)").
+std::string runaway_of(const RailSolution<double>& solution, const std::string& inputs);
+
 // prediction.json (everything, with the duty and the model's provenance) and
 // prediction_time.csv (time, segment, quantity, position, value, low, high).
 std::string prediction_json(const Prediction& p, const DutyCycle& duty, const ModelFile& model,
@@ -162,9 +168,3 @@ double thermal_elongation_m(const std::vector<double>& x_m, const std::vector<do
                             const std::vector<double>& reference_C, double expansion_per_K, double a_m, double b_m);
 
 }  // namespace lmcal
-// Why a simulated rail predicts nothing real, or empty: a temperature or heat rate that is not
-// finite, or a temperature beyond a rig's (units.hpp physical_range, to 1000 °C), where the
-// friction law's heat runs away (its Stribeck term grows as the oil thins, and a coupled heat
-// follows the rail). `inputs` names what drove it ("segment 1 (velocity_m_s = 3, …)").
-std::string runaway_of(const RailSolution<double>& solution, const std::string& inputs);
-

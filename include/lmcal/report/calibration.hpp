@@ -74,6 +74,9 @@ struct CalibrationOptions {
   std::string catalog_file;  // the user's guide catalog ("" = the built-in one only); wins over a manifest's `catalog`
   RawFrictionOptions raw;    // how raw load-cell logs are segmented
   std::vector<std::string> raw_given;  // those of `raw` set by the user (they win over a manifest's [raw])
+  // Where the set's files may be (input_scope.hpp): inside the set's folder unless a root is
+  // given (a fleet's ROOT) or --allow-outside-root. Its root is not part of the results.
+  InputScope inputs;
   FrictionFitOptions friction;
   FrictionDiagnosisOptions friction_diagnosis;
   ThermalFitOptions thermal;  // the friction constants are set from the friction fit

@@ -185,16 +185,17 @@ class FrictionLog:
         return f"<lmcal.FrictionLog: {len(self)} samples in {len(self.run_names)} runs from {files}>"
 
 
-def load_friction_log(source, *, catalog: Optional[str] = None, **raw) -> FrictionLog:
+def load_friction_log(source, *, catalog: Optional[str] = None, allow_outside_root: bool = False, **raw) -> FrictionLog:
     """A friction log from a CSV file, several CSV files (one log), a friction manifest
     (``.toml``), or columns (a dict or a pandas DataFrame). ``raw`` settings segment raw
-    load-cell logs: force_sign, moving_mass_kg, max_acceleration_m_s2, settling_s, ..."""
+    load-cell logs: force_sign, moving_mass_kg, max_acceleration_m_s2, settling_s, ...
+    A manifest's files must lie inside its folder unless ``allow_outside_root``."""
     if isinstance(source, FrictionLog):
         return source
     if isinstance(source, (str, os.PathLike)):
         path = os.fspath(source)
         if path.endswith(".toml"):
-            return FrictionLog(_lmcal.load_friction_manifest(path, catalog, raw))
+            return FrictionLog(_lmcal.load_friction_manifest(path, catalog, raw, allow_outside_root))
         return FrictionLog(_lmcal.load_friction_files([path], raw))
     if isinstance(source, Sequence) and all(isinstance(s, (str, os.PathLike)) for s in source):
         return FrictionLog(_lmcal.load_friction_files([os.fspath(s) for s in source], raw))
@@ -232,11 +233,12 @@ class ThermalDataSet:
         return f"<lmcal.ThermalDataSet '{self.name}': {len(self.runs)} runs>"
 
 
-def load_thermal_dataset(manifest, *, catalog: Optional[str] = None) -> ThermalDataSet:
-    """The runs of a thermal manifest (TOML) with their traces."""
+def load_thermal_dataset(manifest, *, catalog: Optional[str] = None, allow_outside_root: bool = False) -> ThermalDataSet:
+    """The runs of a thermal manifest (TOML) with their traces; its files must lie inside its
+    folder unless ``allow_outside_root``."""
     if isinstance(manifest, ThermalDataSet):
         return manifest
-    return ThermalDataSet(_lmcal.load_thermal_manifest(os.fspath(manifest), catalog))
+    return ThermalDataSet(_lmcal.load_thermal_manifest(os.fspath(manifest), catalog, allow_outside_root))
 
 
 # ---- results ---------------------------------------------------------------------------------
@@ -583,11 +585,14 @@ def calibrate(folder, *, output_dir=None, diagnose: Optional[bool] = None, catal
               starts: Optional[int] = None, seed: Optional[int] = None, free: Optional[Sequence[str]] = None,
               fixed: Optional[Mapping[str, float]] = None, start: Optional[Mapping[str, float]] = None,
               bounds: Optional[Mapping[str, tuple]] = None, run_offsets: Optional[str] = None,
-              law_temperature: Optional[str] = None, raw: Optional[Mapping[str, Any]] = None) -> Calibration:
+              law_temperature: Optional[str] = None, raw: Optional[Mapping[str, Any]] = None,
+              allow_outside_root: bool = False) -> Calibration:
     """The whole calibration of a measurement folder (``lmcal calibrate``): fits, spread,
     diagnoses, the calibrated model and the report. With ``output_dir`` its files are written
     there too. ``progress(step_or_detail, done, total)`` is called as it goes."""
     options = _given(diagnose=diagnose, catalog=catalog, raw=raw)
+    if allow_outside_root:
+        options["allow_outside_root"] = True
     options["uncertainty"] = _given(covariance=covariance, bootstrap=bootstrap)
     options["friction"] = _given(starts=starts, seed=seed, free=free, fixed=fixed, start=start, bounds=bounds,
                                  run_offsets=run_offsets, law_temperature=law_temperature)
@@ -626,10 +631,12 @@ class Prediction:
         return "[[prediction]]\n" + self._summary
 
 
-def predict(model, duty, *, samples: int = 200, seed: int = 1) -> Prediction:
-    """The calibrated model (model.toml of calibrate) over a duty cycle (TOML), with bands."""
+def predict(model, duty, *, samples: int = 200, seed: int = 1, allow_outside_root: bool = False) -> Prediction:
+    """The calibrated model (model.toml of calibrate) over a duty cycle (TOML), with bands. The
+    duty's catalog must lie inside its folder unless ``allow_outside_root``."""
     options = {"samples": samples, "seed": seed}
-    return Prediction(_lmcal.predict(os.fspath(model), os.fspath(duty), samples, seed, _command("predict", options)))
+    return Prediction(_lmcal.predict(os.fspath(model), os.fspath(duty), samples, seed, _command("predict", options),
+                                     allow_outside_root))
 
 
 # ---- simulation ------------------------------------------------------------------------------
