@@ -13,7 +13,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds=${1:?usage: scripts/fuzz.sh SECONDS [HARNESS...]}
 shift
-all=(friction_csv thermal_csv friction_manifest thermal_manifest catalog fit_json)
+all=(friction_csv thermal_csv friction_manifest thermal_manifest catalog fit_json model_file duty fleet_toml)
 harnesses=("${@:-${all[@]}}")
 
 # The build folder: build-fuzz/ by default; LMCAL_FUZZ_BUILD=build-asan reuses the sanitizer
@@ -31,9 +31,9 @@ fi
 
 # Per format: the dictionary and the largest input (the biggest seed fits; more only slows).
 declare -A dict=([friction_csv]=csv [thermal_csv]=csv [friction_manifest]=toml [thermal_manifest]=toml
-                 [catalog]=toml [fit_json]=json)
+                 [catalog]=toml [fit_json]=json [model_file]=toml [duty]=toml [fleet_toml]=toml)
 declare -A max_len=([friction_csv]=8192 [thermal_csv]=8192 [friction_manifest]=4096 [thermal_manifest]=4096
-                    [catalog]=4096 [fit_json]=8192)
+                    [catalog]=4096 [fit_json]=8192 [model_file]=8192 [duty]=4096 [fleet_toml]=2048)
 source scripts/sanitizer-env.sh
 
 # fuzz/regressions/OPEN: "<harness>/<file> | <text its failure prints>" per line.
