@@ -4,6 +4,9 @@
 //   lmcal generate friction -o DIR   -> DIR/friction.csv, DIR/friction_truth.json
 //   lmcal generate friction --raw -o DIR -> DIR/friction.toml, DIR/friction/<run>.csv (raw
 //                                       load-cell time series), DIR/friction_truth.json
+//   lmcal generate axis -o DIR       -> DIR/friction.toml, DIR/friction/<run>.csv (a closed-loop
+//                                       axis's drive log: position and drive force at 1 kHz),
+//                                       DIR/friction_truth.json
 //   lmcal generate thermal  -o DIR   -> DIR/thermal.toml, DIR/thermal/<run>.csv,
 //                                       DIR/thermal_truth.json
 #include <fmt/format.h>
@@ -17,6 +20,7 @@
 #include "progress.hpp"
 #include "lmcal/error.hpp"
 #include "lmcal/io/atomic_file.hpp"
+#include "lmcal/rig/axis_rig.hpp"
 #include "lmcal/rig/fleet_rig.hpp"
 #include "lmcal/rig/virtual_rig.hpp"
 
@@ -34,6 +38,20 @@ struct GenerateOptions {
   bool raw = false;  // raw load-cell time series
   RawFrictionRigConfig raw_rig;
   std::string raw_force_sign = "follows-motion";
+  // generate axis: one trajectory per setup (its own defaults: one setup, one run)
+  FrictionRigConfig axis_setup = [] {
+    FrictionRigConfig c;
+    c.guides = {"SRN 35C"};
+    c.preload_um = {2.5};
+    c.load_N = {1000};
+    c.temperature_C = {26};
+    c.runs = 1;
+    return c;
+  }();
+  AxisRigConfig axis;
+  std::string axis_controller{to_string(AxisRigConfig{}.controller)};
+  std::string axis_reference{to_string(AxisRigConfig{}.reference)};
+  bool axis_no_trajectory_keys = false;
   ThermalRigConfig thermal;
   std::string catalog_file;  // the user's catalog (its guides and bars)
   std::optional<GuideCatalog> catalog;
@@ -99,6 +117,34 @@ void run_generate_friction(GenerateOptions& o, const std::vector<std::string>& a
   out.commit();
   std::cout << fmt::format("wrote {} in {} to {} (truth: {})\n", plural(made.log.size(), "sample"),
                            plural(made.log.run_names.size(), "run"), (dir / "friction.csv").string(),
+                           (dir / "friction_truth.json").string());
+}
+
+void run_generate_axis(GenerateOptions& o, const std::vector<std::string>& argv) {
+  require_autocorrelation("--current-noise-ar1", o.axis.current_noise_ar1);
+  o.axis.controller = parse_axis_controller(o.axis_controller);
+  o.axis.reference = parse_axis_reference(o.axis_reference);
+  o.axis.trajectory_keys = !o.axis_no_trajectory_keys;
+  o.axis_setup.seed = o.seed;
+  o.catalog = user_catalog(o.catalog_file);
+  if (o.catalog) o.axis_setup.catalog = &*o.catalog;
+  const RigEffects effects = resolve_effects(o.effects);
+  const fs::path dir = o.output;
+  const std::vector<std::string> comments = {
+      "SYNTHETIC closed-loop axis log made by the lmcal virtual rig, not measured.",
+      "Command: " + command_line(argv),
+      "Effects: " + active_effects(effects) + "; every true value is in friction_truth.json"};
+  const AxisRigOutput made = with_progress("driving the axis", [&](const Progress&) {
+    return generate_axis_logs(o.axis_setup, o.axis, effects, comments);
+  });
+  OutputSet out;
+  for (const auto& [file, text] : made.run_files) out.add(dir / file, text);
+  out.add(dir / "friction.toml", made.manifest_toml);
+  out.add(dir / "friction_truth.json", made.truth_json);
+  out.commit();
+  std::cout << fmt::format("wrote {} of {} to {} (manifest {}, truth {})\n", plural(made.run_names.size(), "axis run"),
+                           plural(made.traces.empty() ? 0 : made.traces.front().time_s.size(), "sample"),
+                           (dir / "friction").string(), (dir / "friction.toml").string(),
                            (dir / "friction_truth.json").string());
 }
 
@@ -219,6 +265,52 @@ void setup_generate(CLI::App& app, const std::vector<std::string>& argv) {
   raw->add_option("--force-sign", o->raw_force_sign, "How the logged force is signed: follows-motion, opposes-motion, magnitude")
       ->capture_default_str();
   friction->callback([o, &argv] { run_generate_friction(*o, argv); });
+
+  CLI::App* axis = generate->add_subcommand(
+      "axis", "A closed-loop positioning axis's own log (time, encoder position, drive force), a manifest and its truth");
+  add_common(*axis, *o);
+  FrictionRigConfig& as = o->axis_setup;
+  AxisRigConfig& a = o->axis;
+  axis->add_option("--guide,--guides", as.guides, "Guide models (of the built-in catalog or --catalog); a run per setup")
+      ->delimiter(',')
+      ->capture_default_str();
+  axis->add_option("--catalog", o->catalog_file, kCatalogHelp);
+  add_list(*axis, "--preload", as.preload_um, "Preload amounts, um (default 2.5)");
+  add_list(*axis, "--load", as.load_N, "Loads, N (default 1000)");
+  add_list(*axis, "--temperature", as.temperature_C, "Temperatures, C (default 26)");
+  axis->add_option("--runs", as.runs, "Repeats of every setup")->capture_default_str();
+  add_list(*axis, "--velocity", as.velocity_m_s, "Trapezoidal: the moves' top speeds, m/s (default 0.002 ... 0.15)");
+  axis->add_option("--mass", a.moving_mass_kg, "Moving mass, kg")->capture_default_str();
+  axis->add_option("--incline", a.incline_deg, "Axis incline, deg (0 horizontal, 90 vertical, +x up)")->capture_default_str();
+  axis->add_option("--force-constant", a.force_constant_N_A, "Motor force constant K_f, N/A")->capture_default_str();
+  axis->add_option("--controller", o->axis_controller, "pd or p-pi (cascaded P position, PI velocity)")->capture_default_str();
+  axis->add_option("--pd-bandwidth", a.pd_bandwidth_Hz, "pd: natural frequency, Hz")->capture_default_str();
+  axis->add_option("--pd-damping", a.pd_damping, "pd: damping ratio")->capture_default_str();
+  axis->add_option("--position-gain", a.position_gain_1_s, "p-pi: position gain, 1/s")->capture_default_str();
+  axis->add_option("--velocity-bandwidth", a.velocity_bandwidth_Hz, "p-pi: velocity loop bandwidth, Hz")->capture_default_str();
+  axis->add_option("--velocity-integral", a.velocity_integral_Hz, "p-pi: velocity loop integral corner, Hz")
+      ->capture_default_str();
+  axis->add_option("--feedforward", a.acceleration_feedforward, "Share of M*a_ref fed forward")->capture_default_str();
+  axis->add_option("--reference", o->axis_reference, "trapezoidal or sinusoid")->capture_default_str();
+  axis->add_option("--acceleration", a.acceleration_m_s2, "Trapezoidal: acceleration, m/s2")->capture_default_str();
+  axis->add_option("--cruise", a.cruise_s, "Trapezoidal: cruise of every move, s (unless --stroke is shorter)")
+      ->capture_default_str();
+  axis->add_option("--stroke", a.stroke_m, "Trapezoidal: longest move, m")->capture_default_str();
+  axis->add_option("--cycles", a.cycles, "Trapezoidal: out-and-back moves per speed")->capture_default_str();
+  axis->add_option("--dwell", a.dwell_s, "Trapezoidal: pause at each end of a move, s")->capture_default_str();
+  axis->add_option("--amplitude", a.sine_amplitude_m, "Sinusoid: amplitude, m")->capture_default_str();
+  axis->add_option("--frequency", a.sine_frequency_Hz, "Sinusoid: frequency, Hz")->capture_default_str();
+  axis->add_option("--duration", a.duration_s, "Sinusoid: length of a run, s")->capture_default_str();
+  axis->add_option("--sample-rate", a.log_rate_Hz, "Log rate, Hz")->capture_default_str();
+  axis->add_option("--substeps", a.substeps, "Control and integration steps per logged sample")->capture_default_str();
+  axis->add_option("--encoder-resolution", a.encoder_resolution_m, "Encoder step, m")->capture_default_str();
+  axis->add_option("--current-noise", a.current_noise_A, "Noise of the logged current (sigma), A")->capture_default_str();
+  axis->add_option("--current-noise-ar1", a.current_noise_ar1, "Lag-1 autocorrelation of that noise, [0, 1)")
+      ->capture_default_str();
+  axis->add_option("--current-offset", a.current_offset_A, "Constant offset of the logged current, A")->capture_default_str();
+  axis->add_flag("--no-trajectory-keys", o->axis_no_trajectory_keys,
+                 "Leave segmentation and axis_incline_deg out of the manifest's [raw] table (for a plateau-only reader)");
+  axis->callback([o, &argv] { run_generate_axis(*o, argv); });
 
   CLI::App* thermal = generate->add_subcommand("thermal", "A thermal data set (manifest + runs) and its truth");
   add_common(*thermal, *o);

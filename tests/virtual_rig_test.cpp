@@ -2,15 +2,19 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <numbers>
+#include <sstream>
 #include <nlohmann/json.hpp>
 
 #include "lmcal/error.hpp"
 #include "lmcal/io/atomic_file.hpp"
 #include "lmcal/io/catalog.hpp"
 #include "lmcal/models/rail_thermal.hpp"
+#include "lmcal/rig/axis_rig.hpp"
 
 namespace lmcal {
 namespace {
@@ -399,6 +403,272 @@ TEST(VirtualRig, GeneratedDataRoundTripsThroughTheLoaders) {
   }
   fs::remove_all(dir);
   fs::remove_all(tdir);
+}
+
+
+// ---- The closed-loop axis (axis_rig.hpp) ----
+
+// One setup, a few speeds: a run of about 15 s.
+FrictionRigConfig axis_setup(std::vector<double> speeds = {0.005, 0.05, 0.15}) {
+  FrictionRigConfig c;
+  c.guides = {"SRN 35C"};
+  c.preload_um = {2.5};
+  c.load_N = {1000};
+  c.temperature_C = {26};
+  c.velocity_m_s = std::move(speeds);
+  c.runs = 1;
+  c.seed = 3;
+  return c;
+}
+
+// No noise, a fine encoder: what the physics checks read.
+AxisRigConfig quiet_axis() {
+  AxisRigConfig a;
+  a.current_noise_A = 0;
+  a.encoder_resolution_m = 1e-9;
+  return a;
+}
+
+// A run's log as written: time, position in m, drive force in N.
+struct AxisLog {
+  std::vector<double> time_s, position_m, force_N;
+  std::size_t size() const { return time_s.size(); }
+};
+
+AxisLog parse_axis_log(const std::string& csv) {
+  AxisLog log;
+  std::istringstream in(csv);
+  for (std::string line; std::getline(in, line);) {
+    if (line.empty() || line[0] == '#' || line[0] == 't') continue;  // comments, the header
+    double t, x_mm, F;
+    char comma;
+    std::istringstream(line) >> t >> comma >> x_mm >> comma >> F;
+    log.time_s.push_back(t);
+    log.position_m.push_back(x_mm * 1e-3);
+    log.force_N.push_back(F);
+  }
+  return log;
+}
+
+// The law at the run's conditions with the regularised sign, as the plant applies it.
+double axis_friction_N(const AxisRigConfig& a, const FrictionConstants<double>& k, double v) {
+  FrictionConditions<double> c{.load_N = 1000, .preload_um = 2.5, .block_length_mm = 120.2,
+                               .velocity_m_s = std::abs(v), .temperature_C = 26, .direction = v < 0 ? -1.0 : 1.0};
+  return std::tanh(v / a.regularisation_m_s) * friction_force_with_effects_N(k, FrictionEffects<double>{}, c);
+}
+
+constexpr double kG = 9.80665;
+
+// Friction and gravity off, no noise: the logged force is M·a of the logged positions. The
+// integrator's steps give M Δ²x/h² = the force averaged over ±h with triangular weights, which
+// for a smooth force is (F_{k-1} + 10 F_k + F_{k+1}) / 12 (Numerov); what is left is the
+// encoder's rounding (4 counts/h² in Δ²x) and the force's rounding, except at the reference's
+// corners where the feedforward steps.
+TEST(VirtualRigAxis, WithoutFrictionAndGravityTheForceIsMassTimesAcceleration) {
+  FrictionRigConfig setup = axis_setup();
+  setup.constants.k1 = setup.constants.k2 = setup.constants.mu_st = setup.constants.mu_v = setup.constants.f0 = 0;
+  const AxisRigConfig a = quiet_axis();
+  const AxisRigOutput made = generate_axis_logs(setup, a, {});
+  const AxisLog log = parse_axis_log(made.run_files.at(0).second);
+  const double h = 1 / a.log_rate_Hz, M = a.moving_mass_kg;
+  const double tolerance_N = M * 4 * a.encoder_resolution_m / (h * h) + 2e-4;
+  std::size_t within = 0, n = 0;
+  double worst_N = 0, max_force_N = 0;
+  for (std::size_t k = 1; k + 1 < log.size(); ++k, ++n) {
+    const double inertia_N = M * (log.position_m[k + 1] - 2 * log.position_m[k] + log.position_m[k - 1]) / (h * h);
+    const double force_N = (log.force_N[k - 1] + 10 * log.force_N[k] + log.force_N[k + 1]) / 12;
+    const double residual_N = std::abs(inertia_N - force_N);
+    within += residual_N <= tolerance_N;
+    worst_N = std::max(worst_N, residual_N);
+    max_force_N = std::max(max_force_N, std::abs(log.force_N[k]));
+  }
+  EXPECT_GT(max_force_N, 0.9 * M * a.acceleration_m_s2);  // it accelerates (the check is not 0 = 0)
+  EXPECT_GE(static_cast<double>(within), 0.99 * static_cast<double>(n)) << "worst " << worst_N << " N";
+  EXPECT_LT(worst_N, M * a.acceleration_m_s2);  // at the corners: less than the feedforward's step
+}
+
+// Energy over each move of a run on a 20° incline with the paper's friction: the drive's work
+// = friction work + the potential energy's change (the kinetic energy is 0 at both ends, the
+// carriage dwells there), from the logged samples alone and the library's law.
+TEST(VirtualRigAxis, DriveWorkIsFrictionWorkPlusPotentialEnergyOverEachMove) {
+  const FrictionRigConfig setup = axis_setup({0.01, 0.1});
+  AxisRigConfig a = quiet_axis();
+  a.incline_deg = 20;
+  a.cycles = 1;
+  const AxisRigOutput made = generate_axis_logs(setup, a, {});
+  const AxisLog log = parse_axis_log(made.run_files.at(0).second);
+  const AxisTrace& trace = made.traces.at(0);
+  const double h = 1 / a.log_rate_Hz, G = a.moving_mass_kg * kG * std::sin(20 * std::numbers::pi / 180);
+  // The moves: between the samples where the reference rests at one end and then leaves it.
+  std::vector<std::size_t> rests;
+  for (std::size_t k = 1; k < log.size(); ++k)
+    if (trace.reference_m[k] == trace.reference_m[k - 1] && (k + 1 == log.size() || trace.reference_m[k + 1] != trace.reference_m[k]))
+      rests.push_back(k);
+  ASSERT_EQ(rests.size(), 1 + 2 * setup.velocity_m_s.size());  // out and back per speed
+  for (std::size_t m = 0; m + 1 < rests.size(); ++m) {
+    double drive_J = 0, friction_J = 0;
+    for (std::size_t k = rests[m]; k < rests[m + 1]; ++k) {
+      const double dx = log.position_m[k + 1] - log.position_m[k];
+      drive_J += 0.5 * (log.force_N[k] + log.force_N[k + 1]) * dx;
+      friction_J += axis_friction_N(a, setup.constants, dx / h) * dx;
+    }
+    const double potential_J = G * (log.position_m[rests[m + 1]] - log.position_m[rests[m]]);
+    const double v0 = trace.velocity_m_s[rests[m]], v1 = trace.velocity_m_s[rests[m + 1]];
+    const double kinetic_J = 0.5 * a.moving_mass_kg * (v1 * v1 - v0 * v0);
+    EXPECT_GT(std::abs(potential_J), 1.0) << "move " << m;
+    EXPECT_GT(friction_J, 0.01) << "move " << m;
+    EXPECT_NEAR(drive_J, friction_J + potential_J + kinetic_J, 0.005 * friction_J + 1e-3) << "move " << m;
+  }
+}
+
+// The controllers follow the reference: the cascaded P-PI within 0.1 mm (rms 5 µm), the PD within
+// 1 mm (rms 0.3 mm: it sags by M g sin θ / K_p = 0.21 mm, having no integral), at the rig's
+// default speeds on a 20° incline, as the encoder logs the position.
+TEST(VirtualRigAxis, ControllersTrackTheReference) {
+  for (const AxisController controller : {AxisController::p_pi, AxisController::pd}) {
+    AxisRigConfig a;
+    a.controller = controller;
+    a.incline_deg = 20;
+    FrictionRigConfig setup = axis_setup(FrictionRigConfig{}.velocity_m_s);
+    const AxisRigOutput made = generate_axis_logs(setup, a, {});
+    const AxisLog log = parse_axis_log(made.run_files.at(0).second);
+    const AxisTrace& trace = made.traces.at(0);
+    ASSERT_EQ(log.size(), trace.reference_m.size());
+    double worst_m = 0, sum2 = 0;
+    for (std::size_t k = 0; k < log.size(); ++k) {
+      const double error = log.position_m[k] - trace.reference_m[k];
+      worst_m = std::max(worst_m, std::abs(error));
+      sum2 += error * error;
+    }
+    const double rms_m = std::sqrt(sum2 / static_cast<double>(log.size()));
+    const bool cascaded = controller == AxisController::p_pi;
+    EXPECT_LT(worst_m, cascaded ? 1e-4 : 1e-3) << to_string(controller);
+    EXPECT_LT(rms_m, cascaded ? 5e-6 : 3e-4) << to_string(controller);
+    EXPECT_GT(worst_m, 0) << to_string(controller);
+  }
+}
+
+// At constant speed on a 30° incline the drive holds friction + G going up and G − friction going
+// down: half the sum of the mean forces is M g sin θ, half the difference the law's friction,
+// with the current's noise on; the horizontal axis's mean force is the friction alone.
+TEST(VirtualRigAxis, InclineAddsTheWeightInBothDirections) {
+  const double V = 0.05;
+  const FrictionRigConfig setup = axis_setup({V});
+  for (const double incline_deg : {30.0, 0.0}) {
+    AxisRigConfig a;
+    a.incline_deg = incline_deg;
+    a.cycles = 3;
+    const AxisRigOutput made = generate_axis_logs(setup, a, {});
+    const AxisLog log = parse_axis_log(made.run_files.at(0).second);
+    const AxisTrace& trace = made.traces.at(0);
+    double up_N = 0, down_N = 0;
+    std::size_t ups = 0, downs = 0;
+    for (std::size_t k = 0; k < log.size(); ++k) {
+      const double v = trace.velocity_m_s[k];
+      if (std::abs(std::abs(v) - V) > 1e-5 * V) continue;  // at cruise speed, settled
+      (v > 0 ? up_N : down_N) += log.force_N[k];
+      ++(v > 0 ? ups : downs);
+    }
+    ASSERT_GT(ups, 1000u);
+    ASSERT_GT(downs, 1000u);
+    up_N /= static_cast<double>(ups);
+    down_N /= static_cast<double>(downs);
+    const double G = a.moving_mass_kg * kG * std::sin(incline_deg * std::numbers::pi / 180);
+    const double sigma_N = a.force_constant_N_A * a.current_noise_A / std::sqrt(static_cast<double>(std::min(ups, downs)));
+    EXPECT_NEAR((up_N + down_N) / 2, G, 5 * sigma_N) << incline_deg << "°";
+    EXPECT_NEAR((up_N - down_N) / 2, axis_friction_N(a, setup.constants, V), 5 * sigma_N) << incline_deg << "°";
+  }
+}
+
+// The log's shape: a reversal between consecutive moves (two per out-and-back but the last), never at rest for longer than a dwell
+// (plus the controller's settling), the fastest speed reached, and the truth's numbers.
+TEST(VirtualRigAxis, TheLogReversesAndNeverRestsLong) {
+  const FrictionRigConfig setup = axis_setup();
+  AxisRigConfig a;
+  a.incline_deg = 20;
+  const AxisRigOutput made = generate_axis_logs(setup, a, {});
+  const AxisLog log = parse_axis_log(made.run_files.at(0).second);
+  const nlohmann::json truth = nlohmann::json::parse(made.truth_json);
+  EXPECT_EQ(truth["runs"][0]["reversals"], 2 * a.cycles * static_cast<int>(setup.velocity_m_s.size()) - 1);
+  EXPECT_EQ(truth["runs"][0]["samples"], log.size());
+  EXPECT_NEAR(truth["gravity_N"].get<double>(), a.moving_mass_kg * kG * std::sin(20 * std::numbers::pi / 180), 1e-9);
+  const double h = 1 / a.log_rate_Hz;
+  std::size_t still = 0, longest_still = 0;
+  double fastest = 0;
+  for (std::size_t k = 1; k < log.size(); ++k) {
+    const double v = (log.position_m[k] - log.position_m[k - 1]) / h;
+    still = std::abs(v) < 1e-3 ? still + 1 : 0;
+    longest_still = std::max(longest_still, still);
+    if (k >= 10) fastest = std::max(fastest, std::abs(log.position_m[k] - log.position_m[k - 10]) / (10 * h));
+  }
+  EXPECT_LE(static_cast<double>(longest_still) * h, a.dwell_s + 0.1);
+  EXPECT_NEAR(fastest, 0.15, 0.01 * 0.15);
+}
+
+TEST(VirtualRigAxis, SameSeedSameBytesOtherSeedOtherNoise) {
+  FrictionRigConfig setup = axis_setup({0.02, 0.1});
+  AxisRigConfig a;
+  a.current_noise_ar1 = 0.5;
+  a.reference = AxisReference::sinusoid;
+  a.duration_s = 5;
+  const AxisRigOutput one = generate_axis_logs(setup, a, {}), two = generate_axis_logs(setup, a, {});
+  EXPECT_EQ(one.run_files, two.run_files);
+  EXPECT_EQ(one.manifest_toml, two.manifest_toml);
+  EXPECT_EQ(one.truth_json, two.truth_json);
+  setup.seed = 4;
+  const AxisRigOutput other = generate_axis_logs(setup, a, {});
+  EXPECT_NE(other.run_files.at(0).second, one.run_files.at(0).second);
+  EXPECT_EQ(other.manifest_toml, one.manifest_toml);
+}
+
+// Without the trajectory keys the manifest is one the plateau reader takes as it is (a run per
+// setup, its conditions as keys); with them its [raw] table names the trajectory and the incline.
+TEST(VirtualRigAxis, TheFrictionLoaderReadsTheManifest) {
+  FrictionRigConfig setup = axis_setup();
+  setup.load_N = {1000, 2000};
+  AxisRigConfig a;
+  a.incline_deg = 10;
+  a.trajectory_keys = false;
+  const AxisRigOutput made = generate_axis_logs(setup, a, {}, {"synthetic"});
+  ASSERT_EQ(made.run_files.size(), 2u);
+  const fs::path dir = fresh_folder("axis");
+  OutputSet out;
+  for (const auto& [file, text] : made.run_files) out.add(dir / file, text);
+  out.add(dir / "friction.toml", made.manifest_toml);
+  out.commit();
+  const FrictionDataSet set = load_friction_dataset(dir / "friction.toml");
+  EXPECT_EQ(set.log.run_names, made.run_names);
+  ASSERT_EQ(set.log.segmentation.size(), 2u);
+  EXPECT_GT(set.log.size(), 0u);
+  for (std::size_t i = 0; i < set.log.size(); i += 101) {
+    EXPECT_EQ(set.log.load_N[i], setup.load_N[set.log.run[i]]);
+    EXPECT_EQ(set.log.preload_um[i], 2.5);
+    EXPECT_EQ(set.log.block_length_mm[i], 120.2);
+  }
+  fs::remove_all(dir);
+  EXPECT_EQ(made.manifest_toml.find("segmentation"), std::string::npos);
+  a.trajectory_keys = true;
+  const std::string with_keys = generate_axis_logs(setup, a, {}).manifest_toml;
+  EXPECT_NE(with_keys.find("[raw]\nforce_sign = \"follows-motion\"\nsegmentation = \"trajectory\"\naxis_incline_deg = 10\n"),
+            std::string::npos)
+      << with_keys;
+}
+
+TEST(VirtualRigAxis, RefusesBadSettings) {
+  const FrictionRigConfig setup = axis_setup();
+  const auto refused = [&](const char* what, auto change) {
+    AxisRigConfig a;
+    change(a);
+    EXPECT_THROW(generate_axis_logs(setup, a, {}), InvalidParameter) << what;
+  };
+  refused("mass", [](AxisRigConfig& a) { a.moving_mass_kg = 0; });
+  refused("incline", [](AxisRigConfig& a) { a.incline_deg = 95; });
+  refused("stroke shorter than the ramps", [](AxisRigConfig& a) { a.stroke_m = 0.01; });
+  refused("a loop too fast for the step", [](AxisRigConfig& a) { a.substeps = 1; a.velocity_bandwidth_Hz = 500; });
+  refused("noise ar1", [](AxisRigConfig& a) { a.current_noise_ar1 = 1; });
+  RigEffects thermal;
+  set_rig_effect(thermal, "tc_lag", 5);
+  EXPECT_THROW(generate_axis_logs(setup, AxisRigConfig{}, thermal), InvalidParameter);
 }
 
 }  // namespace

@@ -130,14 +130,9 @@ RawFrictionRigOutput generate_raw_friction_logs(const FrictionRigConfig& config,
               cruises.back().last_sample = k;
               cruises.back().end_s = t;
             }
-            const std::string file = fmt::format("friction/{}.csv", name);
-            manifest += fmt::format(
-                "\n[[run]]\nid = {}\nfile = {}\nguide = {}\nload_N = {}\npreload_um = {}\ntemperature_C = {}\n"
-                "viscosity40_mm2_s = {}\n",
-                manifest::toml_string(name), manifest::toml_string(file), manifest::toml_string(spec.model), P, pc, T,
-                config.constants.nu_ref_mm2_s);
-            // A user's guide: its block length written out, as the built-in catalog cannot supply it.
-            if (config.catalog) manifest += fmt::format("block_length_mm = {}\n", c.block_length_mm);
+            std::string file;
+            manifest += rig::raw_run_manifest_toml(name, spec.model, c, config.constants.nu_ref_mm2_s,
+                                                   config.catalog != nullptr, file);
             nlohmann::json segments = nlohmann::json::array();
             for (const CruiseSegment& s : cruises)
               segments.push_back({{"first_sample", s.first_sample}, {"last_sample", s.last_sample},

@@ -11,6 +11,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "io/toml_text.hpp"
 #include "lmcal/error.hpp"
 
 #include "lmcal/rig/virtual_rig.hpp"
@@ -82,6 +83,21 @@ inline double positive_factor(const char* parameter, double relative_sigma, doub
 inline double round_to(double value, int decimals) {
   const double scale = std::pow(10.0, decimals);
   return std::round(value * scale) / scale;
+}
+
+// A raw run's [[run]] table in the friction manifest: its file ("friction/<id>.csv", returned in
+// `file`) and its conditions as keys. A user's guide (`block_length_key`) has its block length
+// written out, as the built-in catalog cannot supply it.
+inline std::string raw_run_manifest_toml(const std::string& id, const std::string& guide, const FrictionConditions<double>& c,
+                                         double viscosity40_mm2_s, bool block_length_key, std::string& file) {
+  file = fmt::format("friction/{}.csv", id);
+  std::string toml = fmt::format(
+      "\n[[run]]\nid = {}\nfile = {}\nguide = {}\nload_N = {}\npreload_um = {}\ntemperature_C = {}\n"
+      "viscosity40_mm2_s = {}\n",
+      manifest::toml_string(id), manifest::toml_string(file), manifest::toml_string(guide), c.load_N, c.preload_um,
+      c.temperature_C, viscosity40_mm2_s);
+  if (block_length_key) toml += fmt::format("block_length_mm = {}\n", c.block_length_mm);
+  return toml;
 }
 
 // Every named effect with its value, unit and whether it is on (the truth file's "effects").
