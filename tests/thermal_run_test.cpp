@@ -127,6 +127,24 @@ TEST_F(ThermalRunTest, WrittenTraceLoadsBackBitForBit) {
   EXPECT_EQ(back.report.missing, (std::map<std::string, std::size_t>{{"ambient2_C", 1}, {"tc1_C", 1}}));
 }
 
+// A logger's preamble before the column names: skipped by skip_lines; errors name the file's lines.
+TEST_F(ThermalRunTest, APreambleIsSkippedAndErrorsNameTheFilesLines) {
+  const ThermalTrace trace = awkward_trace(50, 5.0 / 3.0);
+  const std::string text = thermal_trace_csv(trace);
+  const std::string preamble = "Data logger TC-08, serial 1234\nstart,2024-05-01 10:00\nchannels: 4\n";
+  expect_same_trace(trace, load_thermal_trace(write("preamble.csv", preamble + text), 3));
+  EXPECT_THROW(load_thermal_trace(write("preamble.csv", preamble + text)), InputError);  // the preamble is no header
+  std::string bad = text;
+  bad.insert(bad.find('\n', bad.find('\n') + 1) + 1, "x,1,2,3,4\n");  // the second data row: line 3 of the log
+  try {
+    load_thermal_trace(write("bad.csv", preamble + bad), 3);
+    FAIL() << "accepted a non-numeric time";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.line(), 6);
+    EXPECT_EQ(e.column(), 1);
+  }
+}
+
 TEST_F(ThermalRunTest, WriterUsesCanonicalUnits) {
   ThermalTrace trace = load_thermal_trace(kGood / "thermal" / "v110.csv");
   const std::string text = thermal_trace_csv(trace);

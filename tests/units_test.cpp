@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include <string>
 
 namespace lmcal {
@@ -20,7 +22,8 @@ TEST(Units, InternalUnitIsListedFirstAndConvertsToItself) {
   const std::pair<Quantity, const char*> internal[] = {{Quantity::time, "s"},        {Quantity::velocity, "m_s"},
                                                        {Quantity::force, "N"},       {Quantity::preload, "um"},
                                                        {Quantity::length_mm, "mm"},  {Quantity::distance_m, "m"},
-                                                       {Quantity::temperature, "C"}, {Quantity::viscosity, "mm2_s"}};
+                                                       {Quantity::temperature, "C"}, {Quantity::viscosity, "mm2_s"},
+                                                       {Quantity::angular_velocity, "rad_s"}, {Quantity::torque, "Nm"}};
   for (const auto& [quantity, unit] : internal) {
     EXPECT_EQ(unit_names(quantity).front(), unit);
     const Conversion c = unit_conversion(quantity, unit).value();
@@ -73,6 +76,16 @@ TEST(Units, Viscosity) {
   EXPECT_EQ(to_internal(Quantity::viscosity, "cSt", 99), 99.0);
   EXPECT_DOUBLE_EQ(to_internal(Quantity::viscosity, "m2_s", 99e-6), 99.0);
   EXPECT_EQ(unit_names(Quantity::viscosity), (std::vector<std::string>{"mm2_s", "cSt", "m2_s"}));
+}
+
+// A motor's quantities: rpm to rad/s; percent of a nominal torque to a fraction of it.
+TEST(Units, AngularVelocityAndTorque) {
+  EXPECT_NEAR(to_internal(Quantity::angular_velocity, "rpm", 60), 2 * M_PI, 1e-15);
+  EXPECT_EQ(to_internal(Quantity::torque, "percent", 50), 0.5);
+  EXPECT_TRUE(is_relative_unit(Quantity::torque, "percent"));
+  EXPECT_FALSE(is_relative_unit(Quantity::torque, "Nm"));
+  EXPECT_FALSE(unit_conversion(Quantity::velocity, "rpm"));  // not a linear speed
+  EXPECT_EQ(split_unit("velocity_rad_s", Quantity::angular_velocity)->name, "velocity");
 }
 
 TEST(Units, UnknownUnitHasNoConversion) {

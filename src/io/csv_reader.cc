@@ -92,7 +92,7 @@ bool plain_decimal(const char* p, const char* end, double& out) {
 
 // ---- Reader -------------------------------------------------------------------------------
 
-Reader::Reader(const fs::path& file) : file_(file.string()) {
+Reader::Reader(const fs::path& file, std::size_t skip_lines) : file_(file.string()), skip_lines_(skip_lines) {
   file_size_ = io::check_input_file(file, io::kMaxCsvBytes, "file");
   stream_.reset(std::fopen(file.c_str(), "rb"));
   if (!stream_) throw InputError(file_, 0, 0, fmt::format("cannot open file: {}", std::strerror(errno)));
@@ -210,7 +210,7 @@ void Reader::split_quoted() {
   }
 }
 
-void Reader::read_header() {
+void Reader::start() {
   refill();
   // A UTF-8 byte-order mark (spreadsheet exports) is not part of the first header cell.
   if (end_ >= 3 && std::memcmp(buffer_.data(), "\xEF\xBB\xBF", 3) == 0) pos_ = 3;
@@ -218,7 +218,23 @@ void Reader::read_header() {
   // in '\r' alone (old Mac and some instrument exports).
   const std::string_view first(buffer_.data(), end_);
   if (first.find('\n') == std::string_view::npos && first.find('\r') != std::string_view::npos) eol_ = '\r';
+}
+
+bool Reader::seek_line(long line) {
+  start();
   while (next_line()) {
+    if (line_ == line) {
+      split();
+      return true;
+    }
+  }
+  return false;
+}
+
+void Reader::read_header() {
+  start();
+  while (next_line()) {
+    if (static_cast<std::size_t>(line_) <= skip_lines_) continue;  // a logger's preamble, whatever it holds
     if (is_skipped(line_begin_, line_end_)) continue;
     header_line_ = line_;
     split();
@@ -242,6 +258,10 @@ void Reader::read_header() {
       if (auto problem = io::name_problem(header_.back())) fail(i, "column name: " + *problem);
     }
     return;
+  }
+  if (skip_lines_ != 0 && line_ != 0) {
+    fail_at(0, 0, fmt::format("no header line after the {} skipped line{} (skip_lines = {}; the file has {})", skip_lines_,
+                              skip_lines_ == 1 ? "" : "s", skip_lines_, line_));
   }
   fail_at(0, 0, "empty file; expected a header line");
 }
@@ -439,8 +459,11 @@ namespace {
 
 // The spec a header cell belongs to, with its base name and unit; nullopt for a column the
 // loader does not know. Throws for a known column without a unit or with an unknown one.
+// Several specs may share a name in different quantities (a linear and an angular velocity):
+// the header matches any of them, and is refused only when it matches none.
 std::optional<Column> classify(const Reader& reader, std::size_t cell, std::span<const ColumnSpec> specs) {
   const std::string& header = reader.header()[cell];
+  std::optional<std::pair<std::size_t, UnitMatch>> problem;  // the first spec whose name it carries
   for (std::size_t s = 0; s < specs.size(); ++s) {
     const ColumnSpec& spec = specs[s];
     Column column{.spec = s,
@@ -461,18 +484,26 @@ std::optional<Column> classify(const Reader& reader, std::size_t cell, std::span
     switch (m.kind) {
       case UnitMatch::other: continue;
       case UnitMatch::no_unit:
-        reader.fail(cell,
-                    fmt::format("column '{}' has no unit; accepted: {}", header, accepted_names(base, *spec.quantity)));
       case UnitMatch::unknown_unit:
-        reader.fail(cell, fmt::format("column '{}': unknown unit '{}'; accepted: {}", header, m.unit,
-                                      accepted_names(base, *spec.quantity)));
+        if (!problem) problem.emplace(s, std::move(m));
+        continue;
       case UnitMatch::match:
         column.name = m.split.name;
         column.conversion = m.split.conversion;
         return column;
     }
   }
-  return std::nullopt;
+  if (!problem) return std::nullopt;
+  // Every unit of every spec of that name.
+  const ColumnSpec& first = specs[problem->first];
+  const std::string_view base = first.family ? std::string_view(header).substr(0, header.find('_')) : first.name;
+  std::vector<std::string> accepted;
+  for (const ColumnSpec& spec : specs)
+    if (spec.quantity && spec.name == first.name) accepted.push_back(accepted_names(base, *spec.quantity));
+  const std::string names = fmt::format("{}", fmt::join(accepted, ", "));
+  if (problem->second.kind == UnitMatch::no_unit)
+    reader.fail(cell, fmt::format("column '{}' has no unit; accepted: {}", header, names));
+  reader.fail(cell, fmt::format("column '{}': unknown unit '{}'; accepted: {}", header, problem->second.unit, names));
 }
 
 std::string lowercase(std::string_view text) {
@@ -542,7 +573,7 @@ bool is_timestamp_name(std::string_view header) {
 
 std::vector<Column> bind_header(const Reader& reader, std::span<const ColumnSpec> specs, LoadReport& report) {
   std::vector<Column> columns;
-  std::map<std::pair<std::size_t, std::string>, std::string> seen;  // (spec, base name) -> header
+  std::map<std::string, std::string> seen;  // base name -> header (one column per name, whatever its unit or quantity)
   for (std::size_t cell = 0; cell < reader.header().size(); ++cell) {
     std::optional<Column> column = classify(reader, cell, specs);
     if (!column) {
@@ -559,7 +590,7 @@ std::vector<Column> bind_header(const Reader& reader, std::span<const ColumnSpec
       }
       continue;
     }
-    const auto [it, inserted] = seen.emplace(std::pair(column->spec, column->name), column->header);
+    const auto [it, inserted] = seen.emplace(column->name, column->header);
     if (!inserted) {
       reader.fail(
           cell, fmt::format("duplicate column '{}': '{}' already gives {}", column->header, it->second, column->name));
@@ -580,9 +611,7 @@ std::vector<Column> bind_header(const Reader& reader, std::span<const ColumnSpec
 
 void fail_at_cell(const fs::path& file, long line, std::size_t cell, const std::string& what) {
   Reader reader(file);
-  reader.read_header();
-  while (reader.next())
-    if (reader.line() == line) reader.fail(cell, what);
+  if (reader.seek_line(line)) reader.fail(cell, what);
   throw InputError(reader.file(), line, 0, what);
 }
 

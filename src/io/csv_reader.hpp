@@ -65,17 +65,23 @@ struct Column {
 class Reader {
  public:
   // Opens the file; InputError if it cannot be read. `file` is also the name errors carry.
-  explicit Reader(const std::filesystem::path& file);
+  // The first `skip_lines` lines (a logger's preamble: whatever they hold) are not read; line
+  // numbers in errors still count them.
+  explicit Reader(const std::filesystem::path& file, std::size_t skip_lines = 0);
   Reader(const Reader&) = delete;
   Reader& operator=(const Reader&) = delete;
 
   const std::string& file() const { return file_; }
 
-  // Reads the first line that is neither blank nor a comment. Throws for an empty file and
+  // Reads the first line after the skipped ones that is neither blank nor a comment. Throws for an empty file and
   // for a header that is one cell but looks ';'- or tab-separated.
   void read_header();
   const std::vector<std::string>& header() const { return header_; }
   long header_line() const { return header_line_; }
+
+  // Instead of read_header and next: the file's line `line` (1-based, whatever it holds) as the
+  // current row, for an error at one of its cells; false when the file is shorter.
+  bool seek_line(long line);
 
   // Advances to the next data row; false at the end of the file. Throws for a row whose
   // number of cells differs from the header's.
@@ -102,6 +108,7 @@ class Reader {
   std::size_t estimated_rows() const;
 
  private:
+  void start();         // the first chunk read: byte-order mark and line ends found
   bool next_line();     // the next raw line into line_begin_/line_end_; false at the end
   bool refill();        // moves the unread tail to the front and reads more; false at the end
   void split();         // cells of the current line into cells_
@@ -132,6 +139,7 @@ class Reader {
   std::vector<std::string_view> cells_;
   std::vector<std::string> header_;
   long header_line_ = 0;
+  std::size_t skip_lines_ = 0;
 };
 
 // conversion.apply(value), except that canonical units leave the value untouched: x * 1 + 0

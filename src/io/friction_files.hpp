@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <functional>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -19,6 +20,7 @@ struct FrictionFile {
   // leave out (empty without a manifest).
   std::map<std::string, FrictionRunConditions, std::less<>> runs;
   std::string manifest;  // the manifest's file, for messages
+  std::optional<std::size_t> skip_lines;  // the manifest's skip_lines for this file (else RawFrictionOptions')
 };
 
 FrictionLog load_friction_files(const std::vector<FrictionFile>& files, const RawFrictionOptions& raw);

@@ -154,6 +154,7 @@ std::string known_run_keys() {
   keys.push_back(csv::canonical_name(kSensors, Quantity::distance_m));
   keys.emplace_back(kOverrides);
   keys.emplace_back(kSchedule);
+  keys.emplace_back("skip_lines");
   return fmt::format("{} (numbers in any unit of their quantity)", fmt::join(keys, ", "));
 }
 
@@ -164,6 +165,7 @@ struct RunKeys {
   std::optional<Given> sensors;
   std::optional<Given> overrides;
   std::optional<Given> schedule;
+  std::optional<Given> skip_lines;  // of the run's file
 };
 
 // unit_key for a number key: a key without a quantity matches its name only.
@@ -191,6 +193,13 @@ RunKeys read_run_keys(const Manifest& m, const toml::table& table) {
     if (const auto text = std::find(kTextKeys.begin(), kTextKeys.end(), k); text != kTextKeys.end()) {
       string_of(m, key, node);
       remember(m, keys.text[static_cast<std::size_t>(text - kTextKeys.begin())], {&key, &node}, k);
+      continue;
+    }
+    if (k == "skip_lines") {
+      const double n = number_of(m, key, node);
+      if (!(n >= 0 && n <= 1e9 && n == std::floor(n)))
+        m.fail(node.source(), fmt::format("skip_lines = {}: expected a whole number of lines", n));
+      remember(m, keys.skip_lines, {&key, &node, {}, n}, k);
       continue;
     }
     if (k == kOverrides) {
@@ -431,7 +440,7 @@ ThermalRun read_run(const Manifest& m, const toml::table& table) {
   // The CSV, relative to the manifest's folder.
   const std::string& file = text(kFile);
   run.file = m.existing_file(*keys.text[kFile]->node, file);
-  run.trace = load_thermal_trace(run.file);
+  run.trace = load_thermal_trace(run.file, keys.skip_lines ? static_cast<std::size_t>(keys.skip_lines->value) : 0);
   check_heat(m, run, keys);
   check_speed_and_ambient(m, run, keys, table);
 
@@ -486,8 +495,8 @@ std::string toml_number(double value) {
 
 // ---- Public -------------------------------------------------------------------------------
 
-ThermalTrace load_thermal_trace(const fs::path& file) {
-  csv::Reader reader(file);
+ThermalTrace load_thermal_trace(const fs::path& file, std::size_t skip_lines) {
+  csv::Reader reader(file, skip_lines);
   ThermalTrace trace;
   LoadReport& report = trace.report;
   report.file = reader.file();

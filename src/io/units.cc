@@ -28,6 +28,11 @@ constexpr std::array<UnitDef, 2> kDistanceM{{{"m", {1, 0}}, {"mm", {1e-3, 0}}}};
 constexpr std::array<UnitDef, 3> kTemperature{
     {{"C", {1, 0}}, {"K", {1, -273.15}}, {"F", {5.0 / 9.0, -32.0 * 5.0 / 9.0}}}};
 constexpr std::array<UnitDef, 3> kViscosity{{{"mm2_s", {1, 0}}, {"cSt", {1, 0}}, {"m2_s", {1e6, 0}}}};
+// 1 rpm = 2π/60 rad/s. "percent" of a nominal torque converts to a fraction (is_relative_unit).
+constexpr double kPi = 3.14159265358979323846;
+constexpr std::array<UnitDef, 2> kAngularVelocity{{{"rad_s", {1, 0}}, {"rpm", {2 * kPi / 60, 0}}}};
+constexpr std::array<UnitDef, 2> kTorque{{{"Nm", {1, 0}}, {"percent", {0.01, 0}}}};
+constexpr std::size_t kQuantities = 10;
 
 std::span<const UnitDef> units_of(Quantity quantity) {
   switch (quantity) {
@@ -39,6 +44,8 @@ std::span<const UnitDef> units_of(Quantity quantity) {
     case Quantity::distance_m: return kDistanceM;
     case Quantity::temperature: return kTemperature;
     case Quantity::viscosity: return kViscosity;
+    case Quantity::angular_velocity: return kAngularVelocity;
+    case Quantity::torque: return kTorque;
   }
   return {};
 }
@@ -55,6 +62,8 @@ PhysicalRange physical_range(Quantity quantity) {
     case Quantity::distance_m: return {-1000, 1000, "m"};
     case Quantity::temperature: return {-273.15, 1000, "°C"};
     case Quantity::viscosity: return {1e-3, 1e6, "mm²/s"};
+    case Quantity::angular_velocity: return {-1e5, 1e5, "rad/s"};  // ~1e6 rpm
+    case Quantity::torque: return {-1e6, 1e6, "N·m"};
   }
   return {0, 0, ""};
 }
@@ -66,8 +75,8 @@ std::string out_of_range_message(std::string_view name, std::string_view written
 
 const std::vector<std::string>& unit_names(Quantity quantity) {
   // One list per quantity, built once; indexed by the enum's value.
-  static const std::array<std::vector<std::string>, 8> names = [] {
-    std::array<std::vector<std::string>, 8> all;
+  static const std::array<std::vector<std::string>, kQuantities> names = [] {
+    std::array<std::vector<std::string>, kQuantities> all;
     for (std::size_t q = 0; q < all.size(); ++q) {
       for (const UnitDef& unit : units_of(static_cast<Quantity>(q))) all[q].emplace_back(unit.name);
     }
@@ -81,6 +90,10 @@ std::optional<Conversion> unit_conversion(Quantity quantity, std::string_view un
     if (unit == def.name) return def.conversion;
   }
   return std::nullopt;
+}
+
+bool is_relative_unit(Quantity quantity, std::string_view unit) {
+  return quantity == Quantity::torque && unit == "percent";
 }
 
 std::optional<SplitName> split_unit(std::string_view column, Quantity quantity) {

@@ -95,7 +95,9 @@ struct ThermalTrace {
   std::size_t size() const { return time_s.size(); }
 };
 
-ThermalTrace load_thermal_trace(const std::filesystem::path& file);
+// `skip_lines`: lines before the column names (a logger's preamble), skipped whatever they hold;
+// errors still name the file's own lines. A manifest's [[run]] gives it as `skip_lines = N`.
+ThermalTrace load_thermal_trace(const std::filesystem::path& file, std::size_t skip_lines = 0);
 // Writes a trace in canonical units (°C, s) with the given '#' comment lines first.
 std::string thermal_trace_csv(const ThermalTrace& trace, const std::vector<std::string>& comments = {});
 

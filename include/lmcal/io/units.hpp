@@ -12,6 +12,13 @@
 //   distance     m          m, mm            (stroke, rail_length, positions)
 //   temperature  °C         C, K, F
 //   viscosity    mm²/s      mm2_s, cSt, m2_s
+//   angular velocity  rad/s  rad_s, rpm      (a motor's or joint's speed: friction logs with a drive)
+//   torque       N·m        Nm, percent      (percent: of the drive's nominal torque, see below)
+//
+// Angular velocity and torque are joint quantities: a friction log turns them into the
+// carriage's speed and force through its drive (lmcal/io/drive.hpp); no other input takes them.
+// `percent` converts to a fraction (scale 0.01), not to N·m: the loader multiplies by the
+// drive's nominal_torque_Nm (is_relative_unit says which units need that).
 //
 // Example: split_unit("load_kgf", Quantity::force) -> {"load", {9.80665, 0}}.
 // Trap: temperature conversions have an offset; always call Conversion::apply.
@@ -26,7 +33,18 @@
 
 namespace LMCAL_API lmcal {
 
-enum class Quantity { time, velocity, force, preload, length_mm, distance_m, temperature, viscosity };
+enum class Quantity {
+  time,
+  velocity,
+  force,
+  preload,
+  length_mm,
+  distance_m,
+  temperature,
+  viscosity,
+  angular_velocity,
+  torque
+};
 
 // value_internal = scale * value_given + offset
 struct Conversion {
@@ -40,6 +58,10 @@ const std::vector<std::string>& unit_names(Quantity quantity);
 
 // The conversion for a unit suffix, or nullopt if the quantity does not know it.
 std::optional<Conversion> unit_conversion(Quantity quantity, std::string_view unit);
+
+// True for a unit that is a share of a reference the data's owner states elsewhere
+// ("percent" of the drive's nominal torque): its conversion gives a fraction, not the internal unit.
+bool is_relative_unit(Quantity quantity, std::string_view unit);
 
 // Splits "NAME_UNIT" where UNIT is one of the quantity's suffixes (longest match wins):
 // "velocity_mm_s" -> {"velocity", mm/s}. nullopt if no suffix of the quantity matches.
