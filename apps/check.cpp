@@ -63,10 +63,10 @@ void check_friction(const std::vector<std::string>& files, const FrictionInputOp
   }
 }
 
-void check_thermal(const std::vector<std::string>& files, const std::string& catalog_file) {
+void check_thermal(const std::vector<std::string>& files, const std::string& catalog_file, std::size_t skip_lines) {
   for (const auto& file : files) {
     if (fs::path(file).extension() == ".csv") {
-      const ThermalTrace trace = load_thermal_trace(file);
+      const ThermalTrace trace = load_thermal_trace(file, skip_lines);
       std::cout << "thermal trace:\n";
       print_report(trace.report);
       print_trace(trace);
@@ -87,13 +87,13 @@ void check_thermal(const std::vector<std::string>& files, const std::string& cat
 
 struct ResampleOptions {
   std::string input, output;
-  std::size_t every = 0, average = 0;
+  std::size_t every = 0, average = 0, skip_lines = 0;
 };
 
 void run_resample(const ResampleOptions& o) {
   if ((o.every == 0) == (o.average == 0))
     throw InvalidParameter("--every/--average", "give exactly one of --every N or --average N (N >= 1)");
-  const ThermalTrace trace = load_thermal_trace(o.input);
+  const ThermalTrace trace = load_thermal_trace(o.input, o.skip_lines);
   const ThermalTrace coarse = o.every ? decimate(trace, o.every) : block_average(trace, o.average);
   write_file_atomically(o.output, thermal_trace_csv(coarse, {fmt::format("resampled from {} ({} {})", o.input,
                                                                           o.every ? "every" : "average of",
@@ -118,7 +118,11 @@ void setup_check(CLI::App& app) {
   thermal->add_option("files", *thermal_files, "Manifests or thermal run CSVs")->required();
   thermal->add_option("--catalog", *thermal_catalog,
                       kCatalogHelp);
-  thermal->callback([thermal_files, thermal_catalog] { check_thermal(*thermal_files, *thermal_catalog); });
+  auto thermal_skip = std::make_shared<std::size_t>(0);
+  thermal->add_option("--skip-lines", *thermal_skip, kSkipLinesHelp);
+  thermal->callback([thermal_files, thermal_catalog, thermal_skip] {
+    check_thermal(*thermal_files, *thermal_catalog, *thermal_skip);
+  });
 
   auto o = std::make_shared<ResampleOptions>();
   CLI::App* resample = app.add_subcommand("resample", "Coarsen a thermal run CSV (the paper kept every 120th record)");
@@ -126,6 +130,7 @@ void setup_check(CLI::App& app) {
   resample->add_option("-o,--output", o->output, "Output CSV")->required();
   resample->add_option("--every", o->every, "Keep records 0, N, 2N, ...");
   resample->add_option("--average", o->average, "Average consecutive blocks of N records");
+  resample->add_option("--skip-lines", o->skip_lines, kSkipLinesHelp);
   resample->callback([o] { run_resample(*o); });
 }
 

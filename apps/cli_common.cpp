@@ -229,9 +229,41 @@ void FrictionInputOptions::add_to(CLI::App& app) {
       "velocity_window");
   add(group->add_option("--moving-mass", raw.moving_mass_kg, "Moving mass, kg: the inertia m*a is taken off the force"),
       "moving_mass_kg");
-  add(group->add_option("--duplicate-times", duplicate_times, "Samples sharing a time: refuse or average"),
+  add(group->add_option("--duplicate-times", duplicate_times, "Samples sharing a time: average (merged) or refuse"),
       "duplicate_times");
+  add(group->add_option("--skip-lines", raw.skip_lines, kSkipLinesHelp),
+      "skip_lines");
+  add_drive_options(app);
+  add(group->add_option("--segmentation", segmentation,
+                        "plateaus (a rig's constant-speed plateaus) or trajectory (a drive's log kept whole; the moving "
+                        "mass is fitted with the law)"),
+      "segmentation");
+  add(group->add_option("--trajectory-window", raw.trajectory_window,
+                        "Samples of a trajectory's velocity filter (odd; 0: chosen from the data)"),
+      "trajectory_window");
+  add(group->add_option("--presliding", raw.presliding_m,
+                        "A trajectory's travel after rest or a reversal dropped as pre-sliding, m"),
+      "presliding_m");
+  add(group->add_option("--axis-incline", raw.axis_incline_deg,
+                        "The axis's incline, degrees (90: vertical, +x up); a trajectory then fits the weight"),
+      "axis_incline_deg");
   app.add_option("--catalog", catalog_file, kCatalogHelp);
+}
+
+void FrictionInputOptions::add_drive_options(CLI::App& app) {
+  auto* group = app.add_option_group("Rotary drive", "How a log's motor speed (velocity_rpm, velocity_rad_s) and torque "
+                                                     "(torque_Nm, torque_percent) become the carriage's (docs/formats.md)");
+  Drive& d = raw.drive;
+  const auto add = [&](CLI::Option* option, const char* field) { options_.emplace_back(option, field); };
+  add(group->add_option("--lead", d.lead_mm, "Screw lead, mm (travel per screw turn)"), "lead_mm");
+  add(group->add_option("--pinion-radius", d.pinion_radius_mm, "Rack and pinion: the pinion's pitch radius, mm"),
+      "pinion_radius_mm");
+  add(group->add_option("--gear-ratio", d.gear_ratio, "Motor turns per screw or pinion turn (default 1)"), "gear_ratio");
+  add(group->add_option("--efficiency", d.efficiency, "The drive's efficiency, 0 < eta <= 1 (default 1)"), "efficiency");
+  add(group->add_option("--rotor-inertia", d.rotor_inertia_kg_m2, "Motor and gearbox inertia at the motor, kg m2"),
+      "rotor_inertia_kg_m2");
+  add(group->add_option("--nominal-torque", d.nominal_torque_Nm, "The motor's nominal torque, N m (for torque_percent)"),
+      "nominal_torque_Nm");
 }
 
 std::vector<std::string> FrictionInputOptions::raw_given() const {
@@ -245,6 +277,7 @@ RawFrictionOptions FrictionInputOptions::parsed() const {
   RawFrictionOptions r = raw;
   r.force_sign = parse_force_sign(force_sign);
   r.duplicate_times = parse_duplicate_times(duplicate_times);
+  r.segmentation = parse_raw_segmentation(segmentation);
   return r;
 }
 

@@ -79,6 +79,8 @@ void add_keep_unusable(CLI::App& app, bool& keep);
 void require_usable(const std::optional<std::string>& why, bool keep);
 
 // The help of every --catalog option.
+inline constexpr const char* kSkipLinesHelp =
+    "Lines before the column names (a logger's preamble) to skip, whatever they hold; errors name the file's lines";
 inline constexpr const char* kCatalogHelp =
     "Your guide catalog (TOML: [[guide]] and [[bar]] tables), searched before the built-in one (and instead of a "
     "manifest's catalog)";
@@ -236,7 +238,8 @@ void apply_friction_constant_options(const FrictionConstantOptions& o, FrictionF
 // or one friction manifest) loaded with them.
 struct FrictionInputOptions {
   RawFrictionOptions raw;
-  std::string force_sign = "follows-motion", duplicate_times = "refuse";
+  std::string force_sign = "follows-motion", duplicate_times = "average";
+  std::string segmentation = "plateaus";
   std::string catalog_file;
   void add_to(CLI::App& app);
   // The settings the user gave, by RawFrictionOptions' field names (they win over a manifest's [raw]).
@@ -245,6 +248,7 @@ struct FrictionInputOptions {
   RawFrictionOptions parsed() const;
 
  private:
+  void add_drive_options(CLI::App& app);  // --lead, --pinion-radius, ... into raw.drive
   std::vector<std::pair<const CLI::Option*, std::string>> options_;  // option -> field name
 };
 

@@ -3,7 +3,8 @@
 # bundled case: a check of the bundled (synthetic) measurements, a simulation of the paper's
 # SRN 35C rail case (Cheng et al. 2017, Tables 2-3; fits/simulation/), and last the whole
 # calibration of the bundled measurements with its report (fits/cheng2017/report.html), and
-# of the rig-shaped set (fits/rig/report.html).
+# of the rig-shaped set (fits/rig/report.html) and of a machine axis's own drive log
+# (fits/axis/report.html).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/build.sh
@@ -39,3 +40,8 @@ echo
 echo "== A rig-shaped set (measurements/rig, synthetic): raw load-cell time series cut into"
 echo "   constant-velocity plateaus, thermal runs that stop and cool (open fits/rig/report.html) =="
 "$lmcal" calibrate measurements/rig
+
+echo
+echo "== A machine axis's own drive log (measurements/axis, synthetic): closed-loop moves on a 20 degree"
+echo "   axis, the motor's force; the moving mass and the weight fitted with the law (fits/axis/report.html) =="
+"$lmcal" calibrate measurements/axis

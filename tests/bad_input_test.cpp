@@ -1,4 +1,4 @@
-// The bad-input corpus (tests/data/bad/; loaders: friction and thermal CSVs, thermal manifests,
+// The bad-input corpus (tests/data/bad/; loaders: friction and thermal CSVs, friction and thermal manifests,
 // friction fit JSONs as --friction reads them, duty files): every file there must be refused with exactly the
 // message tests/data/bad/expected.txt gives for it, and every file must be listed there.
 #include "lmcal/error.hpp"
@@ -71,6 +71,8 @@ std::string load_message(const std::string& loader, const std::string& file) {
     } else if (loader == "manifest") {
       // The corpus's manifests use the runs of tests/data/good/: their root is tests/data.
       load_thermal_dataset(file, nullptr, InputScope{.root = ".."});
+    } else if (loader == "frictionmanifest") {
+      load_friction_dataset(file, nullptr, {}, {}, InputScope{.root = ".."});
     } else if (loader == "duty") {
       load_duty_cycle(file);
     } else if (loader == "fitjson") {

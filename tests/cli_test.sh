@@ -581,11 +581,12 @@ check "calibrate gives the same outputs with 1 and 2 threads (rig-shaped set)" s
 check "calibrate gives the same outputs with 1 and 2 threads (Cheng 2017 set)" same_with_threads "$SOURCE/measurements/cheng2017"
 
 # The bundled set is exactly what the recorded commands make (the command lines aside).
-LMCAL="$LMCAL" bash "$SOURCE/scripts/make-bundled-data.sh" "$work/bundled" "$work/bundled-rig" >/dev/null
+LMCAL="$LMCAL" bash "$SOURCE/scripts/make-bundled-data.sh" "$work/bundled" "$work/bundled-rig" "$work/bundled-axis" >/dev/null
 same_as_bundled() {  # same_as_bundled SET FOLDER
   diff -r -q -I '^# Command:' "$SOURCE/measurements/$1" "$2" -x README.md
 }
 check "bundled data set regenerates identically" same_as_bundled cheng2017 "$work/bundled"
 check "the rig-shaped set regenerates identically" same_as_bundled rig "$work/bundled-rig"
+check "the drive-log set regenerates identically" same_as_bundled axis "$work/bundled-axis"
 
 finish cli_test.sh

@@ -100,6 +100,7 @@ TEST(FrictionEffects, EveryRegisteredEffectVanishesAtItsNeutralValueAndIsFindabl
           auto c = test::srn35c_conditions(v);
           c.temperature_C = temperature_C;
           c.direction = direction;
+          c.acceleration_m_s2 = v > 0.1 ? 0.5 : 0.0;  // a trajectory's sample (the moving mass acts there)
           const auto b = friction_breakdown(k, c);
           EXPECT_NEAR(Effect::correction_N(k, c, b, b.total_N(), info.neutral), 0.0, 1e-12 * b.total_N())
               << info.name << " V = " << v;

@@ -38,9 +38,11 @@ TEST(FrictionDiagnosis, NamesEveryLibraryEffectHiddenInTheData) {
                            {"coulomb_temperature", 0.03}, {"coulomb_temperature", 0.08},
                            {"seal_drag_block", 15},       {"seal_drag_block", 60},
                            {"signed_zero_offset", 0.1},   {"signed_zero_offset", 0.3}};
-  // A newly registered effect must come with its own cases here.
+  // A newly registered effect must come with its own cases here; the drive's dynamics (the
+  // moving mass and an incline's weight) are no cause to name: trajectory_friction_test.cpp.
   for (const auto& info : FrictionEffectLibrary::infos)
-    EXPECT_TRUE(std::any_of(std::begin(hidden), std::end(hidden), [&](const Hidden& h) { return h.effect == std::string(info.name); }))
+    if (!info.dynamics)
+      EXPECT_TRUE(std::any_of(std::begin(hidden), std::end(hidden), [&](const Hidden& h) { return h.effect == std::string(info.name); }))
         << info.name << " is registered but never hidden in the test data";
   for (const auto& h : hidden) {
     for (std::uint64_t seed : {21, 22}) {

@@ -279,17 +279,19 @@ RawFrictionOptions keep_all(std::size_t min_samples) {
   return o;
 }
 
-TEST_F(RawFriction, RepeatedTimesAreRefusedOrAveragedAsAsked) {
+TEST_F(RawFriction, RepeatedTimesAreAveragedByDefaultOrRefusedAsAsked) {
   std::vector<std::string> rows = plateau_rows();
   rows.insert(rows.begin() + 10, "a,0.9,9,22,1000,2.5,120.2,24");  // line 12 repeats line 11's time
   const auto file = write("dup.csv", raw_csv(rows));
   RawFrictionOptions o = keep_all(10);
   {
-    const InputError e = test::refusal([&] { load_friction_log(file, o); });
+    RawFrictionOptions refuse = o;
+    refuse.duplicate_times = DuplicateTimes::refuse;
+    const InputError e = test::refusal([&] { load_friction_log(file, refuse); });
     EXPECT_EQ(e.line(), 12);
-    EXPECT_TRUE(test::says(e, "--duplicate-times average"));
+    EXPECT_TRUE(test::says(e, "duplicate_times = refuse"));
   }
-  o.duplicate_times = DuplicateTimes::average;
+  ASSERT_EQ(o.duplicate_times, DuplicateTimes::average);  // the default
   const FrictionLog log = load_friction_log(file, o);
   ASSERT_EQ(log.segmentation.size(), 1u);
   EXPECT_EQ(log.segmentation[0].averaged_duplicates, 1u);
@@ -364,7 +366,8 @@ TEST_F(RawFriction, TheRigsRawRunsFitToTheTrueConstants) {
 
 const char* kTidyHeader = "run,time_s,velocity_m_s,load_N,preload_um,block_length_mm,temperature_C,friction_N,direction\n";
 
-TEST_F(RawFriction, ConditionsAsKeysGiveTheSameLogAndFitAsColumns) {
+// A few setups, one a run, several speeds each: enough for every constant of the law.
+FrictionLog few_setups_log() {
   FrictionRigConfig c = one_setup({0.002, 0.005, 0.01, 0.02, 0.05, 0.11});
   c.load_N = {1000, 3000};
   c.temperature_C = {22, 40};
@@ -372,7 +375,11 @@ TEST_F(RawFriction, ConditionsAsKeysGiveTheSameLogAndFitAsColumns) {
   c.one_setup_per_run = true;
   c.runs = 2;
   c.temperature_noise_K = 0;  // a run's temperature is one value, as a key gives it
-  const FrictionLog columns = generate_friction_log(c, {}).log;
+  return generate_friction_log(c, {}).log;
+}
+
+TEST_F(RawFriction, ConditionsAsKeysGiveTheSameLogAndFitAsColumns) {
+  const FrictionLog columns = few_setups_log();
   const auto tidy = write("columns.csv", friction_log_csv(columns));
 
   // The same samples, with the conditions moved into the manifest.
@@ -457,6 +464,225 @@ TEST_F(RawFriction, SignedFrictionInATidyLogIsAWarning) {
   const auto warnings = load_friction_log(write("signed.csv", text)).reports.at(0).warnings;
   ASSERT_EQ(warnings.size(), 1u);
   EXPECT_NE(warnings[0].find("negative on 5 of the 5 samples with direction = -1"), std::string::npos) << warnings[0];
+}
+
+// ---- Rotary drives, repeated times, preambles (issue 37) -----------------------------------
+
+// A rig's runs as raw logs with a signed velocity column: each tidy sample becomes a plateau of
+// 8 samples, 50 ms apart, at its speed in its sense, the force following the motion (with a
+// ripple of 10 mN); the runs' conditions as [[run]] keys.
+struct RawRows {
+  std::vector<std::string> run;
+  std::vector<double> time_s, velocity_m_s, force_N;
+  std::string run_keys;  // the manifest's [[run]] tables
+};
+RawRows raw_rows_of(const FrictionLog& rig) {
+  RawRows rows;
+  std::vector<bool> described(rig.run_names.size(), false);
+  std::vector<double> next_time_s(rig.run_names.size(), 0);
+  for (std::size_t i = 0; i < rig.size(); ++i) {
+    const std::uint32_t r = rig.run[i];
+    for (int k = 0; k < 8; ++k) {
+      rows.run.push_back(rig.run_names[r]);
+      rows.time_s.push_back(next_time_s[r]);
+      next_time_s[r] += 0.05;
+      rows.velocity_m_s.push_back(rig.direction[i] * rig.velocity_m_s[i]);
+      rows.force_N.push_back(rig.direction[i] * (rig.friction_N[i] + 0.01 * std::sin(k)));
+    }
+    if (described[r]) continue;
+    described[r] = true;
+    rows.run_keys += fmt::format("[[run]]\nid = \"{}\"\nload_N = {}\npreload_um = {}\nblock_length_mm = {}\n"
+                                 "temperature_C = {}\n",
+                                 rig.run_names[r], rig.load_N[i], rig.preload_um[i], rig.block_length_mm[i],
+                                 rig.temperature_C[i]);
+  }
+  return rows;
+}
+
+// Settings that keep the rig's short plateaus.
+constexpr const char* kDriveRaw = "[raw]\nsettling_s = 0\nmin_plateau_samples = 5\nvelocity_window = 3\n";
+
+// Expects two logs to hold the same samples (1e-9 relative) and to fit to the same constants.
+void expect_same_samples_and_fit(const FrictionLog& a, const FrictionLog& b, bool same_lines = true) {
+  ASSERT_EQ(a.size(), b.size());
+  ASSERT_GT(a.size(), 100u);
+  EXPECT_EQ(a.direction, b.direction);
+  if (same_lines) EXPECT_EQ(a.line, b.line);
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    ASSERT_NEAR(a.velocity_m_s[i], b.velocity_m_s[i], 1e-9 * a.velocity_m_s[i]) << i;
+    ASSERT_NEAR(a.friction_N[i], b.friction_N[i], 1e-9 * std::abs(a.friction_N[i])) << i;
+  }
+  FrictionFitOptions o;  // one least-squares solve: its minimum, not the run variance's alternation
+  o.run_offsets = RunOffsets::none;
+  o.per_run_fits = false;
+  const FrictionFitResult fa = fit_friction(a, o), fb = fit_friction(b, o);
+  ASSERT_TRUE(fa.fit.solver.usable);
+  for (std::size_t j = 0; j < 7; ++j) {
+    const double va = fa.fit.parameters[j].value, vb = fb.fit.parameters[j].value;
+    EXPECT_NEAR(va, vb, 1e-9 * std::abs(va)) << fa.fit.parameters[j].name;
+  }
+}
+
+// The rig's runs converted by hand to a motor's speed and torque (the equations written out
+// here, not the library's) read through [drive], against the same runs in m/s and N.
+TEST_F(RawFriction, ARotaryDriveGivesTheSamplesAndFitOfTheLogConvertedByHand) {
+  const RawRows rows = raw_rows_of(few_setups_log());
+  std::string linear = "run,time_s,velocity_m_s,force_N\n";
+  std::string screw = "run,time_s,velocity_rpm,torque_Nm\n";
+  std::string pinion = "run,time_s,velocity_rad_s,torque_percent\n";
+  const double lead_m = 0.010, screw_ratio = 3, screw_eta = 0.9;                 // ball screw behind a belt
+  const double radius_m = 0.020, pinion_ratio = 5, pinion_eta = 0.95, nominal_Nm = 2.5;  // rack and pinion
+  for (std::size_t i = 0; i < rows.run.size(); ++i) {
+    const double v = rows.velocity_m_s[i], f = rows.force_N[i];
+    linear += fmt::format("{},{:.17g},{:.17g},{:.17g}\n", rows.run[i], rows.time_s[i], v, f);
+    const double rpm = v / lead_m * screw_ratio * 60;                 // screw turns/s × ratio, per minute
+    const double screw_Nm = f * lead_m / (2 * M_PI * screw_eta * screw_ratio);
+    screw += fmt::format("{},{:.17g},{:.17g},{:.17g}\n", rows.run[i], rows.time_s[i], rpm, screw_Nm);
+    const double rad_s = v / radius_m * pinion_ratio;
+    const double percent = 100 * f * radius_m / (pinion_eta * pinion_ratio) / nominal_Nm;
+    pinion += fmt::format("{},{:.17g},{:.17g},{:.17g}\n", rows.run[i], rows.time_s[i], rad_s, percent);
+  }
+  write("linear.csv", linear);
+  write("screw.csv", screw);
+  write("pinion.csv", pinion);
+  const FrictionLog by_hand =
+      load_friction_dataset(write("linear.toml", "file = \"linear.csv\"\n" + std::string(kDriveRaw) + rows.run_keys)).log;
+  const FrictionDataSet screwed = load_friction_dataset(
+      write("screw.toml", "file = \"screw.csv\"\n[drive]\nlead_mm = 10\ngear_ratio = 3\nefficiency = 0.9\n" +
+                              std::string(kDriveRaw) + rows.run_keys));
+  expect_same_samples_and_fit(by_hand, screwed.log);
+  EXPECT_NE(screwed.log.reports[0].conversions.at("velocity_rpm").find("screw, lead 10 mm, gear ratio 3"),
+            std::string::npos);
+  const FrictionDataSet pinioned = load_friction_dataset(
+      write("pinion.toml", "file = \"pinion.csv\"\n[drive]\npinion_radius_mm = 20\ngear_ratio = 5\nefficiency = 0.95\n"
+                           "nominal_torque_Nm = 2.5\n" + std::string(kDriveRaw) + rows.run_keys));
+  expect_same_samples_and_fit(by_hand, pinioned.log);
+
+  // The same drive as settings (the flags' and the Python dict's path) rather than [drive].
+  RawFrictionOptions flags;
+  flags.drive.set("lead_mm", 10);
+  flags.drive.set("gear_ratio", 3);
+  flags.drive.set("efficiency", 0.9);
+  const FrictionDataSet given = load_friction_dataset(
+      write("screw_flags.toml", "file = \"screw.csv\"\n" + std::string(kDriveRaw) + rows.run_keys), nullptr, flags,
+      {"lead_mm", "gear_ratio", "efficiency"});
+  EXPECT_EQ(given.log.friction_N, screwed.log.friction_N);
+  EXPECT_EQ(given.log.velocity_m_s, screwed.log.velocity_m_s);
+}
+
+// Reflected to the carriage, a rotor's J·(2π·N/p)² joins the moving mass whose inertia is taken
+// off the force; without a moving mass it is only reported.
+TEST(Drive, RotorInertiaIsReflectedByTheRatioSquared) {
+  Drive screw;
+  screw.set("lead_mm", 10);
+  screw.set("gear_ratio", 3);
+  screw.set("rotor_inertia_kg_m2", 1e-4);
+  EXPECT_NEAR(screw.reflected_inertia_kg(), 1e-4 * std::pow(2 * M_PI * 3 / 0.010, 2), 1e-12);
+  Drive pinion;
+  pinion.set("pinion_radius_mm", 20);
+  pinion.set("gear_ratio", 5);
+  pinion.set("rotor_inertia_kg_m2", 1e-4);
+  EXPECT_NEAR(pinion.reflected_inertia_kg(), 1e-4 * std::pow(5 / 0.020, 2), 1e-12);
+  // Power balance: F·v = η·τ·ω.
+  screw.set("efficiency", 0.8);
+  EXPECT_NEAR(screw.force_per_motor_Nm() * screw.speed_per_motor_rad_s(), 0.8, 1e-15);
+  EXPECT_THROW(screw.set("efficiency", 1.5), InvalidParameter);
+  EXPECT_THROW(screw.set("lead_mm", 0), InvalidParameter);
+  EXPECT_THROW(screw.set("gear_ratio", -1), InvalidParameter);
+  screw.pinion_radius_mm = 20;
+  EXPECT_THROW(screw.validate(), InvalidParameter);
+}
+
+TEST_F(RawFriction, ARotorsInertiaJoinsAGivenMovingMass) {
+  std::string text = "run,time_s,velocity_rpm,torque_Nm,load_N,preload_um,block_length_mm,temperature_C\n";
+  for (int k = 0; k < 60; ++k) {  // accelerating at 0.06 m/s² for 1 s, then 2 s at 60 mm/s (3600 rpm with a 1 mm lead)
+    const double t = 0.05 * k, v = t < 1 ? 0.06 * t : 0.06;
+    text += fmt::format("a,{},{},{},1000,2.5,120.2,24\n", t, v / 0.001 * 60, 0.01);
+  }
+  write("inertia.csv", text);
+  RawFrictionOptions o = keep_all(5);
+  o.drive.set("lead_mm", 1);
+  o.drive.set("rotor_inertia_kg_m2", 1e-6);  // 1e-6 · (2π / 1 mm)² = 39.5 kg at the carriage
+  const FrictionLog plain = load_friction_log(dir_ / "inertia.csv", o);
+  EXPECT_NE(plain.reports[0].conversions.at("rotor_inertia_kg_m2").find("39.4784 kg at the carriage, part of the moving mass"),
+            std::string::npos)
+      << plain.reports[0].conversions.at("rotor_inertia_kg_m2");
+  o.moving_mass_kg = 2;
+  const FrictionLog with_mass = load_friction_log(dir_ / "inertia.csv", o);
+  EXPECT_NE(with_mass.reports[0].conversions.at("rotor_inertia_kg_m2").find("added to moving_mass_kg (2 kg)"),
+            std::string::npos);
+}
+
+// Duplicates by a logger that writes too few digits of the time: each pair's mean is the sample
+// the log deduplicated by hand has.
+TEST_F(RawFriction, RepeatedTimesAverageToTheLogDeduplicatedByHand) {
+  const RawRows rows = raw_rows_of(few_setups_log());
+  std::string once = "run,time_s,velocity_m_s,force_N\n", twice = once;
+  std::size_t pairs = 0;
+  for (std::size_t i = 0; i < rows.run.size(); ++i) {
+    const double v = rows.velocity_m_s[i], f = rows.force_N[i], t = rows.time_s[i];
+    once += fmt::format("{},{:.17g},{:.17g},{:.17g}\n", rows.run[i], t, v, f);
+    if (i % 4 == 0) {  // two readings around the sample, at its time: 0.25 and 0.5 are exact in binary
+      twice += fmt::format("{},{:.17g},{:.17g},{:.17g}\n", rows.run[i], t, v - 0.25 * v, f + 0.5);
+      twice += fmt::format("{},{:.17g},{:.17g},{:.17g}\n", rows.run[i], t, v + 0.25 * v, f - 0.5);
+      ++pairs;
+    } else {
+      twice += fmt::format("{},{:.17g},{:.17g},{:.17g}\n", rows.run[i], t, v, f);
+    }
+  }
+  write("once.csv", once);
+  write("twice.csv", twice);
+  const std::string manifest = std::string(kDriveRaw) + rows.run_keys;
+  const FrictionLog a = load_friction_dataset(write("once.toml", "file = \"once.csv\"\n" + manifest)).log;
+  const FrictionLog b = load_friction_dataset(write("twice.toml", "file = \"twice.csv\"\n" + manifest)).log;
+  std::size_t merged = 0;
+  for (const RunSegmentation& s : b.segmentation) merged += s.averaged_duplicates;
+  EXPECT_EQ(merged, pairs);
+  expect_same_samples_and_fit(a, b, false);
+  // Refused when asked.
+  const auto refuse = write("refuse.toml", "file = \"twice.csv\"\n" + std::string(kDriveRaw) +
+                                               "duplicate_times = \"refuse\"\n" + rows.run_keys);
+  EXPECT_TRUE(test::says(test::refusal([&] { load_friction_dataset(refuse); }), "refused as asked"));
+}
+
+// A logger's preamble: three lines before the column names, skipped by skip_lines (a setting, or
+// a manifest's key for its file); errors name the file's own lines.
+TEST_F(RawFriction, APreambleIsSkippedAndErrorsNameTheFilesLines) {
+  const std::string preamble = "Logger XY-200, firmware 1.2\nchannel A: load cell\nsample rate: 10 Hz\n";
+  const std::string rows = raw_csv(plateau_rows());
+  write("plain.csv", rows);
+  write("preamble.csv", preamble + rows);
+  const FrictionLog plain = load_friction_log(dir_ / "plain.csv", keep_all(10));
+  RawFrictionOptions o = keep_all(10);
+  o.skip_lines = 3;
+  const FrictionLog skipped = load_friction_log(dir_ / "preamble.csv", o);
+  EXPECT_EQ(skipped.friction_N, plain.friction_N);
+  EXPECT_EQ(skipped.velocity_m_s, plain.velocity_m_s);
+  ASSERT_EQ(skipped.line.size(), plain.line.size());
+  EXPECT_EQ(skipped.line.front(), plain.line.front() + 3);  // the file's own line numbers
+  // As a manifest's key: of its file, or of a run's own file.
+  const std::string raw = "[raw]\nsettling_s = 0\nmin_plateau_samples = 10\n";
+  EXPECT_EQ(load_friction_dataset(write("top.toml", "file = \"preamble.csv\"\nskip_lines = 3\n" + raw)).log.friction_N,
+            plain.friction_N);
+  std::string runless = preamble + rows.substr(rows.find(',') + 1);  // the run column dropped
+  for (std::size_t at = runless.find("\na,"); at != std::string::npos; at = runless.find("\na,", at)) runless.erase(at + 1, 2);
+  write("runless.csv", runless);
+  const auto manifest = write("run.toml", "[[run]]\nid = \"p\"\nfile = \"runless.csv\"\nskip_lines = 3\n" + raw);
+  EXPECT_EQ(load_friction_dataset(manifest).log.friction_N, plain.friction_N);
+  // Without it, the preamble is read as the header.
+  EXPECT_THROW(load_friction_log(dir_ / "preamble.csv", keep_all(10)), InputError);
+
+  // An error in a row, and one found after the run was read (a plateau too fast), at the real line.
+  std::vector<std::string> bad = plateau_rows();
+  bad[4] = "a,0.4,4,twenty,1000,2.5,120.2,24";  // line 6 of the log, 9 of the file
+  write("bad_cell.csv", preamble + raw_csv(bad));
+  EXPECT_EQ(test::refusal([&] { load_friction_log(dir_ / "bad_cell.csv", o); }).line(), 9);
+  std::vector<std::string> fast;
+  for (int k = 0; k < 30; ++k) fast.push_back(fmt::format("a,{},{},20,1000,2.5,120.2,24", 0.001 * k, 100 * k));
+  write("fast.csv", preamble + raw_csv(fast));
+  const InputError e = test::refusal([&] { load_friction_log(dir_ / "fast.csv", o); });
+  EXPECT_EQ(e.line(), 5);  // the first sample: line 2 of the log
+  EXPECT_EQ(e.column(), 5);
 }
 
 }  // namespace

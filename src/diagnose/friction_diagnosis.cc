@@ -354,7 +354,7 @@ FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagno
                                      .max_effects = o.max_effects,
                                      .parallel = true,
                                      .progress = o.progress};
-  auto selection = detail::forward_select(friction_effect_names(), baseline, fit_candidate, summarise, rules);
+  auto selection = detail::forward_select(friction_cause_names(), baseline, fit_candidate, summarise, rules);
   const FrictionFitResult& current = selection.current;
   d.rounds = std::move(selection.rounds);
 

@@ -272,6 +272,24 @@ const std::vector<std::string>& friction_effect_names() {
   return names;
 }
 
+const std::vector<std::string>& friction_cause_names() {
+  static const std::vector<std::string> names = [] {
+    std::vector<std::string> v;
+    for (const auto& e : FrictionEffectLibrary::infos)
+      if (!e.dynamics) v.emplace_back(e.name);
+    return v;
+  }();
+  return names;
+}
+
+std::vector<std::string> drive_effects(const FrictionLog& log) {
+  std::vector<std::string> names;
+  if (log.trajectory) names.emplace_back(MovingMass::info.name);
+  if (log.trajectory && std::isfinite(log.axis_incline_deg) && log.axis_incline_deg != 0)
+    names.emplace_back(AxisGravity::info.name);
+  return names;
+}
+
 FrictionConstants<double> FrictionFitResult::constants() const {
   const auto& p = fit.parameters;
   LMCAL_ASSERT(p.size() >= 7, "a friction fit has seven constants");
@@ -357,8 +375,15 @@ FrictionLog with_block_mean_temperature(const FrictionLog& logged) {
   return out;
 }
 
-FrictionFitResult fit_friction(const FrictionLog& logged, const FrictionFitOptions& options) {
+FrictionFitResult fit_friction(const FrictionLog& logged, const FrictionFitOptions& given) {
   if (logged.size() == 0) throw InvalidParameter("log", "the friction log has no samples");
+  // A trajectory's drive force carries its inertia (and an incline's weight): fitted with the law.
+  FrictionFitOptions options = given;
+  for (const std::string& name : drive_effects(logged))
+    if (std::find(options.effects.begin(), options.effects.end(), name) == options.effects.end()) {
+      options.effect_start.resize(std::min(options.effect_start.size(), options.effects.size()));  // it starts neutral
+      options.effects.push_back(name);
+    }
   FrictionLog smoothed;
   if (options.temperature == FrictionTemperature::block_mean) smoothed = with_block_mean_temperature(logged);
   const FrictionLog& log = options.temperature == FrictionTemperature::block_mean ? smoothed : logged;

@@ -41,11 +41,13 @@ enum Spec : std::size_t {
   kViscosity40,
   kDirection,
   kForce,
-  kPosition
+  kPosition,
+  kAngularVelocity,  // a motor's speed: becomes kVelocity through the drive
+  kTorque            // a motor's torque: becomes kForce through the drive
 };
 // Required columns are checked by the loader: a manifest may give them instead, and a raw log
 // has force where a tidy one has friction.
-constexpr std::array<csv::ColumnSpec, 13> kSpecs{{
+constexpr std::array<csv::ColumnSpec, 15> kSpecs{{
     {.name = "run", .text = true},
     {.name = "guide", .text = true},
     {.name = "time", .quantity = Quantity::time},
@@ -62,6 +64,11 @@ constexpr std::array<csv::ColumnSpec, 13> kSpecs{{
     {.name = "direction", .rule = Rule::plus_or_minus_one},
     {.name = "force", .quantity = Quantity::force},
     {.name = "position", .quantity = Quantity::distance_m},
+    {.name = "velocity",
+     .quantity = Quantity::angular_velocity,
+     .rule = Rule::non_negative,
+     .hint = " (a speed; the direction column gives the sense)"},
+    {.name = "torque", .quantity = Quantity::torque},
 }};
 
 std::string header_of(Spec spec) {
@@ -154,10 +161,12 @@ class FileLoader {
  public:
   FileLoader(const detail::FrictionFile& file, const RawFrictionOptions& raw, FrictionLog& log, NameIndex& runs,
              NameIndex& guides)
-      : file_(file), raw_(raw), log_(log), runs_(runs), guides_(guides), reader_(file.path) {
+      : file_(file), raw_(raw), log_(log), runs_(runs), guides_(guides),
+        reader_(file.path, file.skip_lines.value_or(raw.skip_lines)) {
     report_.file = reader_.file();
     reader_.read_header();
     columns_ = csv::bind_header(reader_, kSpecs, report_);
+    bind_drive();
     for (std::size_t spec = 0; spec < kSpecs.size(); ++spec) bound_[spec] = csv::find_column(columns_, spec);
     bind();
   }
@@ -197,6 +206,56 @@ class FileLoader {
   bool is_raw() const { return column(kForce) != nullptr; }
 
   [[noreturn]] void fail_header(const std::string& what) const { reader_.fail_at(reader_.header_line(), 1, what); }
+
+  // A motor's speed or torque column becomes the carriage's velocity or force column: the
+  // drive's factor (drive.hpp) folded into its unit conversion, its range the linear one's.
+  void bind_drive() {
+    const Drive& drive = raw_.drive;
+    const auto linear = [&](Spec joint, Spec spec, Quantity quantity, double factor, const char* what,
+                            const char* motor) {
+      csv::Column* c = mutable_column(joint);
+      if (!c) return;
+      if (const csv::Column* other = csv::find_column(columns_, spec)) {
+        const csv::Column* earlier = other->cell < c->cell ? other : c;
+        const csv::Column* later = other->cell < c->cell ? c : other;
+        reader_.fail(later->cell, fmt::format("'{}' gives the carriage's {} '{}' already gives: give one", later->header,
+                                              what, earlier->header));
+      }
+      if (!drive.given()) {
+        reader_.fail(c->cell, fmt::format("column '{}' is a motor's {}, not the carriage's {}: add a [drive] table to the "
+                                          "friction manifest (lead_mm for a screw or pinion_radius_mm for a rack and "
+                                          "pinion; gear_ratio, efficiency) or give --lead or --pinion-radius",
+                                          c->header, motor, what));
+      }
+      const std::string unit = c->header.substr(c->name.size() + 1);
+      if (is_relative_unit(*kSpecs[joint].quantity, unit)) {
+        if (!drive.nominal_torque_Nm) {
+          reader_.fail(c->cell, fmt::format("column '{}' is a share of the motor's nominal torque: add nominal_torque_Nm "
+                                            "to the [drive] table (or give --nominal-torque)",
+                                            c->header));
+        }
+        factor *= *drive.nominal_torque_Nm;
+      }
+      c->spec = spec;
+      c->conversion.scale *= factor;
+      c->range = physical_range(quantity);
+      report_.conversions[c->header] =
+          fmt::format("{} -> {} through the drive ({})", unit, unit_names(quantity).front(), drive.describe());
+    };
+    linear(kAngularVelocity, kVelocity, Quantity::velocity, drive.speed_per_motor_rad_s(), "velocity", "speed");
+    const bool torque = csv::find_column(columns_, kTorque) != nullptr;
+    linear(kTorque, kForce, Quantity::force, drive.force_per_motor_Nm(), "force", "torque");
+    // The rotor's inertia is the drive's: in a motor's torque, not in a load cell's force.
+    if (torque && drive.rotor_inertia_kg_m2 > 0) {
+      const double reflected = drive.reflected_inertia_kg();
+      report_.conversions["rotor_inertia_kg_m2"] = fmt::format(
+          "{:g} kg·m² -> {:.6g} kg at the carriage, {}", drive.rotor_inertia_kg_m2, reflected,
+          raw_.moving_mass_kg > 0 ? fmt::format("added to moving_mass_kg ({:g} kg) for the inertia taken off the force",
+                                                raw_.moving_mass_kg)
+                                  : std::string("part of the moving mass (not taken off the force: no moving_mass_kg)"));
+      if (raw_.moving_mass_kg > 0) raw_.moving_mass_kg += reflected;
+    }
+  }
 
   // Which columns the file has decides its kind (tidy or raw) and what the manifest must give.
   void bind() {
@@ -389,8 +448,8 @@ class FileLoader {
     if (raw && t == previous.time_s) {
       if (raw_.duplicate_times == DuplicateTimes::refuse) {
         reader_.fail(time.cell, fmt::format("{} = {} repeats the time of the previous sample of run '{}' (line {}); "
-                                            "a raw log needs one sample per time: give --duplicate-times average to "
-                                            "average such samples",
+                                            "refused as asked (duplicate_times = refuse); the default, average, "
+                                            "merges such samples into one",
                                             time.header, reader_.cell(time.cell), log_.run_names[run_index],
                                             previous.line));
       }
@@ -447,11 +506,21 @@ class FileLoader {
       RunSegmentation seg{.run = name, .file = report_.file};
       raw::tally(s, seg);
       seg.averaged_duplicates = r.merged;
-      for (const std::string& w : raw::sign_warnings(name, column(kForce)->header, r.samples, s, raw_))
-        report_.warnings.push_back(w);
+      // On an inclined axis the drive holds the weight: its force may keep one sign both ways.
+      if (!(s.trajectory() && raw_.axis_incline_deg != 0))
+        for (const std::string& w : raw::sign_warnings(name, column(kForce)->header, r.samples, s, raw_))
+          report_.warnings.push_back(w);
+      if (!s.trajectory() && 3 * seg.kept < 2 * seg.samples)
+        report_.warnings.push_back(fmt::format(
+            "run '{}': the plateau reader kept {} of {} samples ({:.0f} %): a drive's log that never holds a speed is "
+            "read whole with --segmentation trajectory (segmentation = \"trajectory\" in the manifest's [raw]), which "
+            "fits the moving mass with the law; or shorten --settling ({} s)",
+            name, seg.kept, seg.samples, 100.0 * static_cast<double>(seg.kept) / static_cast<double>(std::max<std::size_t>(seg.samples, 1)),
+            raw_.settling_s));
       for (std::size_t i = 0; i < s.fate.size(); ++i) {
         if (s.fate[i] != raw::Fate::kept) continue;
-        const double v = s.plateaus[s.plateau[i]].velocity_m_s;
+        // A plateau's sample takes its plateau's speed; a trajectory's, its own filtered one.
+        const double v = s.trajectory() ? s.velocity_m_s[i] : s.plateaus[s.plateau[i]].velocity_m_s;
         // A plateau's speed comes from positions over time: held to the range a column's is.
         if (const PhysicalRange range = physical_range(Quantity::velocity); !range.contains(v)) {
           csv::fail_at_cell(file_.path, r.line[i], motion_->cell,
@@ -462,6 +531,7 @@ class FileLoader {
         FrictionConditions<double> c = setup.conditions;
         c.velocity_m_s = std::abs(v);
         c.direction = v < 0 ? -1.0 : 1.0;
+        c.acceleration_m_s2 = s.trajectory() ? s.acceleration_m_s2[i] : 0.0;
         log_.append(r.run, setup.guide, r.samples.time_s[i], c, raw::friction_N(r.samples, s, raw_, i),
                     setup.viscosity40, static_cast<std::uint32_t>(r.line[i]));
       }
@@ -479,8 +549,17 @@ class FileLoader {
     skip(skipped_, column(kForce)->header + " empty or NaN");
     skip(merged_, "merged into a sample at the same time");
     skip(total.dropped_acceleration, fmt::format("accelerating (|a| > {} m/s²)", raw_.max_acceleration_m_s2));
-    skip(total.dropped_settling, fmt::format("settling ({} s after an acceleration)", raw_.settling_s));
-    skip(total.dropped_stationary, fmt::format("at rest (speed < {} m/s)", raw_.min_speed_m_s));
+    if (raw_.segmentation == RawSegmentation::trajectory) {
+      log_.trajectory = true;
+      log_.axis_incline_deg = raw_.axis_incline_deg;
+      skip(total.dropped_stationary, "at rest or reversing (slower than max(min_speed, 3 σ_v), or within the filter's "
+                                     "reach of such a sample: static friction, not the sliding law)");
+      skip(total.dropped_settling, fmt::format("pre-sliding (the first {} mm of travel after rest or a reversal)",
+                                               raw_.presliding_m * 1e3));
+    } else {
+      skip(total.dropped_settling, fmt::format("settling ({} s after an acceleration)", raw_.settling_s));
+      skip(total.dropped_stationary, fmt::format("at rest (speed < {} m/s)", raw_.min_speed_m_s));
+    }
     skip(total.dropped_short, fmt::format("in plateaus shorter than {} samples", raw_.min_plateau_samples));
     report_.rows_kept = total.kept;
   }
@@ -523,7 +602,7 @@ class FileLoader {
   };
 
   const detail::FrictionFile& file_;
-  const RawFrictionOptions& raw_;
+  RawFrictionOptions raw_;  // the moving mass with the rotor's reflected inertia (bind_drive)
   FrictionLog& log_;
   NameIndex& runs_;
   NameIndex& guides_;
@@ -551,7 +630,8 @@ FrictionConditions<double> FrictionLog::conditions(std::size_t i) const {
           .block_length_mm = block_length_mm[i],
           .velocity_m_s = velocity_m_s[i],
           .temperature_C = temperature_C[i],
-          .direction = static_cast<double>(direction[i])};
+          .direction = static_cast<double>(direction[i]),
+          .acceleration_m_s2 = i < acceleration_m_s2.size() ? acceleration_m_s2[i] : 0.0};
 }
 
 void FrictionLog::append(std::uint32_t run_index, std::uint32_t guide_index, double time,
@@ -568,6 +648,7 @@ void FrictionLog::append(std::uint32_t run_index, std::uint32_t guide_index, dou
   friction_N.push_back(friction);
   viscosity40_mm2_s.push_back(viscosity40);
   direction.push_back(static_cast<std::int8_t>(c.direction));
+  acceleration_m_s2.push_back(c.acceleration_m_s2);
   line.push_back(source_line);
 }
 

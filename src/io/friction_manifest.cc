@@ -37,7 +37,7 @@ constexpr std::array<ConditionKey, 5> kConditionKeys{{
 }};
 
 std::string known_run_keys() {
-  std::vector<std::string> keys{"id", "file", "guide"};
+  std::vector<std::string> keys{"id", "file", "skip_lines", "guide"};
   for (const ConditionKey& k : kConditionKeys) keys.push_back(csv::canonical_name(k.base, k.quantity));
   return fmt::format("{} (numbers in any unit of their quantity)", fmt::join(keys, ", "));
 }
@@ -50,6 +50,7 @@ struct RawKey {
 const std::vector<RawKey>& raw_keys() {
   static const std::vector<RawKey> keys{
       {"force_sign", [](auto& to, auto& from) { to.force_sign = from.force_sign; }},
+      {"skip_lines", [](auto& to, auto& from) { to.skip_lines = from.skip_lines; }},
       {"duplicate_times", [](auto& to, auto& from) { to.duplicate_times = from.duplicate_times; }},
       {"max_acceleration_m_s2", [](auto& to, auto& from) { to.max_acceleration_m_s2 = from.max_acceleration_m_s2; }},
       {"settling_s", [](auto& to, auto& from) { to.settling_s = from.settling_s; }},
@@ -58,6 +59,10 @@ const std::vector<RawKey>& raw_keys() {
       {"min_plateau_samples", [](auto& to, auto& from) { to.min_plateau_samples = from.min_plateau_samples; }},
       {"velocity_window", [](auto& to, auto& from) { to.velocity_window = from.velocity_window; }},
       {"moving_mass_kg", [](auto& to, auto& from) { to.moving_mass_kg = from.moving_mass_kg; }},
+      {"segmentation", [](auto& to, auto& from) { to.segmentation = from.segmentation; }},
+      {"trajectory_window", [](auto& to, auto& from) { to.trajectory_window = from.trajectory_window; }},
+      {"presliding_m", [](auto& to, auto& from) { to.presliding_m = from.presliding_m; }},
+      {"axis_incline_deg", [](auto& to, auto& from) { to.axis_incline_deg = from.axis_incline_deg; }},
   };
   return keys;
 }
@@ -81,6 +86,7 @@ RawFrictionOptions read_raw(const Manifest& m, const toml::table& table) {
     }
     try {
       if (k == "force_sign") o.force_sign = parse_force_sign(manifest::string_of(m, key, node));
+      else if (k == "skip_lines") o.skip_lines = count_of(m, key, node);
       else if (k == "duplicate_times") o.duplicate_times = parse_duplicate_times(manifest::string_of(m, key, node));
       else if (k == "max_acceleration_m_s2") o.max_acceleration_m_s2 = manifest::number_of(m, key, node);
       else if (k == "settling_s") o.settling_s = manifest::number_of(m, key, node);
@@ -89,6 +95,10 @@ RawFrictionOptions read_raw(const Manifest& m, const toml::table& table) {
       else if (k == "min_plateau_samples") o.min_plateau_samples = count_of(m, key, node);
       else if (k == "velocity_window") o.velocity_window = count_of(m, key, node);
       else if (k == "moving_mass_kg") o.moving_mass_kg = manifest::number_of(m, key, node);
+      else if (k == "segmentation") o.segmentation = parse_raw_segmentation(manifest::string_of(m, key, node));
+      else if (k == "trajectory_window") o.trajectory_window = count_of(m, key, node);
+      else if (k == "presliding_m") o.presliding_m = manifest::number_of(m, key, node);
+      else if (k == "axis_incline_deg") o.axis_incline_deg = manifest::number_of(m, key, node);
       RawFrictionOptions one;  // this key alone against its range
       known->copy(one, o);
       one.validate();
@@ -99,9 +109,39 @@ RawFrictionOptions read_raw(const Manifest& m, const toml::table& table) {
   return o;
 }
 
+// The [drive] table: a rotary log's joint quantities -> the carriage's (drive.hpp). Lead and
+// radius both: refused at the later one.
+Drive read_drive(const Manifest& m, const toml::table& table) {
+  Drive d;
+  std::optional<Given> kind;  // lead_mm or pinion_radius_mm
+  for (const auto& [key, node] : table) {
+    const std::string_view k = key.str();
+    if (!Drive::is_key(k))
+      m.fail(key.source(), fmt::format("unknown key '{}' in [drive]; known: {}", k, fmt::join(Drive::keys(), ", ")));
+    const double value = manifest::number_of(m, key, node);
+    try {
+      d.set(k, value);
+    } catch (const InvalidParameter& e) {
+      m.fail(node.source(), e.what());
+    }
+    if (k != "lead_mm" && k != "pinion_radius_mm") continue;
+    const Given given{&key, &node};
+    if (kind) {  // keys come in name order; the message points at the later one in the file
+      const auto at = [](const Given& g) { return std::pair(g.key->source().begin.line, g.key->source().begin.column); };
+      const Given& later = at(given) > at(*kind) ? given : *kind;
+      m.fail(later.key->source(), fmt::format("{} and {}: a drive is a screw (lead_mm) or a rack and pinion "
+                                              "(pinion_radius_mm), not both; give one",
+                                              kind->key->str(), k));
+    }
+    kind = given;
+  }
+  return d;
+}
+
 struct RunEntry {
   std::string id;
   std::optional<std::string> file;
+  std::optional<std::size_t> skip_lines;  // of its file
   const toml::node* file_node = nullptr;
   FrictionRunConditions conditions;
 };
@@ -112,6 +152,10 @@ RunEntry read_run(const Manifest& m, const toml::table& table, const GuideCatalo
   std::optional<Given> id, file, guide;
   for (const auto& [key, node] : table) {
     const std::string_view k = key.str();
+    if (k == "skip_lines") {
+      run.skip_lines = count_of(m, key, node);
+      continue;
+    }
     if (k == "id" || k == "file" || k == "guide") {
       manifest::string_of(m, key, node);
       manifest::remember(m, k == "id" ? id : k == "file" ? file : guide, {&key, &node}, k);
@@ -191,6 +235,8 @@ FrictionDataSet load_friction_dataset(const fs::path& manifest_file, const Guide
   if (catalog) set.catalog_file = catalog->source;
 
   std::optional<std::pair<fs::path, const toml::node*>> common_file;
+  std::optional<std::size_t> common_skip_lines;  // of the common file
+  Drive drive;                                   // [drive], set after [raw] (which holds it)
   const toml::array* runs = nullptr;
   for (const auto& [key, node] : root) {
     const std::string_view k = key.str();
@@ -200,15 +246,25 @@ FrictionDataSet load_friction_dataset(const fs::path& manifest_file, const Guide
       manifest::string_of(m, key, node);
     } else if (k == "file") {
       common_file.emplace(m.existing_file(node, manifest::string_of(m, key, node)), &node);
+    } else if (k == "skip_lines") {
+      common_skip_lines = count_of(m, key, node);
+    } else if (k == "drive") {
+      drive = read_drive(m, manifest::table_of(m, node, "[drive]"));
     } else if (k == "raw") {
       set.raw = read_raw(m, manifest::table_of(m, node, "[raw]"));
     } else if (k == "run") {
       runs = &manifest::run_tables(m, node);
     } else {
-      m.fail(key.source(), fmt::format("unknown key '{}'; known: name, description, catalog, file, raw, run", k));
+      m.fail(key.source(), fmt::format("unknown key '{}'; known: name, description, catalog, file, skip_lines, drive, raw, run",
+                                        k));
     }
   }
+  set.raw.drive = drive;
   for (const std::string& name : raw_given) {
+    if (Drive::is_key(name)) {  // a flag for the drive wins over the [drive] key
+      set.raw.drive.copy_key(name, raw.drive);
+      continue;
+    }
     const auto it = std::find_if(raw_keys().begin(), raw_keys().end(), [&](const RawKey& r) { return r.name == name; });
     if (it == raw_keys().end()) throw InvalidParameter("raw_given", fmt::format("unknown setting '{}'", name));
     it->copy(set.raw, raw);
@@ -228,7 +284,15 @@ FrictionDataSet load_friction_dataset(const fs::path& manifest_file, const Guide
         const fs::path path = m.existing_file(*run.file_node, *run.file);
         if (!own_files.insert(path.lexically_normal()).second)
           m.fail(run.file_node->source(), fmt::format("file '{}' is already another run's file", *run.file));
-        files.push_back({.path = path, .run = run.id, .runs = {{run.id, run.conditions}}, .manifest = m.file});
+        files.push_back({.path = path,
+                         .run = run.id,
+                         .runs = {{run.id, run.conditions}},
+                         .manifest = m.file,
+                         .skip_lines = run.skip_lines});
+      } else if (run.skip_lines) {
+        m.fail(table.source(), fmt::format("run '{}': skip_lines belongs to a run with its own file; give the "
+                                           "top-level file's as a top-level skip_lines",
+                                           run.id));
       } else if (!common_file) {
         m.fail(table.source(), fmt::format("run '{}' has no file, and the manifest no top-level file holding it", run.id));
       } else {
@@ -238,7 +302,10 @@ FrictionDataSet load_friction_dataset(const fs::path& manifest_file, const Guide
     }
   }
   if (common_file)
-    files.insert(files.begin(), {.path = common_file->first, .runs = std::move(conditions), .manifest = m.file});
+    files.insert(files.begin(), {.path = common_file->first,
+                                 .runs = std::move(conditions),
+                                 .manifest = m.file,
+                                 .skip_lines = common_skip_lines});
   if (files.empty()) m.fail(root.source(), "the manifest names no file: give `file = \"...\"` or a file in a [[run]]");
   for (const auto& f : files) set.files.push_back(f.path);
   set.log = detail::load_friction_files(files, set.raw);

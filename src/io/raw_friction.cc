@@ -26,6 +26,14 @@ ForceSign parse_force_sign(std::string_view name) {
   throw InvalidParameter("force_sign", fmt::format("'{}': expected follows-motion, opposes-motion or magnitude", name));
 }
 
+std::string_view to_string(RawSegmentation s) { return s == RawSegmentation::plateaus ? "plateaus" : "trajectory"; }
+
+RawSegmentation parse_raw_segmentation(std::string_view name) {
+  for (RawSegmentation s : {RawSegmentation::plateaus, RawSegmentation::trajectory})
+    if (name == to_string(s)) return s;
+  throw InvalidParameter("segmentation", fmt::format("'{}': expected plateaus or trajectory", name));
+}
+
 std::string_view to_string(DuplicateTimes d) { return d == DuplicateTimes::refuse ? "refuse" : "average"; }
 
 DuplicateTimes parse_duplicate_times(std::string_view name) {
@@ -46,6 +54,14 @@ void RawFrictionOptions::validate() const {
     throw InvalidParameter("velocity_window", static_cast<double>(velocity_window),
                            fmt::format("an odd number from 3 to {} (docs/formats.md#limits)", io::kMaxVelocityWindow));
   if (!(moving_mass_kg >= 0)) throw InvalidParameter("moving_mass_kg", moving_mass_kg, ">= 0");
+  if (!(presliding_m >= 0 && presliding_m <= 1)) throw InvalidParameter("presliding_m", presliding_m, "from 0 to 1 m");
+  if (trajectory_window != 0 &&
+      (trajectory_window < 3 || trajectory_window % 2 == 0 || trajectory_window > io::kMaxVelocityWindow))
+    throw InvalidParameter("trajectory_window", static_cast<double>(trajectory_window),
+                           fmt::format("0 (chosen from the data) or an odd number from 3 to {}", io::kMaxVelocityWindow));
+  if (!(axis_incline_deg >= -90 && axis_incline_deg <= 90))
+    throw InvalidParameter("axis_incline_deg", axis_incline_deg, "an angle from -90 to 90 degrees (+x up: positive)");
+  drive.validate();
 }
 
 namespace raw {
@@ -188,7 +204,7 @@ void group(const RunSamples& run, Motion motion, const RawFrictionOptions& o, Se
 // in one sense (not at rest), a step back means the velocity cannot be derived. An encoder's
 // jitter is no such step: where the block rests the encoder shows it (the smallest step seen
 // at rest is a count), and steps back of up to two counts are allowed while it moves.
-void check_monotone(const RunSamples& run, const Segmented& s) {
+void check_monotone(const RunSamples& run, const Segmented& s, std::size_t reach) {
   double count_m = 0;
   for (std::size_t j = 1; j < run.motion.size(); ++j) {
     if (s.fate[j] != Fate::stationary || s.fate[j - 1] != Fate::stationary) continue;
@@ -196,8 +212,16 @@ void check_monotone(const RunSamples& run, const Segmented& s) {
     if (step > 0 && (count_m == 0 || step < count_m)) count_m = step;
   }
   const double jitter_m = 2.5 * count_m;  // two counts, and the rounding of the logged numbers
+  // Within the filter's reach of a reversal the filtered sense lags the position's: a log that
+  // never rests (a drive's) turns there without a sample at rest, and its genuine reversal is
+  // no step back.
+  std::vector<bool> turning(s.fate.size(), false);
   for (std::size_t j = 1; j < s.fate.size(); ++j) {
-    if (s.fate[j] == Fate::stationary || s.fate[j - 1] == Fate::stationary) continue;
+    if (sign_of(s.velocity_m_s[j]) == sign_of(s.velocity_m_s[j - 1])) continue;
+    for (std::size_t k = j >= reach ? j - reach : 0; k < std::min(s.fate.size(), j + reach + 1); ++k) turning[k] = true;
+  }
+  for (std::size_t j = 1; j < s.fate.size(); ++j) {
+    if (s.fate[j] == Fate::stationary || s.fate[j - 1] == Fate::stationary || turning[j]) continue;
     const double sense = sign_of(s.velocity_m_s[j]);
     if (sense != sign_of(s.velocity_m_s[j - 1])) continue;  // the reversal itself
     if (sense * (run.motion[j] - run.motion[j - 1]) < -jitter_m) {
@@ -213,10 +237,14 @@ void check_monotone(const RunSamples& run, const Segmented& s) {
 
 }  // namespace
 
+double Segmented::sense(std::size_t i) const {
+  return fate[i] == Fate::kept && !trajectory() ? sign_of(plateaus[plateau[i]].velocity_m_s) : sign_of(velocity_m_s[i]);
+}
+
 double friction_N(const RunSamples& run, const Segmented& s, const RawFrictionOptions& o, std::size_t i) {
-  const double sense = s.fate[i] == Fate::kept ? sign_of(s.plateaus[s.plateau[i]].velocity_m_s) : sign_of(s.velocity_m_s[i]);
+  const double sense = s.sense(i);
   const double inertia_N = o.moving_mass_kg * s.acceleration_m_s2[i];
-  const double f = run.force_N[i];
+  const double f = s.force_N.empty() ? run.force_N[i] : s.force_N[i];
   switch (o.force_sign) {
     case ForceSign::follows_motion: return sense * (f - inertia_N);
     case ForceSign::opposes_motion: return sense * (-f - inertia_N);
@@ -225,6 +253,149 @@ double friction_N(const RunSamples& run, const Segmented& s, const RawFrictionOp
   return f;
 }
 
+namespace {
+
+// The median of |x|.
+double median_abs(std::vector<double> x) {
+  if (x.empty()) return 0;
+  for (double& v : x) v = std::abs(v);
+  const auto middle = x.begin() + static_cast<std::ptrdiff_t>(x.size() / 2);
+  std::nth_element(x.begin(), middle, x.end());
+  return *middle;
+}
+
+// σ of white noise on y from its `order`-th differences (variance 6σ² for the second, 20σ²
+// for the third), robustly (1.4826 · median |d|): a smooth motion sampled fast adds little.
+double difference_noise(const std::vector<double>& y, int order) {
+  std::vector<double> d = y;
+  for (int k = 0; k < order && !d.empty(); ++k) {
+    for (std::size_t i = 0; i + 1 < d.size(); ++i) d[i] = d[i + 1] - d[i];
+    d.pop_back();
+  }
+  return 1.4826 * median_abs(d) / std::sqrt(order == 3 ? 20.0 : order == 2 ? 6.0 : 2.0);
+}
+
+double rms(const std::vector<double>& x) {
+  double s = 0;
+  for (double v : x) s += v * v;
+  return x.empty() ? 0 : std::sqrt(s / static_cast<double>(x.size()));
+}
+
+// The running trapezoid integral of y over t (0 at the first sample).
+std::vector<double> running_integral(const std::vector<double>& t, const std::vector<double>& y) {
+  std::vector<double> out(y.size(), 0.0);
+  for (std::size_t i = 1; i < y.size(); ++i) out[i] = out[i - 1] + 0.5 * (y[i] + y[i - 1]) * (t[i] - t[i - 1]);
+  return out;
+}
+
+// v, a and the force over a window of 2h + 1 samples, zero phase, through one operator (see
+// segment in raw_friction.hpp). A velocity column: v the local line's value, a its slope, the
+// force the slope of its integral.
+void filter_trajectory(const RunSamples& run, Motion motion, std::size_t window, Segmented& s) {
+  const std::vector<double>& t = run.time_s;
+  const std::vector<double> impulse = running_integral(t, run.force_N);
+  if (motion == Motion::position_m) {
+    // One operator K = (difference across the window) ∘ (local slope) for all three: a = K[x],
+    // v = K[∫x], F = K[∫∫F]; the friction is then evaluated at the velocity it was smoothed with.
+    const auto K = [&](const std::vector<double>& y) { return window_difference(t, local_slope(t, y, window), window); };
+    s.velocity_m_s = K(running_integral(t, run.motion));
+    s.acceleration_m_s2 = K(run.motion);
+    s.force_N = K(running_integral(t, impulse));
+  } else {
+    LocalLine line = local_line(t, run.motion, window);
+    s.velocity_m_s = std::move(line.value);
+    s.acceleration_m_s2 = std::move(line.slope);
+    s.force_N = local_slope(t, impulse, window);
+  }
+}
+
+// The noise left in v and a by a window of 2h + 1 samples at step dt, for position noise σ_x
+// (or, a velocity column, velocity noise σ): the local line's slope has variance σ²/(dt² Σk²),
+// Σk² = h(h+1)(2h+1)/3; a difference of two slopes 2h apart, √2 σ_v/(2h dt).
+std::pair<double, double> filter_noise(Motion motion, double sigma, double dt, std::size_t h) {
+  const double hk = static_cast<double>(h);
+  const double sum_k2 = hk * (hk + 1) * (2 * hk + 1) / 3;
+  if (motion == Motion::position_m) {
+    const double sigma_v = sigma / (dt * std::sqrt(sum_k2));
+    return {sigma_v, std::sqrt(2.0) * sigma_v / (2 * hk * dt)};
+  }
+  return {sigma / std::sqrt(2 * hk + 1), sigma / (dt * std::sqrt(sum_k2))};
+}
+
+Segmented segment_trajectory(const RunSamples& run, Motion motion, const RawFrictionOptions& o) {
+  const std::size_t n = run.time_s.size();
+  if (n < 20) throw SampleError(0, fmt::format("a trajectory of {} samples: at least 20 are needed to filter it", n));
+  std::vector<double> steps(n - 1);
+  for (std::size_t i = 0; i + 1 < n; ++i) steps[i] = run.time_s[i + 1] - run.time_s[i];
+  const double dt = median_abs(steps);
+  const double sigma = difference_noise(run.motion, motion == Motion::position_m ? 3 : 2);
+  // The window: given, or the smallest whose acceleration noise is under 2 % of the RMS
+  // acceleration the trajectory shows through a wide window (25 ms or 5 samples).
+  // Half-windows in samples, counted in doubles before the cast (a log at 1e-300 s steps must not
+  // overflow it), at most 0.05 s, kMaxVelocityWindow, and what keeps samples × window within
+  // kMaxFilterWork.
+  const auto half_window = [&](double seconds) {
+    const double budget = io::kMaxFilterWork / static_cast<double>(n) / 2 - 1;
+    const double most = std::min({seconds / dt, static_cast<double>(io::kMaxVelocityWindow / 2), budget});
+    return static_cast<std::size_t>(std::clamp(most, 2.0, static_cast<double>(io::kMaxVelocityWindow / 2)));
+  };
+  const std::size_t most = half_window(0.05);
+  std::size_t h = o.trajectory_window / 2;
+  if (static_cast<double>(n) * static_cast<double>(o.trajectory_window) > io::kMaxFilterWork)
+    throw SampleError(0, fmt::format("{} samples filtered over trajectory_window = {}: at most {:.2g} operations "
+                                     "(docs/formats.md#limits); a shorter window or a shorter log",
+                                     n, o.trajectory_window, io::kMaxFilterWork));
+  if (h == 0) {
+    Segmented wide;
+    filter_trajectory(run, motion, 2 * std::min(std::max<std::size_t>(half_window(0.025), 5), most) + 1, wide);
+    const double a_rms = rms(wide.acceleration_m_s2);
+    for (h = 2; h < most && filter_noise(motion, sigma, dt, h).second > 0.02 * a_rms; ++h) {
+    }
+  }
+  Segmented s;
+  s.window = 2 * h + 1;
+  s.window_s = static_cast<double>(s.window) * dt;
+  std::tie(s.sigma_v, s.sigma_a) = filter_noise(motion, sigma, dt, h);
+  filter_trajectory(run, motion, s.window, s);
+  // At rest or reversing, or within the filter's reach of it (half a window, and the two samples
+  // of a's central differences): the smoothed force there mixes in static friction, or both senses.
+  const double rest_m_s = std::max(o.min_speed_m_s, 3 * s.sigma_v);
+  const std::size_t reach = motion == Motion::position_m ? 2 * h : h;
+  s.fate.assign(n, Fate::kept);
+  for (std::size_t i = 0; i < n; ++i) {
+    const bool turning = i > 0 && sign_of(s.velocity_m_s[i]) != sign_of(s.velocity_m_s[i - 1]);
+    if (std::abs(s.velocity_m_s[i]) >= rest_m_s && !turning) continue;
+    for (std::size_t j = i >= reach ? i - reach : 0; j < std::min(n, i + reach + 1); ++j) s.fate[j] = Fate::stationary;
+  }
+  // Pre-sliding: after rest or a reversal the first `presliding_m` of travel is a nonlinear
+  // spring with hysteresis, not the sliding law (PHYSICS.md §8).
+  double travelled = 0;
+  for (std::size_t i = 1; i < n; ++i) {
+    if (s.fate[i] == Fate::stationary) {
+      travelled = 0;
+      continue;
+    }
+    travelled += std::abs(s.velocity_m_s[i]) * (run.time_s[i] - run.time_s[i - 1]);
+    if (travelled < o.presliding_m) s.fate[i] = Fate::settling;
+  }
+  if (motion == Motion::position_m) check_monotone(run, s, reach);
+  std::vector<double> kept_a;
+  for (std::size_t i = 0; i < n; ++i)
+    if (s.fate[i] == Fate::kept) kept_a.push_back(s.acceleration_m_s2[i]);
+  if (kept_a.size() < 20)
+    throw SampleError(0, fmt::format("{} of {} samples in motion (faster than {:.3g} m/s, away from reversals): too few "
+                                     "to read as a trajectory",
+                                     kept_a.size(), n, rest_m_s));
+  if (rms(kept_a) < o.max_acceleration_m_s2)
+    throw SampleError(0, fmt::format("the trajectory never accelerates (RMS {:.3g} m/s² in motion, under {} m/s²): its "
+                                     "moving mass cannot be told from friction; read it as plateaus "
+                                     "(segmentation = \"plateaus\")",
+                                     rms(kept_a), o.max_acceleration_m_s2));
+  return s;
+}
+
+}  // namespace
+
 Segmented segment(const RunSamples& run, Motion motion, const RawFrictionOptions& o) {
   // The filter's cost, samples × window, before it runs.
   const double work = static_cast<double>(run.time_s.size()) * static_cast<double>(o.velocity_window);
@@ -232,6 +403,7 @@ Segmented segment(const RunSamples& run, Motion motion, const RawFrictionOptions
     throw SampleError(0, fmt::format("{} samples filtered over velocity_window = {} take {:.2g} operations: at most {:.2g} "
                                      "(docs/formats.md#limits); a shorter window or a shorter log",
                                      run.time_s.size(), o.velocity_window, work, io::kMaxFilterWork));
+  if (o.segmentation == RawSegmentation::trajectory) return segment_trajectory(run, motion, o);
   Segmented s;
   // The velocity as the classification sees it: filtered over the window either way (a drive's
   // velocity feedback is noisy too); a plateau's own velocity is the unfiltered one's mean.
@@ -246,14 +418,15 @@ Segmented segment(const RunSamples& run, Motion motion, const RawFrictionOptions
   // Twice: the samples off their stretch's speed are transients, with a settling time after.
   classify(run, o, std::vector<bool>(run.time_s.size(), false), s);
   classify(run, o, off_speed(o, s), s);
-  if (motion == Motion::position_m) check_monotone(run, s);
+  if (motion == Motion::position_m) check_monotone(run, s, o.velocity_window / 2);
   group(run, motion, o, s);
   if (s.plateaus.empty()) {
     RunSegmentation counts;
     tally(s, counts);
     throw SampleError(0, fmt::format("no constant-velocity plateau of at least {} samples in {} samples ({} accelerating, "
                                      "{} settling, {} at rest, {} in shorter plateaus): too few samples per plateau; "
-                                     "lower --min-plateau or --settling, or raise --max-acceleration",
+                                     "lower --min-plateau or --settling, or raise --max-acceleration; a drive's log that "
+                                     "never holds a speed is read whole with --segmentation trajectory",
                                      o.min_plateau_samples, run.time_s.size(), counts.dropped_acceleration,
                                      counts.dropped_settling, counts.dropped_stationary, counts.dropped_short));
   }
@@ -273,6 +446,10 @@ void tally(const Segmented& s, RunSegmentation& out) {
     }
   }
   out.plateaus = s.plateaus;
+  out.filter_window = s.window;
+  out.filter_window_s = s.window_s;
+  out.velocity_noise_m_s = s.sigma_v;
+  out.acceleration_noise_m_s2 = s.sigma_a;
 }
 
 std::vector<std::string> sign_warnings(const std::string& run, const std::string& force_column, const RunSamples& samples,
@@ -286,7 +463,7 @@ std::vector<std::string> sign_warnings(const std::string& run, const std::string
     if (s.fate[i] != Fate::kept) continue;
     ++kept;
     negative += friction_N(samples, s, o, i) < 0;
-    const int sense = s.plateaus[s.plateau[i]].velocity_m_s > 0;
+    const int sense = s.sense(i) > 0;
     positive_force[sense] += samples.force_N[i] > 0;
     negative_force[sense] += samples.force_N[i] < 0;
   }

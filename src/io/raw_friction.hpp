@@ -30,6 +30,14 @@ struct Segmented {
   std::vector<Plateau> plateaus;              // kept plateaus, in time order
   std::vector<double> velocity_m_s;           // per sample, signed: derived, or the given one filtered (local line)
   std::vector<double> acceleration_m_s2;      // per sample: the derivative of the filtered velocity
+  // A trajectory's: the force smoothed by the same window as the acceleration (parallel
+  // filtering: both see one bandwidth), and the filter; empty and 0 for plateaus.
+  std::vector<double> force_N;
+  std::size_t window = 0;
+  double window_s = 0, sigma_v = 0, sigma_a = 0;
+  bool trajectory() const { return window != 0; }
+  // The sense of the motion at sample i: its plateau's, or (a trajectory's) its own.
+  double sense(std::size_t i) const;
 };
 
 // A sample that makes the run unusable: its index in RunSamples and what is wrong.
@@ -52,8 +60,20 @@ std::vector<double> local_slope(const std::vector<double>& t, const std::vector<
 // ends): the derivative of an already filtered series, in O(1) per sample.
 std::vector<double> window_difference(const std::vector<double>& t, const std::vector<double>& y, std::size_t window);
 
-// Segments one run. Throws SampleError when the position goes back between reversals (the
-// velocity cannot be derived) or when no plateau is long enough.
+// Segments one run (options.segmentation: plateaus, or the whole trajectory). Throws SampleError
+// when the position goes back between reversals (the velocity cannot be derived), when no
+// plateau is long enough, or when a trajectory never accelerates (no mass to identify).
+//
+// A trajectory keeps every sample in motion. Its filter is one zero-phase operator over a
+// centred window, K = (difference across the window) ∘ (local line's slope): a = K[x],
+// v = K[∫x], F = K[∫∫F] — M·a, the force and the speed the friction is evaluated at all see
+// exactly the same filter (parallel filtering: a trapezoid's corners smear them alike). The window is the smallest (from 5 samples) whose acceleration noise — from the
+// position noise σ_x, estimated robustly from third differences (20σ² for white noise) — is
+// under 2 % of the trajectory's RMS acceleration; at most 0.1 s.
+// Dropped as at rest: samples slower than max(min_speed_m_s, 3σ_v), where static and
+// pre-sliding friction rule (the law is a sliding law); samples within the filter's reach (two
+// half-windows from positions) of one at rest or reversing, whose filtered values mix in static
+// friction or both senses; and the first presliding_m of travel after rest or a reversal.
 Segmented segment(const RunSamples& run, Motion motion, const RawFrictionOptions& options);
 
 // The friction sample i gives: the force in the motion's sense (a kept sample's plateau's) less

@@ -139,10 +139,19 @@ RawFrictionOptions raw_options(const py::dict& given, std::vector<std::string>* 
     else if (name == "min_plateau_samples") raw.min_plateau_samples = value.cast<std::size_t>();
     else if (name == "velocity_window") raw.velocity_window = value.cast<std::size_t>();
     else if (name == "moving_mass_kg") raw.moving_mass_kg = value.cast<double>();
+    else if (name == "skip_lines") raw.skip_lines = value.cast<std::size_t>();
+    else if (Drive::is_key(name)) raw.drive.set(name, value.cast<double>());
+    else if (name == "segmentation") raw.segmentation = parse_raw_segmentation(value.cast<std::string>());
+    else if (name == "trajectory_window") raw.trajectory_window = value.cast<std::size_t>();
+    else if (name == "presliding_m") raw.presliding_m = value.cast<double>();
+    else if (name == "axis_incline_deg") raw.axis_incline_deg = value.cast<double>();
     else
       throw InvalidParameter("raw", fmt::format("unknown segmentation setting '{}'; expected force_sign, duplicate_times, "
                                                 "max_acceleration_m_s2, settling_s, min_speed_m_s, velocity_tolerance, "
-                                                "min_plateau_samples, velocity_window or moving_mass_kg",
+                                                "min_plateau_samples, velocity_window, moving_mass_kg, segmentation, "
+                                                "trajectory_window, presliding_m, axis_incline_deg, skip_lines or a drive's "
+                                                "lead_mm, pinion_radius_mm, gear_ratio, efficiency, rotor_inertia_kg_m2, "
+                                                "nominal_torque_Nm",
                                                 name));
     if (names) names->push_back(name);
   }

@@ -515,7 +515,11 @@ nlohmann::json raw_options_json(const RawFrictionOptions& r) {
           {"min_plateau_samples", r.min_plateau_samples},
           {"velocity_window", r.velocity_window},
           {"moving_mass_kg", r.moving_mass_kg},
-          {"duplicate_times", to_string(r.duplicate_times)}};
+          {"duplicate_times", to_string(r.duplicate_times)},
+          {"segmentation", to_string(r.segmentation)},
+          {"trajectory_window", r.trajectory_window},
+          {"presliding_m", r.presliding_m},
+          {"axis_incline_deg", r.axis_incline_deg}};
 }
 
 nlohmann::json options_json(const CalibrationOptions& o) {

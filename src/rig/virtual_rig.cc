@@ -43,6 +43,7 @@ const std::vector<EffectEntry>& effect_table() {
     std::vector<EffectEntry> t;
     for (std::size_t slot = 0; slot < kFrictionEffectCount; ++slot) {
       const FrictionEffectInfo& f = FrictionEffectLibrary::infos[slot];
+      if (f.dynamics) continue;  // the drive's mass and weight: the axis rig's own settings (axis_rig.hpp)
       t.push_back({{f.name, f.unit, f.neutral, f.description}, slot});
     }
     auto hidden = [&](const char* name, const char* unit, double neutral, const char* description,

@@ -43,6 +43,12 @@ enum class FrictionWeighting {
 
 // The named friction effects a fit may add, with their parameter names and units.
 const std::vector<std::string>& friction_effect_names();
+// Those a diagnosis may name as causes: the library without the drive's dynamics.
+const std::vector<std::string>& friction_cause_names();
+// The terms of the drive's dynamics a log needs besides friction (friction_effect.hpp,
+// `dynamics`): moving_mass for a trajectory (FrictionLog::trajectory), axis_gravity for one on
+// an inclined axis. fit_friction adds those not in its options' effects.
+std::vector<std::string> drive_effects(const FrictionLog& log);
 
 // automatic: random with two runs or more and no robust loss, none otherwise.
 enum class RunOffsets { automatic, none, fixed, random };

@@ -43,6 +43,7 @@
 #include <vector>
 
 #include "lmcal/io/catalog.hpp"
+#include "lmcal/io/drive.hpp"
 #include "lmcal/io/input_scope.hpp"
 #include "lmcal/io/load_report.hpp"
 #include "lmcal/models/friction.hpp"
@@ -58,7 +59,16 @@ std::string_view to_string(ForceSign sign);
 // "follows-motion", "opposes-motion", "magnitude"; InvalidParameter otherwise.
 ForceSign parse_force_sign(std::string_view name);
 
-// Two samples of one run at the same time: refused (the default), or averaged into one.
+// How a raw log is read: cut into constant-velocity plateaus (a friction rig's log), or kept
+// whole as a trajectory (a drive's own log: closed-loop moves that never hold a speed), every
+// sample in motion kept with its filtered velocity and acceleration; the moving mass (and an
+// incline's weight) is then fitted with the law.
+enum class RawSegmentation { plateaus, trajectory };
+std::string_view to_string(RawSegmentation s);
+RawSegmentation parse_raw_segmentation(std::string_view name);
+
+// Two samples of one run at the same time: averaged into one (the default; counted in
+// RunSegmentation::averaged_duplicates), or refused.
 enum class DuplicateTimes { refuse, average };
 std::string_view to_string(DuplicateTimes d);
 DuplicateTimes parse_duplicate_times(std::string_view name);
@@ -75,7 +85,16 @@ struct RawFrictionOptions {
   std::size_t min_plateau_samples = 20; // shorter plateaus are dropped
   std::size_t velocity_window = 11;     // samples of the local least-squares slope for v and a (odd, >= 3)
   double moving_mass_kg = 0;            // > 0: the inertia m·a is taken off the force
-  DuplicateTimes duplicate_times = DuplicateTimes::refuse;
+  DuplicateTimes duplicate_times = DuplicateTimes::average;
+  Drive drive;                // a rotary log's joint quantities -> the carriage's (lmcal/io/drive.hpp)
+  std::size_t skip_lines = 0; // lines before the column names (a logger's preamble), skipped as read
+  RawSegmentation segmentation = RawSegmentation::plateaus;
+  // A trajectory's filter: samples of the local line for v and a (odd, >= 3); 0: chosen from the
+  // data (the smallest window whose acceleration noise is under 2 % of the trajectory's).
+  std::size_t trajectory_window = 0;
+  // A trajectory's samples within this travel after rest or a reversal: pre-sliding, dropped.
+  double presliding_m = 5e-4;
+  double axis_incline_deg = 0;  // 0 horizontal, 90 vertical (+x up): a trajectory then fits the weight
   // InvalidParameter naming the option for a value out of range.
   void validate() const;
 };
@@ -98,6 +117,10 @@ struct RunSegmentation {
   std::size_t dropped_short = 0;         // in a plateau with too few samples
   std::size_t averaged_duplicates = 0;   // samples merged because they shared a time
   std::vector<Plateau> plateaus;         // kept ones, in time order
+  // A trajectory's filter, chosen from the data or given (0 for plateaus): its window, and the
+  // noise it leaves in the velocity and the acceleration (from the position's own noise).
+  std::size_t filter_window = 0;
+  double filter_window_s = 0, velocity_noise_m_s = 0, acceleration_noise_m_s2 = 0;
 };
 
 // A raw run as recorded (thinned to at most kMaxPoints), for a plot of what was kept.
@@ -122,10 +145,15 @@ struct FrictionLog {
   std::vector<double> friction_N;
   std::vector<double> viscosity40_mm2_s;
   std::vector<std::int8_t> direction;    // +1 or -1
+  std::vector<double> acceleration_m_s2; // signed in x; 0 but for a trajectory's samples
   std::vector<std::uint32_t> line;       // the sample's row in its file (a raw log's: the row kept); 0: not from a file
   std::vector<LoadReport> reports;       // one per file loaded
   std::vector<RunSegmentation> segmentation;  // one per raw run (none for a tidy log)
   std::vector<RawTrace> raw_traces;           // one per raw run
+  // Read as a trajectory (RawSegmentation::trajectory): the force carries the drive's inertia
+  // (and on an incline the weight), fitted with the law (friction_fit.hpp, drive_effects).
+  bool trajectory = false;
+  double axis_incline_deg = 0;  // the axis's mounting: 0 horizontal, 90 vertical with +x up
 
   std::size_t size() const { return friction_N.size(); }
   // The operating point of sample i for the friction law, direction included (ν_ref is per

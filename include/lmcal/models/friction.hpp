@@ -108,10 +108,13 @@ struct FrictionConditions {
   T velocity_m_s{};     // V, sliding speed (>= 0)
   T temperature_C{};    // T, lubricant / rail temperature
   T direction{1.0};     // +1 or -1, sense of travel (the published law ignores it)
+  // dV/dt along the travel, m/s² (signed in x): 0 on a plateau; a trajectory's inertia and the
+  // moving_mass effect use it (the law ignores it).
+  T acceleration_m_s2{};
 
   template <typename U>
   FrictionConditions<U> cast() const {
-    return {U(load_N), U(preload_um), U(block_length_mm), U(velocity_m_s), U(temperature_C), U(direction)};
+    return {U(load_N), U(preload_um), U(block_length_mm), U(velocity_m_s), U(temperature_C), U(direction), U(acceleration_m_s2)};
   }
 };
 

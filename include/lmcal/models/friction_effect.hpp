@@ -34,6 +34,9 @@ struct FrictionEffectInfo {
   double lower, upper;      // bounds of a fit
   double scale;             // a typical size (the neutral value is often zero), for fit scaling
   const char* measure = ""; // what to log to see it directly, or to tell it from a look-alike
+  // A term of the drive's dynamics, not of friction: fitted with every trajectory log that
+  // needs it (friction_fit.hpp, drive_effects), never a candidate cause of a diagnosis.
+  bool dynamics = false;
 };
 
 enum class FrictionEffectStage { on_law, on_total };

@@ -21,8 +21,10 @@
 
 #include "lmcal/models/friction.hpp"
 #include "lmcal/models/friction_effect.hpp"
+#include "lmcal/models/friction_effects/axis_gravity.hpp"
 #include "lmcal/models/friction_effects/coulomb_temperature.hpp"
 #include "lmcal/models/friction_effects/direction_asymmetry.hpp"
+#include "lmcal/models/friction_effects/moving_mass.hpp"
 #include "lmcal/models/friction_effects/seal_drag.hpp"
 #include "lmcal/models/friction_effects/seal_drag_block.hpp"
 #include "lmcal/models/friction_effects/signed_zero_offset.hpp"
@@ -60,7 +62,9 @@ using FrictionEffectLibrary = FrictionEffectList<
     SealDrag,
     CoulombTemperature,
     SealDragBlock,
-    SignedZeroOffset>;
+    SignedZeroOffset,
+    MovingMass,
+    AxisGravity>;
 
 inline constexpr std::size_t kFrictionEffectCount = FrictionEffectLibrary::size;
 

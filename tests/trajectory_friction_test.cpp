@@ -1,0 +1,202 @@
+// Friction from a drive's own trajectory (RawSegmentation::trajectory): a carriage of known
+// mass on an inclined axis moving along two superposed sinusoids (reversals, speeds from rest
+// to 0.2 m/s, accelerations that vary independently of the speed), its drive force logged with
+// noise and its position quantised to the encoder's count. The moving mass and the incline's
+// weight are recovered to a fraction of a per cent, the determined friction constants within
+// their 95 % intervals; the log that never rests is read whole; a trajectory that never
+// accelerates is refused.
+#include <gtest/gtest.h>
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <numbers>
+#include <random>
+#include <string>
+
+#include "lmcal/error.hpp"
+#include "lmcal/fit/friction_fit.hpp"
+#include "lmcal/io/friction_log.hpp"
+#include "lmcal/models/friction.hpp"
+#include "lmcal/rig/axis_rig.hpp"
+#include "lmcal/rig/virtual_rig.hpp"
+#include "support/temp_folder.hpp"
+
+namespace lmcal {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Axis {
+  double mass_kg = 40;
+  double incline_deg = 20;
+  double noise_N = 2;
+  double count_m = 1e-6;  // the encoder's resolution
+  double weight_N() const { return mass_kg * 9.81 * std::sin(incline_deg * std::numbers::pi / 180); }
+};
+
+struct RunSpec {
+  std::string id;
+  double load_N, temperature_C;
+  double amplitude_m, frequency_Hz;  // the slow sweep; a fast ripple rides on it
+};
+
+class TrajectoryFriction : public test::TempFolderTest {
+ protected:
+  // Writes one run as a drive logs it (1 kHz, 20 s): time, quantised position, drive force.
+  void write_run(const RunSpec& r, const Axis& axis, unsigned seed, bool accelerate = true) const {
+    std::mt19937_64 rng(seed);
+    std::normal_distribution<double> noise(0, axis.noise_N);
+    const FrictionConstants<double> k = paper_friction_constants();
+    std::string csv = "time_s,position_mm,force_N\n";
+    const double w1 = 2 * std::numbers::pi * r.frequency_Hz, w2 = 2 * std::numbers::pi * 2.7;
+    const double a2 = accelerate ? 0.004 : 0;
+    for (int i = 0; i < 20000; ++i) {
+      const double t = i * 1e-3;
+      double x = r.amplitude_m * std::sin(w1 * t) + a2 * std::sin(w2 * t + 0.3);
+      double v = r.amplitude_m * w1 * std::cos(w1 * t) + a2 * w2 * std::cos(w2 * t + 0.3);
+      double a = -r.amplitude_m * w1 * w1 * std::sin(w1 * t) - a2 * w2 * w2 * std::sin(w2 * t + 0.3);
+      if (!accelerate) {  // a constant speed, back and forth once
+        v = t < 10 ? 0.1 : -0.1;
+        x = t < 10 ? 0.1 * t : 1.0 - 0.1 * (t - 10);
+        a = 0;
+      }
+      const FrictionConditions<double> c{.load_N = r.load_N, .preload_um = 4, .block_length_mm = 120.2,
+                                         .velocity_m_s = std::abs(v), .temperature_C = r.temperature_C};
+      const double sense = v < 0 ? -1.0 : 1.0;
+      const double force = axis.mass_kg * a + sense * friction_force_N(k, c) + axis.weight_N() + noise(rng);
+      const double counted = std::round(x / axis.count_m) * axis.count_m;
+      csv += fmt::format("{:.3f},{:.6f},{:.3f}\n", t, counted * 1e3, force);
+    }
+    write(r.id + ".csv", csv);
+  }
+
+  fs::path write_manifest(const std::vector<RunSpec>& runs, const Axis& axis) const {
+    std::string toml = fmt::format("[raw]\nsegmentation = \"trajectory\"\naxis_incline_deg = {}\n", axis.incline_deg);
+    for (const RunSpec& r : runs)
+      toml += fmt::format("[[run]]\nid = \"{}\"\nfile = \"{}.csv\"\nguide = \"SRN 35C\"\nload_N = {}\npreload_um = 4\n"
+                          "temperature_C = {}\n",
+                          r.id, r.id, r.load_N, r.temperature_C);
+    return write("friction.toml", toml);
+  }
+};
+
+double quoted_low(const ParameterEstimate& p) { return p.interval == "profile" ? p.profile_low : p.ci_low; }
+double quoted_high(const ParameterEstimate& p) { return p.interval == "profile" ? p.profile_high : p.ci_high; }
+
+TEST_F(TrajectoryFriction, TheMassTheWeightAndTheLawAreRecovered) {
+  const Axis axis;
+  const std::vector<RunSpec> runs{{"a", 1000, 24, 0.05, 0.45}, {"b", 3000, 24, 0.06, 0.35},
+                                  {"c", 1000, 34, 0.05, 0.40}, {"d", 3000, 34, 0.06, 0.50}};
+  for (int seed = 1; seed <= 3; ++seed) {
+    SCOPED_TRACE(testing::Message() << "seed " << seed);
+    for (std::size_t r = 0; r < runs.size(); ++r) write_run(runs[r], axis, static_cast<unsigned>(10 * seed + r));
+    const FrictionDataSet set = load_friction_dataset(write_manifest(runs, axis));
+    const FrictionLog& log = set.log;
+    ASSERT_TRUE(log.trajectory);
+    ASSERT_EQ(log.segmentation.size(), runs.size());
+    for (const RunSegmentation& s : log.segmentation) {
+      EXPECT_GT(s.kept, s.samples * 8 / 10) << "a log that never rests is read whole, but for its reversals";
+      EXPECT_GE(s.filter_window, 5u);
+      EXPECT_GT(s.acceleration_noise_m_s2, 0);
+    }
+    FrictionFitOptions o;
+    o.free = {true, false, true, true, true, true, true};  // one preload: k2 held (k1 - k2 pc is what is seen)
+    o.fit.starts = 1;
+    o.per_run_fits = false;
+    const FrictionFitResult fit = fit_friction(log, o);
+    ASSERT_TRUE(fit.fit.solver.usable) << fit.fit.solver.termination;
+    // The mass and the weight to 0.2 % and 0.05 %; their intervals (±0.05 %, ±0.01 %) are not
+    // asserted to cover: a bias of that size remains (the filter's residual autocorrelation
+    // against the HAC bandwidth is the first suspect; open in issue 37).
+    const ParameterEstimate& mass = fit.fit.parameter("moving_mass");
+    EXPECT_NEAR(mass.value, axis.mass_kg, 0.002 * axis.mass_kg) << "the mass within 0.2 %";
+    const ParameterEstimate& weight = fit.fit.parameter("axis_gravity");
+    EXPECT_NEAR(weight.value, axis.weight_N(), 5e-4 * axis.weight_N()) << "the weight within 0.05 %";
+    const FrictionConstants<double> truth = paper_friction_constants();
+    for (const char* name : {"k1", "mu_v", "beta_per_K"}) {
+      const ParameterEstimate& p = fit.fit.parameter(name);
+      const double want = fittable_constant(truth, *find_friction_constant(name));
+      EXPECT_LE(quoted_low(p), want) << name << " " << p.value;
+      EXPECT_GE(quoted_high(p), want) << name << " " << p.value;
+    }
+    for (const auto& p : fit.fit.parameters) EXPECT_NE(p.name, "signed_zero_offset") << "never a load-cell zero";
+  }
+}
+
+// The virtual rig's closed-loop axis (a P-PI controller on trapezoidal moves at ten speeds, a
+// 1 µm encoder, current noise): the mass within 2 %, the weight within 0.5 %, never a load-cell
+// zero. Not asserted, because not yet true: that the Stribeck constants' intervals cover the
+// truth (mu_st comes out 5-9 % low on this rig) — open in issue 37.
+TEST_F(TrajectoryFriction, TheClosedLoopRigsMassAndWeightAreRecovered) {
+  FrictionRigConfig setup;
+  setup.guides = {"SRN 35C"};
+  setup.preload_um = {2.5};
+  setup.load_N = {1000, 3000};
+  setup.temperature_C = {26};
+  setup.runs = 1;
+  AxisRigConfig axis;
+  axis.incline_deg = 20;
+  const double weight_N = axis.moving_mass_kg * 9.81 * std::sin(20 * std::numbers::pi / 180);
+  for (unsigned seed = 1; seed <= 3; ++seed) {
+    SCOPED_TRACE(testing::Message() << "seed " << seed);
+    setup.seed = seed;
+    const AxisRigOutput made = generate_axis_logs(setup, axis, {});
+    for (const auto& [file, text] : made.run_files) write(file, text);
+    const FrictionLog log = load_friction_dataset(write("friction.toml", made.manifest_toml)).log;
+    FrictionFitOptions o;
+    o.fit.starts = 1;
+    o.per_run_fits = false;
+    const FrictionFitResult fit = fit_friction(log, o);
+    ASSERT_TRUE(fit.fit.solver.usable) << fit.fit.solver.termination;
+    const ParameterEstimate& mass = fit.fit.parameter("moving_mass");
+    EXPECT_NEAR(mass.value, axis.moving_mass_kg, 0.02 * axis.moving_mass_kg);
+    const ParameterEstimate& weight = fit.fit.parameter("axis_gravity");
+    EXPECT_NEAR(weight.value, weight_N, 0.005 * weight_N);
+    for (const auto& p : fit.fit.parameters) EXPECT_NE(p.name, "signed_zero_offset");
+  }
+}
+
+TEST_F(TrajectoryFriction, AHorizontalAxisFitsTheMassAndNoWeight) {
+  Axis axis;
+  axis.incline_deg = 0;
+  const std::vector<RunSpec> runs{{"a", 1000, 24, 0.05, 0.45}, {"b", 3000, 30, 0.06, 0.35}};
+  for (std::size_t r = 0; r < runs.size(); ++r) write_run(runs[r], axis, static_cast<unsigned>(r + 1));
+  const FrictionLog log = load_friction_dataset(write_manifest(runs, axis)).log;
+  EXPECT_EQ(drive_effects(log), std::vector<std::string>{"moving_mass"});
+}
+
+TEST_F(TrajectoryFriction, ATrajectoryThatNeverAcceleratesIsRefusedNamingWhatToDo) {
+  const Axis axis;
+  const std::vector<RunSpec> runs{{"a", 1000, 24, 0.05, 0.45}};
+  write_run(runs[0], axis, 1, false);
+  try {
+    load_friction_dataset(write_manifest(runs, axis));
+    ADD_FAILURE() << "accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("the trajectory never accelerates"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("segmentation = \"plateaus\""), std::string::npos) << e.what();
+  }
+}
+
+TEST_F(TrajectoryFriction, ThePlateauReaderSaysWhenItDropsMostOfATrajectory) {
+  Axis axis;
+  axis.incline_deg = 0;
+  const std::vector<RunSpec> runs{{"a", 1000, 24, 0.05, 0.45}};
+  write_run(runs[0], axis, 1);
+  write("plateaus.toml", "[[run]]\nid = \"a\"\nfile = \"a.csv\"\nguide = \"SRN 35C\"\nload_N = 1000\npreload_um = 4\n"
+                         "temperature_C = 24\n");
+  try {
+    const FrictionLog log = load_friction_dataset(dir_ / "plateaus.toml").log;
+    bool warned = false;
+    for (const auto& report : log.reports)
+      for (const auto& w : report.warnings) warned |= w.find("--segmentation trajectory") != std::string::npos;
+    EXPECT_TRUE(warned) << "the plateau reader keeps little of a trajectory and says what would keep it";
+  } catch (const InputError& e) {
+    // No plateau at all in a pure sweep: the refusal is the plateau reader's, and says how to read it.
+    EXPECT_NE(std::string(e.what()).find("--segmentation trajectory"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace lmcal
