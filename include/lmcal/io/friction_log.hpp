@@ -73,7 +73,8 @@ enum class DuplicateTimes { refuse, average };
 std::string_view to_string(DuplicateTimes d);
 DuplicateTimes parse_duplicate_times(std::string_view name);
 
-// How a raw load-cell log is cut into constant-velocity plateaus.
+// How a raw log is read: cut into constant-velocity plateaus, or (segmentation) kept whole as
+// a trajectory; the drive that turns a motor's quantities into the carriage's; the axis.
 struct RawFrictionOptions {
   ForceSign force_sign = ForceSign::follows_motion;
   double max_acceleration_m_s2 = 0.02;  // |a| above it: the block is accelerating (dropped)
@@ -89,8 +90,8 @@ struct RawFrictionOptions {
   Drive drive;                // a rotary log's joint quantities -> the carriage's (lmcal/io/drive.hpp)
   std::size_t skip_lines = 0; // lines before the column names (a logger's preamble), skipped as read
   RawSegmentation segmentation = RawSegmentation::plateaus;
-  // A trajectory's filter: samples of the local line for v and a (odd, >= 3); 0: chosen from the
-  // data (the smallest window whose acceleration noise is under 2 % of the trajectory's).
+  // A trajectory's filter window, samples (odd, >= 3); 0: chosen from the data (the smallest
+  // whose acceleration noise is under 2 % of the trajectory's RMS acceleration).
   std::size_t trajectory_window = 0;
   // A trajectory's samples within this travel after rest or a reversal: pre-sliding, dropped.
   double presliding_m = 5e-4;
