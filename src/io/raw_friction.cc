@@ -309,17 +309,25 @@ void filter_trajectory(const RunSamples& run, Motion motion, std::size_t window,
   }
 }
 
-// The noise left in v and a by a window of 2h + 1 samples at step dt, for position noise σ_x
-// (or, a velocity column, velocity noise σ): the local line's slope has variance σ²/(dt² Σk²),
-// Σk² = h(h+1)(2h+1)/3; a difference of two slopes 2h apart, √2 σ_v/(2h dt).
+// The noise left in v and a by a window of 2h + 1 samples at step dt, for white noise σ on the
+// motion column: σ times the root sum of squares of the filter's own impulse response (the
+// very code filter_trajectory runs, on a unit impulse in the middle of a uniform series).
 std::pair<double, double> filter_noise(Motion motion, double sigma, double dt, std::size_t h) {
-  const double hk = static_cast<double>(h);
-  const double sum_k2 = hk * (hk + 1) * (2 * hk + 1) / 3;
-  if (motion == Motion::position_m) {
-    const double sigma_v = sigma / (dt * std::sqrt(sum_k2));
-    return {sigma_v, std::sqrt(2.0) * sigma_v / (2 * hk * dt)};
-  }
-  return {sigma / std::sqrt(2 * hk + 1), sigma / (dt * std::sqrt(sum_k2))};
+  const std::size_t n = 8 * h + 9;
+  RunSamples impulse;
+  impulse.time_s.resize(n);
+  for (std::size_t i = 0; i < n; ++i) impulse.time_s[i] = static_cast<double>(i) * dt;
+  impulse.motion.assign(n, 0.0);
+  impulse.motion[n / 2] = 1;
+  impulse.force_N.assign(n, 0.0);
+  Segmented response;
+  filter_trajectory(impulse, motion, 2 * h + 1, response);
+  const auto gain = [](const std::vector<double>& y) {
+    double sum = 0;
+    for (double v : y) sum += v * v;
+    return std::sqrt(sum);
+  };
+  return {sigma * gain(response.velocity_m_s), sigma * gain(response.acceleration_m_s2)};
 }
 
 Segmented segment_trajectory(const RunSamples& run, Motion motion, const RawFrictionOptions& o) {
@@ -328,7 +336,14 @@ Segmented segment_trajectory(const RunSamples& run, Motion motion, const RawFric
   std::vector<double> steps(n - 1);
   for (std::size_t i = 0; i + 1 < n; ++i) steps[i] = run.time_s[i + 1] - run.time_s[i];
   const double dt = median_abs(steps);
-  const double sigma = difference_noise(run.motion, motion == Motion::position_m ? 3 : 2);
+  // The motion's noise: from its differences, and at least an encoder's quantisation (count/√12,
+  // the smallest step it makes): most differences of a slow quantised motion are exactly 0.
+  double count = 0;
+  for (std::size_t i = 0; i + 1 < n; ++i) {
+    const double step = std::abs(run.motion[i + 1] - run.motion[i]);
+    if (step > 0 && (count == 0 || step < count)) count = step;
+  }
+  const double sigma = std::max(difference_noise(run.motion, motion == Motion::position_m ? 3 : 2), count / std::sqrt(12.0));
   // The window: given, or the smallest whose acceleration noise is under 2 % of the RMS
   // acceleration the trajectory shows through a wide window (25 ms or 5 samples).
   // Half-windows in samples, counted in doubles before the cast (a log at 1e-300 s steps must not
@@ -357,8 +372,8 @@ Segmented segment_trajectory(const RunSamples& run, Motion motion, const RawFric
   s.window_s = static_cast<double>(s.window) * dt;
   std::tie(s.sigma_v, s.sigma_a) = filter_noise(motion, sigma, dt, h);
   filter_trajectory(run, motion, s.window, s);
-  // At rest or reversing, or within the filter's reach of it (half a window, and the two samples
-  // of a's central differences): the smoothed force there mixes in static friction, or both senses.
+  // At rest or reversing, or within the filter's reach of it (two half-windows from positions):
+  // the filtered force there mixes in static friction, or both senses.
   const double rest_m_s = std::max(o.min_speed_m_s, 3 * s.sigma_v);
   const std::size_t reach = motion == Motion::position_m ? 2 * h : h;
   s.fate.assign(n, Fate::kept);

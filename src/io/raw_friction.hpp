@@ -67,9 +67,10 @@ std::vector<double> window_difference(const std::vector<double>& t, const std::v
 // A trajectory keeps every sample in motion. Its filter is one zero-phase operator over a
 // centred window, K = (difference across the window) ∘ (local line's slope): a = K[x],
 // v = K[∫x], F = K[∫∫F] — M·a, the force and the speed the friction is evaluated at all see
-// exactly the same filter (parallel filtering: a trapezoid's corners smear them alike). The window is the smallest (from 5 samples) whose acceleration noise — from the
-// position noise σ_x, estimated robustly from third differences (20σ² for white noise) — is
-// under 2 % of the trajectory's RMS acceleration; at most 0.1 s.
+// exactly the same filter (parallel filtering: a trapezoid's corners smear them alike). The
+// window is the smallest (from 5 samples) whose acceleration noise is under 2 % of the
+// trajectory's RMS acceleration; at most 0.1 s. That noise is the position's own σ_x (robustly
+// from third differences, 20σ² for white noise) through the filter's impulse response.
 // Dropped as at rest: samples slower than max(min_speed_m_s, 3σ_v), where static and
 // pre-sliding friction rule (the law is a sliding law); samples within the filter's reach (two
 // half-windows from positions) of one at rest or reversing, whose filtered values mix in static
