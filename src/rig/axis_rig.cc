@@ -364,28 +364,23 @@ AxisRigOutput generate_axis_logs(const FrictionRigConfig& conditions, const Axis
     manifest += fmt::format("segmentation = \"trajectory\"\naxis_incline_deg = {}\n", axis.incline_deg);
   nlohmann::json runs = nlohmann::json::array();
   std::uint64_t r = 0;
-  for (int repeat = 0; repeat < conditions.runs; ++repeat)
-    for (const auto& model : conditions.guides)
-      for (double pc : conditions.preload_um)
-        for (double P : conditions.load_N)
-          for (double T : conditions.temperature_C) {
-            const GuideSpec& spec = find_guide(model, conditions.catalog);
-            const FrictionConditions<double> c{
-                .load_N = P, .preload_um = pc,
-                .block_length_mm = require(spec, &GuideSpec::block_length_mm, "block_length_mm"), .temperature_C = T};
-            validate(c);
-            const std::string name = fmt::format("run{:02d}", r + 1);
-            RunResult run = simulate_run(conditions, axis, effects, c, r++, comments);
-            std::string file;
-            manifest += rig::raw_run_manifest_toml(name, spec.model, c, conditions.constants.nu_ref_mm2_s,
-                                                   conditions.catalog != nullptr, file);
-            run.truth.update({{"run", name}, {"guide", spec.model}, {"load_N", P}, {"preload_um", pc},
-                              {"block_length_mm", c.block_length_mm}, {"temperature_C", T}});
-            runs.push_back(std::move(run.truth));
-            out.run_files.emplace_back(file, std::move(run.csv));
-            out.run_names.push_back(name);
-            out.traces.push_back(std::move(run.trace));
-          }
+  for (const rig::RunSetup& setup : rig::run_setups(conditions)) {
+      const GuideSpec& spec = *setup.spec;
+      const FrictionConditions<double> c = setup.conditions;
+      const double pc = c.preload_um, P = c.load_N, T = c.temperature_C;
+      validate(c);
+      const std::string name = fmt::format("run{:02d}", r + 1);
+      RunResult run = simulate_run(conditions, axis, effects, c, r++, comments);
+      std::string file;
+      manifest += rig::raw_run_manifest_toml(name, spec.model, c, conditions.constants.nu_ref_mm2_s,
+                                             conditions.catalog != nullptr, file);
+      run.truth.update({{"run", name}, {"guide", spec.model}, {"load_N", P}, {"preload_um", pc},
+                        {"block_length_mm", c.block_length_mm}, {"temperature_C", T}});
+      runs.push_back(std::move(run.truth));
+      out.run_files.emplace_back(file, std::move(run.csv));
+      out.run_names.push_back(name);
+      out.traces.push_back(std::move(run.trace));
+  }
   out.manifest_toml = manifest;
   nlohmann::json truth = {
       {"kind", "friction_axis"},

@@ -89,59 +89,53 @@ RawFrictionRigOutput generate_raw_friction_logs(const FrictionRigConfig& config,
       manifest::toml_string(to_string(raw.force_sign)), raw.moving_mass_kg);
   nlohmann::json runs = nlohmann::json::array();
   int r = 0;
-  for (int repeat = 0; repeat < config.runs; ++repeat)
-    for (const auto& model : config.guides)
-      for (double pc : config.preload_um)
-        for (double P : config.load_N)
-          for (double T : config.temperature_C) {
-            const GuideSpec& spec = find_guide(model, config.catalog);
-            const std::string name = fmt::format("run{:02d}", ++r);
-            Rng rng(rig::derive_seed(config.seed, static_cast<std::uint64_t>(r - 1)));
-            const double offset_N = config.run_offset_N * rng.normal();
-            Ar1Noise load_cell(config.noise_N, config.noise_ar1);
-            FrictionConditions<double> c{.load_N = P, .preload_um = pc,
-                                         .block_length_mm = require(spec, &GuideSpec::block_length_mm, "block_length_mm"),
-                                         .temperature_C = T};
-            CsvText csv({"time_s", raw.log_velocity ? "velocity_m_s" : "position_mm", "force_N"}, comments);
-            std::vector<CruiseSegment> cruises;
-            std::size_t phase = 0;
-            for (std::size_t k = 0; k < samples; ++k) {
-              const double t = static_cast<double>(k) * dt_s;
-              while (phase + 1 < phases.size() && t >= phases[phase].end_s()) ++phase;
-              const Phase& p = phases[phase];
-              const double v = p.velocity(t);
-              const double sense = v > 0 ? 1.0 : v < 0 ? -1.0 : 0.0;
-              c.velocity_m_s = std::abs(v);
-              c.direction = sense < 0 ? -1.0 : 1.0;
-              const double friction_N = sense == 0 ? 0.0 : friction_force_with_effects_N(config.constants, effects.friction, c);
-              const double drive_N = sense * friction_N + raw.moving_mass_kg * p.a_m_s2;  // towards +x
-              const double zero_N = offset_N + raw.drift_N_per_h * t / 3600.0 + load_cell.next(rng.normal());
-              double logged_N = drive_N;
-              if (raw.force_sign == ForceSign::opposes_motion) logged_N = -drive_N;
-              if (raw.force_sign == ForceSign::magnitude) logged_N = friction_N + sense * raw.moving_mass_kg * p.a_m_s2;
-              const double motion = raw.log_velocity
-                                        ? rig::round_to(v, 7)
-                                        : rig::round_to(std::round(p.position(t) / raw.encoder_resolution_m) *
-                                                            raw.encoder_resolution_m * 1e3, 6);
-              csv.cell(rig::round_to(t, 6)).cell(motion).cell(rig::round_to(logged_N + zero_N, 4)).end_row();
-              if (p.a_m_s2 != 0 || sense == 0) continue;
-              if (cruises.empty() || cruises.back().last_sample + 1 != k || cruises.back().velocity_m_s != v)
-                cruises.push_back({k, k, t, t, v});
-              cruises.back().last_sample = k;
-              cruises.back().end_s = t;
-            }
-            std::string file;
-            manifest += rig::raw_run_manifest_toml(name, spec.model, c, config.constants.nu_ref_mm2_s,
-                                                   config.catalog != nullptr, file);
-            nlohmann::json segments = nlohmann::json::array();
-            for (const CruiseSegment& s : cruises)
-              segments.push_back({{"first_sample", s.first_sample}, {"last_sample", s.last_sample},
-                                  {"start_s", s.start_s}, {"end_s", s.end_s}, {"velocity_m_s", s.velocity_m_s}});
-            runs.push_back({{"run", name}, {"zero_offset_N", offset_N}, {"cruises", segments}});
-            out.run_files.emplace_back(file, csv.str());
-            out.run_names.push_back(name);
-            out.cruises.push_back(std::move(cruises));
-          }
+  for (const rig::RunSetup& setup : rig::run_setups(config)) {
+      const GuideSpec& spec = *setup.spec;
+      const std::string name = fmt::format("run{:02d}", ++r);
+      Rng rng(rig::derive_seed(config.seed, static_cast<std::uint64_t>(r - 1)));
+      const double offset_N = config.run_offset_N * rng.normal();
+      Ar1Noise load_cell(config.noise_N, config.noise_ar1);
+      FrictionConditions<double> c = setup.conditions;
+      CsvText csv({"time_s", raw.log_velocity ? "velocity_m_s" : "position_mm", "force_N"}, comments);
+      std::vector<CruiseSegment> cruises;
+      std::size_t phase = 0;
+      for (std::size_t k = 0; k < samples; ++k) {
+        const double t = static_cast<double>(k) * dt_s;
+        while (phase + 1 < phases.size() && t >= phases[phase].end_s()) ++phase;
+        const Phase& p = phases[phase];
+        const double v = p.velocity(t);
+        const double sense = v > 0 ? 1.0 : v < 0 ? -1.0 : 0.0;
+        c.velocity_m_s = std::abs(v);
+        c.direction = sense < 0 ? -1.0 : 1.0;
+        const double friction_N = sense == 0 ? 0.0 : friction_force_with_effects_N(config.constants, effects.friction, c);
+        const double drive_N = sense * friction_N + raw.moving_mass_kg * p.a_m_s2;  // towards +x
+        const double zero_N = offset_N + raw.drift_N_per_h * t / 3600.0 + load_cell.next(rng.normal());
+        double logged_N = drive_N;
+        if (raw.force_sign == ForceSign::opposes_motion) logged_N = -drive_N;
+        if (raw.force_sign == ForceSign::magnitude) logged_N = friction_N + sense * raw.moving_mass_kg * p.a_m_s2;
+        const double motion = raw.log_velocity
+                                  ? rig::round_to(v, 7)
+                                  : rig::round_to(std::round(p.position(t) / raw.encoder_resolution_m) *
+                                                      raw.encoder_resolution_m * 1e3, 6);
+        csv.cell(rig::round_to(t, 6)).cell(motion).cell(rig::round_to(logged_N + zero_N, 4)).end_row();
+        if (p.a_m_s2 != 0 || sense == 0) continue;
+        if (cruises.empty() || cruises.back().last_sample + 1 != k || cruises.back().velocity_m_s != v)
+          cruises.push_back({k, k, t, t, v});
+        cruises.back().last_sample = k;
+        cruises.back().end_s = t;
+      }
+      std::string file;
+      manifest += rig::raw_run_manifest_toml(name, spec.model, c, config.constants.nu_ref_mm2_s,
+                                             config.catalog != nullptr, file);
+      nlohmann::json segments = nlohmann::json::array();
+      for (const CruiseSegment& s : cruises)
+        segments.push_back({{"first_sample", s.first_sample}, {"last_sample", s.last_sample},
+                            {"start_s", s.start_s}, {"end_s", s.end_s}, {"velocity_m_s", s.velocity_m_s}});
+      runs.push_back({{"run", name}, {"zero_offset_N", offset_N}, {"cruises", segments}});
+      out.run_files.emplace_back(file, csv.str());
+      out.run_names.push_back(name);
+      out.cruises.push_back(std::move(cruises));
+  }
   out.manifest_toml = manifest;
   nlohmann::json truth = {
       {"kind", "friction_raw"},

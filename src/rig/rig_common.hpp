@@ -7,6 +7,7 @@
 #include <numbers>
 #include <random>
 #include <string>
+#include <vector>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -101,6 +102,28 @@ inline std::string raw_run_manifest_toml(const std::string& id, const std::strin
 }
 
 // Every named effect with its value, unit and whether it is on (the truth file's "effects").
+// One run of a raw generator: its guide and conditions (the block length from the catalog).
+struct RunSetup {
+  const GuideSpec* spec;
+  FrictionConditions<double> conditions;
+};
+// Every run of `config` in the order the raw generators number them (run01, run02, …): repeats
+// outermost, then guides, preloads, loads and temperatures.
+inline std::vector<RunSetup> run_setups(const FrictionRigConfig& config) {
+  std::vector<RunSetup> out;
+  for (int repeat = 0; repeat < config.runs; ++repeat)
+    for (const auto& model : config.guides)
+      for (double pc : config.preload_um)
+        for (double P : config.load_N)
+          for (double T : config.temperature_C) {
+            const GuideSpec& spec = find_guide(model, config.catalog);
+            out.push_back({&spec, {.load_N = P, .preload_um = pc,
+                                   .block_length_mm = require(spec, &GuideSpec::block_length_mm, "block_length_mm"),
+                                   .temperature_C = T}});
+          }
+  return out;
+}
+
 nlohmann::json effects_json(const RigEffects& effects);
 // The friction constants by name (the truth file's "friction_constants").
 nlohmann::json constants_json(const FrictionConstants<double>& k);
