@@ -17,12 +17,8 @@ CC=clang-16 CXX=clang++-16 cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=Release -
       -DLMCAL_FUZZ=ON -DLMCAL_PYTHON=OFF -DLMCAL_BUILD_BENCHMARKS=OFF >/dev/null
 cmake --build build-asan -j"$jobs"
 source scripts/sanitizer-env.sh
-# Left out, each for a reason that is not memory safety:
-# - BundledCalibration.AFreshRunReproducesTheCommittedResults compares the compiler the outputs
-#   record with the committed ones' (g++ 12.2.0); built with clang, that name is all that differs
-#   (every number within the test's 1e-6), so it would fail for the compiler, not for a bug.
-# - the end-to-end fleet runs (ctest `fleet`, GeneratedFleet.*) and the Monte Carlo checks
-#   (Coverage.*, *InNineteenOfTwenty) repeat, hundreds of times, code the other tests run once;
-#   under ASan, and serial (clang builds ignore OpenMP), they alone would take most of CI's time.
-ctest --test-dir build-asan --output-on-failure -j"$jobs" \
-      -E '^(BundledCalibration\.AFreshRunReproducesTheCommittedResults|fleet|GeneratedFleet\..*|Coverage\..*|.*InNineteenOfTwenty)$'
+# The suite without the tests scripts/sanitize-skip.txt lists (each with its reason). Clang builds
+# are serial, so the cli test's 1-thread-against-2 comparisons would compare a run with itself:
+# LMCAL_TEST_SERIAL_BUILD tells it to skip them.
+skip=$(grep -v -e '^#' -e '^$' scripts/sanitize-skip.txt | paste -sd '|')
+LMCAL_TEST_SERIAL_BUILD=1 ctest --test-dir build-asan --output-on-failure -j"$jobs" -E "^($skip)\$"
