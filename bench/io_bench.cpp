@@ -14,42 +14,23 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <string>
-#include <unistd.h>
 
 #include "lmcal/io/catalog.hpp"
 #include "lmcal/io/friction_log.hpp"
 #include "lmcal/io/thermal_run.hpp"
 #include "lmcal/rig/virtual_rig.hpp"
+#include "scratch_dir.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
+using lmcal::bench::write;
 
 // A folder that lives as long as the benchmark binary.
-class ScratchDir {
- public:
-  ScratchDir() : path_(fs::temp_directory_path() / ("lmcal_io_bench_" + std::to_string(::getpid()))) {
-    fs::create_directories(path_);
-  }
-  ~ScratchDir() {
-    std::error_code ignored;
-    fs::remove_all(path_, ignored);
-  }
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
-
-const ScratchDir& scratch() {
-  static const ScratchDir dir;
+const lmcal::bench::ScratchDir& scratch() {
+  static const lmcal::bench::ScratchDir dir("lmcal_io_bench");
   return dir;
-}
-
-void write(const fs::path& file, const std::string& text) {
-  std::ofstream(file, std::ios::binary).write(text.data(), static_cast<std::streamsize>(text.size()));
 }
 
 // Rail warming towards a plateau with a slow ambient drift and a little noise, like the

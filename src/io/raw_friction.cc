@@ -80,30 +80,45 @@ std::vector<double> over_windows(std::size_t n, std::size_t window, F f) {
 
 }  // namespace
 
+namespace {
+
+// The least-squares line through samples [lo, hi): its value at t_i and its slope.
+struct LineAt {
+  double value, slope;
+};
+LineAt line_at(const std::vector<double>& t, const std::vector<double>& y, std::size_t i, std::size_t lo, std::size_t hi) {
+  // Offsets from sample i, for round-off (times may be epoch seconds); one pass of sums.
+  double st = 0, sy = 0, stt = 0, sty = 0;
+  for (std::size_t j = lo; j < hi; ++j) {
+    const double dt = t[j] - t[i], dy = y[j] - y[i];
+    st += dt;
+    sy += dy;
+    stt += dt * dt;
+    sty += dt * dy;
+  }
+  const double count = static_cast<double>(hi - lo);
+  const double var = stt - st * st / count;
+  const double slope = var > 0 ? (sty - st * sy / count) / var : 0.0;
+  return {.value = y[i] + sy / count - slope * st / count, .slope = slope};  // the line at t_i
+}
+
+}  // namespace
+
 LocalLine local_line(const std::vector<double>& t, const std::vector<double>& y, std::size_t window) {
   LocalLine line;
   line.value.resize(t.size());
   line.slope = over_windows(t.size(), window, [&](std::size_t i, std::size_t lo, std::size_t hi) {
-    // Offsets from sample i, for round-off (times may be epoch seconds); one pass of sums.
-    double st = 0, sy = 0, stt = 0, sty = 0;
-    for (std::size_t j = lo; j < hi; ++j) {
-      const double dt = t[j] - t[i], dy = y[j] - y[i];
-      st += dt;
-      sy += dy;
-      stt += dt * dt;
-      sty += dt * dy;
-    }
-    const double count = static_cast<double>(hi - lo);
-    const double var = stt - st * st / count;
-    const double slope = var > 0 ? (sty - st * sy / count) / var : 0.0;
-    line.value[i] = y[i] + sy / count - slope * st / count;  // the line at t_i
-    return slope;
+    const LineAt at = line_at(t, y, i, lo, hi);
+    line.value[i] = at.value;
+    return at.slope;
   });
   return line;
 }
 
+// The slope alone: no value column allocated and filled (a million samples: 8 MB a call).
 std::vector<double> local_slope(const std::vector<double>& t, const std::vector<double>& y, std::size_t window) {
-  return local_line(t, y, window).slope;
+  return over_windows(t.size(), window,
+                      [&](std::size_t i, std::size_t lo, std::size_t hi) { return line_at(t, y, i, lo, hi).slope; });
 }
 
 std::vector<double> window_difference(const std::vector<double>& t, const std::vector<double>& y, std::size_t window) {
@@ -288,6 +303,19 @@ std::vector<double> running_integral(const std::vector<double>& t, const std::ve
   return out;
 }
 
+// The trajectory filter's operator over a window of 2h + 1 samples: K = (difference across the
+// window) ∘ (local slope), zero phase.
+std::vector<double> window_operator(const std::vector<double>& t, const std::vector<double>& y, std::size_t window) {
+  return window_difference(t, local_slope(t, y, window), window);
+}
+
+// The acceleration filter_trajectory gives, alone: K[x] from positions, the local line's slope
+// from a velocity column.
+std::vector<double> filtered_acceleration(const RunSamples& run, Motion motion, std::size_t window) {
+  return motion == Motion::position_m ? window_operator(run.time_s, run.motion, window)
+                                      : local_slope(run.time_s, run.motion, window);
+}
+
 // v, a and the force over a window of 2h + 1 samples, zero phase, through one operator (see
 // segment in raw_friction.hpp). A velocity column: v the local line's value, a its slope, the
 // force the slope of its integral.
@@ -295,12 +323,11 @@ void filter_trajectory(const RunSamples& run, Motion motion, std::size_t window,
   const std::vector<double>& t = run.time_s;
   const std::vector<double> impulse = running_integral(t, run.force_N);
   if (motion == Motion::position_m) {
-    // One operator K = (difference across the window) ∘ (local slope) for all three: a = K[x],
-    // v = K[∫x], F = K[∫∫F]; the friction is then evaluated at the velocity it was smoothed with.
-    const auto K = [&](const std::vector<double>& y) { return window_difference(t, local_slope(t, y, window), window); };
-    s.velocity_m_s = K(running_integral(t, run.motion));
-    s.acceleration_m_s2 = K(run.motion);
-    s.force_N = K(running_integral(t, impulse));
+    // One operator K for all three: a = K[x], v = K[∫x], F = K[∫∫F]; the friction is then
+    // evaluated at the velocity it was smoothed with.
+    s.velocity_m_s = window_operator(t, running_integral(t, run.motion), window);
+    s.acceleration_m_s2 = filtered_acceleration(run, motion, window);
+    s.force_N = window_operator(t, running_integral(t, impulse), window);
   } else {
     LocalLine line = local_line(t, run.motion, window);
     s.velocity_m_s = std::move(line.value);
@@ -361,9 +388,9 @@ Segmented segment_trajectory(const RunSamples& run, Motion motion, const RawFric
                                      "(docs/formats.md#limits); a shorter window or a shorter log",
                                      n, o.trajectory_window, io::kMaxFilterWork));
   if (h == 0) {
-    Segmented wide;
-    filter_trajectory(run, motion, 2 * std::min(std::max<std::size_t>(half_window(0.025), 5), most) + 1, wide);
-    const double a_rms = rms(wide.acceleration_m_s2);
+    // Only the wide filter's acceleration is needed (its v and F would be three times the work).
+    const std::size_t wide = 2 * std::min(std::max<std::size_t>(half_window(0.025), 5), most) + 1;
+    const double a_rms = rms(filtered_acceleration(run, motion, wide));
     for (h = 2; h < most && filter_noise(motion, sigma, dt, h).second > 0.02 * a_rms; ++h) {
     }
   }
