@@ -3,6 +3,7 @@
 // Writes DIR/NAME.json and prints the verdict in plain words.
 #include <fmt/format.h>
 
+#include <cmath>
 #include <filesystem>
 #include <iostream>
 
@@ -39,9 +40,12 @@ void print_rounds(const std::vector<std::vector<CandidateScore>>& rounds, const 
   for (std::size_t r = 0; r < rounds.size(); ++r) {
     std::cout << fmt::format("candidates, step {} (held-out RMSE gain against the model so far):\n", r + 1);
     for (const auto& c : rounds[r])
-      std::cout << fmt::format("  {:<20} {:>10.4g} ± {:<9.3g} LRT p {:<8.2g} held-out {:.4f} {} ({:+.2f} %)  {}{}\n", c.effect,
-                               c.value, c.se, c.lrt_p, c.cv_rmse, unit, c.cv_gain_percent, c.accepted ? "ACCEPTED: " : "",
-                               c.reason);
+      std::cout << fmt::format("  {:<20} {:>10.4g} ± {:<9.3g} LRT p {:<8.2g} held-out {:.4f} {} ({:+.2f} %){}  {}{}\n", c.effect,
+                               c.value, c.se, c.lrt_p, c.cv_rmse, unit, c.cv_gain_percent,
+                               std::isfinite(c.cv_shape_gain_percent)
+                                   ? fmt::format(", shape {:.4f} {} ({:+.2f} %)", c.cv_shape_rmse, unit, c.cv_shape_gain_percent)
+                                   : "",
+                               c.accepted ? "ACCEPTED: " : "", c.reason);
   }
 }
 
@@ -71,8 +75,19 @@ void print_empirical(const EmpiricalFinding& e, const char* unit) {
                                c.scale.unit);
     std::cout << "\n";
   }
-  std::cout << fmt::format("  held-out RMSE {:.4g} -> {:.4g} {} ({:.1f} % better){}\n", e.cv_rmse_before, e.cv_rmse_after, unit,
-                           e.cv_gain_percent, e.resembles.empty() ? "" : "; resembles " + e.resembles);
+  std::cout << fmt::format("  {} {:.4g} -> {:.4g} {} ({:.1f} % better){}\n", held_out_criterion_words(e.criterion), e.cv_rmse_before,
+                           e.cv_rmse_after, unit, e.cv_gain_percent, e.resembles.empty() ? "" : "; resembles " + e.resembles);
+}
+
+// From the baseline to the final model, each step with its models' held-out RMSEs.
+void print_steps(const std::vector<DiagnosisStep>& steps, const char* unit) {
+  for (const auto& s : steps)
+    std::cout << fmt::format("step: {} {}: held-out RMSE {:.4g} -> {:.4g} {}{} ({:+.1f} % on the {})\n", s.action, s.name,
+                             s.cv_rmse_before, s.cv_rmse_after, unit,
+                             std::isfinite(s.cv_shape_rmse_before)
+                                 ? fmt::format(", of the runs' shape {:.4g} -> {:.4g} {}", s.cv_shape_rmse_before, s.cv_shape_rmse_after, unit)
+                                 : "",
+                             s.gain_percent, s.criterion);
 }
 
 void print(const FrictionDiagnosis& d) {
@@ -83,6 +98,7 @@ void print(const FrictionDiagnosis& d) {
   print_rounds(d.rounds, "N");
   for (const auto& note : d.design_notes) std::cout << "design: " << note << "\n";
   print_empirical(d.empirical, "N");
+  print_steps(d.steps, "N");
   std::cout << "verdict: " << d.verdict << "\n  " << d.summary << "\n";
 }
 
@@ -105,6 +121,7 @@ void print(const ThermalDiagnosis& d) {
   for (const auto& s : d.skipped) std::cout << "not tried: " << s << "\n";
   print_rounds(d.rounds, "K");
   print_empirical(d.empirical, "K");
+  print_steps(d.steps, "K");
   std::cout << "verdict: " << d.verdict << "\n  " << d.summary << "\n";
 }
 

@@ -548,9 +548,7 @@ FrictionTermSearch learn_friction_term(const FrictionLog& log, const FrictionFit
   }
   FrictionFitResult& joint = kept->fit;
   const CandidateScore& score = kept->score;
-  f.cv_rmse_before = current.cv_rmse_N;
-  f.cv_rmse_after = joint.cv_rmse_N;
-  f.cv_gain_percent = counted_gain(score);
+  set_held_out(f, before, summarise(joint));
   f.lrt_p = score.lrt_p;
   f.delta_bic = score.bic - information_criteria(before.ss, before.n, std::min(before.n_eff, summarise(joint).n_eff), before.k).second;
   // Every covariate's range in these data: the terms are extrapolations beyond.
@@ -575,10 +573,10 @@ FrictionTermSearch learn_friction_term(const FrictionLog& log, const FrictionFit
     c.symbol = term.symbol(t + 1);
     c.words = term_words(term);
     c.covariates = term.covariates();
-    c.coefficient = joint.fit.parameters[at++];
+    c.coefficient = within_bounds(joint.fit.parameters[at++]);
     if (term.has_scale()) {
       c.has_scale = true;
-      c.scale = joint.fit.parameters[at++];
+      c.scale = within_bounds(joint.fit.parameters[at++]);
     }
     formula += (formula.empty() ? "" : " + ") + c.symbol;
     const std::string r = resemblance(term);

@@ -336,9 +336,7 @@ ThermalTermSearch learn_thermal_term(const ThermalDataSet& data, const ThermalFi
   CandidateScore score;
   score.effect = "empirical term";
   const bool passes = score_candidate(before, after, rules, score);
-  f.cv_rmse_before = current.cv_rmse_K;
-  f.cv_rmse_after = joint.cv_rmse_K;
-  f.cv_gain_percent = counted_gain(score);
+  set_held_out(f, before, after);
   f.lrt_p = score.lrt_p;
   f.delta_bic = score.bic - information_criteria(before.ss, before.n, std::min(before.n_eff, after.n_eff), before.k).second;
 
@@ -353,11 +351,11 @@ ThermalTermSearch learn_thermal_term(const ThermalDataSet& data, const ThermalFi
     c.symbol = symbol(term, j + 1, which == 0 ? "P" : fmt::format("P{}", which + 1));
     c.words = words(term);
     c.covariates = covariates(term);
-    c.coefficient = joint.joint.parameters[indices.front()];
+    c.coefficient = within_bounds(joint.joint.parameters[indices.front()]);
     double scale_s = term.scale_s;
     if (indices.size() > 1) {
       c.has_scale = true;
-      c.scale = joint.joint.parameters[indices[1]];
+      c.scale = within_bounds(joint.joint.parameters[indices[1]]);
       scale_s = c.scale.value;
     }
     if (periodic(term.kind)) c.words += fmt::format(" (P = {:.3g} h)", scale_s / kSecondsPerHour);

@@ -9,6 +9,7 @@
 #include <Eigen/Dense>
 #include <numeric>
 
+#include "fit/bounded_interval.hpp"
 #include "fit/fit_json.hpp"
 #include "lmcal/fit/statistics.hpp"
 
@@ -138,6 +139,42 @@ std::pair<double, double> information_criteria(double ss, double n, double n_eff
   return {aic + 2 * K * (K + 1) / std::max(n_eff - K - 1, 1.0), fit + K * std::log(n_eff)};
 }
 
+DiagnosisStep make_step(std::string action, std::string name, const ModelFit& before, const ModelFit& after) {
+  DiagnosisStep s{.action = std::move(action),
+                  .name = std::move(name),
+                  .cv_rmse_before = before.cv_rmse,
+                  .cv_rmse_after = after.cv_rmse,
+                  .cv_shape_rmse_before = before.cv_shape_rmse,
+                  .cv_shape_rmse_after = after.cv_shape_rmse};
+  const double level = held_out_gain_percent(s.cv_rmse_before, s.cv_rmse_after);
+  const double shape = held_out_gain_percent(s.cv_shape_rmse_before, s.cv_shape_rmse_after);
+  s.criterion = std::isfinite(shape) && !(shape <= level) ? "shape" : "level";
+  s.gain_percent = s.criterion == "shape" ? shape : level;
+  return s;
+}
+
+void set_held_out(EmpiricalFinding& f, const ModelFit& before, const ModelFit& after) {
+  const DiagnosisStep step = make_step("add empirical term", f.formula, before, after);
+  f.criterion = step.criterion;
+  f.cv_rmse_before = step.before();
+  f.cv_rmse_after = step.after();
+  f.cv_gain_percent = step.gain_percent;
+}
+
+double final_cv_rmse(const std::vector<DiagnosisStep>& steps, double baseline) {
+  return steps.empty() ? baseline : steps.back().cv_rmse_after;
+}
+
+ParameterEstimate within_bounds(ParameterEstimate p) {
+  if (p.interval != "linear" || !(p.se > 0) || !std::isfinite(p.ci_high - p.ci_low)) return p;
+  const double t = (p.ci_high - p.ci_low) / (2 * p.se);
+  const BoundedInterval b = bounded_interval(p.value, p.se, t, p.lower, p.upper);
+  p.ci_low = b.low;
+  p.ci_high = b.high;
+  p.interval = b.method;
+  return p;
+}
+
 double counted_gain(const CandidateScore& c) {
   if (!std::isfinite(c.cv_shape_gain_percent)) return c.cv_gain_percent;
   return std::max(c.cv_gain_percent, c.cv_shape_gain_percent);
@@ -149,8 +186,9 @@ bool score_candidate(const ModelFit& current, const ModelFit& candidate, const S
   const double bic0 = information_criteria(current.ss, current.n, n_eff, current.k).second;
   c.added_parameters = candidate.k >= current.k ? candidate.k - current.k : 0;
   c.cv_rmse = candidate.cv_rmse;
-  c.cv_gain_percent = 100 * (1 - candidate.cv_rmse / current.cv_rmse);
-  c.cv_shape_gain_percent = 100 * (1 - candidate.cv_shape_rmse / current.cv_shape_rmse);
+  c.cv_shape_rmse = candidate.cv_shape_rmse;
+  c.cv_gain_percent = held_out_gain_percent(current.cv_rmse, candidate.cv_rmse);
+  c.cv_shape_gain_percent = held_out_gain_percent(current.cv_shape_rmse, candidate.cv_shape_rmse);
   const double gain = counted_gain(c);
   bool significant;
   std::string why_not;
@@ -183,12 +221,15 @@ bool score_candidate(const ModelFit& current, const ModelFit& candidate, const S
   return c.accepted;
 }
 
-void set_estimate(CandidateScore& c, const ParameterEstimate& p) {
+void set_estimate(CandidateScore& c, const ParameterEstimate& given) {
+  const ParameterEstimate p = within_bounds(given);
   c.value = p.value;
   c.unit = p.unit;
   c.se = p.se;
-  c.ci_low = p.ci_low;
-  c.ci_high = p.ci_high;
+  const bool profile = p.interval == "profile";
+  c.ci_low = profile ? p.profile_low : p.ci_low;
+  c.ci_high = profile ? p.profile_high : p.ci_high;
+  c.interval = p.interval;
 }
 
 double change_correlation(const std::vector<double>& current, const std::vector<double>& a, const std::vector<double>& b) {
@@ -230,6 +271,15 @@ std::string lower_first(std::string s) {
   if (!s.empty()) s[0] = static_cast<char>(std::tolower(static_cast<unsigned char>(s[0])));
   return s;
 }
+std::string upper_first(std::string s) {
+  if (!s.empty()) s[0] = static_cast<char>(std::toupper(static_cast<unsigned char>(s[0])));
+  return s;
+}
+
+// "12.3 % better", "4.5 % worse" (held_out_gain_percent: a loss against the RMSE after).
+std::string gain_words(double gain) {
+  return gain < 0 ? fmt::format("{:.1f} % worse", -gain) : fmt::format("{:.1f} % better", gain);
+}
 
 // "c1 = 0.12 (95 % [0.1, 0.14]), l1 = 1.3e3 m (95 % [...])"
 std::string estimate_words(const ParameterEstimate& p) {
@@ -253,10 +303,11 @@ std::string empirical_words(const EmpiricalFinding& e, const std::string& unit) 
   }
   return fmt::format(
       " Beyond the library, an empirical term (learned from the residuals, not a named cause; {} candidate terms "
-      "searched) is added to {}: {}. It uses {}. Held-out RMSE {:.4g} {} -> {:.4g} {} ({:.1f} % better; LRT p = "
+      "searched) is added to {}: {}. It uses {}. {} {:.4g} {} -> {:.4g} {} ({}; LRT p = "
       "{:.2g}). {}",
       e.dictionary_size, e.where, e.components.size() > 1 ? e.formula + ", where " + parts : parts, covariates,
-      e.cv_rmse_before, unit, e.cv_rmse_after, unit, e.cv_gain_percent, e.lrt_p,
+      upper_first(held_out_criterion_words(e.criterion)), e.cv_rmse_before, unit, e.cv_rmse_after, unit,
+      gain_words(e.cv_gain_percent), e.lrt_p,
       e.resembles.empty() ? "It resembles no mechanism we know of." : "It resembles " + e.resembles + ".");
 }
 
@@ -267,7 +318,8 @@ Verdict make_verdict(const VerdictInput& in) {
   const CovariateTest none;
   const CovariateTest& baseline_top = in.baseline_covariates.empty() ? none : in.baseline_covariates.front();
   const CovariateTest& final_top = in.final_covariates.empty() ? none : in.final_covariates.front();
-  v.cv_gain_percent = 100 * (1 - in.cv_after / in.cv_before);
+  const double cv_final = std::isfinite(in.cv_final) ? in.cv_final : in.cv_after;
+  v.cv_gain_percent = held_out_gain_percent(in.cv_before, cv_final);
   const LackOfFit& lof = in.final_lack_of_fit;
   std::string remains;
   if (in.final_structured)
@@ -302,9 +354,10 @@ Verdict make_verdict(const VerdictInput& in) {
         shift += fmt::format("{}{} {:.4g} [{:.4g}, {:.4g}] -> {:.4g} [{:.4g}, {:.4g}]", shift.empty() ? "" : ", ", s.name,
                              s.baseline, s.baseline_low, s.baseline_high, s.extended, s.extended_low, s.extended_high);
     v.summary = fmt::format(
-        "{} misses: {}.{} Modelled, the held-out (leave-one-run-out) RMSE goes from {:.4g} {} to {:.4g} {} ({:.1f} % better). "
+        "{} misses: {}.{} Modelled, the held-out (leave-one-run-out) RMSE goes from {:.4g} {} to {:.4g} {} ({}). "
         "Parameters that move: {}. What remains: {}.",
-        in.model, causes, ties, in.cv_before, in.unit, in.cv_after, in.unit, v.cv_gain_percent,
+        in.model, causes, ties, in.cv_before, in.unit, in.cv_after, in.unit,
+        gain_words(held_out_gain_percent(in.cv_before, in.cv_after)),
         shift.empty() ? "none by more than 2 %" : shift, remains);
     if (in.final_structured) v.unexplained_covariate = final_top.covariate;
   } else if (in.baseline_structured || (in.baseline_lack_of_fit.tested && !in.baseline_lack_of_fit.fits)) {
@@ -344,6 +397,12 @@ Verdict make_verdict(const VerdictInput& in) {
       v.verdict += " — empirical term found";
     v.summary += empirical_words(*in.empirical, in.unit);
   }
+  // The final model's held-out RMSE, when the sentences above end elsewhere (the term after the causes).
+  if (cv_final != in.cv_after || (in.accepted.empty() && cv_final != in.cv_before))
+    v.summary += fmt::format(" The final model (the law{} and the term) has a held-out RMSE of {:.4g} {}, against {:.4g} {} "
+                             "for {} alone ({}).",
+                             in.accepted.empty() ? "" : ", its causes", cv_final, in.unit, in.cv_before, in.unit,
+                             lower_first(in.model), gain_words(v.cv_gain_percent));
   return v;
 }
 
@@ -353,6 +412,8 @@ nlohmann::json candidate_json(const CandidateScore& c, const std::string& unit) 
                         {"value", number(c.value)},
                         {"se", number(c.se)},
                         {"ci95", {number(c.ci_low), number(c.ci_high)}},
+                        {"interval", c.interval},
+                        {"cv_shape_rmse_" + unit, number(c.cv_shape_rmse)},
                         {"added_parameters", c.added_parameters},
                         {"aicc", number(c.aicc)},
                         {"bic", number(c.bic)},
@@ -399,10 +460,24 @@ nlohmann::json verdict_json(const std::string& verdict, const std::string& summa
           {"rounds", steps}};
 }
 
+nlohmann::json steps_json(const std::vector<DiagnosisStep>& steps, const std::string& unit) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const auto& s : steps)
+    out.push_back({{"action", s.action},
+                   {"name", s.name},
+                   {"cv_rmse_before_" + unit, number(s.cv_rmse_before)},
+                   {"cv_rmse_after_" + unit, number(s.cv_rmse_after)},
+                   {"cv_shape_rmse_before_" + unit, number(s.cv_shape_rmse_before)},
+                   {"cv_shape_rmse_after_" + unit, number(s.cv_shape_rmse_after)},
+                   {"criterion", s.criterion},
+                   {"gain_percent", number(s.gain_percent)}});
+  return out;
+}
+
 nlohmann::json empirical_json(const EmpiricalFinding& e, const std::string& unit) {
   auto estimate = [](const ParameterEstimate& p) {
     return nlohmann::json{{"name", p.name}, {"unit", p.unit}, {"value", number(p.value)}, {"se", number(p.se)},
-                          {"ci95", {number(p.ci_low), number(p.ci_high)}}, {"at_bound", p.at_bound}};
+                          {"ci95", {number(p.ci_low), number(p.ci_high)}}, {"interval", p.interval}, {"at_bound", p.at_bound}};
   };
   nlohmann::json components = nlohmann::json::array();
   for (const auto& c : e.components) {
@@ -421,6 +496,7 @@ nlohmann::json empirical_json(const EmpiricalFinding& e, const std::string& unit
           {"formula", e.formula},
           {"components", components},
           {"dictionary_size", e.dictionary_size},
+          {"criterion", e.criterion},
           {"cv_rmse_before_" + unit, number(e.cv_rmse_before)},
           {"cv_rmse_after_" + unit, number(e.cv_rmse_after)},
           {"cv_gain_percent", number(e.cv_gain_percent)},
@@ -449,7 +525,19 @@ nlohmann::json covariates_json(const std::vector<CovariateTest>& tests) {
 
 namespace lmcal {
 
-ParameterShift parameter_shift(const ParameterEstimate& baseline, const ParameterEstimate& extended) {
+double held_out_gain_percent(double before, double after) {
+  if (!(before > 0) || !(after > 0) || !std::isfinite(before) || !std::isfinite(after))
+    return std::numeric_limits<double>::quiet_NaN();
+  return 100 * (before - after) / std::max(before, after);
+}
+
+std::string held_out_criterion_words(const std::string& criterion) {
+  return criterion == "shape" ? "held-out RMSE of the runs' shape (each held-out run's own level out)"
+                              : "held-out (leave-one-run-out) RMSE";
+}
+
+ParameterShift parameter_shift(const ParameterEstimate& given_baseline, const ParameterEstimate& given_extended) {
+  const ParameterEstimate baseline = detail::within_bounds(given_baseline), extended = detail::within_bounds(given_extended);
   auto low = [](const ParameterEstimate& p) { return p.interval == "profile" ? p.profile_low : p.ci_low; };
   auto high = [](const ParameterEstimate& p) { return p.interval == "profile" ? p.profile_high : p.ci_high; };
   // A parameter held (by the user, or as unidentifiable) in either model has not moved for a

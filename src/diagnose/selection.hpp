@@ -92,7 +92,22 @@ struct Selection {
   std::vector<std::vector<CandidateScore>> rounds;  // the candidates of every forward step
   std::vector<std::string> accepted;
   Fit current;
+  std::vector<DiagnosisStep> steps;  // one per accepted cause
+  std::vector<Fit> path;             // path[k]: the model with the first k accepted causes (path[0]: the baseline)
+  std::vector<ModelFit> path_scores; // and its summary
 };
+
+// The step from the model `before` to `after`, by their held-out RMSEs (each model's own,
+// computed once), its gain on the criterion counted_gain counts.
+DiagnosisStep make_step(std::string action, std::string name, const ModelFit& before, const ModelFit& after);
+
+// The empirical term's held-out RMSEs before and after it, on the criterion its gain is counted
+// on (make_step's), into `f`.
+void set_held_out(EmpiricalFinding& f, const ModelFit& before, const ModelFit& after);
+
+// `p` with its quoted interval within its bounds (bounded_interval.hpp): a linear interval that
+// would cross a bound is formed on the log or logit scale instead, and `interval` says so.
+ParameterEstimate within_bounds(ParameterEstimate p);
 
 // The held-out gain that counts for a candidate: on new runs' level (cv_gain_percent) or on
 // their shape (cv_shape_gain_percent), whichever it improves more (the plain gain when the
@@ -112,8 +127,10 @@ double change_correlation(const std::vector<double>& current, const std::vector<
 template <class Fit, class FitWith, class Summarise>
 Selection<Fit> forward_select(const std::vector<std::string>& library, Fit baseline, const FitWith& fit_with,
                               const Summarise& summarise, const SelectionRules& rules) {
-  Selection<Fit> s{{}, {}, std::move(baseline)};
+  Selection<Fit> s{{}, {}, std::move(baseline), {}, {}, {}};
   ModelFit current = summarise(s.current, std::string()).first;
+  s.path.push_back(s.current);
+  s.path_scores.push_back(current);
   while (s.accepted.size() < rules.max_effects) {
     std::vector<std::string> effects_left;
     for (const auto& effect : library)
@@ -168,8 +185,11 @@ Selection<Fit> forward_select(const std::vector<std::string>& library, Fit basel
       if (i != best) round[best].tied_with.push_back(round[i].effect);
     round[best].accepted = true;
     s.accepted.push_back(round[best].effect);
+    s.steps.push_back(make_step("add cause", round[best].effect, current, models[best]));
     s.current = std::move(fits[best]);
     current = models[best];
+    s.path.push_back(s.current);
+    s.path_scores.push_back(current);
     s.rounds.push_back(std::move(round));
   }
   return s;
@@ -201,7 +221,8 @@ struct VerdictInput {
   std::string unit;   // of the residuals: "N", "K"
   std::vector<CandidateScore> accepted;  // with the final fit's estimates
   std::vector<ParameterShift> shifts;
-  double cv_before = 0, cv_after = 0, baseline_rmse = 0;
+  double cv_before = 0, cv_after = 0, baseline_rmse = 0;  // cv_after: the named causes' model
+  double cv_final = std::numeric_limits<double>::quiet_NaN();  // the last step's after (with the empirical term)
   bool baseline_structured = false, final_structured = false;
   std::vector<CovariateTest> baseline_covariates, final_covariates;  // strongest first
   LackOfFit baseline_lack_of_fit, final_lack_of_fit;
@@ -220,6 +241,9 @@ Verdict make_verdict(const VerdictInput& in);
 // The verdict of a diagnosis (FrictionDiagnosis, ThermalDiagnosis: accepted, shifts, baseline
 // and final residuals set) into it; `model` and `unit` name the baseline and the residuals,
 // the held-out RMSEs and the baseline RMSE are in that unit.
+// The held-out RMSE a diagnosis ends with: the last step's after (the baseline's without steps).
+double final_cv_rmse(const std::vector<DiagnosisStep>& steps, double baseline);
+// `cv_after` is the named causes' model's; the final value is the last step's after (d.steps).
 template <class Diagnosis>
 void conclude(Diagnosis& d, std::string model, std::string unit, double cv_before, double cv_after, double baseline_rmse) {
   const Verdict v = make_verdict({.model = std::move(model),
@@ -229,6 +253,7 @@ void conclude(Diagnosis& d, std::string model, std::string unit, double cv_befor
                                   .cv_before = cv_before,
                                   .cv_after = cv_after,
                                   .baseline_rmse = baseline_rmse,
+                                  .cv_final = final_cv_rmse(d.steps, cv_before),
                                   .baseline_structured = d.baseline.structured,
                                   .final_structured = d.final.structured,
                                   .baseline_covariates = d.baseline.covariates,
@@ -256,10 +281,13 @@ nlohmann::json verdict_json(const std::string& verdict, const std::string& summa
                             double cv_gain_percent, const std::string& unexplained_covariate, const std::string& unit);
 // The empirical term (searched or not, found or not) as JSON; values in the residuals' unit.
 nlohmann::json empirical_json(const EmpiricalFinding& e, const std::string& unit);
+// The steps from the baseline to the final model, values in the residuals' unit.
+nlohmann::json steps_json(const std::vector<DiagnosisStep>& steps, const std::string& unit);
 template <class Diagnosis>
 nlohmann::json verdict_json(const Diagnosis& d, double cv_before, double cv_after, const std::string& unit) {
   nlohmann::json j = verdict_json(d.verdict, d.summary, d.accepted, d.shifts, d.rounds, cv_before, cv_after, d.cv_gain_percent,
                       d.unexplained_covariate, unit);
+  j["steps"] = steps_json(d.steps, unit);
   j["empirical_term"] = empirical_json(d.empirical, unit);
   return j;
 }

@@ -292,8 +292,9 @@ ThermalDiagnosis diagnose_thermal(const ThermalDataSet& data, const ThermalDiagn
     m.k = fit.joint.free_parameters;
     m.cv_rmse = fit.cv_rmse_K;
     for (const auto& s : fit.samples) m.fitted.push_back(s.simulated_C);
-    if (const ParameterEstimate& a = fit.joint.parameter("alpha"); fit.joint.solver.usable)
-      c.alpha = a.value, c.alpha_low = a.ci_low, c.alpha_high = a.ci_high;
+    if (const ParameterEstimate a = detail::within_bounds(fit.joint.parameter("alpha")); fit.joint.solver.usable)
+      c.alpha = a.value, c.alpha_low = a.interval == "profile" ? a.profile_low : a.ci_low,
+      c.alpha_high = a.interval == "profile" ? a.profile_high : a.ci_high;
     if (!fit.joint.solver.usable) m.problem = "the fit did not converge: " + fit.joint.solver.termination;
     for (const auto& issue : fit.joint.identifiability.issues) m.problem = "not identifiable: " + issue.why;
     if (!effect.empty()) {
@@ -328,7 +329,8 @@ ThermalDiagnosis diagnose_thermal(const ThermalDataSet& data, const ThermalDiagn
       if (p.name == "alpha" || p.name == "h_W_m2K") d.shifts.push_back(parameter_shift(p, d.final_fit.joint.parameter(p.name)));
   };
   std::vector<std::string> accepted = selection.accepted;
-  settle(accepted, std::move(selection.current));
+  d.steps = selection.steps;
+  settle(accepted, selection.current);
 
   // 5. Beyond the library: when structure remains, an empirical sensor term, fitted jointly.
   if (d.final.structured || !d.final.lack_of_fit.fits) {
@@ -346,7 +348,11 @@ ThermalDiagnosis diagnose_thermal(const ThermalDataSet& data, const ThermalDiagn
     for (std::size_t i = accepted.size(); search.fit && i-- > 0;) {
       std::vector<std::string> others = accepted;
       others.erase(others.begin() + static_cast<std::ptrdiff_t>(i));
-      ThermalFitResult named = fit_model(data, o, others, &d.final_fit);
+      // The model without it: the forward selection's own where it passed through it (the same
+      // model, the same held-out RMSE), else refitted.
+      const bool on_path = others.size() < selection.path.size() &&
+                           std::equal(others.begin(), others.end(), selection.accepted.begin());
+      ThermalFitResult named = on_path ? selection.path[others.size()] : fit_model(data, o, others, &d.final_fit);
       if (named.samples.empty()) continue;
       detail::ThermalTermSearch without = search_with(others, named);
       if (!without.fit) continue;
@@ -354,6 +360,8 @@ ThermalDiagnosis diagnose_thermal(const ThermalDataSet& data, const ThermalDiagn
       if (detail::score_candidate(model_fit(*without.fit), model_fit(*search.fit), rules, c)) continue;
       d.dropped.push_back(fmt::format("{} (accepted in round {}, it adds nothing once the empirical term is in: {})",
                                     accepted[i], i + 1, c.reason));
+      // Its own step: from the model with it to the model refitted without it.
+      d.steps.push_back(detail::make_step("drop cause", accepted[i], model_fit(d.final_fit), model_fit(named)));
       accepted = others;
       settle(accepted, std::move(named));
       search = std::move(without);
@@ -361,9 +369,12 @@ ThermalDiagnosis diagnose_thermal(const ThermalDataSet& data, const ThermalDiagn
     d.empirical = std::move(search.finding);
     d.empirical_terms = std::move(search.terms);
     if (search.fit) d.empirical_fit = std::move(*search.fit);
+    if (d.empirical.found)
+      d.steps.push_back(detail::make_step("add empirical term", d.empirical.formula, model_fit(d.final_fit), model_fit(d.empirical_fit)));
   }
+  d.cv_rmse_after_K = detail::final_cv_rmse(d.steps, d.cv_rmse_before_K);
 
-  detail::conclude(d, "The published rail model", "K", d.cv_rmse_before_K, d.cv_rmse_after_K, d.baseline.rmse_K);
+  detail::conclude(d, "The published rail model", "K", d.cv_rmse_before_K, d.final_fit.cv_rmse_K, d.baseline.rmse_K);
   for (const auto& why : d.dropped) d.summary += " Dropped: " + why + ".";
   return d;
 }

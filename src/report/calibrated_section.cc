@@ -87,7 +87,7 @@ void thermal_model(Page& page, const Calibration& c) {
   page.heading(3, "Rail temperature: " + with_causes(model, m.thermal_causes, c.thermal_diagnosis.has_value()));
   const bool nuisances = std::any_of(t.joint.parameters.begin(), t.joint.parameters.end(), nuisance);
   page.paragraph(fmt::format("{} runs, heat Q_f from {}. Held-out (leave-one-run-out) RMSE {} K; largest error {} % of the "
-                             "rise.{}",
+                             "sensor's span (its highest minus lowest 10-record mean).{}",
                              t.runs.size(), m.thermal_options.friction ? "the calibrated friction model" : "the measured mean friction",
                              num(t.cv_rmse_K), num(t.max_error_percent, 3),
                              nuisances ? " Per-run nuisance parameters (thermocouple offsets, start temperatures, heat scales) "

@@ -241,6 +241,7 @@ void diagnosis_section(Page& page, const Calibration& c) {
                              num(d.cv_rmse_before_N), num(d.cv_rmse_after_N), d.cv_gain_percent));
   lack_of_fit_paragraph(page, d.baseline.lack_of_fit, d.final.lack_of_fit, "N", d.design_notes);
   candidate_tables(page, d.rounds, "N");
+  steps_table(page, d.steps, d.cv_rmse_before_N, "N");
   if (!d.accepted.empty()) shift_table(page, d.shifts, "the law alone");
   // Before/after against velocity and against the covariate the baseline residuals follow most.
   std::vector<std::string> shown{"velocity_m_s"};
@@ -288,7 +289,7 @@ void friction_section(Page& page, const Calibration& c) {
   page.heading(2, "Friction: " + published_label(rejects(c.friction_diagnosis)), "friction");
   const std::size_t files = std::max<std::size_t>(c.set.friction_logs.size(), c.set.friction_manifest ? 1 : 0);
   page.paragraph(fmt::format("{} samples in {} from {}. The published law (Eqs. 3-7) fitted by weighted least squares; "
-                             "residual RMSE {} N, largest relative error {} % (against at least a tenth of the median force).",
+                             "residual RMSE {} N, largest error {} % of the measured force's range (its 1st to 99th percentile).",
                              log.size(), plural(f.runs.size(), "run"), plural(files, "file"), num(f.rmse_N),
                              num(100 * f.max_relative_error, 3)));
   page.figures(friction_velocity_panels(c));
@@ -322,16 +323,35 @@ void candidate_tables(Page& page, const std::vector<std::vector<CandidateScore>>
   for (std::size_t r = 0; r < rounds.size(); ++r) {
     std::vector<std::vector<std::string>> rows;
     for (const auto& cand : rounds[r]) {
-      rows.push_back({cand.effect, num(cand.value) + (cand.unit.empty() || cand.unit == "1" ? "" : " " + cand.unit), bracket(cand.ci_low, cand.ci_high),
+      const bool shape = std::isfinite(cand.cv_shape_gain_percent);
+      rows.push_back({cand.effect, num(cand.value) + (cand.unit.empty() || cand.unit == "1" ? "" : " " + cand.unit),
+                      bracket(cand.ci_low, cand.ci_high) + (cand.interval == "linear" ? "" : " (" + cand.interval + ")"),
                       p_value(cand.lrt_p), num(cand.cv_rmse), fmt::format("{:+.2f} %", cand.cv_gain_percent),
+                      shape ? num(cand.cv_shape_rmse) + fmt::format(" ({:+.2f} %)", cand.cv_shape_gain_percent) : "–",
                       (cand.accepted ? "accepted: " : "") + cand.reason});
       if (alpha) rows.back().insert(rows.back().begin() + 3, num(cand.alpha) + " " + bracket(cand.alpha_low, cand.alpha_high));
     }
     page.paragraph(fmt::format("Candidates, step {} (held-out RMSE in {}, gain against the model so far):", r + 1, unit));
-    std::vector<std::string> header{"cause", "estimate", "95 % interval", "LRT p", "held-out RMSE", "gain", "decision"};
+    std::vector<std::string> header{"cause", "estimate", "95 % interval", "LRT p", "held-out RMSE", "gain",
+                                    "held-out RMSE of the runs' shape", "decision"};
     if (alpha) header.insert(header.begin() + 3, "α of that model");
     page.table(header, rows);
   }
+}
+
+void steps_table(Page& page, const std::vector<DiagnosisStep>& steps, double baseline, const char* unit) {
+  if (steps.empty()) return;
+  page.paragraph(fmt::format("From the baseline (held-out RMSE {} {}) to the final model, step by step: each step's "
+                             "before is the step's before it, and the last step's after is the final value.",
+                             num(baseline), unit));
+  std::vector<std::vector<std::string>> rows;
+  for (const auto& s : steps)
+    rows.push_back({s.action, s.name, num(s.cv_rmse_before), num(s.cv_rmse_after),
+                    std::isfinite(s.cv_shape_rmse_before) ? num(s.cv_shape_rmse_before) + " → " + num(s.cv_shape_rmse_after) : "–",
+                    fmt::format("{:+.1f} % ({})", s.gain_percent, s.criterion == "shape" ? "runs' shape" : "held-out RMSE")});
+  page.table({"step", "what", std::string("held-out RMSE before (") + unit + ")", std::string("after (") + unit + ")",
+              std::string("of the runs' shape (") + unit + ")", "gain (counted on)"},
+             rows);
 }
 
 void lack_of_fit_paragraph(Page& page, const LackOfFit& baseline, const LackOfFit& final, const std::string& unit,
@@ -396,9 +416,10 @@ void empirical_section(Page& page, const EmpiricalFinding& e, const std::string&
     rows.push_back({component.symbol, component.words, covariates, coefficient, coefficient_interval, scale, scale_interval});
   }
   page.table({"term", "what it does", "covariates", "coefficient", "95 % interval", "scale", "95 % interval"}, rows);
-  page.paragraph(fmt::format("Held-out (leave-one-run-out) RMSE {} {} before the term, {} {} with it: a gain of {:.1f} % "
+  page.paragraph(fmt::format("{}: RMSE {} {} before the term, {} {} with it: a gain of {:.1f} % "
                              "(LRT p = {}, ΔBIC = {}). Kept: {}.",
-                             num(e.cv_rmse_before), unit, num(e.cv_rmse_after), unit, e.cv_gain_percent, p_value(e.lrt_p),
+                             "H" + held_out_criterion_words(e.criterion).substr(1), num(e.cv_rmse_before), unit,
+                             num(e.cv_rmse_after), unit, e.cv_gain_percent, p_value(e.lrt_p),
                              num(e.delta_bic, 3), e.reason));
   page.paragraph(e.resembles.empty() ? "It resembles no mechanism we know of."
                                      : "It resembles " + e.resembles + ". A resemblance, not a diagnosis: to name the "

@@ -107,7 +107,10 @@ inline std::pair<double, double> quoted_bounds(const ParameterEstimate& p) {
 inline std::string interval(const ParameterEstimate& p) {
   const auto [low, high] = quoted_bounds(p);
   if (!std::isfinite(low) && !std::isfinite(high)) return "–";
-  return bracket(low, high) + (p.interval == "profile" ? " (profile)" : "");
+  return bracket(low, high) + (p.interval == "profile"                             ? " (profile)"
+                                : p.interval == "log" || p.interval == "logit" ? " (" + p.interval + " scale)"
+                                : p.interval == "clipped"                        ? " (clipped at its bound)"
+                                                                                 : "");
 }
 
 // A per-run nuisance parameter (thermocouple offset, start temperature, heat scale): left out

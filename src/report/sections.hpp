@@ -111,6 +111,9 @@ void empirical_section(Page& page, const EmpiricalFinding& e, const std::string&
 // The candidates of every forward step, and the accepted causes.
 void candidate_tables(Page& page, const std::vector<std::vector<CandidateScore>>& rounds, const char* unit);
 
+// The steps from the baseline (its held-out RMSE `baseline`) to the final model: before, after, gain.
+void steps_table(Page& page, const std::vector<DiagnosisStep>& steps, double baseline, const char* unit);
+
 // The lack-of-fit test of the baseline and of the final model, and what the design hides.
 void lack_of_fit_paragraph(Page& page, const LackOfFit& baseline, const LackOfFit& final, const std::string& unit,
                            const std::vector<std::string>& design_notes = {});

@@ -199,6 +199,7 @@ void diagnosis_section(Page& page, const Calibration& c) {
                              "thermocouples' noise is {} K.",
                              num(d.cv_rmse_before_K), num(d.cv_rmse_after_K), d.cv_gain_percent, num(d.noise_K, 3)));
   candidate_tables(page, d.rounds, "K");
+  steps_table(page, d.steps, d.cv_rmse_before_K, "K");
   for (const auto& skipped : d.skipped) page.paragraph("Not tried: " + skipped);
   lack_of_fit_paragraph(page, d.baseline.lack_of_fit, d.final.lack_of_fit, "K");
   if (!d.accepted.empty()) shift_table(page, d.shifts, "published model");
@@ -220,7 +221,7 @@ void thermal_section(Page& page, const Calibration& c) {
   page.heading(2, "Thermal: " + published_label(rejects(c.thermal_diagnosis)), "thermal");
   const ParameterEstimate& alpha = f.joint.parameter("alpha");
   page.paragraph(fmt::format("{} runs; the rail model (Eq. 11, {} source) driven by each run's measured ambient, heat Q_f "
-                             "from {}. Heat partition α = {} {} (joint fit); largest error {} % of the rise.",
+                             "from {}. Heat partition α = {} {} (joint fit); largest error {} % of the sensor's span (its highest minus lowest 10-record mean).",
                              runs.size(), to_string(c.thermal_options.source),
                              c.thermal_options.friction ? "the fitted friction law" : "the measured mean friction",
                              num(alpha.value), interval(alpha), num(f.max_error_percent, 3)));

@@ -63,7 +63,8 @@ def test_ci95_is_the_interval_the_text_quotes(outputs):
     for file in outputs:
         for records in parameter_records(json.loads(file.read_text())):
             for p in records:
-                quoted = {"linear": p["linear_ci95"], "profile": p["profile_ci95"], "none": [None, None]}[p["interval"]]
+                quoted = {"linear": p["linear_ci95"], "log": p["linear_ci95"], "logit": p["linear_ci95"], "clipped": p["linear_ci95"],
+                          "profile": p["profile_ci95"], "none": [None, None]}[p["interval"]]
                 assert p["ci95"] == quoted, f"{file.name} {p['name']}"
                 checked += 1
     assert checked > 50

@@ -32,16 +32,31 @@ struct CovariateTest {
   bool structured = false; // counts as structure under the diagnosis's rule
 };
 
+// A held-out gain in [−100, 100] %: 100 (before − after) / max(before, after). A gain is quoted
+// against the RMSE before, a loss against the RMSE after (a model twice as bad is 50 % worse),
+// so no number of the diagnosis reads "−1316 % better". NaN unless both are finite and > 0.
+double held_out_gain_percent(double before, double after);
+
+// What a held-out gain is counted on: the leave-one-run-out RMSE of new runs ("level": each
+// predicted with an unknown zero), or the same with each held-out run's own level taken out
+// ("shape"). Their words, for every text that quotes one.
+std::string held_out_criterion_words(const std::string& criterion);
+
 struct CandidateScore {
   std::string effect;
   double value = 0, se = 0, ci_low = 0, ci_high = 0;  // its (first) parameter; NaN for a switch
+  // How ci_low/ci_high were formed: "linear" (value ± t·SE), or, where that would cross one of the
+  // parameter's bounds, "log"/"logit" (on the log scale of the distance to the bound, or the
+  // logit between two, mapped back) or "clipped" (the estimate on its bound).
+  std::string interval = "linear";
   std::string unit;                                   // that parameter's ("N s2/m2" for seal_drag)
   std::size_t added_parameters = 1;
   double aicc = 0, bic = 0;
   double lrt_statistic = 0, lrt_p = 1;  // NaN for a switch (not nested: BIC decides)
   double cv_rmse = 0;                   // leave-one-run-out, in the data's unit
-  double cv_gain_percent = 0;           // against the current model
-  double cv_shape_gain_percent = std::numeric_limits<double>::quiet_NaN();  // on the runs' shape (their level out)
+  double cv_gain_percent = 0;           // against the current model (held_out_gain_percent)
+  double cv_shape_rmse = std::numeric_limits<double>::quiet_NaN();  // on the runs' shape (their level out)
+  double cv_shape_gain_percent = std::numeric_limits<double>::quiet_NaN();
   bool accepted = false;
   std::string reason;                   // why it was or was not accepted
   std::string measure;                  // what to log to see this cause directly
@@ -53,6 +68,23 @@ struct CandidateScore {
   double alpha = std::numeric_limits<double>::quiet_NaN();
   double alpha_low = std::numeric_limits<double>::quiet_NaN(), alpha_high = std::numeric_limits<double>::quiet_NaN();
 };
+// One step from the baseline to the final model: a cause added (forward selection), a cause
+// dropped (it stood in for the empirical term: the model refitted without it), or the empirical
+// term added. Each model's held-out RMSEs are computed once and carried: a step's before is the
+// previous step's after, the first step's the baseline's, and the last step's after is the
+// diagnosis's final value (cv_rmse_after_*), which every text quotes.
+struct DiagnosisStep {
+  std::string action;  // "add cause", "drop cause", "add empirical term"
+  std::string name;    // the cause, or the term's formula
+  double cv_rmse_before = std::numeric_limits<double>::quiet_NaN(), cv_rmse_after = std::numeric_limits<double>::quiet_NaN();
+  double cv_shape_rmse_before = std::numeric_limits<double>::quiet_NaN();  // NaN: not scored (thermal)
+  double cv_shape_rmse_after = std::numeric_limits<double>::quiet_NaN();
+  std::string criterion = "level";  // what the step's gain is counted on: "level" or "shape"
+  double gain_percent = std::numeric_limits<double>::quiet_NaN();  // on the criterion, held_out_gain_percent
+  double before() const { return criterion == "shape" ? cv_shape_rmse_before : cv_rmse_before; }
+  double after() const { return criterion == "shape" ? cv_shape_rmse_after : cv_rmse_after; }
+};
+
 // The range of α over the candidate models of every round (thermal; NaN when none has one).
 std::pair<double, double> candidate_alpha_range(const std::vector<std::vector<CandidateScore>>& rounds);
 
@@ -117,7 +149,11 @@ struct EmpiricalFinding {
   std::string formula;    // the whole term in symbols
   std::vector<EmpiricalComponent> components;
   std::size_t dictionary_size = 0;  // candidate terms searched
-  double cv_rmse_before = std::numeric_limits<double>::quiet_NaN();  // held-out, the residuals' unit
+  // Held-out, the residuals' unit, on the criterion the term was kept by ("level" or "shape":
+  // the RMSE of the runs' shape, each held-out run's level out), before and after the term:
+  // the gain beside them is theirs.
+  std::string criterion = "level";
+  double cv_rmse_before = std::numeric_limits<double>::quiet_NaN();
   double cv_rmse_after = std::numeric_limits<double>::quiet_NaN();
   double cv_gain_percent = std::numeric_limits<double>::quiet_NaN();
   double lrt_p = std::numeric_limits<double>::quiet_NaN();

@@ -70,6 +70,9 @@ struct FrictionDiagnosis {
   ResidualDiagnostics final;
   std::vector<std::vector<CandidateScore>> rounds;  // the candidates of every forward step
   std::vector<CandidateScore> accepted;
+  // From the baseline to the final model (the causes, then the empirical term when found): each
+  // step's before is the previous step's after; cv_rmse_after_N is the last step's after.
+  std::vector<DiagnosisStep> steps;
   double cv_rmse_before_N = 0, cv_rmse_after_N = 0, cv_gain_percent = 0;
   std::vector<ParameterShift> shifts;
   std::string unexplained_covariate;  // when the verdict is "unexplained"

@@ -112,6 +112,10 @@ struct ThermalDiagnosis {
   // Causes accepted before the empirical term that no longer pass on top of it (they stood in
   // for what it models), and why: left out of `accepted` and the final fit.
   std::vector<std::string> dropped;
+  // From the baseline to the final model: the causes added, each cause dropped (its own step:
+  // the model refitted without it) and the empirical term; each step's before is the previous
+  // step's after, and cv_rmse_after_K is the last step's after.
+  std::vector<DiagnosisStep> steps;
   double cv_rmse_before_K = 0, cv_rmse_after_K = 0, cv_gain_percent = 0;
   double noise_K = 0;  // the thermocouples' noise (second differences): the floor of the held-out RMSE
   std::vector<ParameterShift> shifts;

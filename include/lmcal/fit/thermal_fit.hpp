@@ -164,7 +164,7 @@ struct SensorGoodness {
   std::size_t n = 0;
   double rmse_K = 0;
   double max_error_K = 0;
-  double max_error_percent = 0;  // max |error| / (measured rise at the end) · 100
+  double max_error_percent = 0;  // max |error| / the sensor's measured span (its highest minus lowest 10-record mean, at least a tenth of the widest sensor's) · 100
 };
 
 struct RunInfo {
