@@ -17,6 +17,7 @@
 #include "fit/bounded_interval.hpp"
 #include "lmcal/diagnose/friction_diagnosis.hpp"
 #include "lmcal/diagnose/thermal_diagnosis.hpp"
+#include "lmcal/fit/friction_fit.hpp"
 #include "lmcal/fit/thermal_fit.hpp"
 #include "lmcal/io/friction_log.hpp"
 #include "lmcal/rig/axis_rig.hpp"
@@ -216,6 +217,31 @@ TEST(DiagnosisInvariantsUnit, AHeatThenCoolRunsMaxErrorIsAgainstItsSpan) {
   ASSERT_TRUE(fit.joint.solver.usable) << fit.joint.solver.termination;
   EXPECT_GT(fit.max_error_percent, 0);
   EXPECT_LT(fit.max_error_percent, 20) << "a few noise σ against a span of kelvins";
+}
+
+// Issue 38: "max relative error 1255 %" on friction near zero. The relative error is taken
+// against the measured force's range (1st to 99th percentile), not each sample's own force: a
+// log whose forces reach down to 0.01 N quotes its largest error as a share of the range.
+TEST(DiagnosisInvariantsUnit, AFrictionFitsRelativeErrorIsAgainstTheMeasuredRange) {
+  FrictionRigConfig rig;
+  rig.guides = {"SRN 35C"};
+  rig.runs = 3;
+  rig.seed = 17;
+  FrictionLog log = generate_friction_log(rig, {}).log;
+  const double lowest = *std::min_element(log.friction_N.begin(), log.friction_N.end());
+  for (double& f : log.friction_N) f -= lowest - 0.01;  // a zero offset the law's f0 takes: forces near 0
+  FrictionFitOptions o;
+  o.per_run_fits = false;
+  o.fit.profile = ProfileMode::none;
+  o.fit.bootstrap = 0;
+  const FrictionFitResult fit = fit_friction(log, o);
+  std::vector<double> sorted = log.friction_N;
+  std::sort(sorted.begin(), sorted.end());
+  auto at = [&](double q) { return sorted[static_cast<std::size_t>(std::round(q * static_cast<double>(sorted.size() - 1)))]; };
+  double largest = 0;
+  for (std::size_t i = 0; i < log.size(); ++i) largest = std::max(largest, std::abs(log.friction_N[i] - fit.predicted_N[i]));
+  EXPECT_NEAR(fit.max_relative_error, largest / (at(0.99) - at(0.01)), 1e-12);
+  EXPECT_LT(fit.max_relative_error, 0.5) << "errors of tenths of a newton against a range of tens";
 }
 
 // The invariants over random designs: campaigns (every covariate varied) with one effect or

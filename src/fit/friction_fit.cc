@@ -550,18 +550,22 @@ FrictionFitResult fit_friction(const FrictionLog& logged, const FrictionFitOptio
     for (double s : out.sigma_N) sigma2 += s * s;
     out.run_offset_sd_N = std::sqrt(variance.ratio * variance.sigma2 * sigma2 / static_cast<double>(log.size()));
   }
-  // Relative errors against at least a tenth of the median force: a force near zero (a slow,
-  // light condition on a load cell's zero) would otherwise turn a small error into 10⁵ %.
-  std::vector<double> magnitudes(log.size());
+  // Relative errors against the signal's scale, not each sample's own force (a force near zero,
+  // a slow light condition or a torque crossing 0, turned a small error into 10³ %): the
+  // measured force's range, 1st to 99th percentile (a spike moves neither), at least a tenth of
+  // its median magnitude (a log at nearly one force).
+  std::vector<double> magnitudes(log.size()), sorted = log.friction_N;
   for (std::size_t i = 0; i < log.size(); ++i) magnitudes[i] = std::abs(log.friction_N[i]);
   std::nth_element(magnitudes.begin(), magnitudes.begin() + static_cast<std::ptrdiff_t>(magnitudes.size() / 2), magnitudes.end());
-  const double floor_N = std::max(0.1 * magnitudes[magnitudes.size() / 2], 1e-9);
+  std::sort(sorted.begin(), sorted.end());
+  const auto percentile = [&](double q) { return sorted[static_cast<std::size_t>(std::round(q * static_cast<double>(sorted.size() - 1)))]; };
+  const double scale_N = std::max({percentile(0.99) - percentile(0.01), 0.1 * magnitudes[magnitudes.size() / 2], 1e-9});
   double ss = 0;
   for (std::size_t i = 0; i < log.size(); ++i) {
     if (!out.run_offset_N.empty() && std::isfinite(out.run_offset_N[log.run[i]])) out.predicted_N[i] += out.run_offset_N[log.run[i]];
     const double r = log.friction_N[i] - out.predicted_N[i];
     ss += r * r;
-    const double relative = std::abs(r) / std::max(std::abs(log.friction_N[i]), floor_N);
+    const double relative = std::abs(r) / scale_N;
     if (relative > out.max_relative_error) {
       out.max_relative_error = relative;
       out.max_relative_error_sample = i;
@@ -826,7 +830,7 @@ std::string friction_fit_summary(const FrictionFitResult& r) {
                    f.solver.termination, f.solver.iterations, f.solver.converged ? "" : " (not converged)", f.solver.starts_agreed,
                    f.solver.starts, f.solver.start_residuals, f.solver.restarted ? " (polished again from the best on all data)" : "",
                    f.solver.covariance_ok ? "ok" : "FAILED");
-  s += fmt::format("goodness: RMSE {:.3f} N, max relative error {:.1f} % (sample {}), residual sigma {:.3g}\n", r.rmse_N,
+  s += fmt::format("goodness: RMSE {:.3f} N, max error {:.1f} % of the measured force's range (sample {}), residual sigma {:.3g}\n", r.rmse_N,
                    100 * r.max_relative_error, r.max_relative_error_sample, std::sqrt(f.residual_variance));
   if (r.variance_passes > 0 && r.run_offset_ratio > 0)
     s += fmt::format("run offsets: random, tau = {:.3g} N (variance {:.3g} x the noise's, {} alternating fits)\n",
