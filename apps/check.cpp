@@ -27,6 +27,7 @@ void print_report(const LoadReport& r) {
   for (const auto& [column, count] : r.missing) std::cout << fmt::format("    {} missing samples in {}\n", count, column);
   for (const auto& column : r.ignored_columns) std::cout << fmt::format("    ignored column {}\n", column);
   if (r.time_gaps) std::cout << fmt::format("    {} gaps in time (> 1.5x the median step)\n", r.time_gaps);
+  for (const auto& note : r.notes) std::cout << fmt::format("    note: {}\n", note);
   for (const auto& warning : r.warnings) std::cout << fmt::format("    warning: {}\n", warning);
 }
 

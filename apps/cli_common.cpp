@@ -182,6 +182,7 @@ void FrictionOptions::add_to(CLI::App& app) {
 FrictionLaw FrictionOptions::law(const LoadedModel* model) const {
   if (!model || !model->model.has_friction) return {.constants = constants};
   model->refuse(given(options_), "the friction law's constants (and its viscosity at the reference temperature)");
+  model->model.require_friction_scalings("a simulation");
   return {.constants = model->model.constants,
           .effects = model->model.effects,
           .effect_names = model->model.friction_causes,

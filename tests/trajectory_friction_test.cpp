@@ -198,5 +198,137 @@ TEST_F(TrajectoryFriction, ThePlateauReaderSaysWhenItDropsMostOfATrajectory) {
   }
 }
 
+
+// ---- conditions nobody logged (FrictionLawConditions) ---------------------------------------
+
+// The combinations a log of one setup determines, from the paper's constants at that setup.
+struct TrueCombinations {
+  double coulomb_N, stribeck_N, stribeck_speed_m_s, viscous_N_s_m;
+};
+TrueCombinations true_combinations(double load_N, double preload_um, double block_length_mm, double temperature_C) {
+  const FrictionConstants<double> k = paper_friction_constants();
+  const double nu = k.nu_ref_mm2_s * std::exp(-k.beta_per_K * (temperature_C - k.T_ref_C));
+  return {(k.k1 - k.k2 * preload_um) * load_N * 1e-3 + block_length_mm * k.f0, k.mu_st * preload_um * block_length_mm / nu,
+          k.v_st_m_s, block_length_mm * k.mu_v * preload_um * nu};
+}
+
+void expect_covers(const FrictionFitResult& fit, const TrueCombinations& truth) {
+  ASSERT_EQ(fit.combinations.size(), 4u);
+  const double values[] = {truth.coulomb_N, truth.stribeck_N, truth.stribeck_speed_m_s, truth.viscous_N_s_m};
+  for (std::size_t c = 0; c < 4; ++c) {
+    const ParameterEstimate& e = fit.combinations[c].estimate;
+    EXPECT_LE(quoted_low(e), values[c]) << e.name << " " << e.value;
+    EXPECT_GE(quoted_high(e), values[c]) << e.name << " " << e.value;
+  }
+}
+
+// A drive's log with nothing but time, position and force (no manifest, no run column): the
+// mass, the weight and the four combinations are recovered, and no output states a load,
+// preload, block length or temperature it was not given.
+TEST_F(TrajectoryFriction, ALogOfTimePositionAndForceFitsTheCombinations) {
+  const Axis axis;
+  const RunSpec run{"drive", 2000, 26, 0.05, 0.45};
+  write_run(run, axis, 7);
+  RawFrictionOptions raw;
+  raw.segmentation = RawSegmentation::trajectory;
+  raw.axis_incline_deg = axis.incline_deg;
+  const FrictionLog log = load_friction_log(dir_ / "drive.csv", raw);
+  EXPECT_TRUE(log.law.combination());
+  EXPECT_FALSE(log.law.temperature);
+  EXPECT_EQ(log.run_names, std::vector<std::string>{"drive"});
+  EXPECT_EQ(log.law.stated(), "no conditions given");
+  FrictionFitOptions o;
+  o.fit.starts = 2;
+  const FrictionFitResult fit = fit_friction(log, o);
+  ASSERT_TRUE(fit.fit.solver.usable) << fit.fit.solver.termination;
+  EXPECT_NEAR(fit.fit.parameter("moving_mass").value, axis.mass_kg, 0.01 * axis.mass_kg);
+  EXPECT_NEAR(fit.fit.parameter("axis_gravity").value, axis.weight_N(), 0.005 * axis.weight_N());
+  expect_covers(fit, true_combinations(run.load_N, 4, 120.2, run.temperature_C));
+  const std::string summary = friction_fit_summary(fit);
+  for (const char* invented : {"load 1000", "preload 1 ", "block length 1 ", "\n  beta_per_K ", "\n  k1 ", "\n  mu_st "})
+    EXPECT_EQ(summary.find(invented), std::string::npos) << invented << " in\n" << summary;
+  EXPECT_NE(summary.find("not given: load_N, preload_um, block_length_mm, temperature_C"), std::string::npos) << summary;
+  const std::string samples = friction_fit_samples_csv(fit, log);
+  const std::string header = samples.substr(0, samples.find('\n'));
+  for (const char* column : {"load_N", "preload_um", "block_length_mm", "temperature_C"})
+    EXPECT_EQ(header.find(column), std::string::npos) << header;
+  EXPECT_EQ(friction_fit_conditions_csv(fit).find("load_N"), std::string::npos);
+}
+
+// A tidy speed-and-force log with a logged temperature that varies: β is fitted with the
+// combinations, which are quoted at the mean logged temperature.
+TEST_F(TrajectoryFriction, ASpeedAndForceLogWithATemperatureFitsBetaToo) {
+  const FrictionConstants<double> k = paper_friction_constants();
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> noise(0, 0.05);
+  std::string csv = "velocity_m_s,temperature_C,friction_N\n";
+  double sum_T = 0;
+  int n = 0;
+  for (double T : {22.0, 27.0, 32.0, 37.0})
+    for (double v : {0.002, 0.005, 0.01, 0.02, 0.04, 0.066, 0.083, 0.11})
+      for (int rep = 0; rep < 20; ++rep) {
+        const FrictionConditions<double> c{.load_N = 1500, .preload_um = 4, .block_length_mm = 97, .velocity_m_s = v,
+                                           .temperature_C = T};
+        csv += fmt::format("{},{},{:.4f}\n", v, T, friction_force_N(k, c) + noise(rng));
+        sum_T += T, ++n;
+      }
+  write("bench.csv", csv);
+  const FrictionLog log = load_friction_log(dir_ / "bench.csv");
+  EXPECT_TRUE(log.law.combination());
+  EXPECT_TRUE(log.law.temperature);
+  const FrictionFitResult fit = fit_friction(log, {});
+  ASSERT_TRUE(fit.fit.solver.usable);
+  EXPECT_DOUBLE_EQ(fit.law_temperature_C, std::round(10 * sum_T / n) / 10);
+  const ParameterEstimate& beta = fit.fit.parameter("beta_per_K");
+  EXPECT_TRUE(beta.free);
+  EXPECT_LE(quoted_low(beta), k.beta_per_K);
+  EXPECT_GE(quoted_high(beta), k.beta_per_K);
+  expect_covers(fit, true_combinations(1500, 4, 97, fit.law_temperature_C));
+}
+
+// A preload by its catalog class is the class's µm; a preload known only as a force leaves the
+// law in combinations and is stated as given; the one setup's load must stay one.
+TEST_F(TrajectoryFriction, APreloadByClassOrForceAndOneSetupPerCombinationLaw) {
+  write("r.csv", "velocity_m_s,friction_N\n0.01,20\n0.02,21\n0.05,22\n");
+  const auto manifest = [&](const std::string& run_keys) {
+    return write("f.toml", "file = \"r.csv\"\n[[run]]\nid = \"r\"\nguide = \"SRN 35C\"\nload_N = 1000\ntemperature_C = 24\n" +
+                               run_keys);
+  };
+  EXPECT_EQ(load_friction_dataset(manifest("preload_class = \"C0\"\n")).log.preload_um.front(), 4.0);
+  EXPECT_EQ(load_friction_dataset(manifest("preload_class = \"C1\"\n")).log.preload_um.front(), 2.5);
+  EXPECT_FALSE(load_friction_dataset(manifest("preload_class = \"C1\"\n")).log.law.combination());
+  const FrictionLog spring = load_friction_dataset(manifest("preload_N = 0.8\n")).log;
+  EXPECT_TRUE(spring.law.combination());
+  EXPECT_EQ(spring.law.stated(), "load 1000 N, preload 0.8 N, block length 120.2 mm");
+  for (const auto& [keys, expected] : std::vector<std::pair<std::string, std::string>>{
+           {"preload_class = \"C9\"\n", "unknown class 'C9'"},
+           {"preload_class = \"C0\"\npreload_um = 4\n", "both give run 'r''s preload"},
+           {"preload_N = -1\n", "expected a force >= 0"}}) {
+    try {
+      load_friction_dataset(manifest(keys));
+      ADD_FAILURE() << keys << " accepted";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
+    }
+  }
+  write("loads.csv", "run,velocity_m_s,load_N,friction_N\nr,0.01,1000,20\nr,0.02,2000,21\n");
+  try {
+    load_friction_log(dir_ / "loads.csv");
+    ADD_FAILURE() << "two loads without a preload accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.line(), 3);
+    EXPECT_NE(std::string(e.what()).find("load_N = 2000 differs from the log's first value, 1000"), std::string::npos)
+        << e.what();
+  }
+  write("with_load.csv", "run,velocity_m_s,load_N,preload_um,block_length_mm,temperature_C,friction_N\nr,0.01,1000,4,97,24,20\n");
+  write("without.csv", "run,velocity_m_s,friction_N\ns,0.01,20\n");
+  try {
+    load_friction_logs({dir_ / "with_load.csv", dir_ / "without.csv"});
+    ADD_FAILURE() << "files that disagree on the conditions accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("give the same conditions for every file of a log"), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace lmcal

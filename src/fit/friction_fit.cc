@@ -290,6 +290,109 @@ std::vector<std::string> drive_effects(const FrictionLog& log) {
   return names;
 }
 
+namespace {
+
+// What a log without some of the law's conditions (FrictionLawConditions) can determine.
+// Without a temperature β is held (the law sits at T_i). A combination law holds k2 and f0 at
+// 0, so that k1 carries the Coulomb level, and starts and bounds k1, mu_st and mu_v from the
+// data's own scale (the paper's values are for its guide, not for an unknown drive).
+void prepare_law(const FrictionLog& log, FrictionFitOptions& o) {
+  constexpr std::size_t kK1 = 0, kK2 = 1, kMuSt = 2, kMuV = 4, kBeta = 5, kF0 = 6;
+  if (!log.law.temperature) o.free[kBeta] = false;
+  if (!log.law.combination()) return;
+  for (std::size_t j : {kK2, kF0}) {
+    o.free[j] = false;
+    fittable_constant(o.start, j) = 0;
+  }
+  double force_max = 0, speed_max = 0, nu = 0;
+  for (std::size_t i = 0; i < log.size(); ++i) {
+    force_max = std::max(force_max, std::abs(log.friction_N[i]));
+    speed_max = std::max(speed_max, log.velocity_m_s[i]);
+    nu += log.viscosity40_mm2_s[i] / static_cast<double>(log.size());
+  }
+  // At the neutral conditions the Coulomb level is k1, the Stribeck amplitude mu_st / ν and the
+  // viscous slope mu_v · ν; none can exceed ten times the largest force.
+  const double force = std::max(force_max, 1e-9);
+  const auto scaled = [&](std::size_t j, double start, double upper) {
+    o.bounds[j] = {0, upper};
+    if (o.free[j]) fittable_constant(o.start, j) = start;
+  };
+  scaled(kK1, 0.5 * force, 10 * force);
+  scaled(kMuSt, 0.2 * force * nu, 10 * force * nu);
+  scaled(kMuV, 0.3 * force / std::max(speed_max, 1e-12) / nu, 10 * force / std::max(speed_max, 1e-12) / nu);
+}
+
+// The temperature a combination law is quoted at: the logged mean (to 0.1 K), else T_i.
+double law_temperature_C(const FrictionLog& log) {
+  if (!log.law.temperature || log.size() == 0) return FrictionLawConditions::kUnloggedTemperature_C;
+  double sum = 0;
+  for (double t : log.temperature_C) sum += t;
+  return std::round(10 * sum / static_cast<double>(log.size())) / 10;
+}
+
+// The combinations a combination law's fit determines (LawCombination), at temperature T.
+std::vector<LawCombination> law_combinations(const FitResult& fit, const FrictionLog& log, double T) {
+  using Law = FrictionLawConditions;
+  const auto& p = fit.parameters;
+  double nu40 = 0;
+  for (double v : log.viscosity40_mm2_s) nu40 += v / static_cast<double>(log.size());
+  const FrictionConstants<double> reference = paper_friction_constants();
+  const double shift = T - reference.T_ref_C, beta = p[5].value;
+  const double nu = nu40 * std::exp(-beta * shift);  // Eq. 6 at T
+  const double load = Law::kNeutralLoad_N * 1e-3, pc = Law::kNeutralPreload_um, lb = Law::kNeutralBlockLength_mm;
+  struct Row {
+    const char* name;
+    const char* unit;
+    std::size_t constant;
+    double factor;          // combination = factor · constant
+    double per_beta;        // d(combination)/dβ / combination
+    const char* meaning;
+  };
+  const Row rows[] = {
+      {"coulomb_N", "N", 0, load, 0, "the Coulomb level: (k1 - k2·pc)·P·1e-3 + Lb·f0"},
+      {"stribeck_N", "N", 2, pc * lb / nu, shift, "the Stribeck amplitude at rest: mu_st·pc·Lb/ν(T)"},
+      {"stribeck_speed_m_s", "m/s", 3, 1, 0, "the Stribeck speed: V_St"},
+      {"viscous_N_s_m", "N·s/m", 4, lb * pc * nu, -shift, "the viscous slope: Lb·mu_v·pc·ν(T)"},
+  };
+  std::vector<LawCombination> out;
+  for (const Row& row : rows) {
+    const ParameterEstimate& k = p[row.constant];
+    ParameterEstimate c = k;
+    c.name = row.name;
+    c.unit = row.unit;
+    const auto scale = [&](double& v) { v *= row.factor; };
+    for (double* v : {&c.value, &c.start, &c.lower, &c.upper, &c.se, &c.ci_low, &c.ci_high, &c.profile_low,
+                      &c.profile_high, &c.boot_low, &c.boot_high})
+      scale(*v);
+    for (ProfilePoint& q : c.profile_curve) scale(q.value);
+    // With β fitted and T away from T_i the combination leans on β too: the delta method.
+    const bool with_beta = row.per_beta != 0 && p[5].free && !p[5].held_unidentifiable && std::isfinite(p[5].se);
+    if (with_beta && fit.covariance.rows() > 5) {
+      const double g0 = row.factor, g5 = c.value * row.per_beta;
+      const auto j = static_cast<Eigen::Index>(row.constant);
+      const double variance = g0 * g0 * fit.covariance(j, j) + 2 * g0 * g5 * fit.covariance(j, 5) +
+                              g5 * g5 * fit.covariance(5, 5);
+      c.se = std::sqrt(std::max(variance, 0.0));
+      const double half = (k.se > 0 ? (k.ci_high - k.ci_low) / (2 * k.se) : 0) * c.se;
+      c.ci_low = c.value - half, c.ci_high = c.value + half;
+      c.profile_low = c.profile_high = c.boot_low = c.boot_high = std::numeric_limits<double>::quiet_NaN();
+      c.profile_curve.clear();
+      if (c.interval != "none") c.interval = "linear";
+    }
+    out.push_back({std::move(c), row.meaning});
+  }
+  return out;
+}
+
+// The combination that stands for constant j in a combination law's outputs (nullptr: none).
+const LawCombination* combination_of(const FrictionFitResult& r, std::size_t j) {
+  static constexpr std::array<int, 7> kCombination{0, -1, 1, 2, 3, -1, -1};  // k1, mu_st, v_st, mu_v
+  if (r.combinations.empty() || j >= kCombination.size() || kCombination[j] < 0) return nullptr;
+  return &r.combinations[static_cast<std::size_t>(kCombination[j])];
+}
+
+}  // namespace
+
 FrictionConstants<double> FrictionFitResult::constants() const {
   const auto& p = fit.parameters;
   LMCAL_ASSERT(p.size() >= 7, "a friction fit has seven constants");
@@ -384,6 +487,7 @@ FrictionFitResult fit_friction(const FrictionLog& logged, const FrictionFitOptio
       options.effect_start.resize(std::min(options.effect_start.size(), options.effects.size()));  // it starts neutral
       options.effects.push_back(name);
     }
+  prepare_law(logged, options);
   FrictionLog smoothed;
   if (options.temperature == FrictionTemperature::block_mean) smoothed = with_block_mean_temperature(logged);
   const FrictionLog& log = options.temperature == FrictionTemperature::block_mean ? smoothed : logged;
@@ -647,6 +751,24 @@ FrictionFitResult fit_friction(const FrictionLog& logged, const FrictionFitOptio
       out.spread.push_back(s);
     }
   }
+  out.law = log.law;
+  if (log.law.combination()) {
+    out.law_temperature_C = law_temperature_C(log);
+    out.combinations = law_combinations(out.fit, log, out.law_temperature_C);
+    // The runs' spread in the combinations, at the pooled fit's factor (and β).
+    for (RunSpread& sp : out.spread) {
+      const std::optional<std::size_t> j = find_friction_constant(sp.parameter);
+      const LawCombination* c = j ? combination_of(out, *j) : nullptr;
+      if (!c || out.fit.parameters[*j].value == 0) continue;
+      const double factor = c->estimate.value / out.fit.parameters[*j].value;
+      for (std::vector<double>* v : {&sp.per_run, &sp.per_run_half_width_95, &sp.per_run_se})
+        for (double& x : *v) x *= factor;
+      for (double* x : {&sp.spread.mean, &sp.spread.sd, &sp.spread.low, &sp.spread.high, &sp.spread.min, &sp.spread.max,
+                        &sp.pooled_se})
+        *x *= factor;
+      sp.parameter = c->estimate.name;
+    }
+  }
   return out;
 }
 
@@ -686,6 +808,67 @@ nlohmann::json run_offsets_json(const FrictionFitResult& r, const FrictionFitOpt
 }
 
 }  // namespace
+
+namespace {
+
+// Whether the summary's table shows parameter j: not the constants a combination law held at
+// 0, nor β without a logged temperature (its value would be the paper's, not this log's).
+bool shown(const FrictionFitResult& r, std::size_t j) {
+  constexpr std::size_t kK2 = 1, kBeta = 5, kF0 = 6;
+  return (r.combinations.empty() || (j != kK2 && j != kF0)) && (r.law.temperature || j != kBeta);
+}
+
+// What the log gave and what the fit could therefore determine.
+std::string law_summary(const FrictionFitResult& r) {
+  if (!r.law.combination() && r.law.temperature) return "";
+  if (!r.law.combination())
+    return "law: no temperature logged: evaluated at the oil's ν40 (T_i = 40 °C), beta_per_K held; log the "
+           "temperature to fit it\n";
+  std::string s = fmt::format("law: not given: {} ({}); fitted in the combinations one setup determines, at {}\n",
+                              fmt::join(r.law.not_logged(), ", "), r.law.stated(),
+                              r.law.temperature ? fmt::format("the mean logged temperature, {:g} °C", r.law_temperature_C)
+                                                : std::string("the log's own (unlogged) temperature"));
+  for (const LawCombination& c : r.combinations) s += fmt::format("  {:<20} {}\n", c.estimate.name, c.meaning);
+  s += "  to separate the paper's constants: give load_N, preload_um (or preload_class) and block_length_mm, with runs "
+       "at two loads or more (k1 from f0), two preloads (k2) and temperatures over 10 K or more (beta)\n";
+  return s;
+}
+
+nlohmann::json law_json(const FrictionFitResult& r) {
+  nlohmann::json j = {{"form", r.law.combination() ? "combinations" : "constants"},
+                      {"not_given", r.law.not_logged()}};
+  if (!r.law.combination()) return j;
+  nlohmann::json combinations = nlohmann::json::array();
+  for (const LawCombination& c : r.combinations) {
+    const ParameterEstimate& e = c.estimate;
+    combinations.push_back({{"name", e.name}, {"unit", e.unit}, {"meaning", c.meaning}, {"value", number(e.value)},
+                            {"se", number(e.se)}, {"interval", e.interval},
+                            {"ci95", {number(e.interval == "profile" ? e.profile_low : e.ci_low),
+                                      number(e.interval == "profile" ? e.profile_high : e.ci_high)}}});
+  }
+  j["stated"] = r.law.stated();
+  j["temperature_C"] = r.law_temperature_C;
+  j["combinations"] = combinations;
+  return j;
+}
+
+}  // namespace
+
+FitResult friction_fit_as_shown(const FrictionFitResult& r) {
+  FitResult f = r.fit;
+  for (std::size_t j = 0; j < f.parameters.size(); ++j) {
+    if (!shown(r, j)) f.parameters[j].interval = "none";
+    const LawCombination* c = combination_of(r, j);
+    if (!c) continue;
+    const double ratio = r.fit.parameters[j].se > 0 ? c->estimate.se / r.fit.parameters[j].se : 0;
+    for (CovarianceSummary& m : f.uncertainty.methods)
+      if (j < m.se.size()) m.se[j] *= ratio;
+    for (RunHeterogeneity& h : f.uncertainty.heterogeneity)
+      if (h.parameter == f.parameters[j].name) h.parameter = c->estimate.name;
+    f.parameters[j] = c->estimate;
+  }
+  return f;
+}
 
 std::string friction_fit_json(const FrictionFitResult& r, const FrictionFitOptions& o, const FitProvenance& prov) {
   nlohmann::json spread = nlohmann::json::array();
@@ -734,7 +917,8 @@ std::string friction_fit_json(const FrictionFitResult& r, const FrictionFitOptio
         {"max_relative_error", r.max_relative_error},
         {"max_relative_error_sample", r.max_relative_error_sample},
         {"conditions", r.conditions.size()}}},
-      {"spread_across_runs", spread}};
+      {"spread_across_runs", spread},
+      {"law", law_json(r)}};
   j.update(fit_json(r.fit));
   if (!r.terms.empty()) {
     nlohmann::json terms = nlohmann::json::array();
@@ -751,15 +935,22 @@ std::string friction_fit_json(const FrictionFitResult& r, const FrictionFitOptio
 }
 
 std::string friction_fit_samples_csv(const FrictionFitResult& r, const FrictionLog& log) {
-  CsvText csv({"run", "line", "time_s", "guide", "velocity_m_s", "load_N", "preload_um", "block_length_mm", "temperature_C",
-               "direction", "measured_N", "predicted_N", "residual_N", "sigma_N"});
+  // Only the conditions the log gave: a combination law's neutral values are not data.
+  const bool setup = !log.law.combination(), temperature = log.law.temperature;
+  std::vector<std::string> header{"run", "line", "time_s", "guide", "velocity_m_s"};
+  if (setup) header.insert(header.end(), {"load_N", "preload_um", "block_length_mm"});
+  if (temperature) header.push_back("temperature_C");
+  header.insert(header.end(), {"direction", "measured_N", "predicted_N", "residual_N", "sigma_N"});
+  CsvText csv(header);
   csv.expect_rows(log.size());
   for (std::size_t i = 0; i < log.size(); ++i) {
     csv.cell(log.run_names[log.run[i]]).cell(i < log.line.size() && log.line[i] > 0 ? std::to_string(log.line[i]) : "");
     csv.cell(i < log.time_s.size() ? log.time_s[i] : NAN);  // nan: the log has no time
     csv.cell(log.guide_names.empty() ? "" : log.guide_names[log.guide[i]]);
-    csv.cell(log.velocity_m_s[i]).cell(log.load_N[i]).cell(log.preload_um[i]).cell(log.block_length_mm[i]);
-    csv.cell(log.temperature_C[i]).cell(double(log.direction[i])).cell(log.friction_N[i]).cell(r.predicted_N[i]);
+    csv.cell(log.velocity_m_s[i]);
+    if (setup) csv.cell(log.load_N[i]).cell(log.preload_um[i]).cell(log.block_length_mm[i]);
+    if (temperature) csv.cell(log.temperature_C[i]);
+    csv.cell(double(log.direction[i])).cell(log.friction_N[i]).cell(r.predicted_N[i]);
     csv.cell(log.friction_N[i] - r.predicted_N[i]).cell(r.sigma_N[i]).end_row();
   }
   return csv.str();
@@ -774,10 +965,18 @@ std::vector<std::pair<std::string, std::string>> friction_fit_files(const Fricti
 }
 
 std::string friction_fit_conditions_csv(const FrictionFitResult& r) {
-  CsvText csv({"guide", "preload_um", "load_N", "temperature_C", "velocity_m_s", "direction", "n", "measured_N",
-               "predicted_N", "bias_N", "rmse_N", "relative_error"});
+  const bool setup = !r.law.combination(), temperature = r.law.temperature;
+  std::vector<std::string> header{"guide"};
+  if (setup) header.insert(header.end(), {"preload_um", "load_N"});
+  if (temperature) header.push_back("temperature_C");
+  header.insert(header.end(), {"velocity_m_s", "direction", "n", "measured_N", "predicted_N", "bias_N", "rmse_N",
+                               "relative_error"});
+  CsvText csv(header);
   for (const auto& c : r.conditions) {
-    csv.cell(c.guide).cell(c.preload_um).cell(c.load_N).cell(c.temperature_C).cell(c.velocity_m_s).cell(c.direction);
+    csv.cell(c.guide);
+    if (setup) csv.cell(c.preload_um).cell(c.load_N);
+    if (temperature) csv.cell(c.temperature_C);
+    csv.cell(c.velocity_m_s).cell(c.direction);
     csv.cell(double(c.n)).cell(c.measured_N).cell(c.predicted_N).cell(c.bias_N).cell(c.rmse_N).cell(c.relative_error);
     csv.end_row();
   }
@@ -785,14 +984,17 @@ std::string friction_fit_conditions_csv(const FrictionFitResult& r) {
 }
 
 std::string friction_fit_summary(const FrictionFitResult& r) {
-  const FitResult& f = r.fit;
+  const FitResult f = friction_fit_as_shown(r);
   std::string s;
   std::size_t free = 0;
   for (const auto& p : f.parameters) free += p.free ? 1 : 0;
   s += fmt::format("{} samples, {} runs, {} of {} parameters asked free\n", f.residuals, r.runs.size(), free,
                    f.parameters.size());
+  s += law_summary(r);
   s += fmt::format("  {:<20} {:>12} {:>11}  {:<27} {}\n", "parameter", "value", "SE", "95% interval", "note");
-  for (const auto& p : f.parameters) {
+  for (std::size_t j = 0; j < f.parameters.size(); ++j) {
+    if (!shown(r, j)) continue;
+    const ParameterEstimate& p = f.parameters[j];
     std::string note;
     if (!p.free) note = "held (given)";
     else if (p.held_unidentifiable) note = "held: not identifiable";

@@ -34,6 +34,15 @@ const CalibratedRange* range_in(const std::vector<CalibratedRange>& ranges, std:
 }  // namespace
 
 const CalibratedRange* ModelFile::friction_range_of(std::string_view q) const { return range_in(friction_range, q); }
+
+void ModelFile::require_friction_scalings(std::string_view use) const {
+  if (friction_law != "combinations") return;
+  throw InvalidParameter("model", fmt::format("its friction law was fitted in combinations (the log gave no load, preload "
+                                              "or block length), so it holds only for the calibrated setup and {} needs "
+                                              "it at other conditions: calibrate from a log with load_N, preload_um and "
+                                              "block_length_mm",
+                                              use));
+}
 const CalibratedRange* ModelFile::thermal_range_of(std::string_view q) const { return range_in(thermal_range, q); }
 
 namespace {
@@ -447,8 +456,13 @@ void set_term_parameter(std::vector<FrictionTerm>& terms, const std::string& nam
 void read_friction(const std::string& file, const toml::table& f, ModelFile& m) {
   only_keys(file, f, "[friction]",
             {"causes", "covariance", "reference_temperature_C", "viscosity40_mm2_s", "parameter", "term",
-             "covariance_matrix", "range"});
+             "covariance_matrix", "range", "law"});
   m.has_friction = true;
+  if (f.get("law")) {
+    m.friction_law = string_at(file, f, "law");
+    if (m.friction_law != "constants" && m.friction_law != "combinations")
+      fail(file, f.get("law")->source(), fmt::format("law = '{}': expected \"constants\" or \"combinations\"", m.friction_law));
+  }
   const auto causes = strings_at(file, f, "causes");
   std::vector<std::string> effects;
   for (const auto& info : FrictionEffectLibrary::infos) effects.emplace_back(info.name);
@@ -470,7 +484,7 @@ void read_friction(const std::string& file, const toml::table& f, ModelFile& m) 
     else if (cause != m.friction_causes.end()) {
       const FrictionEffectInfo& info = FrictionEffectLibrary::infos[*find_friction_effect(r.p.name)];
       require_within(file, r.value_at, r.p.name, r.p.value, info.lower, info.upper, info.unit);
-      m.effects[*find_friction_effect(r.p.name)] = r.p.value;
+      if (!info.dynamics) m.effects[*find_friction_effect(r.p.name)] = r.p.value;  // see model_file_of
     }
     else if (term != term_parameters.end()) set_term_parameter(m.friction_terms, r.p.name, r.p.value);
     else
@@ -594,7 +608,16 @@ ModelFile model_file_of(const FrictionFitResult* friction, const FrictionFitOpti
     m.constants.T_ref_C = fo.start.T_ref_C;
     m.constants.nu_ref_mm2_s = fo.start.nu_ref_mm2_s;
     m.effects = friction->effects();
-    m.friction_causes = fo.effects;
+    // Every effect the fit carries: the options' and the drive's own (drive_effects: a
+    // trajectory's moving mass, an incline's weight), which fit_friction adds.
+    // The drive's dynamics are recorded, not applied: the model's friction is the guide's, and a
+    // simulated or predicted speed has no acceleration or incline of the calibration's axis.
+    for (std::size_t j = 7; j < friction->fit.parameters.size(); ++j)
+      if (const auto slot = find_friction_effect(friction->fit.parameters[j].name)) {
+        m.friction_causes.push_back(friction->fit.parameters[j].name);
+        if (FrictionEffectLibrary::infos[*slot].dynamics) m.effects[*slot] = FrictionEffectLibrary::infos[*slot].neutral;
+      }
+    if (friction->law.combination()) m.friction_law = "combinations";
     m.friction_terms = friction->terms;
     m.friction_parameters = parameters_of(friction->fit);
     m.friction_covariance = friction->fit.uncertainty.method;
@@ -660,6 +683,9 @@ std::string model_file_toml(const ModelFile& m) {
         "[friction]\n# the friction law (Eqs. 3-7) with these effects added\ncauses = {}\ncovariance = {}\n"
         "reference_temperature_C = {}\nviscosity40_mm2_s = {}\n\n",
         string_list(m.friction_causes), manifest::toml_string(m.friction_covariance), number(m.constants.T_ref_C), number(m.constants.nu_ref_mm2_s));
+    if (m.friction_law != "constants")
+      out += fmt::format("# fitted without load, preload and block length: holds for the calibrated setup only\nlaw = {}\n\n",
+                         manifest::toml_string(m.friction_law));
     write_parameters(out, "friction", m.friction_parameters);
     for (std::size_t t = 0; t < m.friction_terms.size(); ++t) {
       const FrictionTerm& term = m.friction_terms[t];

@@ -300,16 +300,51 @@ class FileLoader {
                                                    "or the run's file key",
                                                    file_.manifest, file_.run, column(kRun)->header));
     }
-    if (!column(kRun) && file_.run.empty()) fail_header(csv::missing_column(kSpecs[kRun]));
 
     // Every condition from a column or the manifest, not both.
     for (const ConditionKey& key : kConditionKeys) check_given_once(key.spec, [&](const FrictionRunConditions& c) {
       return (c.*key.field).has_value() && !(key.spec == kBlockLength && c.block_length_from_catalog);
     });
     check_given_once(kGuide, [](const FrictionRunConditions& c) { return c.guide.has_value(); });
-    for (const ConditionKey& key : kConditionKeys) {
-      if (key.required && !column(key.spec) && file_.manifest.empty()) fail_header(csv::missing_column(kSpecs[key.spec]));
+    check_given_once(kPreload, [](const FrictionRunConditions& c) { return c.preload_N || c.preload_class; });
+    bind_law();
+  }
+
+  // Which of the law's conditions this file gives (a column, or a key of some run of the
+  // manifest: then every run needs it); the log's files must agree.
+  void bind_law() {
+    const auto given = [&](Spec spec, std::optional<double> FrictionRunConditions::*field) {
+      return column(spec) != nullptr ||
+             std::any_of(file_.runs.begin(), file_.runs.end(), [&](const auto& run) { return (run.second.*field).has_value(); });
+    };
+    law_.load = given(kLoad, &FrictionRunConditions::load_N);
+    law_.preload = given(kPreload, &FrictionRunConditions::preload_um);
+    // A guide named for its block length that the catalog does not know meant to give it.
+    law_.block_length = given(kBlockLength, &FrictionRunConditions::block_length_mm) ||
+                        std::any_of(file_.runs.begin(), file_.runs.end(),
+                                    [](const auto& run) { return !run.second.block_length_note.empty(); });
+    law_.temperature = given(kTemperature, &FrictionRunConditions::temperature_C);
+    if (law_.combination()) {
+      report_.notes.push_back(fmt::format("not given: {}; the law is fitted in the combinations one setup determines (the "
+                                          "Coulomb level, the Stribeck amplitude and speed, the viscous slope)",
+                                          fmt::join(law_.not_logged(), ", ")));
+    } else if (!law_.temperature) {
+      report_.notes.push_back("not given: temperature_C; the law is evaluated at the oil's ν40 and β is not fitted");
     }
+    if (log_.reports.empty()) {
+      log_.law = law_;
+      return;
+    }
+    const FrictionLawConditions& earlier = log_.law;
+    if (earlier.load != law_.load || earlier.preload != law_.preload || earlier.block_length != law_.block_length ||
+        earlier.temperature != law_.temperature) {
+      fail_header(fmt::format("this file gives {} but {} gives {}: give the same conditions for every file of a log",
+                              given_list(law_), log_.reports.front().file, given_list(earlier)));
+    }
+  }
+  static std::string given_list(const FrictionLawConditions& law) {
+    const std::vector<std::string> missing = law.not_logged();
+    return missing.empty() ? std::string("every condition") : fmt::format("no {}", fmt::join(missing, ", "));
   }
 
   // The runs the manifest describes that rows of this file may belong to.
@@ -329,7 +364,7 @@ class FileLoader {
   void reserve() {
     const std::size_t capacity = log_.size() + reader_.estimated_rows();
     for (auto* v : {&log_.time_s, &log_.velocity_m_s, &log_.load_N, &log_.preload_um, &log_.block_length_mm,
-                    &log_.temperature_C, &log_.friction_N, &log_.viscosity40_mm2_s}) {
+                    &log_.temperature_C, &log_.friction_N, &log_.viscosity40_mm2_s, &log_.acceleration_m_s2}) {
       v->reserve(capacity);
     }
     log_.run.reserve(capacity);
@@ -348,7 +383,7 @@ class FileLoader {
     const FrictionRunConditions* found = nullptr;
     if (const auto it = file_.runs.find(name); it != file_.runs.end()) found = &it->second;
     for (const ConditionKey& key : kConditionKeys) {
-      if (!key.required || column(key.spec) || (found && (found->*key.field))) continue;
+      if (!key.required || !logged(key.spec) || column(key.spec) || (found && (found->*key.field))) continue;
       std::string what =
           fmt::format("run '{}' has no {}: add {} to its [[run]] in {}, or a '{}' column to this file", name,
                       header_of(key.spec), header_of(key.spec), file_.manifest, header_of(key.spec));
@@ -391,8 +426,58 @@ class FileLoader {
     return index;
   }
 
+  // A file without a run column or a manifest's run: one run, named after the file.
+  std::string default_run_name() {
+    std::string name = file_.path.stem().string();
+    if (auto problem = io::name_problem(name)) fail_header(fmt::format("no run column, and the file's name cannot name its run: {}", *problem));
+    report_.notes.push_back(fmt::format("no run column: one run, named '{}' after the file", name));
+    return name;
+  }
+
+  bool logged(Spec spec) const {
+    switch (spec) {
+      case kLoad: return law_.load;
+      case kPreload: return law_.preload;
+      case kBlockLength: return law_.block_length;
+      case kTemperature: return law_.temperature;
+      default: return true;
+    }
+  }
+
+  // A row's conditions as the law sees them: a combination law's at the neutral values (each
+  // stated one checked to be the log's one setup), an unlogged temperature at T_i.
+  FrictionConditions<double> law_conditions(FrictionConditions<double> c, const FrictionRunConditions* given) {
+    using Law = FrictionLawConditions;
+    if (!law_.temperature) c.temperature_C = Law::kUnloggedTemperature_C;
+    if (!law_.combination()) return c;
+    FrictionLawConditions& law = log_.law;
+    const auto one_setup = [&](Spec spec, bool is_logged, double value, std::optional<double> Law::*stated) {
+      if (!is_logged) return;
+      if (!(law.*stated)) {
+        law.*stated = value;
+      } else if (*(law.*stated) != value) {
+        const std::string what = fmt::format(
+            "{} = {} differs from the log's first value, {}: without {} the law is fitted in the combinations of "
+            "one setup; give {} for the paper's scalings, or fit each setup as its own log",
+            header_of(spec), value, *(law.*stated), fmt::join(law.not_logged(), ", "), fmt::join(law.not_logged(), ", "));
+        if (const csv::Column* col = column(spec)) reader_.fail(col->cell, what);
+        reader_.fail_at(reader_.line(), 0, what + fmt::format(" (the value of run '{}' in {})", log_.run_names.at(last_run_),
+                                                               file_.manifest));
+      }
+    };
+    one_setup(kLoad, law_.load, c.load_N, &Law::load_N);
+    one_setup(kPreload, law_.preload, c.preload_um, &Law::preload_um);
+    one_setup(kBlockLength, law_.block_length, c.block_length_mm, &Law::block_length_mm);
+    if (given && given->preload_N) one_setup(kPreload, true, *given->preload_N, &Law::preload_N);
+    if (given && given->preload_class && !law.preload_class) law.preload_class = given->preload_class;
+    c.load_N = Law::kNeutralLoad_N;
+    c.preload_um = Law::kNeutralPreload_um;
+    c.block_length_mm = Law::kNeutralBlockLength_mm;
+    return c;
+  }
+
   void read_row(std::string& scratch) {
-    if (!column(kRun) && !file_run_) file_run_ = runs_(file_.run);
+    if (!column(kRun) && !file_run_) file_run_ = runs_(file_.run.empty() ? default_run_name() : file_.run);
     const std::uint32_t run_index =
         column(kRun) ? name_index(runs_, *column(kRun), name_cell(reader_, *column(kRun), scratch), "run") : *file_run_;
     const FrictionRunConditions* given = manifest_conditions(run_index);
@@ -402,11 +487,13 @@ class FileLoader {
     const std::uint32_t guide_index =
         guide.empty() ? run_guide(run_index, given) : name_index(guides_, *column(kGuide), guide, "guide");
     const double t = column(kTime) ? reader_.number(*column(kTime), false) : kNaN;
-    const FrictionConditions<double> c{
-        .load_N = condition(kLoad, &FrictionRunConditions::load_N, given),
-        .preload_um = condition(kPreload, &FrictionRunConditions::preload_um, given),
-        .block_length_mm = condition(kBlockLength, &FrictionRunConditions::block_length_mm, given),
-        .temperature_C = condition(kTemperature, &FrictionRunConditions::temperature_C, given)};
+    last_run_ = run_index;
+    const FrictionConditions<double> c = law_conditions(
+        {.load_N = condition(kLoad, &FrictionRunConditions::load_N, given),
+         .preload_um = condition(kPreload, &FrictionRunConditions::preload_um, given),
+         .block_length_mm = condition(kBlockLength, &FrictionRunConditions::block_length_mm, given),
+         .temperature_C = condition(kTemperature, &FrictionRunConditions::temperature_C, given)},
+        given);
     const double nu40 =
         condition(kViscosity40, &FrictionRunConditions::viscosity40_mm2_s, given, kDefaultViscosity40_mm2_s);
     if (is_raw()) {
@@ -612,6 +699,8 @@ class FileLoader {
   std::array<const csv::Column*, kSpecs.size()> bound_{};  // by spec: its column, or nullptr
   csv::Column* motion_ = nullptr;  // a raw log's position or velocity
   std::optional<std::uint32_t> file_run_;  // the manifest's run of a file without a run column
+  FrictionLawConditions law_;              // what this file gives
+  std::uint32_t last_run_ = 0;             // the current row's run
   raw::Motion motion_kind_ = raw::Motion::velocity_m_s;
   std::vector<std::optional<const FrictionRunConditions*>> run_conditions_;  // by run index, once looked up
   std::vector<std::optional<std::uint32_t>> run_guide_;                      // by run index, without a guide column
@@ -623,6 +712,37 @@ class FileLoader {
 };
 
 }  // namespace
+
+std::vector<std::string> FrictionLawConditions::not_logged() const {
+  std::vector<std::string> out;
+  if (!load) out.push_back(header_of(kLoad));
+  if (!preload) out.push_back(preload_N ? header_of(kPreload) + " (only preload_N)" : header_of(kPreload));
+  if (!block_length) out.push_back(header_of(kBlockLength));
+  if (!temperature) out.push_back(header_of(kTemperature));
+  return out;
+}
+
+std::string FrictionLawConditions::stated() const {
+  std::vector<std::string> parts;
+  if (load_N) parts.push_back(fmt::format("load {:g} N", *load_N));
+  if (preload_um) {
+    parts.push_back(preload_class ? fmt::format("preload {:g} µm (class {})", *preload_um, *preload_class)
+                                  : fmt::format("preload {:g} µm", *preload_um));
+  }
+  if (preload_N) parts.push_back(fmt::format("preload {:g} N", *preload_N));
+  if (block_length_mm) parts.push_back(fmt::format("block length {:g} mm", *block_length_mm));
+  return parts.empty() ? std::string("no conditions given") : fmt::format("{}", fmt::join(parts, ", "));
+}
+
+double preload_class_um(std::string_view preload_class, std::string_view guide) {
+  // The middle of each class's radial clearance, −µm (PHYSICS.md §1a; size 25's C0 is −4…−3).
+  const bool size25 = guide.find(" 25") != std::string_view::npos;
+  if (preload_class == "normal") return 1.5;
+  if (preload_class == "C1") return 2.5;
+  if (preload_class == "C0") return size25 ? 3.5 : 4.0;
+  throw InvalidParameter("preload_class", fmt::format("unknown class '{}': expected normal, C1 or C0 (THK SRG/SRN)",
+                                                      preload_class));
+}
 
 FrictionConditions<double> FrictionLog::conditions(std::size_t i) const {
   return {.load_N = load_N[i],

@@ -36,8 +36,11 @@ constexpr std::array<ConditionKey, 5> kConditionKeys{{
     {"viscosity40", Quantity::viscosity, &FrictionRunConditions::viscosity40_mm2_s, true},
 }};
 
+constexpr std::size_t kPreloadKey = 1;
+static_assert(kConditionKeys[kPreloadKey].base == "preload");
+
 std::string known_run_keys() {
-  std::vector<std::string> keys{"id", "file", "skip_lines", "guide"};
+  std::vector<std::string> keys{"id", "file", "skip_lines", "guide", "preload_class", "preload_N"};
   for (const ConditionKey& k : kConditionKeys) keys.push_back(csv::canonical_name(k.base, k.quantity));
   return fmt::format("{} (numbers in any unit of their quantity)", fmt::join(keys, ", "));
 }
@@ -149,9 +152,23 @@ struct RunEntry {
 RunEntry read_run(const Manifest& m, const toml::table& table, const GuideCatalog* catalog) {
   RunEntry run;
   std::array<std::optional<Given>, kConditionKeys.size()> numbers;
-  std::optional<Given> id, file, guide;
+  std::optional<Given> id, file, guide, preload_class, preload_N;
   for (const auto& [key, node] : table) {
     const std::string_view k = key.str();
+    // A preload by its catalog class, or only as a force (a spring's: no µm for the law).
+    if (k == "preload_class") {
+      manifest::string_of(m, key, node);
+      manifest::remember(m, preload_class, {&key, &node}, "preload");
+      continue;
+    }
+    if (k == "preload_N") {
+      const double value = manifest::number_of(m, key, node);
+      if (!(value >= 0) || value > physical_range(Quantity::force).high)
+        m.fail(node.source(), fmt::format("preload_N = {}: expected a force >= 0", value));
+      manifest::remember(m, preload_N, {&key, &node, {}, value}, "preload");
+      run.conditions.preload_N = value;
+      continue;
+    }
     if (k == "skip_lines") {
       run.skip_lines = count_of(m, key, node);
       continue;
@@ -190,6 +207,27 @@ RunEntry read_run(const Manifest& m, const toml::table& table, const GuideCatalo
   }
   if (guide) {
     run.conditions.guide = guide->node->as_string()->get();
+  }
+  // One preload: in µm, by class, or as a force.
+  const std::optional<Given>& preload_um = numbers[kPreloadKey];
+  for (const std::optional<Given>* other : {&preload_class, &preload_N}) {
+    if (preload_um && *other) {
+      m.fail((*other)->key->source(), fmt::format("'{}' and '{}' both give run '{}''s preload: give one",
+                                                  preload_um->key->str(), (*other)->key->str(), run.id));
+    }
+  }
+  if (preload_class && preload_N) {
+    m.fail(preload_N->key->source(), fmt::format("'preload_class' and 'preload_N' both give run '{}''s preload: give one",
+                                                 run.id));
+  }
+  if (preload_class) {
+    const std::string& name = preload_class->node->as_string()->get();
+    try {
+      run.conditions.preload_um = preload_class_um(name, run.conditions.guide.value_or(""));
+    } catch (const InvalidParameter& e) {
+      m.fail(preload_class->node->source(), e.what());
+    }
+    run.conditions.preload_class = name;
   }
   // The guide's catalog entry gives the block length when the run does not; a guide no catalog
   // knows is only a name (as in a guide column), and said so if the block length is missing.

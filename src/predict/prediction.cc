@@ -418,6 +418,7 @@ void require_finite_bands(const Prediction& p) {
 Prediction predict(const ModelFile& m, const DutyCycle& duty, const PredictionOptions& o) {
   if (!m.has_thermal) throw InvalidParameter("model", "has no [thermal] part: a prediction needs the calibrated rail model");
   if (!m.has_friction) throw InvalidParameter("model", "has no [friction] part: a prediction needs the friction law for the heat");
+  m.require_friction_scalings("a duty's prediction");
   if (m.friction_covariance_matrix.empty() && m.thermal_covariance_matrix.empty())
     throw InvalidParameter("model", "has no covariance matrix (written by lmcal before 0.2?): recalibrate to get bands");
   if (o.samples < 20) throw InvalidParameter("samples", static_cast<double>(o.samples), "at least 20 draws for a band");

@@ -793,6 +793,7 @@ PYBIND11_MODULE(_lmcal, m) {
                report["rows_kept"] = r.rows_kept;
                report["skipped"] = r.skipped;
                report["ignored_columns"] = r.ignored_columns;
+               report["notes"] = r.notes;
                report["conversions"] = r.conversions;
                report["warnings"] = r.warnings;
                out.append(report);

@@ -640,7 +640,7 @@ std::string calibration_summary(const Calibration& c) {
     s += fmt::format("  friction law{}: RMSE {:.3f} N, held-out {:.3f} N\n",
                      m.friction_causes.empty() ? "" : fmt::format(" + {}", fmt::join(m.friction_causes, " + ")), m.friction->rmse_N,
                      m.friction->cv_rmse_N);
-    s += parameter_lines(m.friction->fit) + how_sure_line(m.friction->fit);
+    s += parameter_lines(friction_fit_as_shown(*m.friction)) + how_sure_line(m.friction->fit);
   }
   if (m.thermal) {
     s += fmt::format("  rail model{} ({} source): held-out RMSE {:.4f} K\n",

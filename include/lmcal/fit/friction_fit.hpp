@@ -133,6 +133,17 @@ struct RunSpread {
   bool wider_than_pooled = false;
 };
 
+// A combination law's (FrictionLawConditions::combination) constants as what the data
+// determine at the log's one setup, quoted at `temperature_C`: the Coulomb level (N), the
+// Stribeck amplitude (N) and speed (m/s), the viscous slope (N·s/m). Each is the fitted k1,
+// mu_st, v_st_m_s or mu_v times the neutral conditions' factor (and, for a temperature away
+// from T_i, ν's): intervals scaled with them where one constant carries the combination,
+// by the delta method otherwise (`interval` says which).
+struct LawCombination {
+  ParameterEstimate estimate;  // name "coulomb_N", "stribeck_N", "stribeck_speed_m_s", "viscous_N_s_m"
+  std::string meaning;         // in words, with the paper's constants it stands for
+};
+
 struct FrictionFitResult {
   FitResult fit;  // parameters: k1 … f0, then the effects
   std::vector<double> predicted_N;
@@ -165,6 +176,12 @@ struct FrictionFitResult {
 
   std::vector<FrictionTerm> terms;  // the fitted empirical terms (coefficient and scale at their estimates)
 
+  // What the log gave (FrictionLog::law); for a combination law the combinations, quoted at
+  // `law_temperature_C` (the mean logged temperature; T_i when none was logged).
+  FrictionLawConditions law;
+  std::vector<LawCombination> combinations;
+  double law_temperature_C = 0;
+
   FrictionConstants<double> constants() const;
   FrictionEffects<double> effects() const;
 };
@@ -188,5 +205,10 @@ std::vector<std::pair<std::string, std::string>> friction_fit_files(const Fricti
                                                                     const FrictionFitOptions& options,
                                                                     const FitProvenance& provenance);
 std::string friction_fit_summary(const FrictionFitResult& result);
+// The fit as outputs show it: a combination law's combinations (FrictionFitResult::
+// combinations) in place of the constants they scale, each covariance method's SE scaled as
+// the quoted one; the constants that are not the log's (k2 and f0 of a combination law, β
+// without a logged temperature) with interval "none".
+FitResult friction_fit_as_shown(const FrictionFitResult& result);
 
 }  // namespace lmcal

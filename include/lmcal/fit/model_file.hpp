@@ -80,6 +80,12 @@ struct ModelFile {
   FrictionConstants<double> constants = paper_friction_constants();
   FrictionEffects<double> effects;
   std::vector<std::string> friction_causes;
+  // "constants": the paper's law with its scalings in load, preload and block length;
+  // "combinations": fitted where none of them was logged (FrictionLawConditions), so it holds
+  // for the calibrated setup only and cannot predict other conditions (`law = "combinations"`).
+  std::string friction_law = "constants";
+  // Refuses (InvalidParameter naming `use`) a combination law, which knows no conditions.
+  void require_friction_scalings(std::string_view use) const;
   // Empirical terms the diagnosis learned beyond the library (not named causes); their
   // parameters are "term1", "term1_scale", … among friction_parameters.
   std::vector<FrictionTerm> friction_terms;

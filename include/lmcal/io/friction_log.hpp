@@ -1,8 +1,9 @@
 // Friction logs: tidy CSV from a load-cell rig, one row per sample.
 //
-// Required columns (any accepted unit, see units.hpp):
-//   run, velocity_m_s, load_N, preload_um, block_length_mm, temperature_C, friction_N
-// Optional: time_s, viscosity40_mm2_s (default 99), direction (+1/-1, default +1), guide.
+// Required columns (any accepted unit, see units.hpp): velocity_m_s and friction_N.
+// Optional: run (default: one run named after the file), load_N, preload_um, block_length_mm,
+// temperature_C (FrictionLawConditions: what is not given is not invented), time_s,
+// viscosity40_mm2_s (default 99), direction (+1/-1, default +1), guide.
 // Lines starting with '#' are comments. Columns lmcal does not know are ignored and
 // listed in the report; a known quantity with an unknown unit is an error.
 //
@@ -131,6 +132,29 @@ struct RawTrace {
   std::vector<double> time_s, velocity_m_s, force_N;
 };
 
+// Where the law's conditions come from. A log need not give them: a drive's log often has
+// nothing but speed and force. Without load, preload (in µm: a preload given only as a force,
+// preload_N, has none) or block length the paper's scalings cannot be applied; the law is then
+// fitted in the combinations one setup determines (fit_friction: the Coulomb level, the
+// Stribeck amplitude and speed, the viscous slope, and β where the temperature varies), every
+// sample at the neutral conditions below and the setup's stated values kept only to be shown,
+// so the log must hold one setup. Without a temperature the law is evaluated at ν40 (T = T_i)
+// and β is not fitted. Nothing not logged is invented: outputs print only what was given.
+struct FrictionLawConditions {
+  static constexpr double kNeutralLoad_N = 1000, kNeutralPreload_um = 1, kNeutralBlockLength_mm = 1;
+  static constexpr double kUnloggedTemperature_C = 40;  // T_i: ν = ν40
+  bool load = true, preload = true, block_length = true, temperature = true;  // given (column or manifest)
+  // The one setup of a combination-law log, as stated (unset: not given).
+  std::optional<double> load_N, preload_um, preload_N, block_length_mm;
+  std::optional<std::string> preload_class;  // how preload_um was given, when by a catalog class
+  // The paper's scalings cannot be applied: the law is fitted in combinations.
+  bool combination() const { return !(load && preload && block_length); }
+  // The canonical names of the conditions not given ("load_N", "preload_um", ...).
+  std::vector<std::string> not_logged() const;
+  // "load 1000 N, preload 0.8 N (no µm: the law's preload scaling unknown)": the stated setup.
+  std::string stated() const;
+};
+
 // Columns, one entry per kept sample (struct of arrays: fast to load and to fit).
 struct FrictionLog {
   std::vector<std::string> run_names;    // run index -> name as written in the file(s)
@@ -155,6 +179,7 @@ struct FrictionLog {
   // (and on an incline the weight), fitted with the law (friction_fit.hpp, drive_effects).
   bool trajectory = false;
   double axis_incline_deg = 0;  // the axis's mounting: 0 horizontal, 90 vertical with +x up
+  FrictionLawConditions law;    // what was given; a combination law's columns hold the neutral values
 
   std::size_t size() const { return friction_N.size(); }
   // The operating point of sample i for the friction law, direction included (ν_ref is per
@@ -173,6 +198,8 @@ FrictionLog load_friction_logs(const std::vector<std::filesystem::path>& files, 
 struct FrictionRunConditions {
   std::optional<std::string> guide;
   std::optional<double> load_N, preload_um, block_length_mm, temperature_C, viscosity40_mm2_s;
+  std::optional<double> preload_N;           // a preload known only as a force (no µm: a combination law)
+  std::optional<std::string> preload_class;  // "normal", "C1", "C0": preload_um from the class (preload_class_um)
   bool block_length_from_catalog = false;  // the guide's catalog value: a column may still give it
   std::string block_length_note;           // why the guide's catalog could not give it ("" = it did, or no guide)
 };
@@ -192,6 +219,8 @@ struct FrictionRunConditions {
 //   preload_um = 2.5
 //   temperature_C = 24
 //   viscosity40_mm2_s = 99
+//   # preload_class = "C0"           # instead of preload_um (preload_class_um)
+//   # preload_N = 0.8                # a spring's preload force: no µm, a combination law
 // Keys and columns must not both give a quantity; a run the files hold but the manifest does
 // not list needs its conditions as columns.
 struct FrictionDataSet {
@@ -209,6 +238,11 @@ struct FrictionDataSet {
 FrictionDataSet load_friction_dataset(const std::filesystem::path& manifest, const GuideCatalog* user_catalog = nullptr,
                                       const RawFrictionOptions& raw = {},
                                       const std::vector<std::string>& raw_given = {}, const InputScope& scope = {});
+
+// The preload (µm) of a THK preload class for SRG/SRN guides, the middle of the class's radial
+// clearance (PHYSICS.md §1a): normal 1.5, C1 2.5, C0 4 (3.5 for size 25, e.g. "SRG 25C"; the
+// paper's pc = 2.5 and 4). InvalidParameter naming the classes otherwise.
+double preload_class_um(std::string_view preload_class, std::string_view guide = {});
 
 // Writes a log in the canonical units (the inverse of load_friction_log), with the given
 // '#' comment lines first.

@@ -25,6 +25,9 @@ struct LoadReport {
   // not read, a magnitude where a signed value was expected, …): printed by `check`, kept in
   // the JSON outputs and listed in the report's "data loaded" section.
   std::vector<std::string> warnings;
+  // What the loader assumed where the file is silent (a run named after the file, conditions
+  // not given): printed by `check` and kept with the warnings' neighbours.
+  std::vector<std::string> notes;
 };
 
 }  // namespace lmcal
