@@ -246,8 +246,13 @@ void FrictionInputOptions::add_to(CLI::App& app) {
                         "A trajectory's travel after rest or a reversal dropped as pre-sliding, m"),
       "presliding_m");
   add(group->add_option("--axis-incline", raw.axis_incline_deg,
-                        "The axis's incline, degrees (90: vertical, +x up); a trajectory then fits the weight"),
+                        "The axis's incline, degrees (90: vertical, +x up; 0 states a horizontal axis); a trajectory "
+                        "then fits the weight"),
       "axis_incline_deg");
+  add(group->add_option("--force-sensor", force_sensor,
+                        "What measured the force: load_cell, motor_current, torque_sensor or unknown (what a "
+                        "diagnosis may name: a load cell's zero needs a load cell)"),
+      "force_sensor");
   app.add_option("--catalog", catalog_file, kCatalogHelp);
 }
 
@@ -279,6 +284,9 @@ RawFrictionOptions FrictionInputOptions::parsed() const {
   r.force_sign = parse_force_sign(force_sign);
   r.duplicate_times = parse_duplicate_times(duplicate_times);
   r.segmentation = parse_raw_segmentation(segmentation);
+  r.force_sensor = parse_force_sensor(force_sensor);
+  for (const auto& [option, field] : options_)
+    if (option->count() > 0 && field == std::string_view("axis_incline_deg")) r.incline_stated = true;
   return r;
 }
 

@@ -240,6 +240,7 @@ struct FrictionInputOptions {
   RawFrictionOptions raw;
   std::string force_sign = "follows-motion", duplicate_times = "average";
   std::string segmentation = "plateaus";
+  std::string force_sensor = "unknown";
   std::string catalog_file;
   void add_to(CLI::App& app);
   // The settings the user gave, by RawFrictionOptions' field names (they win over a manifest's [raw]).

@@ -40,7 +40,7 @@ void print_rounds(const std::vector<std::vector<CandidateScore>>& rounds, const 
   for (std::size_t r = 0; r < rounds.size(); ++r) {
     std::cout << fmt::format("candidates, step {} (held-out RMSE gain against the model so far):\n", r + 1);
     for (const auto& c : rounds[r])
-      std::cout << fmt::format("  {:<20} {:>10.4g} ± {:<9.3g} LRT p {:<8.2g} held-out {:.4f} {} ({:+.2f} %){}  {}{}\n", c.effect,
+      std::cout << fmt::format("  {:<20} {:>10.4g} ± {:<9.3g} LRT p {:<8.2g} held-out {:.4f} {} ({:+.2f} %){}  {}{}\n", shown_name(c),
                                c.value, c.se, c.lrt_p, c.cv_rmse, unit, c.cv_gain_percent,
                                std::isfinite(c.cv_shape_gain_percent)
                                    ? fmt::format(", shape {:.4f} {} ({:+.2f} %)", c.cv_shape_rmse, unit, c.cv_shape_gain_percent)

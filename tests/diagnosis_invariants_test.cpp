@@ -154,6 +154,12 @@ TEST_F(DiagnosisInvariants, ACommonRunZeroDoesNotActAsASignedOneBesideADirection
         EXPECT_LT(c.cv_rmse, 2 * d.cv_rmse_before_N) << "seed " << seed << " " << c.effect << ": " << d.summary;
     ASSERT_FALSE(d.accepted.empty()) << d.summary;
     EXPECT_EQ(d.accepted.front().effect, "signed_zero_offset") << "seed " << seed << ": " << d.summary;
+    // A motor's force with no sensor stated: the constant signed force is not called a load
+    // cell's zero, but reported as what it is, with its candidates (issue 38 #1).
+    EXPECT_EQ(shown_name(d.accepted.front()), "signed_constant_force") << d.summary;
+    EXPECT_NE(d.summary.find("signed_constant_force"), std::string::npos) << d.summary;
+    EXPECT_EQ(d.summary.find("signed_zero_offset"), std::string::npos) << d.summary;
+    EXPECT_NE(d.summary.find("a drive's current offset"), std::string::npos) << d.summary;
     expect_friction_invariants(d, fmt::format("axis seed {}", seed));
   }
 }

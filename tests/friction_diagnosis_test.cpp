@@ -197,6 +197,7 @@ TEST(FrictionDiagnosis, ASignedSensorOffsetIsNotADirectionAsymmetry) {
     const auto d = diagnose(generate_friction_log(one_setup_per_run(seed), effects).log);
     ASSERT_FALSE(d.accepted.empty()) << d.summary;
     EXPECT_EQ(d.accepted.front().effect, "signed_zero_offset") << d.summary;
+    EXPECT_EQ(shown_name(d.accepted.front()), "signed_zero_offset") << "the rig states its load cell and mounting";
     for (const auto& c : d.accepted) EXPECT_NE(c.effect, "direction_asymmetry") << d.summary;
   }
 }

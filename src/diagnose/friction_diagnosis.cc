@@ -28,6 +28,34 @@ namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr int kCandidateIterations = 15;
 
+// A cause is named only where its precondition holds. A constant force signed with the motion
+// (signed_zero_offset's signature) is a load cell's or torque sensor's zero only where one
+// measured the force on an axis whose mounting is known; otherwise it may as well be the weight
+// on an inclined axis or a drive's current offset, and it is reported as what the data show,
+// under a neutral name, with those candidates.
+void read_precondition(CandidateScore& c, const FrictionLog& log) {
+  if (c.effect != SignedZeroOffset::info.name) return;
+  const ForceSensor sensor = log.force_sensor;
+  const bool has_zero = sensor == ForceSensor::load_cell || sensor == ForceSensor::torque_sensor;
+  if (has_zero && log.incline_stated) return;
+  std::vector<std::string> candidates, unstated;
+  if (sensor != ForceSensor::motor_current)
+    candidates.push_back(sensor == ForceSensor::torque_sensor ? "a torque sensor's zero" : "a load cell's zero");
+  if (!log.incline_stated) candidates.push_back("the weight on an inclined axis");
+  if (!has_zero) candidates.push_back("a drive's current offset");
+  if (sensor == ForceSensor::unknown) unstated.push_back("what measured the force (force_sensor)");
+  if (!log.incline_stated) unstated.push_back("the axis's mounting (axis_incline_deg)");
+  candidates.insert(candidates.end(), c.tied_with.begin(), c.tied_with.end());
+  c.shown = "signed_constant_force";
+  c.tied_with = std::move(candidates);
+  c.precondition = unstated.empty()
+                       ? std::string("a constant force signed with the motion, which a motor's current cannot tell from "
+                                     "the friction's level")
+                       : fmt::format("a constant force signed with the motion; not stated: {}", fmt::join(unstated, ", "));
+  c.measure = "state force_sensor and axis_incline_deg in the friction manifest's [raw] table (--force-sensor, "
+              "--axis-incline), and log the force at rest before each run";
+}
+
 // A fit of the law plus `effects`, started at `start` (one start: the diagnosis refits many times).
 FrictionFitResult fit_with(const FrictionLog& log, const FrictionDiagnosisOptions& o, const std::vector<std::string>& effects,
                            const FrictionConstants<double>& start, const std::vector<double>& effect_start,
@@ -401,6 +429,9 @@ FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagno
   d.cv_rmse_after_N = detail::final_cv_rmse(d.steps, d.cv_rmse_before_N);
   d.accepted = detail::accepted_scores(d.rounds, selection.accepted,
                                        [&](const std::string& name) { return &current.fit.parameter(name); });
+  for (auto& round : d.rounds)
+    for (CandidateScore& c : round) read_precondition(c, log);
+  for (CandidateScore& c : d.accepted) read_precondition(c, log);
   for (std::size_t j = 0; j < 7; ++j)
     d.shifts.push_back(parameter_shift(baseline.fit.parameters[j], current.fit.parameters[j]));
 

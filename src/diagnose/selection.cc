@@ -337,10 +337,13 @@ Verdict make_verdict(const VerdictInput& in) {
     std::string causes, ties;
     for (const auto& c : in.accepted) {
       causes += causes.empty() ? "" : "; ";
-      causes += std::isfinite(c.value) ? fmt::format("{} = {:.4g}{} (95 % [{:.4g}, {:.4g}])", c.effect, c.value,
+      causes += std::isfinite(c.value) ? fmt::format("{} = {:.4g}{} (95 % [{:.4g}, {:.4g}])", shown_name(c), c.value,
                                                      c.unit.empty() || c.unit == "1" ? "" : " " + c.unit, c.ci_low, c.ci_high)
-                                       : c.effect;
-      if (!c.tied_with.empty()) {
+                                       : shown_name(c);
+      if (!c.precondition.empty()) {
+        ties += fmt::format(" {}: {}, {}.{}", shown_name(c), one_of(c.tied_with), c.precondition,
+                            c.measure.empty() ? "" : " To separate them, " + c.measure + ".");
+      } else if (!c.tied_with.empty()) {
         std::vector<std::string> all{c.effect};
         all.insert(all.end(), c.tied_with.begin(), c.tied_with.end());
         ties += fmt::format(" {}: these data cannot tell them apart (they change the fit alike); {} is kept as the "
@@ -408,6 +411,8 @@ Verdict make_verdict(const VerdictInput& in) {
 
 nlohmann::json candidate_json(const CandidateScore& c, const std::string& unit) {
   return nlohmann::json{{"effect", c.effect},
+                        {"shown_as", shown_name(c)},
+                        {"precondition", c.precondition},
                         {"unit", c.unit},
                         {"value", number(c.value)},
                         {"se", number(c.se)},

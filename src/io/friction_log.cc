@@ -635,7 +635,11 @@ class FileLoader {
     };
     skip(skipped_, column(kForce)->header + " empty or NaN");
     skip(merged_, "merged into a sample at the same time");
-    skip(total.dropped_acceleration, fmt::format("accelerating (|a| > {} m/s²)", raw_.max_acceleration_m_s2));
+    skip(total.dropped_acceleration,
+         raw_.segmentation == RawSegmentation::trajectory
+             ? std::string("at a step of the drive force (a jump 5 σ out of its trend, or within the filter's reach of "
+                           "one: where in the sample interval it fell is unknown)")
+             : fmt::format("accelerating (|a| > {} m/s²)", raw_.max_acceleration_m_s2));
     if (raw_.segmentation == RawSegmentation::trajectory) {
       log_.trajectory = true;
       log_.axis_incline_deg = raw_.axis_incline_deg;
@@ -713,6 +717,24 @@ class FileLoader {
 
 }  // namespace
 
+std::string_view to_string(ForceSensor s) {
+  switch (s) {
+    case ForceSensor::load_cell: return "load_cell";
+    case ForceSensor::motor_current: return "motor_current";
+    case ForceSensor::torque_sensor: return "torque_sensor";
+    case ForceSensor::unknown: break;
+  }
+  return "unknown";
+}
+
+ForceSensor parse_force_sensor(std::string_view name) {
+  for (ForceSensor s : {ForceSensor::unknown, ForceSensor::load_cell, ForceSensor::motor_current, ForceSensor::torque_sensor})
+    if (name == to_string(s)) return s;
+  throw InvalidParameter("force_sensor", fmt::format("unknown sensor '{}': expected load_cell, motor_current, "
+                                                     "torque_sensor or unknown",
+                                                     name));
+}
+
 std::vector<std::string> FrictionLawConditions::not_logged() const {
   std::vector<std::string> out;
   if (!load) out.push_back(header_of(kLoad));
@@ -787,6 +809,8 @@ namespace detail {
 FrictionLog load_friction_files(const std::vector<FrictionFile>& files, const RawFrictionOptions& raw) {
   raw.validate();
   FrictionLog log;
+  log.force_sensor = raw.force_sensor;
+  log.incline_stated = raw.incline_stated;
   NameIndex runs(log.run_names);
   NameIndex guides(log.guide_names);
   for (const FrictionFile& file : files) FileLoader(file, raw, log, runs, guides).load();

@@ -65,7 +65,11 @@ const std::vector<RawKey>& raw_keys() {
       {"segmentation", [](auto& to, auto& from) { to.segmentation = from.segmentation; }},
       {"trajectory_window", [](auto& to, auto& from) { to.trajectory_window = from.trajectory_window; }},
       {"presliding_m", [](auto& to, auto& from) { to.presliding_m = from.presliding_m; }},
-      {"axis_incline_deg", [](auto& to, auto& from) { to.axis_incline_deg = from.axis_incline_deg; }},
+      {"axis_incline_deg", [](auto& to, auto& from) {
+         to.axis_incline_deg = from.axis_incline_deg;
+         to.incline_stated = true;
+       }},
+      {"force_sensor", [](auto& to, auto& from) { to.force_sensor = from.force_sensor; }},
   };
   return keys;
 }
@@ -101,7 +105,8 @@ RawFrictionOptions read_raw(const Manifest& m, const toml::table& table) {
       else if (k == "segmentation") o.segmentation = parse_raw_segmentation(manifest::string_of(m, key, node));
       else if (k == "trajectory_window") o.trajectory_window = count_of(m, key, node);
       else if (k == "presliding_m") o.presliding_m = manifest::number_of(m, key, node);
-      else if (k == "axis_incline_deg") o.axis_incline_deg = manifest::number_of(m, key, node);
+      else if (k == "axis_incline_deg") o.axis_incline_deg = manifest::number_of(m, key, node), o.incline_stated = true;
+      else if (k == "force_sensor") o.force_sensor = parse_force_sensor(manifest::string_of(m, key, node));
       RawFrictionOptions one;  // this key alone against its range
       known->copy(one, o);
       one.validate();

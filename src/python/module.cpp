@@ -144,7 +144,8 @@ RawFrictionOptions raw_options(const py::dict& given, std::vector<std::string>* 
     else if (name == "segmentation") raw.segmentation = parse_raw_segmentation(value.cast<std::string>());
     else if (name == "trajectory_window") raw.trajectory_window = value.cast<std::size_t>();
     else if (name == "presliding_m") raw.presliding_m = value.cast<double>();
-    else if (name == "axis_incline_deg") raw.axis_incline_deg = value.cast<double>();
+    else if (name == "axis_incline_deg") raw.axis_incline_deg = value.cast<double>(), raw.incline_stated = true;
+    else if (name == "force_sensor") raw.force_sensor = parse_force_sensor(value.cast<std::string>());
     else
       throw InvalidParameter("raw", fmt::format("unknown segmentation setting '{}'; expected force_sign, duplicate_times, "
                                                 "max_acceleration_m_s2, settling_s, min_speed_m_s, velocity_tolerance, "

@@ -324,7 +324,7 @@ void candidate_tables(Page& page, const std::vector<std::vector<CandidateScore>>
     std::vector<std::vector<std::string>> rows;
     for (const auto& cand : rounds[r]) {
       const bool shape = std::isfinite(cand.cv_shape_gain_percent);
-      rows.push_back({cand.effect, num(cand.value) + (cand.unit.empty() || cand.unit == "1" ? "" : " " + cand.unit),
+      rows.push_back({shown_name(cand), num(cand.value) + (cand.unit.empty() || cand.unit == "1" ? "" : " " + cand.unit),
                       bracket(cand.ci_low, cand.ci_high) + (cand.interval == "linear" ? "" : " (" + cand.interval + ")"),
                       p_value(cand.lrt_p), num(cand.cv_rmse), fmt::format("{:+.2f} %", cand.cv_gain_percent),
                       shape ? num(cand.cv_shape_rmse) + fmt::format(" ({:+.2f} %)", cand.cv_shape_gain_percent) : "–",

@@ -168,6 +168,8 @@ FrictionRigOutput generate_friction_log(const FrictionRigConfig& config, const R
 
   FrictionRigOutput out;
   FrictionLog& log = out.log;
+  log.force_sensor = ForceSensor::load_cell;  // the rig's: a load cell on a horizontal axis
+  log.incline_stated = true;
   nlohmann::json runs = nlohmann::json::array();
   std::size_t out_of_range = 0;
   // The setups, in sweep order; a run covers all of them or one.

@@ -298,7 +298,10 @@ def test_a_value_out_of_range_in_columns_names_column_and_row():
     with pytest.raises(lmcal.InputError, match="row 1: column 'velocity_m_s': expected a number, found 'fast'"):
         lmcal.load_friction_log(c)
     with pytest.raises(lmcal.InputError, match="missing"):
-        lmcal.load_friction_log({k: v for k, v in good_columns().items() if k != "load_N"})
+        lmcal.load_friction_log({k: v for k, v in good_columns().items() if k != "friction_N"})
+    # Conditions are optional (the law in combinations), and said in the load report.
+    lean = lmcal.load_friction_log({k: v for k, v in good_columns().items() if k != "load_N"})
+    assert any("not given: load_N" in note for r in lean.load_reports for note in r["notes"])
 
 
 def test_bad_options_name_the_option():

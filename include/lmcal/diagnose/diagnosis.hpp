@@ -42,6 +42,10 @@ double held_out_gain_percent(double before, double after);
 // ("shape"). Their words, for every text that quotes one.
 std::string held_out_criterion_words(const std::string& criterion);
 
+struct CandidateScore;
+// The name a candidate is reported under: its neutral name where its precondition is absent.
+const std::string& shown_name(const CandidateScore& c);
+
 struct CandidateScore {
   std::string effect;
   double value = 0, se = 0, ci_low = 0, ci_high = 0;  // its (first) parameter; NaN for a switch
@@ -60,6 +64,11 @@ struct CandidateScore {
   bool accepted = false;
   std::string reason;                   // why it was or was not accepted
   std::string measure;                  // what to log to see this cause directly
+  // The name outputs give it, where its precondition does not hold (a load cell's zero needs a
+  // load cell): a neutral one ("signed_constant_force") with its look-alikes in `tied_with`
+  // and `precondition` saying what is unknown; empty: `effect` (shown_name).
+  std::string shown;
+  std::string precondition;
   // Candidates of the same round whose change to the fit cannot be told from this one's
   // (the changes they make to the fitted values correlate above 0.99): a tie, named together.
   std::vector<std::string> tied_with;
@@ -68,6 +77,7 @@ struct CandidateScore {
   double alpha = std::numeric_limits<double>::quiet_NaN();
   double alpha_low = std::numeric_limits<double>::quiet_NaN(), alpha_high = std::numeric_limits<double>::quiet_NaN();
 };
+inline const std::string& shown_name(const CandidateScore& c) { return c.shown.empty() ? c.effect : c.shown; }
 // One step from the baseline to the final model: a cause added (forward selection), a cause
 // dropped (it stood in for the empirical term: the model refitted without it), or the empirical
 // term added. Each model's held-out RMSEs are computed once and carried: a step's before is the

@@ -68,6 +68,14 @@ enum class RawSegmentation { plateaus, trajectory };
 std::string_view to_string(RawSegmentation s);
 RawSegmentation parse_raw_segmentation(std::string_view name);
 
+// What measured the force. It decides what a diagnosis may name: a constant force signed
+// with the motion is a load cell's zero only where a load cell measured it (and the axis's
+// mounting is known, or it may be the weight on an incline), a current offset only where a
+// motor current did; `unknown` (the default) names neither alone.
+enum class ForceSensor { unknown, load_cell, motor_current, torque_sensor };
+std::string_view to_string(ForceSensor s);  // "unknown", "load_cell", "motor_current", "torque_sensor"
+ForceSensor parse_force_sensor(std::string_view name);
+
 // Two samples of one run at the same time: averaged into one (the default; counted in
 // RunSegmentation::averaged_duplicates), or refused.
 enum class DuplicateTimes { refuse, average };
@@ -97,6 +105,8 @@ struct RawFrictionOptions {
   // A trajectory's samples within this travel after rest or a reversal: pre-sliding, dropped.
   double presliding_m = 5e-4;
   double axis_incline_deg = 0;  // 0 horizontal, 90 vertical (+x up): a trajectory then fits the weight
+  bool incline_stated = false;  // axis_incline_deg was given: the mounting is known (0 included)
+  ForceSensor force_sensor = ForceSensor::unknown;
   // InvalidParameter naming the option for a value out of range.
   void validate() const;
 };
@@ -180,6 +190,8 @@ struct FrictionLog {
   bool trajectory = false;
   double axis_incline_deg = 0;  // the axis's mounting: 0 horizontal, 90 vertical with +x up
   FrictionLawConditions law;    // what was given; a combination law's columns hold the neutral values
+  ForceSensor force_sensor = ForceSensor::unknown;  // as stated (RawFrictionOptions)
+  bool incline_stated = false;                      // the axis's mounting was stated
 
   std::size_t size() const { return friction_N.size(); }
   // The operating point of sample i for the friction law, direction included (ν_ref is per
