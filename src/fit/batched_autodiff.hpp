@@ -26,6 +26,7 @@
 
 #include "lmcal/error.hpp"
 #include "lmcal/fit/fit_result.hpp"
+#include "run_offsets.hpp"
 
 namespace lmcal::detail {
 
@@ -92,13 +93,10 @@ class CentredSums {
     if (++rows_ == kBlock) flush();
   }
 
-  // Σ (x - c_g m_g)(x - c_g m_g)ᵀ, `shrink` c_g per group (empty: no centring, c = 0).
+  // Σ (x - c_g m_g)(x - c_g m_g)ᵀ, `shrink` c_g per group (empty: no centring, c = 0). May be
+  // called again with another `shrink`.
   Eigen::MatrixXd finish(const std::vector<double>& shrink) {
-    flush();
-    for (const Chunk& c : chunks_) {
-      group_count_[c.group] += c.n;
-      group_sum_[c.group] += c.n * c.mean;
-    }
+    close();
     Eigen::MatrixXd out = total_.selfadjointView<Eigen::Lower>();
     for (const Chunk& c : chunks_) {
       const double share = shrink.empty() ? 0.0 : shrink[c.group];
@@ -107,6 +105,19 @@ class CentredSums {
     }
     return out;
   }
+
+  // Per group: rows and Σ x (after close(); groups beyond those seen have none).
+  void close() {
+    if (closed_) return;
+    closed_ = true;
+    flush();
+    for (const Chunk& c : chunks_) {
+      group_count_[c.group] += c.n;
+      group_sum_[c.group] += c.n * c.mean;
+    }
+  }
+  double group_count(std::size_t g) const { return g < group_count_.size() ? group_count_[g] : 0.0; }
+  double group_sum(std::size_t g, Eigen::Index k) const { return g < group_sum_.size() ? group_sum_[g][k] : 0.0; }
 
  private:
   static constexpr Eigen::Index kBlock = 256;
@@ -140,6 +151,7 @@ class CentredSums {
   Eigen::MatrixXd total_;  // lower triangle
   Eigen::MatrixXd block_;
   Eigen::Index rows_ = 0;
+  bool closed_ = false;
   std::vector<Chunk> chunks_;
   std::vector<double> group_count_;
   std::vector<Eigen::VectorXd> group_sum_;
@@ -152,15 +164,20 @@ class BatchedAutoDiffCostFunction final : public ceres::CostFunction, public Nor
   // each group, r_i - c_g · mean_g(r), which profiles out one free offset per group (c_g = 1,
   // e.g. a load cell's zero per run) or whitens a random one (c_g = 1 - 1/sqrt(1 + n_g λ) for
   // an offset of variance λ σ²: generalised least squares). `shrink` holds c_g per group
-  // (empty: 1 for all). Not combined with a robust loss.
+  // (empty: 1 for all). Not combined with a robust loss. With `profiled` (rows: all of the
+  // model's), λ is re-estimated at each evaluation of the normal equations while it profiles
+  // (run_offsets.hpp) and `shrink` follows.
   BatchedAutoDiffCostFunction(RowFunctor functor, int num_parameters, std::size_t rows, RowLoss loss = {},
-                              std::vector<std::size_t> groups = {}, std::vector<double> shrink = {})
-      : functor_(std::move(functor)), rows_(rows), loss_(loss), groups_(std::move(groups)), shrink_(std::move(shrink)) {
+                              std::vector<std::size_t> groups = {}, std::vector<double> shrink = {},
+                              ProfiledRunOffsets* profiled = nullptr)
+      : functor_(std::move(functor)), rows_(rows), loss_(loss), groups_(std::move(groups)), shrink_(std::move(shrink)),
+        profiled_(profiled) {
     LMCAL_ASSERT(groups_.empty() || (groups_.size() == rows && loss.kind == RobustLoss::none),
                  "group centring needs one group per row and no robust loss");
     LMCAL_ASSERT(num_parameters >= 1 && num_parameters <= 16, "1 to 16 parameters");
     mutable_parameter_block_sizes()->push_back(num_parameters);
     set_num_residuals(static_cast<int>(rows));
+    find_stretches();
   }
 
   bool normal_equations(const double* theta, double& cost, Eigen::MatrixXd& JtJ, Eigen::VectorXd& Jtr) const override {
@@ -173,6 +190,7 @@ class BatchedAutoDiffCostFunction final : public ceres::CostFunction, public Nor
       return std::isfinite(r);
     };
     if (!rows_with_gradient(theta, x.data(), add)) return false;
+    if (profiled_ && profiled_->profiling && !groups_.empty()) profile(sums, p);
     const Eigen::MatrixXd S = sums.finish(groups_.empty() ? std::vector<double>{} : shrink_or_ones());
     JtJ = S.topLeftCorner(p, p);
     Jtr = S.col(p).head(p);
@@ -281,49 +299,82 @@ class BatchedAutoDiffCostFunction final : public ceres::CostFunction, public Nor
     return true;
   }
 
+  // λ from the raw residuals' per-group sums (column p of the sums), and c_g from it.
+  void profile(CentredSums& sums, int p) const {
+    const std::size_t groups = profiled_->shrink->size();
+    std::vector<double> count(groups), sum(groups);
+    sums.close();
+    for (std::size_t g = 0; g < groups; ++g) count[g] = sums.group_count(g), sum[g] = sums.group_sum(g, p);
+    const double within = sums.finish(std::vector<double>(groups, 1.0))(p, p);
+    profiled_->update(count, sum, within);
+    shrink_ = *profiled_->shrink;
+  }
+
   std::vector<double> shrink_or_ones() const {
     if (!shrink_.empty()) return shrink_;
     return std::vector<double>(*std::max_element(groups_.begin(), groups_.end()) + 1, 1.0);
   }
 
+  // Consecutive rows of one group, [begin, end) (a run's samples are a stretch of the log).
+  struct Stretch {
+    std::size_t begin, end, group;
+  };
+
+  void find_stretches() {
+    if (groups_.empty()) return;
+    group_count_.assign(*std::max_element(groups_.begin(), groups_.end()) + 1, 0.0);
+    for (std::size_t i = 0; i < rows_; ++i) {
+      if (i == 0 || groups_[i] != groups_[i - 1]) stretches_.push_back({i, i, groups_[i]});
+      stretches_.back().end = i + 1;
+      group_count_[groups_[i]] += 1;
+    }
+  }
+
+  // c_g = 0 for every group (a random offset of variance 0): the whitening is the identity.
+  bool identity() const {
+    return !shrink_.empty() && std::all_of(shrink_.begin(), shrink_.end(), [](double c) { return c == 0; });
+  }
+
+  // x_i − c_g · mean_g(x) for a residual or a Jacobian column (x[i · stride]), stretch by stretch;
+  // each group's sum in row order.
+  void centre_one(double* x, std::size_t stride, std::vector<double>& sum) const {
+    std::fill(sum.begin(), sum.end(), 0.0);
+    for (const Stretch& s : stretches_) {
+      double total = sum[s.group];
+      for (std::size_t i = s.begin; i < s.end; ++i) total += x[i * stride];
+      sum[s.group] = total;
+    }
+    for (std::size_t g = 0; g < sum.size(); ++g) sum[g] *= (shrink_.empty() ? 1.0 : shrink_[g]) / group_count_[g];
+    for (const Stretch& s : stretches_) {
+      const double m = sum[s.group];
+      for (std::size_t i = s.begin; i < s.end; ++i) x[i * stride] -= m;
+    }
+  }
+
   void centre(double* residuals, double* jacobian) const {
+    if (identity()) return;
     const std::size_t p = static_cast<std::size_t>(parameter_block_sizes()[0]);
-    const std::size_t groups = *std::max_element(groups_.begin(), groups_.end()) + 1;
-    std::vector<double> sum(groups * (p + 1), 0.0), count(groups, 0.0);
-    for (std::size_t i = 0; i < rows_; ++i) {
-      double* s = &sum[groups_[i] * (p + 1)];
-      s[0] += residuals[i];
-      for (std::size_t j = 0; jacobian && j < p; ++j) s[j + 1] += jacobian[i * p + j];
-      count[groups_[i]] += 1;
-    }
-    for (std::size_t i = 0; i < rows_; ++i) {
-      const double* s = &sum[groups_[i] * (p + 1)];
-      const double c = (shrink_.empty() ? 1.0 : shrink_[groups_[i]]) / count[groups_[i]];
-      residuals[i] -= c * s[0];
-      for (std::size_t j = 0; jacobian && j < p; ++j) jacobian[i * p + j] -= c * s[j + 1];
-    }
+    std::vector<double> sum(group_count_.size());
+    centre_one(residuals, 1, sum);
+    for (std::size_t j = 0; jacobian && j < p; ++j) centre_one(jacobian + j, p, sum);
   }
 
   // centre() for a column-major J.
   void centre_columns(Eigen::VectorXd& r, Eigen::MatrixXd& J) const {
-    const std::size_t groups = *std::max_element(groups_.begin(), groups_.end()) + 1;
-    std::vector<double> count(groups, 0.0), sum(groups);
-    for (std::size_t g : groups_) count[g] += 1;
-    auto centre_one = [&](double* x) {
-      std::fill(sum.begin(), sum.end(), 0.0);
-      for (std::size_t i = 0; i < rows_; ++i) sum[groups_[i]] += x[i];
-      for (std::size_t g = 0; g < groups; ++g) sum[g] *= (shrink_.empty() ? 1.0 : shrink_[g]) / count[g];
-      for (std::size_t i = 0; i < rows_; ++i) x[i] -= sum[groups_[i]];
-    };
-    centre_one(r.data());
-    for (Eigen::Index j = 0; j < J.cols(); ++j) centre_one(J.col(j).data());
+    if (identity()) return;
+    std::vector<double> sum(group_count_.size());
+    centre_one(r.data(), 1, sum);
+    for (Eigen::Index j = 0; j < J.cols(); ++j) centre_one(J.col(j).data(), 1, sum);
   }
 
   RowFunctor functor_;
   std::size_t rows_;
   RowLoss loss_;
   std::vector<std::size_t> groups_;
-  std::vector<double> shrink_;
+  mutable std::vector<double> shrink_;  // follows profiled_ while it profiles
+  ProfiledRunOffsets* profiled_;
+  std::vector<Stretch> stretches_;
+  std::vector<double> group_count_;
 };
 
 }  // namespace lmcal::detail

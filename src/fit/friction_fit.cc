@@ -32,6 +32,9 @@ using detail::condition_key;
 using detail::FrictionData;
 using detail::FrictionModel;
 using detail::kConstantUnits;
+using detail::run_offset_shrink;
+using detail::run_offset_variance;
+using detail::RunOffsetVariance;
 
 namespace {
 
@@ -184,62 +187,6 @@ std::vector<std::size_t> effect_slots(const FrictionFitOptions& o) {
     slots.push_back(slot);
   }
   return slots;
-}
-
-// The variance of a random run offset relative to the noise, λ = τ²/σ², by maximum likelihood
-// from the residuals `raw` (whitened, offsets not taken out) grouped by run: with n_g
-// residuals of mean ē_g and within-run sum of squares W_g per run,
-//   -2 log L(λ) = n log(Q(λ)/n) + Σ_g log(1 + n_g λ),   Q(λ) = Σ_g W_g + n_g ē_g² / (1 + n_g λ),
-// σ² = Q/n profiled. A grid over log λ, then golden-section refinement; λ = 0 when no
-// offset variance is seen. (ML: with few runs τ² is biased low by about the between-run
-// share of the constants; the intervals do not rest on it — see assess_uncertainty.)
-struct RunOffsetVariance {
-  double ratio = 0, sigma2 = 1, deviance_ss = 0;
-  std::vector<double> count;  // residuals per run
-};
-
-RunOffsetVariance run_offset_variance(const std::vector<double>& raw, const std::vector<std::size_t>& run, std::size_t runs) {
-  RunOffsetVariance v;
-  v.count.assign(runs, 0.0);
-  std::vector<double> sum(runs, 0.0), sq(runs, 0.0);
-  for (std::size_t i = 0; i < raw.size(); ++i) {
-    v.count[run[i]] += 1;
-    sum[run[i]] += raw[i];
-    sq[run[i]] += raw[i] * raw[i];
-  }
-  const double n = static_cast<double>(raw.size());
-  double within = 0;
-  for (std::size_t g = 0; g < runs; ++g)
-    if (v.count[g] > 0) within += sq[g] - sum[g] * sum[g] / v.count[g];
-  auto q = [&](double lambda) {
-    double Q = within;
-    for (std::size_t g = 0; g < runs; ++g)
-      if (v.count[g] > 0) Q += sum[g] * sum[g] / v.count[g] / (1 + v.count[g] * lambda);
-    return Q;
-  };
-  auto deviance = [&](double lambda) {
-    double logdet = 0;
-    for (double c : v.count) logdet += std::log1p(c * lambda);
-    return n * std::log(std::max(q(lambda), 1e-300) / n) + logdet;
-  };
-  double best = 0, best_d = deviance(0);
-  for (double e = -8; e <= 6; e += 0.25)
-    if (const double d = deviance(std::pow(10.0, e)); d < best_d) best = std::pow(10.0, e), best_d = d;
-  if (best > 0) {
-    double a = std::log10(best) - 0.25, b = std::log10(best) + 0.25;
-    const double g = (std::sqrt(5.0) - 1) / 2;
-    for (int it = 0; it < 40; ++it) {
-      const double x1 = b - g * (b - a), x2 = a + g * (b - a);
-      if (deviance(std::pow(10.0, x1)) < deviance(std::pow(10.0, x2))) b = x2;
-      else a = x1;
-    }
-    const double refined = std::pow(10.0, (a + b) / 2);
-    if (deviance(refined) < best_d) best = refined;
-  }
-  v.ratio = best;
-  v.sigma2 = q(best) / n;
-  v.deviance_ss = n * std::exp(deviance(best) / n);
-  return v;
 }
 
 // The residuals before the whitening of BatchedAutoDiffCostFunction's group centring: r_i +
@@ -432,8 +379,8 @@ namespace {
 
 constexpr double kSetPointGap_K = 1.0, kSetPointWidth_K = 3.0;
 
-double successive_noise(const std::vector<std::size_t>& in_time, const std::vector<double>& T) {
-  std::vector<double> step;
+double successive_noise(std::span<const std::size_t> in_time, const std::vector<double>& T, std::vector<double>& step) {
+  step.clear();
   for (std::size_t k = 1; k < in_time.size(); ++k) step.push_back(std::abs(T[in_time[k]] - T[in_time[k - 1]]));
   if (step.empty()) return 0;
   std::nth_element(step.begin(), step.begin() + static_cast<std::ptrdiff_t>(step.size() / 2), step.end());
@@ -443,10 +390,28 @@ double successive_noise(const std::vector<std::size_t>& in_time, const std::vect
 }  // namespace
 
 FrictionLog with_block_mean_temperature(const FrictionLog& logged) {
+  // Each sample's setting, looked up only where it changes (a log holds one for a stretch),
+  // then the samples grouped by setting in one index array (a counting sort: log order kept).
   using Setting = std::tuple<std::uint32_t, std::uint32_t, double, double>;
-  std::map<Setting, std::vector<std::size_t>> settings;
-  for (std::size_t i = 0; i < logged.size(); ++i)
-    settings[{logged.run[i], logged.guide.empty() ? 0 : logged.guide[i], logged.preload_um[i], logged.load_N[i]}].push_back(i);
+  const std::size_t n = logged.size();
+  std::map<Setting, std::size_t> index;
+  std::vector<std::size_t> setting_of(n), offset;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Setting setting{logged.run[i], logged.guide.empty() ? 0 : logged.guide[i], logged.preload_um[i], logged.load_N[i]};
+    if (i == 0 || !(logged.run[i] == logged.run[i - 1] && (logged.guide.empty() || logged.guide[i] == logged.guide[i - 1]) &&
+                    logged.preload_um[i] == logged.preload_um[i - 1] && logged.load_N[i] == logged.load_N[i - 1])) {
+      const auto [it, inserted] = index.try_emplace(setting, offset.size());
+      if (inserted) offset.push_back(0);
+      setting_of[i] = it->second;
+    } else {
+      setting_of[i] = setting_of[i - 1];
+    }
+    ++offset[setting_of[i]];
+  }
+  std::vector<std::size_t> begin_of(offset.size() + 1, 0);
+  for (std::size_t s = 0; s < offset.size(); ++s) begin_of[s + 1] = begin_of[s] + offset[s];
+  std::vector<std::size_t> grouped(n), fill(begin_of.begin(), begin_of.end() - 1);
+  for (std::size_t i = 0; i < n; ++i) grouped[fill[setting_of[i]]++] = i;
   FrictionLog out = logged;
   const auto& T = logged.temperature_C;
   const auto assign_mean = [&](std::span<const std::size_t> members) {
@@ -454,10 +419,18 @@ FrictionLog with_block_mean_temperature(const FrictionLog& logged) {
     for (std::size_t i : members) sum += T[i];
     for (std::size_t i : members) out.temperature_C[i] = sum / static_cast<double>(members.size());
   };
-  for (auto& [setting, members] : settings) {
-    const double noise = successive_noise(members, T);  // members in time (log) order
+  std::vector<double> steps;
+  std::vector<std::pair<double, std::size_t>> by_T;
+  for (std::size_t s = 0; s < offset.size(); ++s) {
+    const std::span<std::size_t> members(grouped.data() + begin_of[s], begin_of[s + 1] - begin_of[s]);
+    const double noise = successive_noise(members, T, steps);  // members in time (log) order
     const double gap = std::max(kSetPointGap_K, 5 * noise), width = std::max(kSetPointWidth_K, 8 * noise);
-    std::stable_sort(members.begin(), members.end(), [&](std::size_t a, std::size_t b) { return T[a] < T[b]; });
+    // By temperature, sorted as (T, sample) pairs held together (ties are equal values: their
+    // order changes no mean).
+    by_T.clear();
+    for (std::size_t i : members) by_T.emplace_back(T[i], i);
+    std::sort(by_T.begin(), by_T.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+    for (std::size_t k = 0; k < members.size(); ++k) members[k] = by_T[k].second;
     for (std::size_t begin = 0; begin < members.size();) {
       std::size_t end = begin + 1;
       while (end < members.size() && T[members[end]] - T[members[end - 1]] <= gap) ++end;
@@ -532,30 +505,35 @@ FrictionFitResult fit_friction(const FrictionLog& logged, const FrictionFitOptio
   std::vector<std::size_t> run_of(log.size());
   for (std::size_t i = 0; i < log.size(); ++i) run_of[i] = log.run[i];
   if (offsets == RunOffsets::fixed) data.run_shrink.assign(runs, 1.0);
-  // Random offsets: start from the given λ (0: without them), then alternate the constants (warm-started)
-  // and λ (maximum likelihood given the constants) until the whitening settles.
+  // Random offsets: start from the given λ (0: without them), then λ profiled within the polish
+  // (re-estimated by maximum likelihood given the constants at each of its steps: one fit, at
+  // the joint optimum), unless max_variance_passes = 1 holds it at the start.
   if (offsets == RunOffsets::random) {
     std::vector<double> count(runs, 0.0);
     for (std::size_t i = 0; i < log.size(); ++i) count[log.run[i]] += 1;
     const double lambda = std::max(options.run_offset_ratio_start, 0.0);
-    for (std::size_t r = 0; r < runs; ++r) data.run_shrink.push_back(1 - 1 / std::sqrt(1 + count[r] * lambda));
+    for (std::size_t r = 0; r < runs; ++r) data.run_shrink.push_back(run_offset_shrink(count[r], lambda));
   }
+  const bool random = offsets == RunOffsets::random && runs >= 2;
+  detail::ProfiledRunOffsets profiled{&data.run_shrink};
+  if (random && options.max_variance_passes > 1) data.profiled = &profiled;
   const FrictionModel model(data, slots);
   detail::FinalState final_state;
-  const bool random = offsets == RunOffsets::random && runs >= 2;
   auto run_specs = specs;
   auto warm_start = [&] {
     for (std::size_t j = 0; j < run_specs.size(); ++j)
       if (run_specs[j].free && !out.fit.parameters[j].held_unidentifiable)
         run_specs[j].start = std::clamp(out.fit.parameters[j].value, run_specs[j].lower, run_specs[j].upper);
   };
-  // The passes that settle the offsets' variance skip what only the final fit needs.
+  // A fit whose λ still moved after it (a polish stopped short) is refitted from its estimate at
+  // the new λ, up to max_variance_passes fits.
   FitOptions pass_options = options.fit;
-  if (random) pass_options.bootstrap = 0, pass_options.profile = ProfileMode::none;
   RunOffsetVariance variance;
   SolverReport multi_start;  // the first pass's: the later ones start from its estimate
   for (int pass = 1;; ++pass) {
+    profiled.profiling = data.profiled != nullptr;  // until the estimate settles (FrictionModel::estimate_settled)
     out.fit = detail::solve_least_squares(model, run_specs, pass_options, &final_state);
+    profiled.profiling = false;
     out.variance_passes = pass;
     if (pass == 1) multi_start = out.fit.solver;
     if (!random || !out.fit.solver.converged) break;  // refining τ² of a fit that did not converge buys nothing
@@ -563,19 +541,13 @@ FrictionFitResult fit_friction(const FrictionLog& logged, const FrictionFitOptio
     std::vector<double> shrink(runs);
     double change = 0;
     for (std::size_t r = 0; r < runs; ++r) {
-      shrink[r] = 1 - 1 / std::sqrt(1 + variance.count[r] * variance.ratio);
+      shrink[r] = run_offset_shrink(variance.count[r], variance.ratio);
       change = std::max(change, std::abs(shrink[r] - data.run_shrink[r]));
     }
     if (change < 0.005 || pass >= options.max_variance_passes) break;
     data.run_shrink = std::move(shrink);
     warm_start();
     pass_options.starts = 0;
-  }
-  if (random && out.fit.solver.usable && (options.fit.bootstrap > 0 || options.fit.profile != ProfileMode::none)) {
-    warm_start();
-    FitOptions final_options = options.fit;
-    final_options.starts = 0;
-    out.fit = detail::solve_least_squares(model, run_specs, final_options, &final_state);
   }
   if (out.variance_passes > 1 || out.fit.solver.starts < multi_start.starts) {
     SolverReport& s = out.fit.solver;
@@ -661,8 +633,11 @@ FrictionFitResult fit_friction(const FrictionLog& logged, const FrictionFitOptio
   std::vector<double> magnitudes(log.size()), sorted = log.friction_N;
   for (std::size_t i = 0; i < log.size(); ++i) magnitudes[i] = std::abs(log.friction_N[i]);
   std::nth_element(magnitudes.begin(), magnitudes.begin() + static_cast<std::ptrdiff_t>(magnitudes.size() / 2), magnitudes.end());
-  std::sort(sorted.begin(), sorted.end());
-  const auto percentile = [&](double q) { return sorted[static_cast<std::size_t>(std::round(q * static_cast<double>(sorted.size() - 1)))]; };
+  const auto percentile = [&](double q) {  // a selection, not a sort of all the forces
+    const auto k = static_cast<std::ptrdiff_t>(std::round(q * static_cast<double>(sorted.size() - 1)));
+    std::nth_element(sorted.begin(), sorted.begin() + k, sorted.end());
+    return sorted[static_cast<std::size_t>(k)];
+  };
   const double scale_N = std::max({percentile(0.99) - percentile(0.01), 0.1 * magnitudes[magnitudes.size() / 2], 1e-9});
   double ss = 0;
   for (std::size_t i = 0; i < log.size(); ++i) {
@@ -1035,8 +1010,9 @@ std::string friction_fit_summary(const FrictionFitResult& r) {
   s += fmt::format("goodness: RMSE {:.3f} N, max error {:.1f} % of the measured force's range (sample {}), residual sigma {:.3g}\n", r.rmse_N,
                    100 * r.max_relative_error, r.max_relative_error_sample, std::sqrt(f.residual_variance));
   if (r.variance_passes > 0 && r.run_offset_ratio > 0)
-    s += fmt::format("run offsets: random, tau = {:.3g} N (variance {:.3g} x the noise's, {} alternating fits)\n",
-                     r.run_offset_sd_N, r.run_offset_ratio, r.variance_passes);
+    s += fmt::format("run offsets: random, tau = {:.3g} N (variance {:.3g} x the noise's, ML with the constants{})\n",
+                     r.run_offset_sd_N, r.run_offset_ratio,
+                     r.variance_passes > 1 ? fmt::format(", {} fits", r.variance_passes) : std::string());
   if (!r.spread.empty()) {
     s += fmt::format("spread across {} runs (Eq. 1 sigma; ratio = sigma / (pooled SE * sqrt(runs)), ~1 if only noise; "
                      "p: the pooled fit's test of heterogeneity between runs, Holm across the constants):\n",

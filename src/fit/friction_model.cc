@@ -52,7 +52,8 @@ std::unique_ptr<ceres::CostFunction> FrictionModel::cost_function(const std::vec
   const int parameters = static_cast<int>(7 + effect_slots_.size() + terms);
   if (terms > 0) return term_cost_function(data_, rows, effect_slots_, parameters, n, loss, std::move(groups));
   return std::make_unique<BatchedAutoDiffCostFunction<FrictionResidual<false>>>(
-      FrictionResidual<false>{&data_, rows, effect_slots_}, parameters, n, loss, std::move(groups), data_.run_shrink);
+      FrictionResidual<false>{&data_, rows, effect_slots_}, parameters, n, loss, std::move(groups), data_.run_shrink,
+      rows.empty() ? data_.profiled : nullptr);
 }
 
 // A run is a cluster; its samples, in the log's order (time order within a run), are its

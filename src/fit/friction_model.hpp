@@ -9,6 +9,7 @@
 
 #include "friction_condition.hpp"
 #include "least_squares.hpp"
+#include "run_offsets.hpp"
 #include "lmcal/io/friction_log.hpp"
 #include "lmcal/models/friction_effects.hpp"
 #include "lmcal/models/friction_terms.hpp"
@@ -27,6 +28,9 @@ struct FrictionData {
   // run, profiled; below 1: a random one, GLS-whitened; see BatchedAutoDiffCostFunction).
   // Empty: no run offsets.
   std::vector<double> run_shrink;
+  // Random offsets with λ profiled by the polish (run_offsets.hpp; it updates run_shrink in
+  // place), or null: run_shrink as given.
+  ProfiledRunOffsets* profiled = nullptr;
   // Empirical terms on top of the law and its effects (friction_terms.hpp; empty: none), and
   // what they need of the log.
   const std::vector<FrictionTerm>* terms = nullptr;
@@ -50,6 +54,9 @@ class FrictionModel : public LeastSquaresModel {
   void explain(IdentifiabilityIssue& issue) const override;
   std::vector<IdentifiabilityIssue> design_issues(const std::vector<std::string>& free) const override;
   RowStructure row_structure() const override;
+  void estimate_settled() const override {
+    if (data_.profiled) data_.profiled->profiling = false;
+  }
 
  private:
   const FrictionData& data_;

@@ -956,7 +956,9 @@ FitResult solve_least_squares(const LeastSquaresModel& model, const std::vector<
   Estimate e;
   try {
     e = estimate(model, specs, options, held, result.identifiability);                        // 1-3
+    model.estimate_settled();
   } catch (const NonFiniteResiduals& failure) {
+    model.estimate_settled();
     result = unusable_fit(model, specs, held, failure.what(), final_state);
     result.solver.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - clock_start).count();
     return result;

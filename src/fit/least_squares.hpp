@@ -73,6 +73,11 @@ class LeastSquaresModel {
   // The run and time step of every residual row, for covariances that do not assume
   // independent rows; empty (the default) when the model knows none.
   virtual RowStructure row_structure() const { return {}; }
+  // Called once the estimate is settled (after the polish and the identifiability rounds,
+  // before the uncertainty and the profiles): a model whose whitening followed the estimate
+  // during the polish (a random intercept's variance, profiled) holds it from here on, so
+  // that the covariance, the bootstrap and the profiles see one objective.
+  virtual void estimate_settled() const {}
 };
 
 // The state at the final estimate, for callers that derive more from it.

@@ -91,15 +91,17 @@ struct FrictionFitOptions {
   //           that changes only between runs (load, temperature on a one-setup-per-run rig)
   //           is then lost to the offsets;
   //   random: a random run intercept of variance τ², estimated by maximum likelihood with the
-  //           constants (alternating, at most `max_variance_passes` fits): generalised least
-  //           squares, so what changes between runs stays informative, weighed against τ²;
+  //           constants (λ = τ²/σ² profiled within the one fit: re-estimated from per-run sums
+  //           at each Gauss-Newton step; a fit whose λ still moves is refitted, at most
+  //           `max_variance_passes` fits; 1 holds λ at `run_offset_ratio_start`): generalised
+  //           least squares, so what changes between runs stays informative, weighed against τ²;
   //   automatic (the default): random with two runs or more and no robust loss, else none.
   // Without offsets the covariance takes a load-cell zero that moves between runs for noise:
   // the constants carried by the level between runs (f0, k1) get intervals far too narrow.
   RunOffsets run_offsets = RunOffsets::automatic;
   FrictionTemperature temperature = FrictionTemperature::block_mean;
   int max_variance_passes = 4;
-  double run_offset_ratio_start = 0;  // random offsets: λ of the first fit (a related model's, to save passes)
+  double run_offset_ratio_start = 0;  // random offsets: λ at the start (a related model's, to save steps)
 };
 
 struct ConditionResidual {
