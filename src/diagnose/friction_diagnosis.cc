@@ -33,6 +33,42 @@ constexpr int kCandidateIterations = 15;
 // measured the force on an axis whose mounting is known; otherwise it may as well be the weight
 // on an inclined axis or a drive's current offset, and it is reported as what the data show,
 // under a neutral name, with those candidates.
+// Whether a log column varies enough for a cause that needs it (FrictionEffectInfo::varies):
+// both directions, or a spread beyond the column's resolution (a condition a combination law
+// did not log is constant at its neutral value).
+bool varies_in(const FrictionLog& log, std::string_view column) {
+  if (column.empty() || log.size() == 0) return true;
+  if (column == "direction")
+    return std::any_of(log.direction.begin(), log.direction.end(), [](auto d) { return d > 0; }) &&
+           std::any_of(log.direction.begin(), log.direction.end(), [](auto d) { return d < 0; });
+  const auto spread = [](const std::vector<double>& v) {
+    const auto [low, high] = std::minmax_element(v.begin(), v.end());
+    return *high - *low;
+  };
+  if (column == "temperature_C") {  // a thermometer's noise spreads one set point too: the SD, not the range
+    if (!log.law.temperature) return false;
+    double sum = 0, sum2 = 0;
+    for (double t : log.temperature_C) sum += t, sum2 += t * t;
+    const double n = static_cast<double>(log.size()), mean = sum / n;
+    return std::sqrt(std::max(sum2 / n - mean * mean, 0.0)) >= 0.5;
+  }
+  if (column == "load_N") return log.law.load && !log.law.combination() && spread(log.load_N) > 1e-6 * log.load_N.front();
+  return true;
+}
+
+// The library's causes a log can show; the others, with why, into `not_tried`.
+std::vector<std::string> causes_that_can_show(const FrictionLog& log, std::vector<std::string>& not_tried) {
+  std::vector<std::string> out;
+  for (const std::string& name : friction_cause_names()) {
+    const FrictionEffectInfo& info = FrictionEffectLibrary::infos[*find_friction_effect(name)];
+    if (varies_in(log, info.varies)) out.push_back(name);
+    else not_tried.push_back(fmt::format("{} ({} {})", name, info.varies,
+                                         std::string_view(info.varies) == "direction" ? "has one sense only"
+                                                                                      : "constant or not logged"));
+  }
+  return out;
+}
+
 void read_precondition(CandidateScore& c, const FrictionLog& log) {
   if (c.effect != SignedZeroOffset::info.name) return;
   const ForceSensor sensor = log.force_sensor;
@@ -400,7 +436,9 @@ FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagno
                                      .max_effects = o.max_effects,
                                      .parallel = true,
                                      .progress = o.progress};
-  auto selection = detail::forward_select(friction_cause_names(), baseline, fit_candidate, summarise, rules);
+  std::vector<std::string> not_tried;
+  auto selection =
+      detail::forward_select(causes_that_can_show(log, not_tried), baseline, fit_candidate, summarise, rules);
   const FrictionFitResult& current = selection.current;
   d.rounds = std::move(selection.rounds);
 
@@ -437,6 +475,8 @@ FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagno
 
   detail::conclude(d, "The published law", "N", d.cv_rmse_before_N, current.cv_rmse_N, d.baseline.rmse_N);
   d.design_notes = design_notes(log, baseline, d.baseline.lack_of_fit);
+  if (!not_tried.empty())
+    d.design_notes.push_back(fmt::format("not tried, their precondition absent: {}", fmt::join(not_tried, "; ")));
   if (!held_zeros.empty())
     d.design_notes.push_back(fmt::format(
         "{} fitted with the spread of the runs' zeros held at the model's before it: fitted freely, the zeros spread "

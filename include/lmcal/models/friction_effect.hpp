@@ -37,6 +37,11 @@ struct FrictionEffectInfo {
   // A term of the drive's dynamics, not of friction: fitted with every trajectory log that
   // needs it (friction_fit.hpp, drive_effects), never a candidate cause of a diagnosis.
   bool dynamics = false;
+  // A log column that must vary for the cause to show at all ("temperature_C", "load_N",
+  // "direction"): its precondition. A diagnosis does not try it on a log where the column is
+  // constant or was not given, and says so. (A look-alike that stays possible is a tie instead:
+  // seal_drag_block beside seal_drag at one block length.)
+  const char* varies = "";
 };
 
 enum class FrictionEffectStage { on_law, on_total };

@@ -14,7 +14,7 @@ namespace LMCAL_API lmcal {
 struct CoulombTemperature {
   static constexpr FrictionEffectInfo info{"coulomb_temperature", "1/K", "Coulomb term (1 + c (T - T_i))", 0.0, -0.1, 0.1,
                                            0.01,
-                                           "the same load at two oil temperatures within one run (or repeated setups)"};
+                                           "the same load at two oil temperatures within one run (or repeated setups)", false, "temperature_C"};
   static constexpr FrictionEffectStage stage = FrictionEffectStage::on_law;
 
   template <typename P, typename C, typename B, typename Total, typename E>

@@ -13,7 +13,7 @@ namespace LMCAL_API lmcal {
 struct DirectionAsymmetry {
   static constexpr FrictionEffectInfo info{"direction_asymmetry", "1", "friction (1 + a) forward, (1 - a) backward",
                                            0.0, -0.5, 0.5, 0.05,
-                                           "the force in both directions at several loads (an asymmetry grows with the force, a sensor offset does not)"};
+                                           "the force in both directions at several loads (an asymmetry grows with the force, a sensor offset does not)", false, "direction"};
   static constexpr FrictionEffectStage stage = FrictionEffectStage::on_total;
 
   template <typename P, typename C, typename B, typename Total, typename E>

@@ -14,7 +14,7 @@ namespace LMCAL_API lmcal {
 struct SignedZeroOffset {
   static constexpr FrictionEffectInfo info{"signed_zero_offset", "N", "load-cell zero o in the signed force: + direction o",
                                            0.0, -10.0, 10.0, 0.1,
-                                           "the load cell at rest before each run (its zero), and both directions at several loads"};
+                                           "the load cell at rest before each run (its zero), and both directions at several loads", false, "direction"};
   static constexpr FrictionEffectStage stage = FrictionEffectStage::on_law;
 
   template <typename P, typename C, typename B, typename Total, typename E>

@@ -13,7 +13,7 @@ namespace LMCAL_API lmcal {
 struct ViscousLoad {
   static constexpr FrictionEffectInfo info{"viscous_load", "1/kN", "viscous coefficient grows with load: μv (1 + c P/kN)",
                                            0.0, -1.0, 1.0, 0.1,
-                                           "the same speeds at two or more loads"};
+                                           "the same speeds at two or more loads", false, "load_N"};
   static constexpr FrictionEffectStage stage = FrictionEffectStage::on_law;
 
   template <typename P, typename C, typename B, typename Total, typename E>
