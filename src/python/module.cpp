@@ -150,7 +150,7 @@ RawFrictionOptions raw_options(const py::dict& given, std::vector<std::string>* 
       throw InvalidParameter("raw", fmt::format("unknown segmentation setting '{}'; expected force_sign, duplicate_times, "
                                                 "max_acceleration_m_s2, settling_s, min_speed_m_s, velocity_tolerance, "
                                                 "min_plateau_samples, velocity_window, moving_mass_kg, segmentation, "
-                                                "trajectory_window, presliding_m, axis_incline_deg, skip_lines or a drive's "
+                                                "trajectory_window, presliding_m, axis_incline_deg, force_sensor, skip_lines or a drive's "
                                                 "lead_mm, pinion_radius_mm, gear_ratio, efficiency, rotor_inertia_kg_m2, "
                                                 "nominal_torque_Nm",
                                                 name));
