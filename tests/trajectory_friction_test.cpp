@@ -341,6 +341,16 @@ TEST_F(TrajectoryFriction, APreloadByClassOrForceAndOneSetupPerCombinationLaw) {
       EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
     }
   }
+  write("s.csv", "velocity_m_s,friction_N\n0.01,20\n0.02,21\n");
+  write("springs.toml", "[[run]]\nid = \"r\"\nfile = \"r.csv\"\npreload_N = 0.8\n[[run]]\nid = \"s\"\nfile = \"s.csv\"\n"
+                        "preload_N = 1.2\n");
+  try {
+    load_friction_dataset(dir_ / "springs.toml");
+    ADD_FAILURE() << "two spring preloads accepted as one setup";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("preload_N = 1.2 differs from the log's first value, 0.8"), std::string::npos)
+        << e.what();
+  }
   write("loads.csv", "run,velocity_m_s,load_N,friction_N\nr,0.01,1000,20\nr,0.02,2000,21\n");
   try {
     load_friction_log(dir_ / "loads.csv");

@@ -451,7 +451,8 @@ class FileLoader {
     if (!law_.temperature) c.temperature_C = Law::kUnloggedTemperature_C;
     if (!law_.combination()) return c;
     FrictionLawConditions& law = log_.law;
-    const auto one_setup = [&](Spec spec, bool is_logged, double value, std::optional<double> Law::*stated) {
+    const auto one_setup = [&](const std::string& name, const csv::Column* col, bool is_logged, double value,
+                               std::optional<double> Law::*stated) {
       if (!is_logged) return;
       if (!(law.*stated)) {
         law.*stated = value;
@@ -459,16 +460,16 @@ class FileLoader {
         const std::string what = fmt::format(
             "{} = {} differs from the log's first value, {}: without {} the law is fitted in the combinations of "
             "one setup; give {} for the paper's scalings, or fit each setup as its own log",
-            header_of(spec), value, *(law.*stated), fmt::join(law.not_logged(), ", "), fmt::join(law.not_logged(), ", "));
-        if (const csv::Column* col = column(spec)) reader_.fail(col->cell, what);
+            name, value, *(law.*stated), fmt::join(law.not_logged(), ", "), fmt::join(law.not_logged(), ", "));
+        if (col) reader_.fail(col->cell, what);
         reader_.fail_at(reader_.line(), 0, what + fmt::format(" (the value of run '{}' in {})", log_.run_names.at(last_run_),
                                                                file_.manifest));
       }
     };
-    one_setup(kLoad, law_.load, c.load_N, &Law::load_N);
-    one_setup(kPreload, law_.preload, c.preload_um, &Law::preload_um);
-    one_setup(kBlockLength, law_.block_length, c.block_length_mm, &Law::block_length_mm);
-    if (given && given->preload_N) one_setup(kPreload, true, *given->preload_N, &Law::preload_N);
+    one_setup(header_of(kLoad), column(kLoad), law_.load, c.load_N, &Law::load_N);
+    one_setup(header_of(kPreload), column(kPreload), law_.preload, c.preload_um, &Law::preload_um);
+    one_setup(header_of(kBlockLength), column(kBlockLength), law_.block_length, c.block_length_mm, &Law::block_length_mm);
+    if (given && given->preload_N) one_setup("preload_N", nullptr, true, *given->preload_N, &Law::preload_N);
     if (given && given->preload_class && !law.preload_class) law.preload_class = given->preload_class;
     c.load_N = Law::kNeutralLoad_N;
     c.preload_um = Law::kNeutralPreload_um;
