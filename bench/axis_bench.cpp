@@ -40,14 +40,7 @@ struct AxisLog {
 const AxisLog& axis_log() {
   static const bench::ScratchDir dir("lmcal_axis_bench");
   static const AxisLog log = [] {
-    FrictionRigConfig setup;
-    setup.guides = {"SRN 35C"};
-    setup.preload_um = {2.5};
-    setup.load_N = {1000, 2000, 3000};
-    setup.temperature_C = {26};
-    setup.velocity_m_s = {0.005, 0.02, 0.05, 0.1, 0.15};
-    setup.runs = 1;
-    setup.seed = 2027;
+    const FrictionRigConfig setup = bundled_axis_setup(2027);
     AxisRigConfig axis;
     axis.incline_deg = 20;
     axis.cruise_s = 0.5;

@@ -126,14 +126,7 @@ void expect_friction_invariants(const FrictionDiagnosis& d, const std::string& l
 class DiagnosisInvariants : public test::TempFolderTest {
  protected:
   FrictionLog axis_log(std::uint64_t seed, double asymmetry) {
-    FrictionRigConfig setup;
-    setup.guides = {"SRN 35C"};
-    setup.preload_um = {2.5};
-    setup.load_N = {1000, 2000, 3000};
-    setup.temperature_C = {26};
-    setup.velocity_m_s = {0.005, 0.02, 0.05, 0.1, 0.15};
-    setup.runs = 1;
-    setup.seed = seed;
+    const FrictionRigConfig setup = bundled_axis_setup(seed);
     AxisRigConfig axis;
     axis.cycles = 1;
     axis.cruise_s = 0.5;

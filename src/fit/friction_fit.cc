@@ -283,9 +283,11 @@ std::vector<LawCombination> law_combinations(const FitResult& fit, const Frictio
   const auto& p = fit.parameters;
   double nu40 = 0;
   for (double v : log.viscosity40_mm2_s) nu40 += v / static_cast<double>(log.size());
-  const FrictionConstants<double> reference = paper_friction_constants();
-  const double shift = T - reference.T_ref_C, beta = p[5].value;
-  const double nu = nu40 * std::exp(-beta * shift);  // Eq. 6 at T
+  FrictionConstants<double> fitted = paper_friction_constants();
+  fitted.nu_ref_mm2_s = nu40;
+  fitted.beta_per_K = p[5].value;
+  const double shift = T - fitted.T_ref_C;
+  const double nu = viscosity_mm2_s(fitted, T);  // Eq. 6 at T
   const double load = Law::kNeutralLoad_N * 1e-3, pc = Law::kNeutralPreload_um, lb = Law::kNeutralBlockLength_mm;
   struct Row {
     const char* name;

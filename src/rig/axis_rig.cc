@@ -342,6 +342,18 @@ void require_no_plant_effects(const RigEffects& effects) {
 
 }  // namespace
 
+FrictionRigConfig bundled_axis_setup(std::uint64_t seed) {
+  FrictionRigConfig setup;
+  setup.guides = {"SRN 35C"};
+  setup.preload_um = {2.5};
+  setup.load_N = {1000, 2000, 3000};
+  setup.temperature_C = {26};
+  setup.velocity_m_s = {0.005, 0.02, 0.05, 0.1, 0.15};
+  setup.runs = 1;
+  setup.seed = seed;
+  return setup;
+}
+
 AxisRigOutput generate_axis_logs(const FrictionRigConfig& conditions, const AxisRigConfig& axis, const RigEffects& effects,
                                  const std::vector<std::string>& comments) {
   rig::require_no_thermal_effects(effects);

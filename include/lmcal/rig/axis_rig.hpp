@@ -54,6 +54,7 @@
 
 #include "lmcal/export.hpp"
 
+#include <cstdint>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -116,6 +117,11 @@ struct AxisRigOutput {
   std::vector<AxisTrace> traces;                               // per run
   std::string truth_json;
 };
+
+// The conditions of the bundled axis set (measurements/axis, scripts/make-bundled-data.sh):
+// one SRN 35C at 2.5 µm preload and 26 °C, a run at each of 1, 2 and 3 kN, top speeds 0.005,
+// 0.02, 0.05, 0.1 and 0.15 m/s; seeded by `seed`.
+FrictionRigConfig bundled_axis_setup(std::uint64_t seed);
 
 // Every setup of `conditions` (guide × preload × load × temperature, `runs` times) is one run:
 // one trajectory of the reference at those conditions. Seeded by conditions.seed.
