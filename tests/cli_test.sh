@@ -177,13 +177,15 @@ check "a missing folder refused" refused "expected a measurement folder" calibra
 
 # --- a log of nothing but speed and force: the law in combinations, nothing invented ------------
 mkdir -p bare
-awk -F, '/^#/ { next } !header++ { for (i = 1; i <= NF; ++i) col[$i] = i; print "velocity_m_s,friction_N"; next }
-         $col["load_N"] == 3000 && $col["guide"] == "SRN 35C" && $col["preload_um"] == 4 { print $col["velocity_m_s"] "," $col["friction_N"] }' \
+awk -F, '/^#/ { next } !header++ { for (i = 1; i <= NF; ++i) col[$i] = i; print "run,velocity_m_s,friction_N"; next }
+         $col["load_N"] == 3000 && $col["guide"] == "SRN 35C" && $col["preload_um"] == 4 {
+           print $col["run"] "," $col["velocity_m_s"] "," $col["friction_N"] }' \
     "$SOURCE/measurements/cheng2017/friction.csv" > bare/friction.csv
 "$LMCAL" check friction bare/friction.csv > bare_check.txt 2>&1
 check "check says what a speed-and-force log does not give" grep -q 'note: not given: load_N, preload_um, block_length_mm, temperature_C' bare_check.txt
 "$LMCAL" calibrate bare -o bare_out --no-diagnosis > bare_cal.txt 2>&1
 check "calibrate quotes the combinations, not the constants" grep -q '^    viscous_N_s_m ' bare_cal.txt
+check "the report lists the combinations and their spread across runs" grep -q '<td>viscous_N_s_m</td>' bare_out/report.html
 check "nor any condition it was not given" bash -c '! grep -E "^ +(k1|mu_st|beta_per_K) " "$0" && ! head -1 "$1" | grep -q load_N' bare_cal.txt bare_out/friction_samples.csv
 check "the model file says its law holds for one setup" grep -q '^law = "combinations"' bare_out/model.toml
 check "simulate refuses a combination law at other conditions" refused "fitted in combinations" simulate friction --model bare_out/model.toml -o out/f.csv --velocity 0.1

@@ -834,7 +834,7 @@ nlohmann::json law_json(const FrictionFitResult& r) {
 FitResult friction_fit_as_shown(const FrictionFitResult& r) {
   FitResult f = r.fit;
   for (std::size_t j = 0; j < f.parameters.size(); ++j) {
-    if (!shown(r, j)) f.parameters[j].interval = "none";
+    if (!shown(r, j)) f.parameters[j].interval = "none", f.parameters[j].listed = false;
     const LawCombination* c = combination_of(r, j);
     if (!c) continue;
     const double ratio = r.fit.parameters[j].se > 0 ? c->estimate.se / r.fit.parameters[j].se : 0;

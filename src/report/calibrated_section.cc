@@ -66,7 +66,7 @@ void friction_model(Page& page, const Calibration& c) {
                              "residual RMSE {} N.",
                              c.friction_log->size(), f.runs.size(), num(f.run_offset_sd_N, 3), num(f.cv_rmse_N), num(f.rmse_N)));
   empirical_terms(page, f.terms);
-  parameter_table(page, f.fit);
+  parameter_table(page, friction_fit_as_shown(f));
   caveats(page, f.fit);
 }
 

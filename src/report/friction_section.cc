@@ -216,8 +216,9 @@ void spread_section(Page& page, const FrictionFitResult& f) {
       "covariance, χ²(runs − 1)), Holm-adjusted across the constants; below 0.05 the runs differ beyond what the model "
       "explains.");
   std::vector<std::vector<std::string>> rows;
+  const FitResult shown = friction_fit_as_shown(f);  // the spread's names: a combination law's combinations
   for (const auto& sp : f.spread) {
-    const auto& pooled = f.fit.parameter(sp.parameter);
+    const auto& pooled = shown.parameter(sp.parameter);
     const std::size_t runs = sp.per_run.size();
     const std::string note = sp.spread.n == 0  ? "no run's own fit estimated it (held or undetermined in each)"
                              : sp.spread.n < 2 ? "one run's fit estimated it: no spread"
@@ -444,9 +445,10 @@ void friction_run_figures(Page& page, const FrictionFitResult& f, const std::str
   std::vector<Plot> plots;
   std::string runs;
   for (std::size_t r = 0; r < f.runs.size(); ++r) runs += fmt::format("{}{} {}", r ? ", " : "", r + 1, f.runs[r]);
+  const FitResult shown = friction_fit_as_shown(f);  // the spread's names: a combination law's combinations
   for (const auto& sp : f.spread) {
     if (std::none_of(sp.per_run.begin(), sp.per_run.end(), [](double v) { return std::isfinite(v); })) continue;
-    Plot plot = per_run_plot(plot_id(id_prefix + sp.parameter), sp.parameter + " per run", f.fit.parameter(sp.parameter),
+    Plot plot = per_run_plot(plot_id(id_prefix + sp.parameter), sp.parameter + " per run", shown.parameter(sp.parameter),
                              {.value = sp.per_run, .half_width_95 = sp.per_run_half_width_95, .names = f.runs}, "");
     plot.width_px = 300, plot.height_px = 220;
     plots.push_back(std::move(plot));

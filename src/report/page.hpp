@@ -115,7 +115,9 @@ inline std::string interval(const ParameterEstimate& p) {
 
 // A per-run nuisance parameter (thermocouple offset, start temperature, heat scale): left out
 // of the tables of the model's parameters.
-inline bool nuisance(const ParameterEstimate& p) { return p.per_run; }
+// Left out of the tables of a model's parameters: a run's nuisance parameter, or a constant the
+// outputs do not show (friction_fit_as_shown: one a combination law held, β without a temperature).
+inline bool nuisance(const ParameterEstimate& p) { return p.per_run || !p.listed; }
 
 inline std::string flags(const ParameterEstimate& p) {
   if (!p.free) return "held (given)";

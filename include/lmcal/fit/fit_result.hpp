@@ -83,6 +83,9 @@ struct ParameterEstimate {
   // A nuisance parameter of one run (a thermocouple offset, a start temperature, a heat
   // scale): fitted for the others' sake, left out of the tables of the model's parameters.
   bool per_run = false;
+  // Listed in the tables of the model's parameters; false for a constant held only to state the
+  // others, which the data say nothing of (friction_fit_as_shown).
+  bool listed = true;
   double se = 0;               // NaN when not fitted or the covariance failed
   double dof = 0;              // of the t quantile of ci_low/ci_high
   double ci_low = 0, ci_high = 0;            // linear t interval
