@@ -8,7 +8,7 @@
 # that did it in <build folder>/artifacts/<harness>/. A finding that is known and not fixed yet is
 # listed in fuzz/regressions/OPEN: its reproducer's failure, and a fuzzing failure of its
 # harness that prints the same text, are reported but do not fail the run.
-# Usage: scripts/fuzz.sh SECONDS [HARNESS...]   (default: every harness, one after the other)
+# Usage: scripts/fuzz.sh SECONDS [HARNESS...]   (default: every harness; FUZZ_JOBS at once, default one per core)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds=${1:?usage: scripts/fuzz.sh SECONDS [HARNESS...]}
@@ -58,23 +58,36 @@ for h in "${harnesses[@]}"; do
   done
 done
 
-for h in "${harnesses[@]}"; do
-  work=$build/corpus/$h
-  artifacts=$build/artifacts/$h/
-  log=$build/fuzz_$h.log
+# Fuzz each harness for SECONDS, FUZZ_JOBS at once (default: one per core); then report them in
+# order. A harness's exit status is kept in its folder.
+fuzz_one() {  # fuzz_one HARNESS
+  local h=$1 work=$build/corpus/$1 artifacts=$build/artifacts/$1/ status=0
   rm -rf "$work" "$artifacts"
   mkdir -p "$work" "$artifacts"
   cp fuzz/corpus/"$h"/* "$work"/
-  status=0
   "$build"/fuzz/fuzz_"$h" "$work" -dict=fuzz/dict/"${dict[$h]}".dict -max_len="${max_len[$h]}" \
     -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -artifact_prefix="$artifacts" -print_final_stats=1 \
-    >"$log" 2>&1 || status=$?
+    >"$build"/fuzz_"$h".log 2>&1 || status=$?
+  echo "$status" >"$build"/fuzz_"$h".status
+}
+parallel=${FUZZ_JOBS:-$(nproc)}
+for h in "${harnesses[@]}"; do
+  rm -f "$build"/fuzz_"$h".status
+  while (($(jobs -rp | wc -l) >= parallel)); do wait -n || true; done
+  fuzz_one "$h" &
+done
+wait
+
+for h in "${harnesses[@]}"; do
+  artifacts=$build/artifacts/$h/
+  log=$build/fuzz_$h.log
+  status=$(cat "$build"/fuzz_"$h".status 2>/dev/null || echo "no status (the harness's setup failed)")
   # libFuzzer's last status line: "#<executions> DONE cov: <edges> ft: <features> corp: <inputs>/<bytes> ...".
   last=$(grep -E '^#[0-9]+' "$log" | tail -1 || true)
   execs=$(grep -oE 'stat::number_of_executed_units: *[0-9]+' "$log" | grep -oE '[0-9]+$' || echo "${last%%[[:space:]]*}")
   cov=$(grep -oE 'cov: [0-9]+ ft: [0-9]+ corp: [0-9]+' <<<"$last" || echo "cov: ? ft: ? corp: ?")
   echo "fuzz $h: ${execs#\#} executions in ${seconds} s, $cov"
-  if ((status != 0)); then
+  if [[ $status != 0 ]]; then
     known=$(open_texts "$h" | grep -F -f - "$log" | head -1 || true)
     if [[ -n "$known" ]]; then
       echo "fuzz $h: stopped on an open finding (fuzz/regressions/OPEN), not counted: $known"

@@ -5,6 +5,7 @@ set -euo pipefail
 
 packages=(
   g++ cmake make                 # toolchain
+  ccache                         # compiler cache: rebuilds on this machine reuse earlier objects
   libceres-dev libeigen3-dev     # least squares, autodiff, covariance; linear algebra
   libnlopt-dev libnlopt-cxx-dev  # global and derivative-free search
   libcli11-dev libfmt-dev nlohmann-json3-dev libtomlplusplus-dev libfast-float-dev

@@ -6,6 +6,7 @@
 #include "lmcal/io/friction_log.hpp"
 #include "lmcal/io/thermal_run.hpp"
 #include "lmcal/predict/prediction.hpp"
+#include "support/source_paths.hpp"
 
 #include <gtest/gtest.h>
 
@@ -20,7 +21,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const fs::path kBadDir = fs::path(LMCAL_TEST_DATA_DIR) / "bad";
+const fs::path kBadDir = test::test_data_dir() / "bad";
 constexpr const char* kExpected = "expected.txt";
 
 struct Case {

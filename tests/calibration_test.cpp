@@ -19,6 +19,7 @@
 #include "lmcal/rig/virtual_rig.hpp"
 #include "report/sections.hpp"
 #include "support/temp_folder.hpp"
+#include "support/source_paths.hpp"
 
 namespace lmcal {
 namespace {
@@ -523,7 +524,7 @@ void expect_same_text(const std::string& a, const std::string& b, double absolut
 }
 
 TEST(BundledCalibration, AFreshRunReproducesTheCommittedResults) {
-  const fs::path root = LMCAL_SOURCE_DIR;
+  const fs::path root = test::source_dir();
   const fs::path previous = fs::current_path();
   fs::current_path(root);  // the outputs record the set as given: measurements/cheng2017
   const Calibration c = calibrate(find_calibration_set("measurements/cheng2017"), {});
@@ -580,7 +581,7 @@ TEST(BundledCalibration, AFreshRunReproducesTheCommittedResults) {
 // constants within 3 SE, α inside its interval, nothing named by the diagnoses, and the
 // report shows the raw trace with its plateaus.
 TEST(BundledCalibration, TheRigShapedSetCalibratesToItsTruth) {
-  const fs::path root = LMCAL_SOURCE_DIR;
+  const fs::path root = test::source_dir();
   const Calibration c = calibrate(find_calibration_set(root / "measurements" / "rig"), {});
   ASSERT_TRUE(c.set.friction_manifest);
   ASSERT_EQ(c.friction_log->segmentation.size(), 8u);

@@ -17,13 +17,14 @@
 #include <unistd.h>
 
 #include "support/temp_folder.hpp"
+#include "support/source_paths.hpp"
 
 namespace lmcal {
 namespace {
 
 namespace fs = std::filesystem;
 
-const fs::path kGood = fs::path(LMCAL_TEST_DATA_DIR) / "good";
+const fs::path kGood = test::test_data_dir() / "good";
 
 class FrictionLogTest : public test::TempFolderTest {};
 

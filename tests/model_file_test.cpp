@@ -22,13 +22,14 @@
 #include "lmcal/models/friction_effects.hpp"
 #include "lmcal/models/thermal_effects.hpp"
 #include "support/srn35c.hpp"
+#include "support/source_paths.hpp"
 
 namespace lmcal {
 namespace {
 
 namespace fs = std::filesystem;
 
-const fs::path kModelDir = fs::path(LMCAL_TEST_DATA_DIR) / "model";
+const fs::path kModelDir = test::test_data_dir() / "model";
 
 // --- bad input --------------------------------------------------------------------------------
 

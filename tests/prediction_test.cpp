@@ -21,6 +21,7 @@
 #include "lmcal/fit/thermal_fit.hpp"
 #include "lmcal/rig/virtual_rig.hpp"
 #include "support/temp_folder.hpp"
+#include "support/source_paths.hpp"
 
 namespace lmcal {
 namespace {
@@ -89,7 +90,7 @@ TEST(ThermalElongation, IsTheStoredHeatOverTheRailsHeatCapacityPerLength) {
 
 class PredictTest : public test::TempFolderTest {
  protected:
-  static ModelFile bundled() { return read_model_file(fs::path(LMCAL_SOURCE_DIR) / "fits/cheng2017/model.toml"); }
+  static ModelFile bundled() { return read_model_file(test::source_dir() / "fits/cheng2017/model.toml"); }
 
   DutyCycle duty(const std::string& segments, const std::string& extra = "") {
     return load_duty_cycle(write("duty.toml", "guide = \"SRN 35C\"\nrail_length_m = 0.6\nambient_C = 24\n"
@@ -303,14 +304,14 @@ TEST_F(PredictTest, ADutysSizesAreBoundedBeforeItIsLaidOutOrRun) {
   EXPECT_NE(invalid_parameter_message([&] { check_prediction_size(day, {.half_rail_segments = 1'000'000'000}); }).find("at most 10000"),
             std::string::npos);
   // The bundled example is well inside: seconds, megabytes.
-  const DutyCycle example = load_duty_cycle(fs::path(LMCAL_SOURCE_DIR) / "examples/duty/two_shifts.toml");
+  const DutyCycle example = load_duty_cycle(test::source_dir() / "examples/duty/two_shifts.toml");
   EXPECT_NO_THROW(check_prediction_size(example, {}));
   EXPECT_LT(prediction_cost(example, {}).cpu_s, 10);
   EXPECT_LT(prediction_cost(example, {}).bytes, 1e8);
 }
 
 TEST_F(PredictTest, AModelOfAnotherMajorVersionIsRefused) {
-  std::ifstream in(fs::path(LMCAL_SOURCE_DIR) / "fits/cheng2017/model.toml");
+  std::ifstream in(test::source_dir() / "fits/cheng2017/model.toml");
   std::string text((std::istreambuf_iterator<char>(in)), {});
   text.replace(text.find("lmcal_version = \"0."), 20, "lmcal_version = \"1.");
   try {

@@ -19,13 +19,14 @@
 #include <unistd.h>
 
 #include "support/temp_folder.hpp"
+#include "support/source_paths.hpp"
 
 namespace lmcal {
 namespace {
 
 namespace fs = std::filesystem;
 
-const fs::path kGood = fs::path(LMCAL_TEST_DATA_DIR) / "good";
+const fs::path kGood = test::test_data_dir() / "good";
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 class ThermalRunTest : public test::TempFolderTest {};
