@@ -109,6 +109,18 @@ const T* find_law_parameter(const FrictionConstants<T>& k, const FrictionEffects
   return find_law_parameter(const_cast<FrictionConstants<T>&>(k), const_cast<FrictionEffects<T>&>(e), name);
 }
 
+namespace detail {
+// An effect at its neutral value that is not being fitted (a double, or a Jet without
+// derivatives) adds exactly nothing, for every condition and every value of its parts
+// (friction_effect.hpp's trap): it is skipped, so that the library's unused effects cost a fit
+// nothing. A fitted one is evaluated even at its neutral start (its derivative is not zero).
+template <typename T>
+bool held_neutral(const T& value, double neutral) {
+  if constexpr (requires { value.a; value.v.isZero(); }) return value.a == neutral && value.v.isZero();
+  else return value == neutral;
+}
+}  // namespace detail
+
 // The published law with every effect of `e` applied, N.
 template <typename P, typename C, typename E>
 auto friction_force_with_effects_N(const FrictionConstants<P>& k, const FrictionEffects<E>& e,
@@ -119,7 +131,8 @@ auto friction_force_with_effects_N(const FrictionConstants<P>& k, const Friction
   R total(law_N);
   auto add_stage = [&](FrictionEffectStage stage, const auto& reference_N) {
     FrictionEffectLibrary::for_each([&]<class Effect, std::size_t slot>() {
-      if (Effect::stage == stage) total = total + Effect::correction_N(k, c, b, reference_N, e[slot]);
+      if (Effect::stage == stage && !detail::held_neutral(e[slot], Effect::info.neutral))
+        total = total + Effect::correction_N(k, c, b, reference_N, e[slot]);
     });
   };
   add_stage(FrictionEffectStage::on_law, law_N);
