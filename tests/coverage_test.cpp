@@ -20,35 +20,17 @@
 #include "lmcal/fit/friction_fit.hpp"
 #include "lmcal/fit/thermal_fit.hpp"
 #include "lmcal/rig/virtual_rig.hpp"
+#include "support/coverage_tally.hpp"
 
 namespace lmcal {
 namespace {
+
+using test::Tally;
 
 std::size_t replicates(std::size_t ci_default) {
   const char* env = std::getenv("LMCAL_COVERAGE_REPLICATES");
   return env ? static_cast<std::size_t>(std::stoul(env)) : ci_default;
 }
-
-// Hits, errors and quoted SEs of one parameter over the replicates.
-struct Tally {
-  std::string name;
-  double truth = 0;
-  std::size_t n = 0, hits = 0;
-  double squared_error = 0, se = 0;
-
-  void add(const ParameterEstimate& p) {
-    const double low = p.interval == "profile" ? p.profile_low : p.ci_low;
-    const double high = p.interval == "profile" ? p.profile_high : p.ci_high;
-    ++n;
-    hits += truth >= low && truth <= high ? 1 : 0;
-    squared_error += (p.value - truth) * (p.value - truth);
-    se += p.se;
-  }
-  double coverage() const { return static_cast<double>(hits) / static_cast<double>(n); }
-  // The quoted SE over the actual error (RMS about the truth, bias included): about 1 when the
-  // intervals are as wide as they need to be, far above 1 when they widen needlessly.
-  double se_ratio() const { return (se / static_cast<double>(n)) / std::sqrt(squared_error / static_cast<double>(n)); }
-};
 
 // Coverage at 95 % within what N replicates resolve, and intervals not needlessly wide.
 void expect_honest(const Tally& t) {
