@@ -463,9 +463,21 @@ FrictionFitResult fit_friction(const FrictionLog& logged, const FrictionFitOptio
       options.effects.push_back(name);
     }
   prepare_law(logged, options);
+  // A temperature constant within each run (a manifest's, or none logged) is its own block
+  // mean: the log is used as it is, not copied.
+  const auto constant_within_runs = [](const FrictionLog& l) {
+    std::vector<double> first(l.run_names.size(), kNaN);
+    for (std::size_t i = 0; i < l.size(); ++i) {
+      double& T = first[l.run[i]];
+      if (std::isnan(T)) T = l.temperature_C[i];
+      else if (l.temperature_C[i] != T) return false;
+    }
+    return true;
+  };
+  const bool smooth = options.temperature == FrictionTemperature::block_mean && !constant_within_runs(logged);
   FrictionLog smoothed;
-  if (options.temperature == FrictionTemperature::block_mean) smoothed = with_block_mean_temperature(logged);
-  const FrictionLog& log = options.temperature == FrictionTemperature::block_mean ? smoothed : logged;
+  if (smooth) smoothed = with_block_mean_temperature(logged);
+  const FrictionLog& log = smooth ? smoothed : logged;
   // The law is friction in motion against the conditions: with nothing moving, or nothing
   // varied, none of it can be fitted (the fit would report an exact, meaningless agreement).
   const auto varies = [&](const std::vector<double>& column) {
