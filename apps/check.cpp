@@ -65,8 +65,10 @@ void print_segmentation(const RunSegmentation& s) {
 
 void check_friction(const std::vector<std::string>& files, const FrictionInputOptions& options) {
   const FrictionLog log = load_friction_input(files, options).log;
-  std::cout << fmt::format("friction log: {}, {}, {}\n", plural(log.size(), "sample"), plural(log.run_names.size(), "run"),
-                           plural(log.guide_names.size(), "guide"));
+  // A log without a guide column or key has one unnamed guide: not counted as a guide.
+  const bool guides = !(log.guide_names.size() == 1 && log.guide_names.front().empty());
+  std::cout << fmt::format("friction log: {}, {}{}\n", plural(log.size(), "sample"), plural(log.run_names.size(), "run"),
+                           guides ? ", " + plural(log.guide_names.size(), "guide") : ", no guide named");
   for (const auto& r : log.reports) {
     print_report(r);
     for (const auto& s : log.segmentation)

@@ -189,6 +189,12 @@ check "the report lists the combinations and their spread across runs" grep -q '
 check "nor any condition it was not given" bash -c '! grep -E "^ +(k1|mu_st|beta_per_K) " "$0" && ! head -1 "$1" | grep -q load_N' bare_cal.txt bare_out/friction_samples.csv
 check "the model file says its law holds for one setup" grep -q '^law = "combinations"' bare_out/model.toml
 check "simulate refuses a combination law at other conditions" refused "fitted in combinations" simulate friction --model bare_out/model.toml -o out/f.csv --velocity 0.1
+check "check counts no guide where none was named" grep -q 'samples, [0-9]* runs, no guide named$' bare_check.txt
+awk -F, 'NR == 1 || $1 == "'"$(awk -F, 'NR == 2 { print $1 }' bare/friction.csv)"'"' bare/friction.csv > bare/one_run.csv
+mkdir -p bare1 && mv bare/one_run.csv bare1/friction.csv
+"$LMCAL" calibrate bare1 -o bare1_out --no-diagnosis > bare1_cal.txt 2>&1
+check "one run: no held-out RMSE, said in words, and no NaN" \
+  bash -c 'grep -q "no held-out RMSE (one run: none to hold out)" "$0" && grep -q "friction: [0-9]* samples, 1 run;" "$0" && ! grep -qi nan "$0"' bare1_cal.txt
 
 # --- calibrate once, use everywhere: simulate with the calibrated model ------------------------
 mkdir -p modelset

@@ -637,9 +637,12 @@ std::string calibration_summary(const Calibration& c) {
   const CalibratedModel& m = c.calibrated;
   s += "THE CALIBRATED MODEL (model.toml): the published models with the causes the diagnoses accepted\n";
   if (m.friction) {
-    s += fmt::format("  friction law{}: RMSE {:.3f} N, held-out {:.3f} N\n",
+    // Held out: a run predicted from the others; with one run there is none to hold out.
+    const double held_out = m.friction->cv_rmse_N;
+    s += fmt::format("  friction law{}: RMSE {:.3f} N, {}\n",
                      m.friction_causes.empty() ? "" : fmt::format(" + {}", fmt::join(m.friction_causes, " + ")), m.friction->rmse_N,
-                     m.friction->cv_rmse_N);
+                     std::isfinite(held_out) ? fmt::format("held-out {:.3f} N", held_out)
+                                             : std::string("no held-out RMSE (one run: none to hold out)"));
     s += parameter_lines(friction_fit_as_shown(*m.friction)) + how_sure_line(m.friction->fit);
   }
   if (m.thermal) {
@@ -657,8 +660,8 @@ std::string calibration_summary(const Calibration& c) {
   }
   s += "the published models, for comparison (conditional on a model the diagnosis rejects where it names a cause):\n";
   if (c.friction)
-    s += fmt::format("  friction: {} samples, {} runs; the law alone, residual RMSE {:.3f} N\n", c.friction_log->size(),
-                     c.friction->runs.size(), c.friction->rmse_N);
+    s += fmt::format("  friction: {}, {}; the law alone, residual RMSE {:.3f} N\n", report::plural(c.friction_log->size(), "sample"),
+                     report::plural(c.friction->runs.size(), "run"), c.friction->rmse_N);
   if (c.friction_diagnosis)
     s += fmt::format("  diagnosis: {}: {}\n", c.friction_diagnosis->verdict, report::without_verdict(c.friction_diagnosis->summary));
   if (c.thermal) {
