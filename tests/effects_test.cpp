@@ -63,6 +63,9 @@ TEST(FrictionEffects, JetDerivativesOfTheEffectParametersEqualFiniteDifferences)
   for (double v : {0.0, 0.01, 0.11}) {
     auto c = test::srn35c_conditions(v);
     c.direction = -1;
+    c.acceleration_m_s2 = 0.4;            // a trajectory's sample: every effect acts
+    c.position_m = 0.0123;
+    c.distance_since_reversal_m = 6e-4;
     FrictionEffects<Jet> ej;
     for (std::size_t i = 0; i < kFrictionEffectCount; ++i) ej[i] = Jet(e[i], static_cast<int>(i));
     const Jet F = friction_force_with_effects_N(k, ej, c);
@@ -93,6 +96,12 @@ TEST(FrictionEffects, EveryRegisteredEffectVanishesAtItsNeutralValueAndIsFindabl
     EXPECT_GT(info.upper, info.neutral) << info.name;
     EXPECT_GT(info.scale, 0) << info.name;
     EXPECT_FALSE(std::string_view(info.measure).empty()) << info.name << ": what to log to see it (a tie quotes it)";
+    if constexpr (is_friction_effect_part(Effect::info)) {
+      // A shape parameter: no correction of its own; it acts through its effect (the Jet test).
+      EXPECT_EQ(friction_effect_slot(info.part_of) + 1 <= slot, true) << info.name << " registered before its effect";
+      ++checked;
+      return;
+    } else {
     bool acts = false;
     for (double v : {0.0, 0.004, 0.05, 0.11})
       for (double temperature_C : {22.0, 40.0})
@@ -101,6 +110,8 @@ TEST(FrictionEffects, EveryRegisteredEffectVanishesAtItsNeutralValueAndIsFindabl
           c.temperature_C = temperature_C;
           c.direction = direction;
           c.acceleration_m_s2 = v > 0.1 ? 0.5 : 0.0;  // a trajectory's sample (the moving mass acts there)
+          c.position_m = v > 0.1 ? 0.0123 : 0.0;      // along a raw log's travel (a ripple acts there)
+          c.distance_since_reversal_m = v > 0.1 ? 6e-4 : 0.0;  // 0.6 mm after a reversal (pre-sliding)
           const auto b = friction_breakdown(k, c);
           EXPECT_NEAR(Effect::correction_N(k, c, b, b.total_N(), info.neutral), 0.0, 1e-12 * b.total_N())
               << info.name << " V = " << v;
@@ -108,6 +119,7 @@ TEST(FrictionEffects, EveryRegisteredEffectVanishesAtItsNeutralValueAndIsFindabl
         }
     EXPECT_TRUE(acts) << info.name << " changes nothing at any test condition";
     ++checked;
+    }
   });
   EXPECT_EQ(checked, kFrictionEffectCount);
   EXPECT_THROW(friction_effect_slot("no_such_effect"), InvalidParameter);

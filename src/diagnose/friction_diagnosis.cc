@@ -18,6 +18,7 @@
 #include "lmcal/fit/statistics.hpp"
 #include "fit/fit_json.hpp"
 #include "fit/friction_condition.hpp"
+#include "cause_starts.hpp"
 #include "empirical_friction.hpp"
 #include "selection.hpp"
 
@@ -27,6 +28,9 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr int kCandidateIterations = 15;
+// An RMS acceleration under which a mass error's force is under a tenth of a newton per 10 kg of
+// error: no precondition for moving_mass_error.
+constexpr double kMinCauseAcceleration_m_s2 = 0.01;
 
 // A cause is named only where its precondition holds. A constant force signed with the motion
 // (signed_zero_offset's signature) is a load cell's or torque sensor's zero only where one
@@ -53,7 +57,28 @@ bool varies_in(const FrictionLog& log, std::string_view column) {
     return std::sqrt(std::max(sum2 / n - mean * mean, 0.0)) >= 0.5;
   }
   if (column == "load_N") return log.law.load && !log.law.combination() && spread(log.load_N) > 1e-6 * log.load_N.front();
+  // A raw log's travel: over more than a few encoder counts (a tidy log has none: all 0).
+  if (column == "position_m") return spread(log.position_m) > 1e-3;
+  if (column == "distance_since_reversal_m") return spread(log.distance_since_reversal_m) > 1e-3;
+  // Accelerations that matter beside friction, on a log whose moving mass is not fitted anyway
+  // (a trajectory fits it with the law: moving_mass).
+  if (column == "acceleration_m_s2") {
+    if (log.trajectory) return false;
+    double sum2 = 0;
+    for (double a : log.acceleration_m_s2) sum2 += a * a;
+    return std::sqrt(sum2 / static_cast<double>(log.size())) >= kMinCauseAcceleration_m_s2;
+  }
   return true;
+}
+
+// Why a cause's precondition is absent, in words.
+std::string absent_because(const FrictionLog& log, std::string_view column) {
+  if (column == "direction") return "has one sense only";
+  if (column == "acceleration_m_s2")
+    return log.trajectory ? "a trajectory: its moving mass is fitted with the law (moving_mass)"
+                          : fmt::format("RMS under {} m/s2 or not logged", kMinCauseAcceleration_m_s2);
+  if (column == "position_m" || column == "distance_since_reversal_m") return "spans under 1 mm or not logged (a raw log's)";
+  return "constant or not logged";
 }
 
 // The library's causes a log can show; the others, with why, into `not_tried`.
@@ -62,9 +87,7 @@ std::vector<std::string> causes_that_can_show(const FrictionLog& log, std::vecto
   for (const std::string& name : friction_cause_names()) {
     const FrictionEffectInfo& info = FrictionEffectLibrary::infos[*find_friction_effect(name)];
     if (varies_in(log, info.varies)) out.push_back(name);
-    else not_tried.push_back(fmt::format("{} ({} {})", name, info.varies,
-                                         std::string_view(info.varies) == "direction" ? "has one sense only"
-                                                                                      : "constant or not logged"));
+    else not_tried.push_back(fmt::format("{} ({} {})", name, info.varies, absent_because(log, info.varies)));
   }
   return out;
 }
@@ -380,10 +403,31 @@ FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagno
   // 2-3. Candidates, forward.
   std::set<std::string> held_zeros;  // candidates fitted with the zeros' variance held (fitted in parallel)
   std::mutex held_zeros_mutex;
-  auto fit_candidate = [&](const std::vector<std::string>& effects, const FrictionFitResult& current,
+  auto fit_candidate = [&](const std::vector<std::string>& causes, const FrictionFitResult& current,
                            const std::vector<FrictionTerm>& terms = {}) {
+    // The causes with their parts and the drive's terms, each from the current model's value
+    // where it has one; a new cause from its neutral value, or where it says so from the
+    // current residuals (cause_starts.hpp).
+    std::vector<std::string> effects = causes;
+    with_effect_parts(effects);
+    for (const std::string& name : drive_effects(log))
+      if (std::find(effects.begin(), effects.end(), name) == effects.end()) effects.push_back(name);
     std::vector<double> effect_start;
-    for (std::size_t j = 7; j < current.fit.parameters.size(); ++j) effect_start.push_back(current.fit.parameters[j].value);
+    for (const std::string& name : effects) {
+      const auto at = std::find_if(current.fit.parameters.begin() + 7, current.fit.parameters.end(),
+                                   [&](const ParameterEstimate& p) { return p.name == name; });
+      effect_start.push_back(at != current.fit.parameters.end() ? at->value
+                                                                : FrictionEffectLibrary::infos[friction_effect_slot(name)].neutral);
+    }
+    const std::string& added = causes.empty() ? std::string() : causes.back();
+    if (!added.empty() && std::none_of(current.fit.parameters.begin(), current.fit.parameters.end(),
+                                       [&](const ParameterEstimate& p) { return p.name == added; })) {
+      std::vector<double> residual_N(n);
+      for (std::size_t i = 0; i < n; ++i) residual_N[i] = log.friction_N[i] - current.predicted_N[i];
+      const std::vector<double> start = detail::cause_start(added, log, residual_N);
+      const auto at = std::find(effects.begin(), effects.end(), added) - effects.begin();
+      for (std::size_t p = 0; p < start.size(); ++p) effect_start[static_cast<std::size_t>(at) + p] = start[p];
+    }
     // From the current estimate where it is inside its bounds (fewer iterations), else from
     // the given start (a misspecified fit may sit on a bound).
     FrictionConstants<double> start = o.fit.start;
@@ -404,7 +448,7 @@ FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagno
         fit.run_offset_sd_N > 2 * current.run_offset_sd_N + 0.5 * current.rmse_N) {
       fit = fit_with(log, o, effects, start, effect_start, current.run_offset_ratio, terms, true);
       const std::lock_guard<std::mutex> lock(held_zeros_mutex);
-      held_zeros.insert(terms.empty() ? effects.back() : "the empirical term");
+      held_zeros.insert(terms.empty() ? added : "the empirical term");
     }
     return fit;
   };

@@ -223,7 +223,7 @@ const std::vector<std::string>& friction_cause_names() {
   static const std::vector<std::string> names = [] {
     std::vector<std::string> v;
     for (const auto& e : FrictionEffectLibrary::infos)
-      if (!e.dynamics) v.emplace_back(e.name);
+      if (!e.dynamics && !is_friction_effect_part(e)) v.emplace_back(e.name);
     return v;
   }();
   return names;
@@ -457,6 +457,7 @@ FrictionFitResult fit_friction(const FrictionLog& logged, const FrictionFitOptio
   if (logged.size() == 0) throw InvalidParameter("log", "the friction log has no samples");
   // A trajectory's drive force carries its inertia (and an incline's weight): fitted with the law.
   FrictionFitOptions options = given;
+  with_effect_parts(options.effects, &options.effect_start);  // an effect's shape is fitted with it
   for (const std::string& name : drive_effects(logged))
     if (std::find(options.effects.begin(), options.effects.end(), name) == options.effects.end()) {
       options.effect_start.resize(std::min(options.effect_start.size(), options.effects.size()));  // it starts neutral

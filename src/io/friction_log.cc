@@ -364,7 +364,8 @@ class FileLoader {
   void reserve() {
     const std::size_t capacity = log_.size() + reader_.estimated_rows();
     for (auto* v : {&log_.time_s, &log_.velocity_m_s, &log_.load_N, &log_.preload_um, &log_.block_length_mm,
-                    &log_.temperature_C, &log_.friction_N, &log_.viscosity40_mm2_s, &log_.acceleration_m_s2}) {
+                    &log_.temperature_C, &log_.friction_N, &log_.viscosity40_mm2_s, &log_.acceleration_m_s2,
+                    &log_.position_m, &log_.distance_since_reversal_m, &log_.time_since_reversal_s}) {
       v->reserve(capacity);
     }
     log_.run.reserve(capacity);
@@ -605,6 +606,7 @@ class FileLoader {
             "fits the moving mass with the law; or shorten --settling ({} s)",
             name, seg.kept, seg.samples, 100.0 * static_cast<double>(seg.kept) / static_cast<double>(std::max<std::size_t>(seg.samples, 1)),
             raw_.settling_s));
+      const raw::Travel travel = raw::travel(r.samples, motion_kind_, s, raw_);
       for (std::size_t i = 0; i < s.fate.size(); ++i) {
         if (s.fate[i] != raw::Fate::kept) continue;
         // A plateau's sample takes its plateau's speed; a trajectory's, its own filtered one.
@@ -620,8 +622,11 @@ class FileLoader {
         c.velocity_m_s = std::abs(v);
         c.direction = v < 0 ? -1.0 : 1.0;
         c.acceleration_m_s2 = s.trajectory() ? s.acceleration_m_s2[i] : 0.0;
+        c.position_m = travel.position_m[i];
+        c.distance_since_reversal_m = travel.distance_since_reversal_m[i];
         log_.append(r.run, setup.guide, r.samples.time_s[i], c, raw::friction_N(r.samples, s, raw_, i),
                     setup.viscosity40, static_cast<std::uint32_t>(r.line[i]));
+        log_.time_since_reversal_s.back() = travel.time_since_reversal_s[i];
       }
       log_.raw_traces.push_back(thin_trace(name, r.samples, s));
       total.kept += seg.kept;
@@ -774,7 +779,9 @@ FrictionConditions<double> FrictionLog::conditions(std::size_t i) const {
           .velocity_m_s = velocity_m_s[i],
           .temperature_C = temperature_C[i],
           .direction = static_cast<double>(direction[i]),
-          .acceleration_m_s2 = i < acceleration_m_s2.size() ? acceleration_m_s2[i] : 0.0};
+          .acceleration_m_s2 = i < acceleration_m_s2.size() ? acceleration_m_s2[i] : 0.0,
+          .position_m = i < position_m.size() ? position_m[i] : 0.0,
+          .distance_since_reversal_m = i < distance_since_reversal_m.size() ? distance_since_reversal_m[i] : 0.0};
 }
 
 void FrictionLog::append(std::uint32_t run_index, std::uint32_t guide_index, double time,
@@ -792,6 +799,9 @@ void FrictionLog::append(std::uint32_t run_index, std::uint32_t guide_index, dou
   viscosity40_mm2_s.push_back(viscosity40);
   direction.push_back(static_cast<std::int8_t>(c.direction));
   acceleration_m_s2.push_back(c.acceleration_m_s2);
+  position_m.push_back(c.position_m);
+  distance_since_reversal_m.push_back(c.distance_since_reversal_m);
+  time_since_reversal_s.push_back(std::numeric_limits<double>::quiet_NaN());
   line.push_back(source_line);
 }
 

@@ -507,6 +507,23 @@ Segmented segment(const RunSamples& run, Motion motion, const RawFrictionOptions
   return s;
 }
 
+Travel travel(const RunSamples& run, Motion motion, const Segmented& s, const RawFrictionOptions& o) {
+  Travel out;
+  out.position_m = motion == Motion::position_m ? run.motion : running_integral(run.time_s, run.motion);
+  const std::size_t n = out.position_m.size();
+  const double rest_m_s = std::max(o.min_speed_m_s, 3 * s.sigma_v);
+  out.distance_since_reversal_m.resize(n);
+  out.time_since_reversal_s.resize(n);
+  std::size_t turn = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const bool turning = i > 0 && sign_of(s.velocity_m_s[i]) != sign_of(s.velocity_m_s[i - 1]);
+    if (std::abs(s.velocity_m_s[i]) < rest_m_s || turning) turn = i;
+    out.distance_since_reversal_m[i] = std::abs(out.position_m[i] - out.position_m[turn]);
+    out.time_since_reversal_s[i] = run.time_s[i] - run.time_s[turn];
+  }
+  return out;
+}
+
 void tally(const Segmented& s, RunSegmentation& out) {
   out.samples = s.fate.size();
   out.kept = out.dropped_acceleration = out.dropped_settling = out.dropped_stationary = out.dropped_short = 0;

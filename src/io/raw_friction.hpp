@@ -86,6 +86,15 @@ Segmented segment(const RunSamples& run, Motion motion, const RawFrictionOptions
 // the inertia m·a, by the sign convention.
 double friction_N(const RunSamples& run, const Segmented& s, const RawFrictionOptions& o, std::size_t i);
 
+// Where each sample is along the travel and how far and how long the carriage has moved since it
+// last turned: the position (the motion's own, or the velocity's running integral from the
+// run's start); the turning point is the last sample at rest (slower than max(min_speed_m_s,
+// 3 σ_v)) or where the filtered sense flips, the run's first sample before any.
+struct Travel {
+  std::vector<double> position_m, distance_since_reversal_m, time_since_reversal_s;
+};
+Travel travel(const RunSamples& run, Motion motion, const Segmented& s, const RawFrictionOptions& o);
+
 // Counts per fate, into `out` (kept, dropped_*), and the plateaus.
 void tally(const Segmented& s, RunSegmentation& out);
 

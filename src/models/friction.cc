@@ -1,6 +1,10 @@
 #include "lmcal/models/friction.hpp"
 
+#include <fmt/format.h>
+
+#include <algorithm>
 #include <string>
+#include <vector>
 
 #include "lmcal/error.hpp"
 #include "lmcal/io/units.hpp"
@@ -40,6 +44,33 @@ std::size_t friction_constant_index(const std::string& parameter, std::string_vi
   if (const auto j = find_friction_constant(name)) return *j;
   throw InvalidParameter(parameter, "unknown constant '" + std::string(name) +
                                         "'; expected one of k1, k2, mu_st, v_st_m_s, mu_v, beta_per_K, f0");
+}
+
+void with_effect_parts(std::vector<std::string>& names, std::vector<double>* starts) {
+  const auto& infos = FrictionEffectLibrary::infos;
+  const auto given = [&](std::string_view name) { return std::find(names.begin(), names.end(), name) != names.end(); };
+  std::vector<std::string> out;
+  std::vector<double> out_starts;
+  for (std::size_t m = 0; m < names.size(); ++m) {
+    const bool started = starts != nullptr && m < starts->size();
+    out.push_back(names[m]);
+    if (started) out_starts.push_back((*starts)[m]);
+    const auto slot = find_friction_effect(names[m]);
+    if (!slot) continue;
+    if (is_friction_effect_part(infos[*slot])) {
+      if (!given(infos[*slot].part_of))
+        throw InvalidParameter("effect", fmt::format("'{}' is a shape parameter of {}: fit it with {}", names[m],
+                                                     infos[*slot].part_of, infos[*slot].part_of));
+      continue;
+    }
+    for (std::size_t p = *slot + 1; p < kFrictionEffectCount && infos[p].part_of == std::string_view(names[m]); ++p) {
+      if (given(infos[p].name)) continue;  // given: keeps its place and its start
+      out.push_back(infos[p].name);
+      if (started) out_starts.push_back(infos[p].neutral);
+    }
+  }
+  names = std::move(out);
+  if (starts != nullptr) *starts = std::move(out_starts);
 }
 
 std::size_t friction_effect_slot(std::string_view name) {

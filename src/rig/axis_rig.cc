@@ -168,6 +168,8 @@ class Plant {
     const Jet u(v, 0);
     c_.velocity_m_s = abs(u);
     c_.direction = Jet(v < 0 ? -1.0 : 1.0);
+    c_.position_m = Jet(x_);
+    c_.distance_since_reversal_m = Jet(std::abs(x_ - x_turn_));
     return tanh(u / v_s_) * friction_force_with_effects_N(k_, e_, c_);
   }
 
@@ -184,13 +186,16 @@ class Plant {
       u -= du;
       if (std::abs(du) <= 1e-15 + 1e-12 * std::abs(u)) break;
     }
+    // The travel since the last reversal or rest (pre-sliding's state) restarts where the
+    // velocity changes sign or is within the regularisation's reach of rest.
+    if (std::abs(u) < 10 * v_s_ || (u < 0) != (v_ < 0)) x_turn_ = x_;
     v_ = u;
     x_ += dt * v_;
   }
 
   double x() const { return x_; }
   double v() const { return v_; }
-  void place(double x) { x_ = x; }
+  void place(double x) { x_ = x_turn_ = x; }
 
  private:
   const FrictionConstants<double>& k_;
@@ -198,6 +203,7 @@ class Plant {
   FrictionConditions<Jet> c_;
   double M_, v_s_, gravity_N_;
   double x_ = 0, v_ = 0;
+  double x_turn_ = 0;  // where the carriage last reversed or rested
 };
 
 void validate(const AxisRigConfig& a) {
@@ -334,7 +340,7 @@ nlohmann::json reference_json(const FrictionRigConfig& conditions, const AxisRig
 // The plant has the carriage's inertia and weight itself: a friction effect that models either
 // (as a trajectory fit does) would count it twice.
 void require_no_plant_effects(const RigEffects& effects) {
-  for (const char* name : {"moving_mass", "axis_gravity"})
+  for (const char* name : {"moving_mass", "axis_gravity", "moving_mass_error"})
     if (const auto slot = find_friction_effect(name); slot && effects.friction[*slot] != FrictionEffectLibrary::infos[*slot].neutral)
       throw InvalidParameter("--effect", fmt::format("{} is the axis's own (the plant's moving_mass_kg and incline_deg): "
                                                      "give --mass and --incline instead", name));

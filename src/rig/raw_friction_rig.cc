@@ -99,6 +99,7 @@ RawFrictionRigOutput generate_raw_friction_logs(const FrictionRigConfig& config,
       CsvText csv({"time_s", raw.log_velocity ? "velocity_m_s" : "position_mm", "force_N"}, comments);
       std::vector<CruiseSegment> cruises;
       std::size_t phase = 0;
+      double turn_m = phases.front().x0_m;  // where the carriage last rested (every move starts from rest)
       for (std::size_t k = 0; k < samples; ++k) {
         const double t = static_cast<double>(k) * dt_s;
         while (phase + 1 < phases.size() && t >= phases[phase].end_s()) ++phase;
@@ -107,6 +108,10 @@ RawFrictionRigOutput generate_raw_friction_logs(const FrictionRigConfig& config,
         const double sense = v > 0 ? 1.0 : v < 0 ? -1.0 : 0.0;
         c.velocity_m_s = std::abs(v);
         c.direction = sense < 0 ? -1.0 : 1.0;
+        c.acceleration_m_s2 = p.a_m_s2;
+        c.position_m = p.position(t);
+        if (sense == 0) turn_m = c.position_m;
+        c.distance_since_reversal_m = std::abs(c.position_m - turn_m);
         const double friction_N = sense == 0 ? 0.0 : friction_force_with_effects_N(config.constants, effects.friction, c);
         const double drive_N = sense * friction_N + raw.moving_mass_kg * p.a_m_s2;  // towards +x
         const double zero_N = offset_N + raw.drift_N_per_h * t / 3600.0 + load_cell.next(rng.normal());

@@ -181,6 +181,13 @@ struct FrictionLog {
   std::vector<double> viscosity40_mm2_s;
   std::vector<std::int8_t> direction;    // +1 or -1
   std::vector<double> acceleration_m_s2; // signed in x; 0 but for a trajectory's samples
+  // A raw log's travel (0 in a tidy log): the position (the log's own origin, or the velocity's
+  // integral from the run's start), and the travel and time since the carriage last reversed or
+  // rested (NaN time without one in the run) — the covariates of position-periodic and
+  // pre-sliding friction.
+  std::vector<double> position_m;
+  std::vector<double> distance_since_reversal_m;
+  std::vector<double> time_since_reversal_s;
   std::vector<std::uint32_t> line;       // the sample's row in its file (a raw log's: the row kept); 0: not from a file
   std::vector<LoadReport> reports;       // one per file loaded
   std::vector<RunSegmentation> segmentation;  // one per raw run (none for a tidy log)

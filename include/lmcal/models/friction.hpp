@@ -111,10 +111,17 @@ struct FrictionConditions {
   // dV/dt along the travel, m/s² (signed in x): 0 on a plateau; a trajectory's inertia and the
   // moving_mass effect use it (the law ignores it).
   T acceleration_m_s2{};
+  // Where along the travel the carriage is, m (the log's own origin), and how far it has moved
+  // since it last reversed or rested, m: a raw log's (derived from its motion); 0 where a log
+  // gives no motion. Position-periodic and pre-sliding effects use them (the law ignores them).
+  T position_m{};
+  T distance_since_reversal_m{};
 
   template <typename U>
   FrictionConditions<U> cast() const {
-    return {U(load_N), U(preload_um), U(block_length_mm), U(velocity_m_s), U(temperature_C), U(direction), U(acceleration_m_s2)};
+    return {U(load_N),      U(preload_um), U(block_length_mm),   U(velocity_m_s),
+            U(temperature_C), U(direction), U(acceleration_m_s2), U(position_m),
+            U(distance_since_reversal_m)};
   }
 };
 

@@ -20,6 +20,18 @@
 //   on_total: scales the result; `total_N` is the law with every on_law effect applied.
 // Trap: at `value == neutral` the correction must be zero for every condition (the effects
 // test checks it for the whole library), or a fit of another effect would carry it along.
+//
+// Shape parameters. An effect whose form needs more than its value (a ripple's period and
+// phase, a pre-sliding distance) lists them as its parts: `static constexpr std::size_t kParts`
+// library entries registered right after it, each with `info.part_of` naming it and no
+// correction of its own. Its correction_N takes its value and then theirs; the overload with
+// its value alone takes the parts at their `neutral` values (for a part: the value a fit starts
+// from, since with the effect at its neutral value the parts change nothing). A fit of the
+// effect fits its parts with it (with_effect_parts), a rig sets them by name
+// (--effect position_ripple_period_m=0.006), and a diagnosis tries the effect and its parts as
+// one cause, started from the current model's residuals where a start from the parts' neutral
+// values would not converge (src/diagnose/cause_starts.hpp: a ripple's period from a
+// periodogram).
 #pragma once
 
 #include "lmcal/export.hpp"
@@ -42,6 +54,9 @@ struct FrictionEffectInfo {
   // constant or was not given, and says so. (A look-alike that stays possible is a tie instead:
   // seal_drag_block beside seal_drag at one block length.)
   const char* varies = "";
+  // A shape parameter of the named effect (its part): fitted, set and reported with it, never
+  // a cause or an effect of its own.
+  const char* part_of = "";
 };
 
 enum class FrictionEffectStage { on_law, on_total };

@@ -15,8 +15,10 @@
 #include <array>
 #include <cstddef>
 #include <optional>
+#include <string>
 #include <string_view>
 #include <type_traits>
+#include <vector>
 #include <utility>
 
 #include "lmcal/models/friction.hpp"
@@ -25,10 +27,14 @@
 #include "lmcal/models/friction_effects/coulomb_temperature.hpp"
 #include "lmcal/models/friction_effects/direction_asymmetry.hpp"
 #include "lmcal/models/friction_effects/moving_mass.hpp"
+#include "lmcal/models/friction_effects/moving_mass_error.hpp"
+#include "lmcal/models/friction_effects/position_ripple.hpp"
+#include "lmcal/models/friction_effects/presliding.hpp"
 #include "lmcal/models/friction_effects/seal_drag.hpp"
 #include "lmcal/models/friction_effects/seal_drag_block.hpp"
 #include "lmcal/models/friction_effects/signed_zero_offset.hpp"
 #include "lmcal/models/friction_effects/stribeck_exponent.hpp"
+#include "lmcal/models/friction_effects/viscous_direction.hpp"
 #include "lmcal/models/friction_effects/viscous_load.hpp"
 
 namespace LMCAL_API lmcal {
@@ -64,9 +70,47 @@ using FrictionEffectLibrary = FrictionEffectList<
     SealDragBlock,
     SignedZeroOffset,
     MovingMass,
-    AxisGravity>;
+    AxisGravity,
+    ViscousDirection,
+    MovingMassError,
+    PositionRipple,
+    PositionRipplePeriod,
+    PositionRipplePhase,
+    Presliding,
+    PreslidingDistance>;
 
 inline constexpr std::size_t kFrictionEffectCount = FrictionEffectLibrary::size;
+
+// The number of parts (shape parameters) of an effect: library entries right after it.
+template <class Effect>
+constexpr std::size_t friction_effect_parts() {
+  if constexpr (requires { Effect::kParts; }) return Effect::kParts;
+  else return 0;
+}
+constexpr bool is_friction_effect_part(const FrictionEffectInfo& info) { return info.part_of[0] != '\0'; }
+
+namespace detail {
+constexpr bool same_name(const char* a, const char* b) {
+  for (; *a != '\0' && *a == *b; ++a, ++b) {
+  }
+  return *a == *b;
+}
+// Every part follows its effect, and every entry after an effect within its kParts is its part.
+constexpr bool parts_follow_their_effects() {
+  bool ok = true;
+  FrictionEffectLibrary::for_each([&]<class Effect, std::size_t slot>() {
+    for (std::size_t p = 1; p <= friction_effect_parts<Effect>(); ++p)
+      ok = ok && slot + p < kFrictionEffectCount && same_name(FrictionEffectLibrary::infos[slot + p].part_of, Effect::info.name);
+  });
+  std::size_t claimed = 0;  // parts claimed by the effects before
+  FrictionEffectLibrary::for_each([&]<class Effect, std::size_t slot>() {
+    if (is_friction_effect_part(Effect::info)) ok = ok && claimed > 0, --claimed;
+    else claimed = friction_effect_parts<Effect>();
+  });
+  return ok;
+}
+}  // namespace detail
+static_assert(detail::parts_follow_their_effects(), "an effect's parts are registered right after it, naming it");
 
 // The slot of a named effect, or none.
 constexpr std::optional<std::size_t> find_friction_effect(std::string_view name) {
@@ -95,6 +139,11 @@ struct FrictionEffects {
     return values[FrictionEffectLibrary::slot_of<Effect>()];
   }
 };
+
+// `names` with every effect's parts right after it (those not already given), `starts` (a fit's
+// effect_start, in the order of `names`) with the parts' neutral values inserted where it
+// reaches. An effect is fitted with its shape (friction_effect.hpp).
+void with_effect_parts(std::vector<std::string>& names, std::vector<double>* starts = nullptr);
 
 // The law's parameter called `name`: a fittable constant of `k` or an effect of `e`; nullptr for
 // another name.
@@ -131,8 +180,12 @@ auto friction_force_with_effects_N(const FrictionConstants<P>& k, const Friction
   R total(law_N);
   auto add_stage = [&](FrictionEffectStage stage, const auto& reference_N) {
     FrictionEffectLibrary::for_each([&]<class Effect, std::size_t slot>() {
-      if (Effect::stage == stage && !detail::held_neutral(e[slot], Effect::info.neutral))
-        total = total + Effect::correction_N(k, c, b, reference_N, e[slot]);
+      if constexpr (!is_friction_effect_part(Effect::info)) {
+        if (Effect::stage == stage && !detail::held_neutral(e[slot], Effect::info.neutral))
+          total = total + [&]<std::size_t... part>(std::index_sequence<part...>) {
+            return Effect::correction_N(k, c, b, reference_N, e[slot], e[slot + 1 + part]...);
+          }(std::make_index_sequence<friction_effect_parts<Effect>()>{});
+      }
     });
   };
   add_stage(FrictionEffectStage::on_law, law_N);
