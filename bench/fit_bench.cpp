@@ -2,6 +2,10 @@
 // and covariance included, under 0.15 s on one core (numpy/scipy least_squares: ~0.3 s).
 #include <benchmark/benchmark.h>
 
+#include <time.h>
+
+#include <cstdlib>
+
 #include "lmcal/fit/friction_fit.hpp"
 #include "lmcal/diagnose/friction_diagnosis.hpp"
 #include "lmcal/diagnose/thermal_diagnosis.hpp"
@@ -19,6 +23,31 @@ FrictionLog hundred_thousand_samples() {
   return generate_friction_log(rig, {}).log;
 }
 
+// bench/guard's slowdown check (bench/README.md): LMCAL_BENCH_SLOWDOWN_MS=N makes every
+// iteration of BM_FrictionFit100k, and nothing else, N ms slower. A busy wait on this thread's
+// CPU clock, not a sleep: a slower fit costs CPU time, which is what the guard compares (a sleep
+// would show in the wall time only).
+double slowdown_ms() {
+  static const double ms = [] {
+    const char* text = std::getenv("LMCAL_BENCH_SLOWDOWN_MS");
+    return text ? std::atof(text) : 0.0;
+  }();
+  return ms;
+}
+
+double thread_cpu_s() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
+
+void injected_slowdown() {
+  if (slowdown_ms() <= 0) return;
+  const double until = thread_cpu_s() + 1e-3 * slowdown_ms();
+  while (thread_cpu_s() < until) {
+  }
+}
+
 void BM_FrictionFit100k(benchmark::State& state) {
   static const FrictionLog log = hundred_thousand_samples();
   FrictionFitOptions options;
@@ -27,9 +56,11 @@ void BM_FrictionFit100k(benchmark::State& state) {
     const auto result = fit_friction(log, options);
     benchmark::DoNotOptimize(result.fit.parameters.data());
     if (!result.fit.solver.covariance_ok) state.SkipWithError("covariance failed");
+    injected_slowdown();
   }
   state.counters["samples"] = static_cast<double>(log.size());
   state.counters["starts"] = options.fit.starts;
+  if (slowdown_ms() > 0) state.counters["slowdown_ms"] = slowdown_ms();
 }
 
 BENCHMARK(BM_FrictionFit100k)->Unit(benchmark::kMillisecond)->MinTime(2.0);
