@@ -187,6 +187,8 @@ check "check says what a speed-and-force log does not give" grep -q 'note: not g
 check "calibrate quotes the combinations, not the constants" grep -q '^    viscous_N_s_m ' bare_cal.txt
 check "the report lists the combinations and their spread across runs" grep -q '<td>viscous_N_s_m</td>' bare_out/report.html
 check "nor any condition it was not given" bash -c '! grep -E "^ +(k1|mu_st|beta_per_K) " "$0" && ! head -1 "$1" | grep -q load_N' bare_cal.txt bare_out/friction_samples.csv
+check "the report names no constant and no condition it was not given" \
+  bash -c '! grep -qE "<td>(k1|mu_st|v_st_m_s|mu_v)</td>|1000 N|load \(N\)|preload \(um\)" "$0"' bare_out/report.html
 check "the model file says its law holds for one setup" grep -q '^law = "combinations"' bare_out/model.toml
 check "simulate refuses a combination law at other conditions" refused "fitted in combinations" simulate friction --model bare_out/model.toml -o out/f.csv --velocity 0.1
 check "check counts no guide where none was named" grep -q 'samples, [0-9]* runs, no guide named$' bare_check.txt

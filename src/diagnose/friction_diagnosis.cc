@@ -364,9 +364,11 @@ ResidualDiagnostics diagnose_residuals(const FrictionLog& log, const FrictionFit
 std::vector<std::string> design_notes(const FrictionLog& log, const FrictionFitResult& baseline, const LackOfFit& lack) {
   std::vector<std::string> notes;
   std::string between, single;
+  const std::vector<std::string> not_given = log.law.not_logged();  // their columns hold neutral stand-ins
   for (const Covariate& c : covariates_of(log)) {
     const std::set<double> values(c.value.begin(), c.value.end());
     if (std::string(c.name) == "time_s" || std::string(c.name) == "direction") continue;
+    if (std::find(not_given.begin(), not_given.end(), c.name) != not_given.end()) continue;
     if (values.size() == 1) single += fmt::format("{}{} ({:g})", single.empty() ? "" : ", ", c.name, *values.begin());
     else if (c.run_level) between += (between.empty() ? "" : ", ") + std::string(c.name);
   }
@@ -378,6 +380,8 @@ std::vector<std::string> design_notes(const FrictionLog& log, const FrictionFitR
         between, log.run_names.size(), baseline.run_offset_sd_N));
   if (!single.empty())
     notes.push_back(fmt::format("one value only of {}: no effect of these can be seen in these data", single));
+  if (!not_given.empty())
+    notes.push_back(fmt::format("not given: {}: no effect of these can be seen in these data", fmt::join(not_given, ", ")));
   if (!lack.tested) notes.push_back("lack of fit not tested (" + lack.basis + "): repeat a setup in a second run to get it");
   return notes;
 }

@@ -298,10 +298,10 @@ std::vector<LawCombination> law_combinations(const FitResult& fit, const Frictio
     const char* meaning;
   };
   const Row rows[] = {
-      {"coulomb_N", "N", 0, load, 0, "the Coulomb level: (k1 - k2·pc)·P·1e-3 + Lb·f0"},
-      {"stribeck_N", "N", 2, pc * lb / nu, shift, "the Stribeck amplitude at rest: mu_st·pc·Lb/ν(T)"},
-      {"stribeck_speed_m_s", "m/s", 3, 1, 0, "the Stribeck speed: V_St"},
-      {"viscous_N_s_m", "N·s/m", 4, lb * pc * nu, -shift, "the viscous slope: Lb·mu_v·pc·ν(T)"},
+      {detail::kLawCombinationNames[0], "N", 0, load, 0, "the Coulomb level: (k1 - k2·pc)·P·1e-3 + Lb·f0"},
+      {detail::kLawCombinationNames[2], "N", 2, pc * lb / nu, shift, "the Stribeck amplitude at rest: mu_st·pc·Lb/ν(T)"},
+      {detail::kLawCombinationNames[3], "m/s", 3, 1, 0, "the Stribeck speed: V_St"},
+      {detail::kLawCombinationNames[4], "N·s/m", 4, lb * pc * nu, -shift, "the viscous slope: Lb·mu_v·pc·ν(T)"},
   };
   std::vector<LawCombination> out;
   for (const Row& row : rows) {

@@ -80,6 +80,11 @@ void FrictionModel::explain(IdentifiabilityIssue& issue) const {
   std::set<std::string> dominant;
   for (const auto& [name, weight] : issue.combination)
     if (std::abs(weight) >= 0.3) dominant.insert(name);
+  // A combination law's outputs name the combinations, not the paper's constants.
+  const auto shown = [&](std::string_view constant) -> std::string {
+    const auto j = find_friction_constant(constant);
+    return j && data_.log->law.combination() && kLawCombinationNames[*j] ? kLawCombinationNames[*j] : std::string(constant);
+  };
   auto only = [&](std::initializer_list<const char*> names) {
     for (const auto& d : dominant)
       if (std::none_of(names.begin(), names.end(), [&](const char* n) { return d == n; })) return false;
@@ -88,9 +93,8 @@ void FrictionModel::explain(IdentifiabilityIssue& issue) const {
   const Design& d = design_;
   if (dominant.count("beta_per_K") && d.temperatures.size() == 1) {
     issue.why = fmt::format(
-        "all samples are at one temperature ({} C): beta only scales the viscosity, which mu_v and mu_st "
-        "absorb",
-        *d.temperatures.begin());
+        "all samples are at one temperature ({} C): beta only scales the viscosity, which {} and {} absorb",
+        *d.temperatures.begin(), shown("mu_v"), shown("mu_st"));
     issue.measure = "repeat the sweep at a second temperature, at least 10 K away";
   } else if (only({"k1", "k2"}) && d.preloads.size() == 1) {
     issue.why =
@@ -100,9 +104,10 @@ void FrictionModel::explain(IdentifiabilityIssue& issue) const {
     issue.why = d.low_speed == 0
                     ? fmt::format(
                           "no samples below 0.03 m/s (slowest {} m/s): the Stribeck term has decayed and "
-                          "only a combination of mu_st and v_st shows",
-                          d.min_velocity)
-                    : fmt::format("only {} samples below 0.03 m/s: too few to separate mu_st from v_st", d.low_speed);
+                          "only a combination of {} and {} shows",
+                          d.min_velocity, shown("mu_st"), shown("v_st_m_s"))
+                    : fmt::format("only {} samples below 0.03 m/s: too few to separate {} from {}", d.low_speed,
+                                  shown("mu_st"), shown("v_st_m_s"));
     issue.measure = "measure at several speeds between 0.002 and 0.03 m/s";
   } else if ((dominant.count("f0") || dominant.count("k1") || dominant.count("k2")) && d.loads.size() == 1 &&
              d.block_lengths.size() == 1) {
@@ -114,7 +119,7 @@ void FrictionModel::explain(IdentifiabilityIssue& issue) const {
     issue.measure = "measure at a second load";
   } else {
     std::string combo;
-    for (const auto& [name, weight] : issue.combination) combo += fmt::format(" {:+.2f}·{}", weight, name);
+    for (const auto& [name, weight] : issue.combination) combo += fmt::format(" {:+.2f}·{}", weight, shown(name));
     issue.why = "the data determine only the combination" + combo + " (relative to each parameter's size)";
     issue.measure = "widen the range of speed, load, preload and temperature";
   }

@@ -172,6 +172,14 @@ ModelFile calibrated_model_file(const Calibration& c) {
 // of the logs' own speeds, loads, preloads, temperatures and directions.
 void plan_next_friction(Calibration& c) {
   if (!c.calibrated.friction || !c.friction_log) return;
+  // A combination law's log holds neutral stand-ins for what it did not give: a plan over them
+  // would print a load and a preload nobody logged.
+  if (const FrictionLawConditions& law = c.friction_log->law; law.combination()) {
+    c.notes.push_back(fmt::format("plan of the next friction conditions skipped: the law is fitted in combinations (not given: {}); "
+                                  "log them to plan for the paper's constants",
+                                  fmt::join(law.not_logged(), ", ")));
+    return;
+  }
   try {
     // A tie the diagnosis reported among the accepted causes: the conditions that separate it,
     // from a fit with both.

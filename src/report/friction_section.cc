@@ -65,11 +65,17 @@ constexpr Varied kVaried[] = {{"load", "N", &Key::load_N},
                               {"preload", "um", &Key::preload_um},
                               {"temperature", "°C", &Key::temperature_C}};
 
-// The held conditions in words: "1.5 um, 26 °C".
-std::string held_conditions(const Key& ref, const Varied& varied) {
+// Whether the log gave the quantity (a combination law's log holds neutral stand-ins for the rest).
+bool given(const FrictionLawConditions& law, const Varied& v) {
+  return v.member == &Key::load_N ? law.load : v.member == &Key::preload_um ? law.preload : law.temperature;
+}
+
+// The held conditions the log gave, in words: "1.5 um, 26 °C".
+std::string held_conditions(const Key& ref, const Varied& varied, const FrictionLawConditions& law) {
   std::string text;
   for (const Varied& v : kVaried)
-    if (v.member != varied.member) text += fmt::format("{}{} {}", text.empty() ? "" : ", ", num(ref.*v.member), v.unit);
+    if (v.member != varied.member && given(law, v))
+      text += fmt::format("{}{} {}", text.empty() ? "" : ", ", num(ref.*v.member), v.unit);
   return text;
 }
 
@@ -106,14 +112,19 @@ Plot velocity_panel(const Calibration& c, const Varied& varied) {
   }
   std::vector<double> grid;
   for (int j = 0; j <= 60; ++j) grid.push_back(v_max * j / 60.0);
-  const std::string guide = log.guide_names.empty() || log.guide_names[ref.guide].empty() ? "" : log.guide_names[ref.guide] + ", ";
+  const std::string guide = log.guide_names.empty() || log.guide_names[ref.guide].empty() ? "" : log.guide_names[ref.guide];
+  const std::string held = held_conditions(ref, varied, log.law);
+  const std::string setup = guide.empty() || held.empty() ? guide + held : guide + ", " + held;
+  const bool varies = given(log.law, varied);  // else the one panel of a log that gave none of them
   Plot plot{.id = std::string("friction-by-") + varied.name,
-            .title = fmt::format("Friction vs velocity by {} ({}{})", varied.name, guide, held_conditions(ref, varied)),
+            .title = fmt::format("Friction vs velocity{}{}", varies ? fmt::format(" by {}", varied.name) : "",
+                                 setup.empty() ? "" : " (" + setup + ")"),
             .x_label = "velocity (m/s)",
             .y_label = "friction force (N)"};
   std::size_t index = 0;
   for (const auto& [value, by_velocity] : measured) {
-    Series points{.label = fmt::format("{} {}", num(value), varied.unit), .mark = Mark::points, .color = colour(index)};
+    Series points{.label = varies ? fmt::format("{} {}", num(value), varied.unit) : "measured", .mark = Mark::points,
+                  .color = colour(index)};
     for (const auto& [v, sum] : by_velocity) {
       points.x.push_back(v);
       points.y.push_back(sum.first / static_cast<double>(sum.second));
@@ -154,7 +165,9 @@ Plot velocity_panel(const Calibration& c, const Varied& varied) {
 
 std::vector<Plot> friction_velocity_panels(const Calibration& c) {
   std::vector<Plot> panels;
-  for (const Varied& varied : kVaried) panels.push_back(velocity_panel(c, varied));
+  for (const Varied& varied : kVaried)
+    if (given(c.friction_log->law, varied)) panels.push_back(velocity_panel(c, varied));
+  if (panels.empty()) panels.push_back(velocity_panel(c, kVaried[0]));  // speed and force only: one panel
   return panels;
 }
 
@@ -206,6 +219,12 @@ constexpr Covariate kCovariates[] = {{"velocity_m_s", "velocity (m/s)", &Conditi
                                      {"temperature_C", "temperature (°C)", &ConditionResidual::temperature_C},
                                      {"direction", "direction (+1 forward, -1 backward)", &ConditionResidual::direction}};
 
+// Whether the log gave the covariate (a combination law's log holds neutral stand-ins).
+bool given(const FrictionLawConditions& law, const Covariate& cov) {
+  const std::string_view name = cov.name;
+  return name == "load_N" ? law.load : name == "preload_um" ? law.preload : name == "temperature_C" ? law.temperature : true;
+}
+
 void spread_section(Page& page, const FrictionFitResult& f) {
   if (f.spread.empty()) return;
   page.heading(3, "Spread across runs of the published law");
@@ -251,7 +270,7 @@ void diagnosis_section(Page& page, const Calibration& c) {
   std::vector<Plot> plots;
   for (const auto& name : shown)
     for (const auto& cov : kCovariates)
-      if (name == cov.name)
+      if (name == cov.name && given(c.friction_log->law, cov))
         plots.push_back(condition_residuals(plot_id(std::string("friction-diagnosis-") + cov.name),
                                             std::string("Residuals before and after, against ") + cov.label, cov.label,
                                             {{"the law", &d.baseline_fit.conditions}, {"law + causes", &d.final_fit.conditions}},
@@ -295,15 +314,23 @@ void friction_section(Page& page, const Calibration& c) {
                              num(100 * f.max_relative_error, 3)));
   page.figures(friction_velocity_panels(c));
 
-  page.heading(3, "Constants of the published law");
-  parameter_tables(page, f.fit, [](const ParameterEstimate&) { return true; });
+  if (f.law.combination()) {
+    page.heading(3, "The law's combinations");
+    page.paragraph(fmt::format("The log gives no {}: the paper's constants cannot be separated, and the law is fitted in the "
+                               "combinations the data determine, at {} °C.",
+                               fmt::join(f.law.not_logged(), ", "), num(f.law_temperature_C)));
+  } else {
+    page.heading(3, "Constants of the published law");
+  }
+  parameter_tables(page, friction_fit_as_shown(f), [](const ParameterEstimate& p) { return p.listed; });
 
   page.heading(3, "Residuals against the covariates");
   page.paragraph("Mean residual (measured - fitted) of each condition; structure here is what the law misses.");
   std::vector<Plot> plots;
   for (const auto& cov : kCovariates)
-    plots.push_back(condition_residuals(plot_id(std::string("friction-residual-") + cov.name), std::string("Residuals vs ") + cov.label,
-                                        cov.label, {{"", &f.conditions}}, cov.member));
+    if (given(log.law, cov))
+      plots.push_back(condition_residuals(plot_id(std::string("friction-residual-") + cov.name), std::string("Residuals vs ") + cov.label,
+                                          cov.label, {{"", &f.conditions}}, cov.member));
   Plot runs{.id = "friction-residual-run", .title = "Mean residual of each run", .x_label = "run", .y_label = "mean residual (N)"};
   runs.references.push_back({});
   Series s{.mark = Mark::points};

@@ -223,7 +223,7 @@ void how_sure_section(Page& page, const Calibration& c) {
   if (m.friction) {
     page.heading(3, "Friction law: how sure");
     const FitResult& searched = m.friction->fit.solver.start_costs.size() < 2 && c.friction ? c.friction->fit : m.friction->fit;
-    fit_panel(page, m.friction->fit, "calibrated-friction-", searched);
+    fit_panel(page, friction_fit_as_shown(*m.friction), "calibrated-friction-", searched);
     friction_run_figures(page, *m.friction, "calibrated-friction-runs-");
     const FrictionLog& log = *c.friction_log;
     std::vector<std::vector<double>> runs(log.run_names.size());
