@@ -222,8 +222,9 @@ void how_sure_section(Page& page, const Calibration& c) {
                  "error side by side; the quoted one is the method that fits the data's structure.");
   if (m.friction) {
     page.heading(3, "Friction law: how sure");
-    const FitResult& searched = m.friction->fit.solver.start_costs.size() < 2 && c.friction ? c.friction->fit : m.friction->fit;
-    fit_panel(page, friction_fit_as_shown(*m.friction), "calibrated-friction-", searched);
+    const FitResult shown = friction_fit_as_shown(*m.friction);
+    const bool started_from_the_law = m.friction->fit.solver.start_costs.size() < 2 && c.friction;
+    fit_panel(page, shown, "calibrated-friction-", started_from_the_law ? c.friction->fit : shown);
     friction_run_figures(page, *m.friction, "calibrated-friction-runs-");
     const FrictionLog& log = *c.friction_log;
     std::vector<std::vector<double>> runs(log.run_names.size());
