@@ -317,8 +317,10 @@ void friction_section(Page& page, const Calibration& c) {
   if (f.law.combination()) {
     page.heading(3, "The law's combinations");
     page.paragraph(fmt::format("The log gives no {}: the paper's constants cannot be separated, and the law is fitted in the "
-                               "combinations the data determine, at {} °C.",
-                               fmt::join(f.law.not_logged(), ", "), num(f.law_temperature_C)));
+                               "combinations the data determine, {}.",
+                               fmt::join(f.law.not_logged(), ", "),
+                               f.law.temperature ? fmt::format("at the mean logged temperature, {} °C", num(f.law_temperature_C))
+                                                 : std::string("with the oil's viscosity at 40 °C (ν40: no temperature logged)")));
   } else {
     page.heading(3, "Constants of the published law");
   }
