@@ -9,7 +9,9 @@
 
 #include <fmt/format.h>
 
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <numbers>
 #include <optional>
 #include <random>
@@ -21,6 +23,7 @@
 #include "lmcal/io/friction_log.hpp"
 #include "lmcal/models/friction.hpp"
 #include "lmcal/rig/axis_rig.hpp"
+#include "fit/parallel_slices.hpp"
 #include "lmcal/rig/virtual_rig.hpp"
 #include "support/coverage_tally.hpp"
 #include "support/temp_folder.hpp"
@@ -414,6 +417,43 @@ TEST_F(TrajectoryFriction, APreloadByClassOrForceAndOneSetupPerCombinationLaw) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("give the same conditions for every file of a log"), std::string::npos) << e.what();
   }
+}
+
+// A trajectory's rows are evaluated on several threads (batched_autodiff.hpp): the fit with its
+// defaults (starts, random run offsets, per-run fits, covariance, held-out runs) gives the same
+// bits on one thread as on two.
+TEST_F(TrajectoryFriction, AFitGivesTheSameBitsOnOneThreadOrTwo) {
+  ClosedLoopAxis rig;
+  rig.setup.seed = 5;
+  const AxisRigOutput made = generate_axis_logs(rig.setup, rig.axis, {});
+  for (const auto& [file, text] : made.run_files) write(file, text);
+  const FrictionLog log = load_friction_dataset(write("friction.toml", made.manifest_toml)).log;
+  const auto fit_on = [&](int threads) {
+    const int before = detail::limit_slice_threads(threads);
+    EXPECT_EQ(detail::slice_threads(log.size(), 4096), std::min<std::size_t>(threads, log.size() / 4096))
+        << "the rows are split over the threads asked for";
+    FrictionFitResult result = fit_friction(log, {});
+    detail::limit_slice_threads(before);
+    return result;
+  };
+  ASSERT_GT(log.size(), 2u * 4096) << "enough rows for two threads";
+  const FrictionFitResult one = fit_on(1), two = fit_on(2);
+  const auto bits = [](const std::vector<double>& v) {  // NaN (a held parameter's SE) equals NaN
+    std::vector<std::uint64_t> out;
+    for (double x : v) out.push_back(std::bit_cast<std::uint64_t>(x));
+    return out;
+  };
+  ASSERT_EQ(one.fit.parameters.size(), two.fit.parameters.size());
+  for (std::size_t j = 0; j < one.fit.parameters.size(); ++j) {
+    const ParameterEstimate &a = one.fit.parameters[j], &b = two.fit.parameters[j];
+    SCOPED_TRACE(a.name);
+    EXPECT_EQ(bits({a.value, a.se, a.ci_low, a.ci_high}), bits({b.value, b.se, b.ci_low, b.ci_high}));
+  }
+  EXPECT_EQ(one.fit.solver.iterations, two.fit.solver.iterations);
+  EXPECT_EQ(bits({one.rmse_N, one.cv_rmse_N, one.run_offset_ratio}), bits({two.rmse_N, two.cv_rmse_N, two.run_offset_ratio}));
+  EXPECT_EQ(bits(one.predicted_N), bits(two.predicted_N));
+  ASSERT_EQ(one.spread.size(), two.spread.size());
+  for (std::size_t j = 0; j < one.spread.size(); ++j) EXPECT_EQ(bits(one.spread[j].per_run), bits(two.spread[j].per_run));
 }
 
 }  // namespace

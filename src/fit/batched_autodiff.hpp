@@ -26,6 +26,7 @@
 
 #include "lmcal/error.hpp"
 #include "lmcal/fit/fit_result.hpp"
+#include "parallel_slices.hpp"
 #include "run_offsets.hpp"
 
 namespace lmcal::detail {
@@ -218,11 +219,21 @@ class BatchedAutoDiffCostFunction final : public ceres::CostFunction, public Nor
     const double* theta = parameters[0];
     bool ok = true;
     if (jacobians == nullptr || jacobians[0] == nullptr) {
-      auto prepared = functor_.prepare(theta);
-      for (std::size_t i = 0; i < rows_ && ok; ++i) {
-        residuals[i] = robust_residual(functor_(prepared, i), loss_);
-        ok = std::isfinite(residuals[i]);
-      }
+      const auto prepared = functor_.prepare(theta);
+      const int threads = slice_threads(rows_, kRowsPerThread);
+      std::vector<decltype(functor_.prepare(theta))> own(static_cast<std::size_t>(threads), prepared);
+      std::vector<char> finite(static_cast<std::size_t>(threads), 1);
+      for_each_slice(rows_, threads, [&](int slice, std::size_t begin, std::size_t end) {
+        auto& mine = own[static_cast<std::size_t>(slice)];
+        for (std::size_t i = begin; i < end; ++i) {
+          residuals[i] = robust_residual(functor_(mine, i), loss_);
+          if (!std::isfinite(residuals[i])) {
+            finite[static_cast<std::size_t>(slice)] = 0;
+            return;
+          }
+        }
+      });
+      ok = std::find(finite.begin(), finite.end(), 0) == finite.end();
     } else {
       const auto p = static_cast<std::size_t>(parameter_block_sizes()[0]);
       std::vector<double> gradient(p);
@@ -246,33 +257,16 @@ class BatchedAutoDiffCostFunction final : public ceres::CostFunction, public Nor
     return false;
   }
 
-  // Each row's gradient into `gradient` (p values), then visit(row, residual); false when
-  // visit does.
-  template <typename Visit>
-  bool analytic_rows(const double* theta, double* gradient, const Visit& visit) const {
-    if constexpr (requires(const RowFunctor& f, decltype(f.prepare(theta)) prepared, double* g) {
-                    f.gradient(prepared, std::size_t{}, g);
-                  }) {
-      const auto p = static_cast<std::size_t>(parameter_block_sizes()[0]);
-      auto prepared = functor_.prepare(theta);
-      for (std::size_t i = 0; i < rows_; ++i) {
-        double r = functor_.gradient(prepared, i, gradient);
-        if (loss_.kind != RobustLoss::none) {  // r̃(r): the chain rule through a one-slot Jet
-          const ceres::Jet<double, 1> w = robust_residual(ceres::Jet<double, 1>(r, 0), loss_);
-          r = w.a;
-          for (std::size_t j = 0; j < p; ++j) gradient[j] *= w.v[0];
-        }
-        if (!visit(i, r)) return false;
-      }
-      return true;
-    } else {
-      (void)theta, (void)gradient, (void)visit;
-      return false;
-    }
-  }
+  // Rows are evaluated a batch at a time, each batch in slices on the threads
+  // (parallel_slices.hpp) into a buffer, then visited in row order. A row's residual and
+  // gradient do not depend on the thread that computed it, so neither does anything summed from
+  // them: the same bits with 1 thread or many.
+  static constexpr std::size_t kBatch = 16384;
+  static constexpr std::size_t kRowsPerThread = 4096;
 
-  // Each row's gradient into `gradient`, then visit(row, residual), by the closed form where
-  // the functor has one, else by the smallest Jet that holds the parameters (8, 12 or 16).
+  // Each row's gradient into `gradient` (p values), then visit(row, residual); false when visit
+  // is. By the closed form where the functor has one, else by the smallest Jet that holds the
+  // parameters (8, 12 or 16).
   template <typename Visit>
   bool rows_with_gradient(const double* theta, double* gradient, const Visit& visit) const {
     const int p = parameter_block_sizes()[0];
@@ -282,21 +276,78 @@ class BatchedAutoDiffCostFunction final : public ceres::CostFunction, public Nor
     return jet_rows<16>(theta, gradient, visit);
   }
 
-  // Flattened: GCC otherwise leaves Eigen's Jet assignments out of line in the row loop (a
-  // call per Jet operation); inlined, the 100 k-sample diagnosis's Jet<16> fits run 1.5x faster.
+  // slice(prepared, begin, end, gradients, residuals) fills rows [begin, end) with each thread's
+  // copy of `prepared` (a row may change it: the sample's viscosity).
+  template <typename Prepared, typename Slice, typename Visit>
+  bool in_batches(const Prepared& prepared, const Slice& slice, double* gradient, const Visit& visit) const {
+    const auto p = static_cast<std::size_t>(parameter_block_sizes()[0]);
+    const std::size_t batch = std::min(rows_, kBatch);
+    const int threads = slice_threads(batch, kRowsPerThread);
+    struct alignas(128) Own {  // a cache line of its own: the threads write theirs at every row
+      Prepared prepared;
+    };
+    std::vector<Own> own(static_cast<std::size_t>(threads), Own{prepared});
+    std::vector<double> g(batch * p), r(batch);
+    for (std::size_t first = 0; first < rows_; first += batch) {
+      const std::size_t n = std::min(batch, rows_ - first);
+      for_each_slice(n, threads, [&](int s, std::size_t begin, std::size_t end) {
+        slice(own[static_cast<std::size_t>(s)].prepared, first + begin, first + end, g.data() + begin * p, r.data() + begin);
+      });
+      for (std::size_t k = 0; k < n; ++k) {
+        std::copy_n(g.data() + k * p, p, gradient);
+        if (!visit(first + k, r[k])) return false;
+      }
+    }
+    return true;
+  }
+
+  template <typename Visit>
+  bool analytic_rows(const double* theta, double* gradient, const Visit& visit) const {
+    if constexpr (requires(const RowFunctor& f, decltype(f.prepare(theta)) prepared, double* g) {
+                    f.gradient(prepared, std::size_t{}, g);
+                  }) {
+      const auto p = static_cast<std::size_t>(parameter_block_sizes()[0]);
+      auto slice = [&](auto& prepared, std::size_t begin, std::size_t end, double* g, double* r) {
+        for (std::size_t i = begin; i < end; ++i, g += p) {
+          double value = functor_.gradient(prepared, i, g);
+          if (loss_.kind != RobustLoss::none) {  // r̃(r): the chain rule through a one-slot Jet
+            const ceres::Jet<double, 1> w = robust_residual(ceres::Jet<double, 1>(value, 0), loss_);
+            value = w.a;
+            for (std::size_t j = 0; j < p; ++j) g[j] *= w.v[0];
+          }
+          *r++ = value;
+        }
+      };
+      return in_batches(functor_.prepare(theta), slice, gradient, visit);
+    } else {
+      (void)theta, (void)gradient, (void)visit;
+      return false;
+    }
+  }
+
   template <int N>
-  [[gnu::flatten]] bool jet_rows(const double* theta, double* gradient, const auto& visit) const {
+  bool jet_rows(const double* theta, double* gradient, const auto& visit) const {
     using Jet = ceres::Jet<double, N>;
     const int p = parameter_block_sizes()[0];
     std::array<Jet, N> t;
     for (int j = 0; j < p; ++j) t[j] = Jet(theta[j], j);
-    auto prepared = functor_.prepare(t.data());
-    for (std::size_t i = 0; i < rows_; ++i) {
-      const Jet r = robust_residual(functor_(prepared, i), loss_);
-      for (int j = 0; j < p; ++j) gradient[j] = r.v[j];
-      if (!visit(i, r.a)) return false;
+    auto slice = [this](auto& prepared, std::size_t begin, std::size_t end, double* g, double* r) {
+      jet_slice<N>(prepared, begin, end, g, r);
+    };
+    return in_batches(functor_.prepare(t.data()), slice, gradient, visit);
+  }
+
+  // Flattened: GCC otherwise leaves Eigen's Jet assignments out of line in the row loop (a
+  // call per Jet operation); inlined, the 100 k-sample diagnosis's Jet<16> fits run 1.5x faster.
+  template <int N, typename Prepared>
+  [[gnu::flatten]] void jet_slice(Prepared& prepared, std::size_t begin, std::size_t end, double* g, double* r) const {
+    using Jet = ceres::Jet<double, N>;
+    const auto p = static_cast<std::size_t>(parameter_block_sizes()[0]);
+    for (std::size_t i = begin; i < end; ++i, g += p) {
+      const Jet value = robust_residual(functor_(prepared, i), loss_);
+      for (std::size_t j = 0; j < p; ++j) g[j] = value.v[j];
+      *r++ = value.a;
     }
-    return true;
   }
 
   // λ from the raw residuals' per-group sums (column p of the sums), and c_g from it.
