@@ -19,6 +19,7 @@
 #include "fit_json.hpp"
 #include "friction_model.hpp"
 #include "least_squares.hpp"
+#include "parallel_slices.hpp"
 #include "lmcal/error.hpp"
 #include "lmcal/io/csv_writer.hpp"
 
@@ -453,6 +454,27 @@ FrictionLog with_block_mean_temperature(const FrictionLog& logged) {
   return out;
 }
 
+namespace {
+
+// A run alone at one load and one block length: k1·P/1000 and f0·Lb are both constant offsets
+// there. The fit would find that after a first polish and refit without k1; k1 is held at its
+// start (the pooled value) from the outset instead, and f0 carries the run's level.
+std::vector<detail::ParameterSpec> one_load_holds_k1(std::vector<detail::ParameterSpec> specs, const FrictionLog& log,
+                                                     const std::vector<std::size_t>& samples) {
+  const auto named = [&](std::string_view name) {
+    return std::find_if(specs.begin(), specs.end(), [&](const detail::ParameterSpec& s) { return s.name == name; });
+  };
+  const auto k1 = named("k1"), f0 = named("f0");
+  if (k1 == specs.end() || f0 == specs.end() || !k1->free || !f0->free) return specs;
+  for (std::size_t i : samples)
+    if (log.load_N[i] != log.load_N[samples.front()] || log.block_length_mm[i] != log.block_length_mm[samples.front()])
+      return specs;
+  k1->free = false;
+  return specs;
+}
+
+}  // namespace
+
 FrictionFitResult fit_friction(const FrictionLog& logged, const FrictionFitOptions& given) {
   if (logged.size() == 0) throw InvalidParameter("log", "the friction log has no samples");
   // A trajectory's drive force carries its inertia (and an incline's weight): fitted with the law.
@@ -703,7 +725,8 @@ FrictionFitResult fit_friction(const FrictionLog& logged, const FrictionFitOptio
     run_options.profile = ProfileMode::none;
     std::vector<std::vector<double>> values(specs.size(), std::vector<double>(log.run_names.size(), kNaN));
     std::vector<std::vector<double>> half_widths = values, ses = values;
-    for (std::uint32_t r = 0; r < log.run_names.size(); ++r) {
+    // The runs' fits are independent: each on a free thread (its rows then on that thread alone).
+    detail::for_each_index(log.run_names.size(), [&](std::size_t r) {
       FrictionData run_data{&log, {}, {}, options.start.T_ref_C, data.run_shrink};
       run_data.terms = &options.terms;
       run_data.series = &series;
@@ -712,16 +735,17 @@ FrictionFitResult fit_friction(const FrictionLog& logged, const FrictionFitOptio
           run_data.samples.push_back(i);
           run_data.inv_sigma.push_back(1.0 / out.sigma_N[i]);
         }
-      if (run_data.samples.size() <= specs.size()) continue;
-      const FitResult run_fit = detail::solve_least_squares(FrictionModel(run_data, slots), run_specs, run_options);
-      if (!run_fit.solver.usable) continue;
+      if (run_data.samples.size() <= specs.size()) return;
+      const FitResult run_fit =
+          detail::solve_least_squares(FrictionModel(run_data, slots), one_load_holds_k1(run_specs, log, run_data.samples), run_options);
+      if (!run_fit.solver.usable) return;
       for (std::size_t j = 0; j < specs.size(); ++j)
-        if (run_specs[j].free && !run_fit.parameters[j].held_unidentifiable) {
+        if (run_fit.parameters[j].free && !run_fit.parameters[j].held_unidentifiable) {
           values[j][r] = run_fit.parameters[j].value;
           half_widths[j][r] = 0.5 * (run_fit.parameters[j].ci_high - run_fit.parameters[j].ci_low);
           ses[j][r] = run_fit.parameters[j].se;
         }
-    }
+    });
     const double runs = static_cast<double>(log.run_names.size());
     for (std::size_t j = 0; j < specs.size(); ++j) {
       if (!run_specs[j].free) continue;

@@ -50,4 +50,19 @@ void for_each_slice(std::size_t items, int threads, const std::function<void(int
     if (f) std::rethrow_exception(f);
 }
 
+void for_each_index(std::size_t items, const std::function<void(std::size_t)>& body) {
+  std::vector<std::exception_ptr> failure(items);
+  const int threads = slice_threads(items, 1);
+#pragma omp parallel for schedule(dynamic) num_threads(threads) if (threads > 1)
+  for (std::size_t i = 0; i < items; ++i) {
+    try {
+      body(i);
+    } catch (...) {
+      failure[i] = std::current_exception();
+    }
+  }
+  for (const std::exception_ptr& f : failure)
+    if (f) std::rethrow_exception(f);
+}
+
 }  // namespace lmcal::detail

@@ -22,4 +22,9 @@ int limit_slice_threads(int threads);
 void for_each_slice(std::size_t items, int threads,
                     const std::function<void(int slice, std::size_t begin, std::size_t end)>& body);
 
+// body(index) for every index of [0, items), each on a free thread (heavy items of unequal
+// cost: a run's fit). The exception of the lowest index that threw is rethrown once all have
+// finished.
+void for_each_index(std::size_t items, const std::function<void(std::size_t index)>& body);
+
 }  // namespace lmcal::detail
