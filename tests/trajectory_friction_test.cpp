@@ -23,7 +23,7 @@
 #include "lmcal/io/friction_log.hpp"
 #include "lmcal/models/friction.hpp"
 #include "lmcal/rig/axis_rig.hpp"
-#include "fit/parallel_slices.hpp"
+#include "parallel_slices.hpp"
 #include "lmcal/rig/virtual_rig.hpp"
 #include "support/coverage_tally.hpp"
 #include "support/temp_folder.hpp"

@@ -8,6 +8,7 @@
 
 #include "lmcal/error.hpp"
 #include "lmcal/io/limits.hpp"
+#include "parallel_slices.hpp"
 
 namespace lmcal {
 
@@ -74,7 +75,10 @@ template <typename F>
 std::vector<double> over_windows(std::size_t n, std::size_t window, F f) {
   std::vector<double> out(n);
   const std::size_t half = window / 2;
-  for (std::size_t i = 0; i < n; ++i) out[i] = f(i, i >= half ? i - half : 0, std::min(n, i + half + 1));
+  // Each sample's window on its own: slices of the samples on the threads, the same bits.
+  detail::for_each_slice(n, detail::slice_threads(n, 16384), [&](int, std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) out[i] = f(i, i >= half ? i - half : 0, std::min(n, i + half + 1));
+  });
   return out;
 }
 
