@@ -94,10 +94,10 @@ TEST(FrictionCausesPlateaus, ADirectionDependentViscousSlopeIsNamedAlone) {
 }
 
 // A mass taken off 2 kg short, on a load-cell log whose speed wobbles (a = ±0.4 m/s² at every
-// speed). No reader fills such a log yet (a tidy log has no acceleration column; a plateau
-// reader keeps |a| < 0.02 m/s²): the rig's log gets the accelerations and the force they carry
-// through the library's own correction here.
-TEST(FrictionCausesPlateaus, AMovingMassErrorIsNamedAloneWhereTheAccelerationVaries) {
+// speed): the rig's log gets the accelerations and the force they carry through the library's
+// own correction, and reaches the diagnosis as a user's would, a tidy CSV with an
+// acceleration column.
+TEST_F(FrictionCauses, AMovingMassErrorIsNamedAloneWhereTheAccelerationVaries) {
   constexpr double error_kg = 2;
   for (std::uint64_t seed : {1, 2, 3}) {
     SCOPED_TRACE(testing::Message() << "seed " << seed);
@@ -110,7 +110,8 @@ TEST(FrictionCausesPlateaus, AMovingMassErrorIsNamedAloneWhereTheAccelerationVar
       const FrictionConditions<double> c = log.conditions(i);
       log.friction_N[i] += friction_force_with_effects_N(k, e, c) - friction_force_N(k, c);
     }
-    expect_named_alone(diagnose_friction(log, {}), "moving_mass_error", error_kg);
+    const FrictionLog loaded = load_friction_log(write("wobbling.csv", friction_log_csv(log, {})));
+    expect_named_alone(diagnose_friction(loaded, {}), "moving_mass_error", error_kg);
   }
 }
 

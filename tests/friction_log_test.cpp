@@ -139,6 +139,36 @@ TEST_F(FrictionLogTest, WrittenLogLoadsBackBitForBit) {
   EXPECT_EQ(friction_log_csv(back, {"written by friction_log_test", "second line"}), text);
 }
 
+// A tidy log may give the carriage's acceleration where its friction was taken (a moving
+// mass's error shows against it): any unit of acceleration, written back in m/s² when a sample
+// has one; a raw log's comes from its motion, and its column is ignored with the reason.
+TEST_F(FrictionLogTest, ATidyLogsAccelerationLoadsInItsUnitAndWritesBack) {
+  const FrictionLog log = load_friction_log(write("accelerating.csv",
+                                                  "run,velocity_m_s,load_N,preload_um,block_length_mm,temperature_C,"
+                                                  "friction_N,acceleration_mm_s2\n"
+                                                  "r1,0.1,1000,2.5,120,25,30.5,-400\n"
+                                                  "r1,0.1,1000,2.5,120,25,30.1,250\n"));
+  EXPECT_DOUBLE_EQ(log.acceleration_m_s2[0], -0.4);
+  EXPECT_DOUBLE_EQ(log.conditions(1).acceleration_m_s2, 0.25);
+  const std::string text = friction_log_csv(log, {});
+  EXPECT_NE(text.find(",acceleration_m_s2\n"), std::string::npos) << text;
+  expect_same_bits(load_friction_log(write("back.csv", text)).acceleration_m_s2, log.acceleration_m_s2, "acceleration");
+  EXPECT_EQ(friction_log_csv(load_friction_log(write("none.csv", friction_log_csv(awkward_log(), {}))), {})
+                .find("acceleration"),
+            std::string::npos)
+      << "no column where no sample accelerates";
+  RawFrictionOptions raw;
+  raw.segmentation = RawSegmentation::trajectory;
+  std::string rows = "time_s,position_m,force_N,acceleration_m_s2\n";
+  for (int i = 0; i < 4000; ++i) {  // 0.05 m strokes at 0.5 Hz, friction 20 N against the motion
+    const double t = 0.001 * i, w = 3.14159265358979;
+    rows += fmt::format("{},{},{},0\n", t, 0.05 * std::sin(w * t), std::cos(w * t) > 0 ? 20.0 : -20.0);
+  }
+  const auto report = load_friction_log(write("raw.csv", rows), raw).reports.at(0);
+  ASSERT_EQ(report.ignored_columns.size(), 1u);
+  EXPECT_NE(report.ignored_columns[0].find("comes from its motion"), std::string::npos);
+}
+
 // Names a spreadsheet would run as formulas (=, +, -, @) are written with a leading apostrophe
 // (issue 23 #10), and read back as they were; so are names that start with an apostrophe.
 TEST_F(FrictionLogTest, FormulaLikeNamesAreNeutralisedInTheFileAndReadBackIntact) {

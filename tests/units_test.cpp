@@ -23,7 +23,8 @@ TEST(Units, InternalUnitIsListedFirstAndConvertsToItself) {
                                                        {Quantity::force, "N"},       {Quantity::preload, "um"},
                                                        {Quantity::length_mm, "mm"},  {Quantity::distance_m, "m"},
                                                        {Quantity::temperature, "C"}, {Quantity::viscosity, "mm2_s"},
-                                                       {Quantity::angular_velocity, "rad_s"}, {Quantity::torque, "Nm"}};
+                                                       {Quantity::angular_velocity, "rad_s"}, {Quantity::torque, "Nm"},
+                                                       {Quantity::acceleration, "m_s2"}};
   for (const auto& [quantity, unit] : internal) {
     EXPECT_EQ(unit_names(quantity).front(), unit);
     const Conversion c = unit_conversion(quantity, unit).value();
@@ -37,6 +38,12 @@ TEST(Units, Time) {
   EXPECT_EQ(to_internal(Quantity::time, "h", 6), 21600.0);
   EXPECT_DOUBLE_EQ(to_internal(Quantity::time, "ms", 500), 0.5);
   EXPECT_EQ(unit_names(Quantity::time), (std::vector<std::string>{"s", "ms", "min", "h"}));
+}
+
+TEST(Units, Acceleration) {
+  EXPECT_EQ(to_internal(Quantity::acceleration, "g", 1), 9.80665);  // standard gravity, exact
+  EXPECT_DOUBLE_EQ(to_internal(Quantity::acceleration, "mm_s2", 250), 0.25);
+  EXPECT_EQ(unit_names(Quantity::acceleration), (std::vector<std::string>{"m_s2", "mm_s2", "g"}));
 }
 
 TEST(Units, Velocity) {

@@ -43,11 +43,12 @@ enum Spec : std::size_t {
   kForce,
   kPosition,
   kAngularVelocity,  // a motor's speed: becomes kVelocity through the drive
-  kTorque            // a motor's torque: becomes kForce through the drive
+  kTorque,           // a motor's torque: becomes kForce through the drive
+  kAcceleration      // a tidy log's: the carriage's, where its friction was taken
 };
 // Required columns are checked by the loader: a manifest may give them instead, and a raw log
 // has force where a tidy one has friction.
-constexpr std::array<csv::ColumnSpec, 15> kSpecs{{
+constexpr std::array<csv::ColumnSpec, 16> kSpecs{{
     {.name = "run", .text = true},
     {.name = "guide", .text = true},
     {.name = "time", .quantity = Quantity::time},
@@ -69,6 +70,7 @@ constexpr std::array<csv::ColumnSpec, 15> kSpecs{{
      .rule = Rule::non_negative,
      .hint = " (a speed; the direction column gives the sense)"},
     {.name = "torque", .quantity = Quantity::torque},
+    {.name = "acceleration", .quantity = Quantity::acceleration},
 }};
 
 std::string header_of(Spec spec) {
@@ -293,6 +295,8 @@ class FileLoader {
       if (!column(kVelocity)) fail_header(csv::missing_column(kSpecs[kVelocity]));
       if (const csv::Column* p = column(kPosition)) report_.ignored_columns.push_back(p->header);
     }
+    if (const csv::Column* a = column(kAcceleration); a && raw)
+      report_.ignored_columns.push_back(a->header + " (a raw log's acceleration comes from its motion)");
 
     // The run: a column, or the manifest's name for the file; not both.
     if (column(kRun) && !file_.run.empty()) {
@@ -514,6 +518,7 @@ class FileLoader {
     FrictionConditions<double> sample = c;
     sample.velocity_m_s = v;
     sample.direction = dir;
+    if (const csv::Column* a = column(kAcceleration)) sample.acceleration_m_s2 = reader_.number(*a, false);
     log_.append(run_index, guide_index, t, sample, f, nu40, static_cast<std::uint32_t>(reader_.line()));
     if (dir < 0) {
       ++backward_rows_;
@@ -837,6 +842,9 @@ std::string friction_log_csv(const FrictionLog& log, const std::vector<std::stri
       std::any_of(log.guide_names.begin(), log.guide_names.end(), [](const std::string& g) { return !g.empty(); });
   const bool with_time =
       log.size() != 0 && std::none_of(log.time_s.begin(), log.time_s.end(), [](double t) { return std::isnan(t); });
+  // The acceleration when a sample has one (a moving mass's error shows against it).
+  const bool with_acceleration =
+      std::any_of(log.acceleration_m_s2.begin(), log.acceleration_m_s2.end(), [](double a) { return a != 0; });
 
   std::vector<std::string> header{header_of(kRun)};
   if (with_guide) header.push_back(header_of(kGuide));
@@ -844,6 +852,7 @@ std::string friction_log_csv(const FrictionLog& log, const std::vector<std::stri
   for (Spec spec : {kVelocity, kLoad, kPreload, kBlockLength, kTemperature, kFriction, kViscosity40, kDirection}) {
     header.push_back(header_of(spec));
   }
+  if (with_acceleration) header.push_back(header_of(kAcceleration));
 
   CsvText csv(header, comments);
   for (std::size_t i = 0; i < log.size(); ++i) {
@@ -857,8 +866,9 @@ std::string friction_log_csv(const FrictionLog& log, const std::vector<std::stri
         .cell(log.temperature_C[i])
         .cell(log.friction_N[i])
         .cell(log.viscosity40_mm2_s[i])
-        .cell(static_cast<double>(log.direction[i]))
-        .end_row();
+        .cell(static_cast<double>(log.direction[i]));
+    if (with_acceleration) csv.cell(log.acceleration_m_s2[i]);
+    csv.end_row();
   }
   return csv.str();
 }

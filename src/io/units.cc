@@ -32,7 +32,9 @@ constexpr std::array<UnitDef, 3> kViscosity{{{"mm2_s", {1, 0}}, {"cSt", {1, 0}},
 constexpr double kPi = 3.14159265358979323846;
 constexpr std::array<UnitDef, 2> kAngularVelocity{{{"rad_s", {1, 0}}, {"rpm", {2 * kPi / 60, 0}}}};
 constexpr std::array<UnitDef, 2> kTorque{{{"Nm", {1, 0}}, {"percent", {0.01, 0}}}};
-constexpr std::size_t kQuantities = 10;
+// 1 g = 9.80665 m/s² (standard gravity, CGPM 1901).
+constexpr std::array<UnitDef, 3> kAcceleration{{{"m_s2", {1, 0}}, {"mm_s2", {1e-3, 0}}, {"g", {9.80665, 0}}}};
+constexpr std::size_t kQuantities = 11;
 
 std::span<const UnitDef> units_of(Quantity quantity) {
   switch (quantity) {
@@ -46,6 +48,7 @@ std::span<const UnitDef> units_of(Quantity quantity) {
     case Quantity::viscosity: return kViscosity;
     case Quantity::angular_velocity: return kAngularVelocity;
     case Quantity::torque: return kTorque;
+    case Quantity::acceleration: return kAcceleration;
   }
   return {};
 }
@@ -64,6 +67,7 @@ PhysicalRange physical_range(Quantity quantity) {
     case Quantity::viscosity: return {1e-3, 1e6, "mm²/s"};
     case Quantity::angular_velocity: return {-1e5, 1e5, "rad/s"};  // ~1e6 rpm
     case Quantity::torque: return {-1e6, 1e6, "N·m"};
+    case Quantity::acceleration: return {-1e4, 1e4, "m/s²"};  // ~1000 g
   }
   return {0, 0, ""};
 }

@@ -43,7 +43,8 @@ enum class Quantity {
   temperature,
   viscosity,
   angular_velocity,
-  torque
+  torque,
+  acceleration
 };
 
 // value_internal = scale * value_given + offset
