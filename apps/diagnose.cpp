@@ -54,7 +54,7 @@ void print_lack_of_fit(const LackOfFit& l, const char* unit) {
   else
     std::cout << fmt::format("lack of fit against {}: F {:.3g} on ({:.0f}, {:.0f}) dof, p {:.2g}, {:.3g} {} beyond a noise of {:.3g} {}{}\n",
                              l.basis, l.statistic, l.df1, l.df2, l.p_value, l.lack_rms, unit, l.pure_error_rms, unit,
-                             l.fits ? "" : "  <- the model misses");
+                             l.fits ? "" : "  <- structure remains: the model misses");
 }
 
 // The term learned beyond the library, one line per component.

@@ -148,7 +148,10 @@ FrictionRigConfig one_setup_per_run(std::uint64_t seed) {
 // temperature-dependent Coulomb term in one-setup runs is named, with its interval. Two
 // sweeps of the 18 setups: with one, only the 18 runs' levels see the term (the fit sees each
 // run's mean logged temperature), and its direction beside k1 is at the edge of what they
-// determine (relative SE 0.53 against the 0.5 that counts as identified).
+// determine (relative SE 0.53 against the 0.5 that counts as identified). A cause is named only
+// where its interval excludes 0 (issue 38 #5): on seed 1 the estimate, 0.089, lies near its
+// bound 0.1, and its interval on the logit scale reaches below 0 ([-0.003, 0.099]): not named,
+// and the round says why.
 TEST(FrictionDiagnosis, OneSetupPerRunStillShowsWhatChangesBetweenRuns) {
   for (std::uint64_t seed : {1, 2, 3}) {
     RigEffects effects;
@@ -156,7 +159,17 @@ TEST(FrictionDiagnosis, OneSetupPerRunStillShowsWhatChangesBetweenRuns) {
     FrictionRigConfig rig = one_setup_per_run(seed);
     rig.runs = 2;
     const auto d = diagnose(generate_friction_log(rig, effects).log);
+    if (seed == 1) {
+      ASSERT_TRUE(d.accepted.empty()) << d.summary;
+      const auto& round = d.rounds.front();
+      const auto c = std::find_if(round.begin(), round.end(), [](auto& c) { return c.effect == "coulomb_temperature"; });
+      ASSERT_NE(c, round.end());
+      EXPECT_LE(c->ci_low, 0) << c->reason;
+      EXPECT_NE(c->reason.find("contains its neutral value 0"), std::string::npos) << c->reason;
+      continue;
+    }
     ASSERT_FALSE(d.accepted.empty()) << "seed " << seed << ": " << d.summary;
+    EXPECT_GT(d.accepted.front().ci_low, 0) << d.summary;
     EXPECT_EQ(d.accepted.front().effect, "coulomb_temperature") << "seed " << seed << ": " << d.summary;
     EXPECT_LE(d.accepted.front().ci_low, 0.08) << d.summary;
     EXPECT_GE(d.accepted.front().ci_high, 0.08) << d.summary;

@@ -149,7 +149,8 @@ struct Covariate {
   bool run_level = true;  // one value within every run: seen only between runs
 };
 
-std::vector<Covariate> covariates_of(const FrictionLog& log) {
+// `tolerance`: values within it of a run's first are that value (condition_tolerance).
+std::vector<Covariate> covariates_of(const FrictionLog& log, double tolerance) {
   std::vector<Covariate> c = {{"velocity_m_s", log.velocity_m_s}, {"load_N", log.load_N},
                               {"preload_um", log.preload_um},     {"block_length_mm", log.block_length_mm},
                               {"temperature_C", {}},              {"direction", {}}};
@@ -164,7 +165,7 @@ std::vector<Covariate> covariates_of(const FrictionLog& log) {
     for (std::size_t i = 0; i < log.size() && cov.run_level; ++i) {
       double& f = first[log.run[i]];
       if (std::isnan(f)) f = cov.value[i];
-      else if (cov.value[i] != f) cov.run_level = false;
+      else if (std::abs(cov.value[i] - f) > tolerance * std::max(std::abs(cov.value[i]), std::abs(f))) cov.run_level = false;
     }
   }
   return c;
@@ -214,23 +215,89 @@ std::pair<std::vector<std::vector<double>>, std::vector<double>> group_means(con
   return {columns, means};
 }
 
-// Lack of fit against pure error: the cell means (run × condition; repeated samples of a
-// cell averaged, so serially correlated samples count once) fitted by run + condition
-// (backfitting), against run alone. What the conditions add beyond the runs' levels is the
-// model's lack of fit; the run × condition remainder is the pure error — the spread of a
-// condition repeated in other runs. Needs conditions repeated across runs.
-LackOfFit lack_of_fit(const FrictionLog& log, const std::vector<double>& centred, std::size_t parameters, double structure_p,
-                      double min_fraction) {
-  LackOfFit l;
+// "speed, load and preload matched within 1 % of their value, temperature to 1 K"
+std::string matched_words(double tolerance) {
+  return fmt::format("speed, load and preload matched within {:g} % of their value, temperature to 1 K", 100 * tolerance);
+}
+
+// The residuals' noise from their high-frequency differences: within each run, the samples of
+// one setup and direction (every condition but the speed) in time order, second differences k
+// samples apart, e(i+k) - 2 e(i) + e(i-k) (variance 6σ² for white noise: a run's level and a
+// misfit smooth over neighbouring samples cancel). k = 1, or a trajectory's filter window (its
+// filtered samples share their noise over the window, so neighbours differ by little of it).
+// Noise correlated over more than k samples is seen only in part (the margin's trap).
+detail::NoiseFloor residual_noise(const FrictionLog& log, const std::vector<detail::ConditionKey>& keys,
+                                  const std::vector<double>& residual, std::size_t& lag) {
+  std::map<std::pair<std::uint32_t, detail::ConditionKey>, std::vector<std::size_t>> series;
+  for (std::size_t i = 0; i < log.size(); ++i) {
+    detail::ConditionKey setup = keys[i];
+    std::get<4>(setup) = 0;  // the speed sweeps along a series
+    series[{log.run[i], setup}].push_back(i);
+  }
+  std::vector<std::size_t> run_lag(log.run_names.size(), 1);
+  for (const RunSegmentation& s : log.segmentation)
+    for (std::size_t r = 0; r < log.run_names.size(); ++r)
+      if (log.trajectory && log.run_names[r] == s.run && s.filter_window > 1) run_lag[r] = s.filter_window;
+  lag = *std::max_element(run_lag.begin(), run_lag.end());
+  double ss = 0, count = 0, independent = 0;
+  for (const auto& [where, at] : series) {
+    const std::size_t k = run_lag[where.first];
+    double m = 0;
+    for (std::size_t j = k; j + k < at.size(); ++j) {
+      ss += std::pow(residual[at[j + k]] - 2 * residual[at[j]] + residual[at[j - k]], 2);
+      m += 1;
+    }
+    count += m;
+    independent += m / static_cast<double>(k);  // k apart: k interleaved series of differences
+  }
+  if (count == 0) return {};
+  return {std::sqrt(ss / (6 * count)), independent * detail::kSecondDifferenceDofShare};
+}
+
+// Lack of fit against the noise of the residuals' consecutive differences (residual_noise): the
+// run-centred residuals' variance, every parameter and run level counted, against it, with
+// o.noise_margin. `why` says why not against pure error.
+LackOfFit noise_lack_of_fit(const FrictionLog& log, const std::vector<detail::ConditionKey>& keys,
+                            const std::vector<double>& centred, std::size_t parameters, const std::string& why,
+                            const FrictionDiagnosisOptions& o) {
+  double ss = 0;
+  for (double e : centred) ss += e * e;
+  std::size_t lag = 1;
+  const detail::NoiseFloor noise = residual_noise(log, keys, centred, lag);
+  const auto n = static_cast<double>(log.size());
+  LackOfFit l = detail::lack_of_fit_against_noise(
+      ss, n, n, parameters + log.run_names.size(), noise, o.structure_p, o.noise_margin,
+      fmt::format("the noise of consecutive residuals (second differences {} sample{} apart within each run's setup and "
+                  "direction; {}; {}), structure when the residual RMS exceeds {:g} times it",
+                  lag, lag == 1 ? "" : "s", why, matched_words(o.condition_tolerance), o.noise_margin));
+  l.condition_tolerance = o.condition_tolerance;
+  return l;
+}
+
+// Lack of fit. Against pure error where the design repeats conditions across runs: the cell
+// means (run × condition; repeated samples of a cell averaged, so serially correlated samples
+// count once) fitted by run + condition (backfitting), against run alone. What the conditions
+// add beyond the runs' levels is the model's lack of fit; the run × condition remainder is the
+// pure error — the spread of a condition repeated in other runs. Conditions match within
+// o.condition_tolerance (their resolution), not as exact doubles. A few conditions coinciding by
+// chance (continuous speeds) make no pure error: at least half the conditions must recur in
+// another run. Otherwise the residuals are judged against the noise of their high-frequency
+// differences (residual_noise), with o.noise_margin.
+LackOfFit lack_of_fit(const FrictionLog& log, const std::vector<detail::ConditionKey>& keys, const std::vector<double>& centred,
+                      std::size_t parameters, const FrictionDiagnosisOptions& o) {
   std::map<detail::ConditionKey, std::size_t> condition_index;
   std::map<std::pair<std::size_t, std::size_t>, std::pair<double, double>> cells;  // (run, condition) -> sum, count
   for (std::size_t i = 0; i < log.size(); ++i) {
-    const std::size_t ci = condition_index.try_emplace(detail::condition_key(log, i), condition_index.size()).first->second;
+    const std::size_t ci = condition_index.try_emplace(keys[i], condition_index.size()).first->second;
     auto& cell = cells[{log.run[i], ci}];
     cell.first += centred[i];
     cell.second += 1;
   }
   const std::size_t R = log.run_names.size(), C = condition_index.size(), N = cells.size();
+  std::vector<std::size_t> runs_of_condition(C, 0);
+  for (const auto& [rc, cell] : cells) ++runs_of_condition[rc.second];
+  const auto repeated = static_cast<std::size_t>(std::count_if(runs_of_condition.begin(), runs_of_condition.end(),
+                                                               [](std::size_t runs) { return runs >= 2; }));
   // Connected components of the run-condition graph: the additive model's rank is R + C - components.
   std::vector<std::size_t> parent(R + C);
   std::iota(parent.begin(), parent.end(), 0);
@@ -243,10 +310,9 @@ LackOfFit lack_of_fit(const FrictionLog& log, const std::vector<double>& centred
   for (const auto& [rc, cell] : cells) roots.insert(find(rc.first));
   const double df_pure = static_cast<double>(N) - static_cast<double>(R + C) + static_cast<double>(roots.size());
   const double df_lack = static_cast<double>(C) - static_cast<double>(roots.size()) - static_cast<double>(parameters);
-  if (df_pure < 3 || df_lack < 1) {
-    l.basis = "no pure error: no condition is repeated in another run";
-    return l;
-  }
+  if (df_pure < 3 || df_lack < 1 || 2 * repeated < C)
+    return noise_lack_of_fit(log, keys, centred, parameters,
+                             fmt::format("{} of {} conditions recur in another run, too few for a pure error", repeated, C), o);
   std::vector<double> run_effect(R, 0.0), condition_effect(C, 0.0);
   auto sweep = [&](bool runs) {
     std::vector<double> sum(runs ? R : C, 0.0), count(runs ? R : C, 0.0);
@@ -273,8 +339,12 @@ LackOfFit lack_of_fit(const FrictionLog& log, const std::vector<double>& centred
     if (before - ss(true) < 1e-14 * std::max(before, 1e-300)) break;
   }
   const double ss_pure = ss(true);
+  LackOfFit l;
   l.tested = true;
-  l.basis = fmt::format("pure error from {} conditions repeated across runs", C);
+  l.against = "pure error";
+  l.condition_tolerance = o.condition_tolerance;
+  l.basis = fmt::format("pure error from {} conditions, {} of them repeated across runs ({})", C, repeated,
+                        matched_words(o.condition_tolerance));
   l.df1 = df_lack;
   l.df2 = df_pure;
   l.statistic = ((ss_runs - ss_pure) / df_lack) / std::max(ss_pure / df_pure, 1e-300);
@@ -283,7 +353,7 @@ LackOfFit lack_of_fit(const FrictionLog& log, const std::vector<double>& centred
   l.lack_rms = std::sqrt(std::max((ss_runs - ss_pure) / df_lack - ss_pure / df_pure, 0.0));
   // Rejected when significant and material (a lack of a tenth of the noise over thousands of
   // conditions is significant without mattering).
-  l.fits = l.p_value >= structure_p || l.lack_rms < min_fraction * l.pure_error_rms;
+  l.fits = l.p_value >= o.structure_p || l.lack_rms < o.min_structure_fraction * l.pure_error_rms;
   return l;
 }
 
@@ -308,15 +378,16 @@ ResidualDiagnostics diagnose_residuals(const FrictionLog& log, const FrictionFit
   d.durbin_watson = dw_den > 0 ? dw_num / dw_den : kNaN;
   for (std::size_t r = 0; r < fit.run_offset_N.size(); ++r) d.run_bias_N.emplace_back(log.run_names[r], fit.run_offset_N[r]);
 
-  const std::vector<Covariate> covariates = covariates_of(log);
+  const std::vector<Covariate> covariates = covariates_of(log, o.condition_tolerance);
   const std::size_t k = covariates.size();
-  // Condition means of the centred residuals (within runs).
-  std::vector<detail::ConditionKey> condition(n);
-  for (std::size_t i = 0; i < n; ++i) condition[i] = detail::condition_key(log, i);
+  // Condition means of the centred residuals (within runs), conditions matched to their resolution.
+  const std::vector<detail::ConditionKey> condition = detail::tolerant_condition_keys(log, o.condition_tolerance);
   const auto [within_x, within_e] = group_means(condition, covariates, law.centred);
-  // Run means of the raw residuals (between runs).
+  // Run means of the raw residuals (between runs); the covariates' run means to their
+  // resolution: one block length whose run means differ in the last bit is one value, not tested.
   std::vector<std::uint32_t> run_key(log.run.begin(), log.run.end());
-  const auto [run_x, run_e] = group_means(run_key, covariates, law.raw);
+  auto [run_x, run_e] = group_means(run_key, covariates, law.raw);
+  for (auto& x : run_x) x = detail::snap_to_resolution(x, o.condition_tolerance);
   const std::size_t runs = run_e.size();
   auto between = [&](const std::string& name, const std::vector<double>& x) {
     std::set<double> distinct(x.begin(), x.end());
@@ -356,18 +427,32 @@ ResidualDiagnostics diagnose_residuals(const FrictionLog& log, const FrictionFit
     return a.structured ? a.size > b.size : a.p_value < b.p_value;
   });
   d.structured = !d.covariates.empty() && d.covariates.front().structured;
-  d.lack_of_fit = lack_of_fit(log, law.centred, fit.fit.free_parameters, structure_p, o.min_structure_fraction);
+  d.lack_of_fit = lack_of_fit(log, condition, law.centred, fit.fit.free_parameters, o);
   return d;
 }
 
-// What the design hides or makes costly, in words.
-std::vector<std::string> design_notes(const FrictionLog& log, const FrictionFitResult& baseline, const LackOfFit& lack) {
+// What the design hides or makes costly, in words; and what the final residuals' tests found
+// significant but left unexplained because of its size.
+std::vector<std::string> design_notes(const FrictionLog& log, const FrictionFitResult& baseline, const LackOfFit& lack,
+                                      const ResidualDiagnostics& final, const FrictionDiagnosisOptions& o) {
   std::vector<std::string> notes;
   std::string between, single;
   const std::vector<std::string> not_given = log.law.not_logged();  // their columns hold neutral stand-ins
-  for (const Covariate& c : covariates_of(log)) {
-    const std::set<double> values(c.value.begin(), c.value.end());
-    if (std::string(c.name) == "time_s" || std::string(c.name) == "direction") continue;
+  for (const Covariate& c : covariates_of(log, o.condition_tolerance)) {
+    const std::vector<double> snapped = detail::snap_to_resolution(c.value, o.condition_tolerance);
+    const std::set<double> values(snapped.begin(), snapped.end());
+    if (std::string(c.name) == "time_s") continue;
+    if (std::string(c.name) == "direction") {
+      // Each run moves one way: a force signed with the motion is seen only between runs,
+      // against the spread of their zero offsets.
+      if (values.size() > 1 && c.run_level)
+        notes.push_back(fmt::format(
+            "direction changes only between runs (each run moves one way): direction is confounded with the runs, so a "
+            "force signed with the motion (a zero offset, a direction asymmetry) is judged on the {} run means against "
+            "the spread of the runs' zero offsets (tau = {:.3g} N); log both senses in each run to see it within runs",
+            log.run_names.size(), baseline.run_offset_sd_N));
+      continue;
+    }
     if (std::find(not_given.begin(), not_given.end(), c.name) != not_given.end()) continue;
     if (values.size() == 1) single += fmt::format("{}{} ({:g})", single.empty() ? "" : ", ", c.name, *values.begin());
     else if (c.run_level) between += (between.empty() ? "" : ", ") + std::string(c.name);
@@ -383,6 +468,15 @@ std::vector<std::string> design_notes(const FrictionLog& log, const FrictionFitR
   if (!not_given.empty())
     notes.push_back(fmt::format("not given: {}: no effect of these can be seen in these data", fmt::join(not_given, ", ")));
   if (!lack.tested) notes.push_back("lack of fit not tested (" + lack.basis + "): repeat a setup in a second run to get it");
+  else if (lack.against == "noise")
+    notes.push_back("lack of fit judged against the noise of consecutive residuals, not against pure error (too few "
+                    "conditions recur in another run): repeat setups in a second run for a test against pure error");
+  // Significant, but under the size that counts: said, not dropped silently.
+  for (const CovariateTest& t : final.covariates)
+    if (t.p_adjusted < o.structure_p && !t.structured)
+      notes.push_back(fmt::format("{} (p = {:.2g}, Holm {:.2g}) left unexplained: its size, {:.3g} N, is under {:g} % of the "
+                                  "sample RMSE ({:.3g} N)",
+                                  t.covariate, t.p_value, t.p_adjusted, t.size, 100 * o.min_structure_fraction, final.rmse_N));
   return notes;
 }
 
@@ -472,6 +566,7 @@ FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagno
       const auto& p = fit.fit.parameter(effect);
       detail::set_estimate(c, p);
       c.measure = FrictionEffectLibrary::infos[friction_effect_slot(effect)].measure;
+      c.neutral = FrictionEffectLibrary::infos[friction_effect_slot(effect)].neutral;
       if (p.held_unidentifiable) m.problem = "not identifiable from these data";
     }
     if (!fit.fit.solver.converged)
@@ -522,7 +617,7 @@ FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagno
     d.shifts.push_back(parameter_shift(baseline.fit.parameters[j], current.fit.parameters[j]));
 
   detail::conclude(d, "The published law", "N", d.cv_rmse_before_N, current.cv_rmse_N, d.baseline.rmse_N);
-  d.design_notes = design_notes(log, baseline, d.baseline.lack_of_fit);
+  d.design_notes = design_notes(log, baseline, d.baseline.lack_of_fit, d.final, o);
   if (!not_tried.empty())
     d.design_notes.push_back(fmt::format("not tried, their precondition absent: {}", fmt::join(not_tried, "; ")));
   if (!held_zeros.empty())

@@ -180,6 +180,16 @@ double counted_gain(const CandidateScore& c) {
   return std::max(c.cv_gain_percent, c.cv_shape_gain_percent);
 }
 
+bool interval_excludes_neutral(const CandidateScore& c) {
+  return !is_cause(c) || !std::isfinite(c.ci_low) || !std::isfinite(c.ci_high) || c.neutral < c.ci_low ||
+         c.neutral > c.ci_high;
+}
+
+double whole_model_loss(const CandidateScore& c) {
+  if (!std::isfinite(c.cv_shape_gain_percent)) return 0;
+  return std::max(0.0, -std::min(c.cv_gain_percent, c.cv_shape_gain_percent));
+}
+
 bool score_candidate(const ModelFit& current, const ModelFit& candidate, const SelectionRules& rules, CandidateScore& c) {
   const double n_eff = std::min(current.n_eff, candidate.n_eff);
   std::tie(c.aicc, c.bic) = information_criteria(candidate.ss, candidate.n, n_eff, candidate.k);
@@ -190,6 +200,7 @@ bool score_candidate(const ModelFit& current, const ModelFit& candidate, const S
   c.cv_gain_percent = held_out_gain_percent(current.cv_rmse, candidate.cv_rmse);
   c.cv_shape_gain_percent = held_out_gain_percent(current.cv_shape_rmse, candidate.cv_shape_rmse);
   const double gain = counted_gain(c);
+  const bool excludes_neutral = interval_excludes_neutral(c);
   bool significant;
   std::string why_not;
   if (c.added_parameters > 0) {
@@ -208,16 +219,25 @@ bool score_candidate(const ModelFit& current, const ModelFit& candidate, const S
   const bool at_noise = rules.noise_floor <= 0 || current.cv_rmse <= 1.02 * rules.noise_floor;
   const double removed = at_noise ? 1.0 : (current.cv_rmse * current.cv_rmse - candidate.cv_rmse * candidate.cv_rmse) / excess;
   const bool enough = removed >= rules.min_excess_removed;
-  const bool better = gain >= rules.min_cv_gain_percent && enough;
+  // The whole model, level and shape together: a cause that gains on one criterion must not
+  // lose on the other by more than a gain must bring.
+  const bool whole = !is_cause(c) || whole_model_loss(c) <= rules.min_cv_gain_percent;
+  const bool better = gain >= rules.min_cv_gain_percent && enough && whole;
   if (!candidate.problem.empty()) c.reason = candidate.problem;
   else if (!significant) c.reason = why_not;
+  else if (!excludes_neutral)
+    c.reason = fmt::format("its 95 % interval [{:.4g}, {:.4g}] contains its neutral value {:g}", c.ci_low, c.ci_high, c.neutral);
   else if (gain < rules.min_cv_gain_percent)
     c.reason = fmt::format("held-out RMSE gain {:.2f} % < {:.2f} %", gain, rules.min_cv_gain_percent);
-  else if (!better)
+  else if (!whole)
+    c.reason = fmt::format("the whole model loses on held-out runs: {:.2f} % better on one criterion but {:.2f} % worse on "
+                           "the other (level {:+.2f} %, runs' shape {:+.2f} %; at most {:.2f} % may be lost)",
+                           gain, whole_model_loss(c), c.cv_gain_percent, c.cv_shape_gain_percent, rules.min_cv_gain_percent);
+  else if (!enough)
     c.reason = fmt::format("removes {:.0f} % of the held-out RMSE above the noise ({:.4g}), less than {:.0f} %", 100 * removed,
                            rules.noise_floor, 100 * rules.min_excess_removed);
   else c.reason = "significant and better on held-out runs";
-  c.accepted = candidate.problem.empty() && significant && better;  // passes; forward_select picks one
+  c.accepted = candidate.problem.empty() && significant && excludes_neutral && better;  // passes; forward_select picks one
   return c.accepted;
 }
 
@@ -325,7 +345,8 @@ Verdict make_verdict(const VerdictInput& in) {
   if (in.final_structured)
     remains = fmt::format("the residuals still follow {} (p = {:.2g})", final_top.covariate, final_top.p_value);
   if (lof.tested && !lof.fits)
-    remains += (remains.empty() ? "the residuals exceed the noise, " : "; and they exceed the noise, ") +
+    remains += (remains.empty() ? "structure remains, the residuals exceed the noise: "
+                                : "; and structure remains, they exceed the noise: ") +
                lack_of_fit_words(lof, in.unit);
   if (remains.empty())
     remains = lof.tested ? "no structure left beyond the noise (" + lack_of_fit_words(lof, in.unit) + ")"
@@ -371,10 +392,13 @@ Verdict make_verdict(const VerdictInput& in) {
           "Unexplained: the residuals of {} follow {} (p = {:.2g}), but no mechanism of the library explains them on "
           "held-out runs. Held-out RMSE {:.4g} {}.",
           lower_first(in.model), v.unexplained_covariate, baseline_top.p_value, in.cv_before, in.unit);
+      if (in.baseline_lack_of_fit.tested && !in.baseline_lack_of_fit.fits)
+        v.summary += " Structure remains, the residuals also exceed the noise: " +
+                     lack_of_fit_words(in.baseline_lack_of_fit, in.unit) + ".";
     } else {
       v.unexplained_covariate = "none identified";
       v.summary = fmt::format(
-          "Unexplained: the residuals of {} exceed the noise ({}) without following any one covariate or pair, and no "
+          "Unexplained: structure remains, the residuals of {} exceed the noise ({}) without following any one covariate or pair, and no "
           "mechanism of the library explains them on held-out runs. Held-out RMSE {:.4g} {}.",
           lower_first(in.model), lack_of_fit_words(in.baseline_lack_of_fit, in.unit), in.cv_before, in.unit);
     }
@@ -513,9 +537,33 @@ nlohmann::json empirical_json(const EmpiricalFinding& e, const std::string& unit
 }
 
 nlohmann::json lack_of_fit_json(const LackOfFit& l) {
-  return {{"tested", l.tested}, {"basis", l.basis}, {"F", number(l.statistic)}, {"df", {number(l.df1), number(l.df2)}},
-          {"p", number(l.p_value)}, {"lack_rms", number(l.lack_rms)}, {"pure_error_rms", number(l.pure_error_rms)},
-          {"fits", l.fits}};
+  return {{"tested", l.tested}, {"basis", l.basis}, {"against", l.against}, {"F", number(l.statistic)},
+          {"df", {number(l.df1), number(l.df2)}}, {"p", number(l.p_value)}, {"lack_rms", number(l.lack_rms)},
+          {"pure_error_rms", number(l.pure_error_rms)}, {"margin", number(l.margin)},
+          {"condition_tolerance", number(l.condition_tolerance)}, {"fits", l.fits}};
+}
+
+LackOfFit lack_of_fit_against_noise(double ss, double n, double n_eff, std::size_t k, const NoiseFloor& noise,
+                                    double structure_p, double margin, std::string basis) {
+  LackOfFit l;
+  const auto K = static_cast<double>(k);
+  if (!(noise.sigma > 0) || !(noise.dof > 0) || !(n > K + 1)) {
+    l.basis = "not tested: no noise estimate from " + basis + ", or no residual degrees of freedom";
+    return l;
+  }
+  l.tested = true;
+  l.against = "noise";
+  l.basis = std::move(basis);
+  const double variance = ss / (n - K);
+  l.pure_error_rms = noise.sigma;
+  l.lack_rms = std::sqrt(std::max(variance - noise.sigma * noise.sigma, 0.0));
+  l.statistic = variance / (noise.sigma * noise.sigma);
+  l.df1 = std::max(n_eff * (n - K) / n, 1.0);
+  l.df2 = noise.dof;
+  l.p_value = fisher_f_upper_p(l.statistic, l.df1, l.df2);
+  l.margin = margin;
+  l.fits = !(l.p_value < structure_p && std::sqrt(variance) > margin * noise.sigma);
+  return l;
 }
 
 nlohmann::json covariates_json(const std::vector<CovariateTest>& tests) {

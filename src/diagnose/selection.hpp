@@ -84,7 +84,9 @@ struct SelectionRules {
 std::pair<double, double> information_criteria(double ss, double n, double n_eff, std::size_t k);
 
 // Scores `candidate` against `current` (LRT and BIC on the effective sample, held-out gain)
-// and sets c.aicc … c.reason; true when it passes.
+// and sets c.aicc … c.reason; true when it passes: significant, a cause's interval (as set in
+// `c` before) excluding its neutral value, the counted gain at least min_cv_gain_percent and,
+// for a cause, the whole model's loss on the other criterion (whole_model_loss) within it.
 bool score_candidate(const ModelFit& current, const ModelFit& candidate, const SelectionRules& rules, CandidateScore& c);
 
 template <class Fit>
@@ -109,12 +111,23 @@ void set_held_out(EmpiricalFinding& f, const ModelFit& before, const ModelFit& a
 // would cross a bound is formed on the log or logit scale instead, and `interval` says so.
 ParameterEstimate within_bounds(ParameterEstimate p);
 
+// A named cause with a neutral value (the library's), as opposed to a switch, a thermal
+// extension without one, or the empirical term.
+inline bool is_cause(const CandidateScore& c) { return std::isfinite(c.neutral); }
+// A cause's 95 % interval (as quoted) excludes the value at which it is absent; true for
+// anything else (and for an estimate without an interval).
+bool interval_excludes_neutral(const CandidateScore& c);
+
 // The held-out gain that counts for a candidate: on new runs' level (cv_gain_percent) or on
 // their shape (cv_shape_gain_percent), whichever it improves more (the plain gain when the
 // shape was not scored). The level of a held-out run rests on a few run means and its zero
 // offset's variance, so a cause of the runs' shape may not show there, and a cause that
 // changes only between runs shows nowhere else; the likelihood-ratio test guards both.
 double counted_gain(const CandidateScore& c);
+// What the candidate loses on the other criterion, in % (0 when it loses on neither, or the
+// shape was not scored). A cause is judged on the whole model, level and shape together: its
+// counted gain must clear the threshold and this loss stay within it.
+double whole_model_loss(const CandidateScore& c);
 
 // Correlation of the changes two candidate fits make to the current fitted values (0 when
 // either makes none or the fitted values are missing).
@@ -173,10 +186,12 @@ Selection<Fit> forward_select(const std::vector<std::string>& library, Fit basel
     }
     // Candidates that change the fit as the best does, and fit about as well (BIC within
     // switch_bic), are indistinguishable from it on these data: a tie, named together,
-    // represented by the one listed first in the library (the plainer form comes first).
+    // represented by the one listed first in the library (the plainer form comes first). A
+    // look-alike whose interval holds its neutral value is not named: it would be a cause named
+    // with an interval that says it may be absent.
     std::vector<std::size_t> tie{best};
     for (std::size_t i = 0; i < round.size(); ++i)
-      if (i != best && models[i].problem.empty() && std::isfinite(round[i].cv_rmse) &&
+      if (i != best && models[i].problem.empty() && std::isfinite(round[i].cv_rmse) && interval_excludes_neutral(round[i]) &&
           change_correlation(current.fitted, models[best].fitted, models[i].fitted) > rules.tie_correlation &&
           round[i].bic < round[best].bic + rules.switch_bic)  // and fit as well: a clearly worse form is no tie
         tie.push_back(i);
@@ -271,6 +286,24 @@ void conclude(Diagnosis& d, std::string model, std::string unit, double cv_befor
 nlohmann::json candidate_json(const CandidateScore& c, const std::string& unit);
 nlohmann::json covariates_json(const std::vector<CovariateTest>& tests);
 nlohmann::json lack_of_fit_json(const LackOfFit& l);
+
+// A noise σ in the residuals' unit from differences of a series (the thermocouples' traces, a
+// friction log's consecutive residuals), with the degrees of freedom of that estimate: for
+// white noise, the mean square of m second differences is as good as 18/35 m independent
+// squares (they overlap).
+struct NoiseFloor {
+  double sigma = 0, dof = 0;
+};
+inline constexpr double kSecondDifferenceDofShare = 18.0 / 35.0;
+
+// Lack of fit against a noise floor: F = s² / σ², the residual variance per degree of freedom
+// the fit leaves (n − k: every parameter and level counted) against the noise variance, the
+// residuals' degrees of freedom counted on n_eff (serially correlated residuals carry less
+// evidence than their number). Rejected (fits = false) when F is significant at structure_p
+// and the residual RMS s exceeds `margin` σ: on thousands of records a hair above the noise is
+// significant without mattering. `basis` names the noise in words.
+LackOfFit lack_of_fit_against_noise(double ss, double n, double n_eff, std::size_t k, const NoiseFloor& noise,
+                                    double structure_p, double margin, std::string basis);
 
 // What both diagnoses write of their verdict: verdict, summary, causes, the held-out RMSE
 // before and after ("cv_rmse_before_<unit>"), the gain, parameter shifts, the unexplained

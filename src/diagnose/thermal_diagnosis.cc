@@ -34,6 +34,7 @@ ThermalFitOptions model_options(const ThermalDiagnosisOptions& o) {
   f.cross_validate = true;
   f.fit.starts = 0;
   f.fit.profile = ProfileMode::none;
+  f.fit.bootstrap = 0;  // TMPEXP
   f.sensitivities = true;  // the empirical term's search linearises the model in its global parameters
   return f;
 }
@@ -71,52 +72,19 @@ double effective_sample_size(double n, double rho) {
 }
 
 // The thermocouples' noise over all runs (RMS of each run's second-difference estimate, over
-// noise_spacing_s) and the degrees of freedom of that estimate: for white noise, the mean
-// square of m second differences is as good as 18/35 m independent squares (they overlap).
-struct NoiseFloor {
-  double sigma_K = 0, dof = 0;
-};
-
-NoiseFloor noise_floor(const ThermalDataSet& data, const ThermalDiagnosisOptions& o) {
+// noise_spacing_s) and the degrees of freedom of that estimate (NoiseFloor, selection.hpp).
+detail::NoiseFloor noise_floor(const ThermalDataSet& data, const ThermalDiagnosisOptions& o) {
   double ss = 0, differences = 0;
   for (const auto& run : data.runs) {
     std::size_t m = 0;
     ss += std::pow(thermocouple_noise_K(run.trace, o.noise_spacing_s, &m), 2);
     differences += static_cast<double>(m);
   }
-  return {std::sqrt(ss / static_cast<double>(data.runs.size())), differences * 18.0 / 35.0};
-}
-
-// Lack of fit against the noise floor: F = s² / σ², the residual variance per degree of
-// freedom the fit leaves (n − k: every offset, heat scale and global parameter counted) against
-// the thermocouples' noise variance. The residuals' degrees of freedom are counted on n_eff
-// (serially correlated residuals carry less evidence than their number). Rejected at
-// structure_p, but called a lack of fit only when the excess sqrt(s² − σ²) is at least
-// min_structure_fraction of σ: on thousands of records millikelvin are significant without
-// mattering.
-LackOfFit lack_of_fit_against_noise(double ss, double n, double n_eff, std::size_t k, const NoiseFloor& noise,
-                                    const ThermalDiagnosisOptions& o) {
-  LackOfFit l;
-  const auto K = static_cast<double>(k);
-  if (!(noise.sigma_K > 0) || !(noise.dof > 0) || !(n > K + 1)) {
-    l.basis = "not tested: no noise estimate from the thermocouples' second differences, or no residual degrees of freedom";
-    return l;
-  }
-  l.tested = true;
-  l.basis = fmt::format("the thermocouples' noise (second differences of the traces over {:g} s)", o.noise_spacing_s);
-  const double variance = ss / (n - K);
-  l.pure_error_rms = noise.sigma_K;
-  l.lack_rms = std::sqrt(std::max(variance - noise.sigma_K * noise.sigma_K, 0.0));
-  l.statistic = variance / (noise.sigma_K * noise.sigma_K);
-  l.df1 = std::max(n_eff * (n - K) / n, 1.0);
-  l.df2 = noise.dof;
-  l.p_value = fisher_f_upper_p(l.statistic, l.df1, l.df2);
-  l.fits = !(l.p_value < o.structure_p && l.lack_rms >= o.min_structure_fraction * noise.sigma_K);
-  return l;
+  return {std::sqrt(ss / static_cast<double>(data.runs.size())), differences * detail::kSecondDifferenceDofShare};
 }
 
 ThermalResidualDiagnostics diagnose_residuals(const ThermalFitResult& fit, const ThermalDiagnosisOptions& o,
-                                              const NoiseFloor& noise) {
+                                              const detail::NoiseFloor& noise) {
   ThermalResidualDiagnostics d;
   const auto& samples = fit.samples;
   double ss = 0;
@@ -125,7 +93,13 @@ ThermalResidualDiagnostics diagnose_residuals(const ThermalFitResult& fit, const
   d.rmse_K = std::sqrt(ss / std::max(n, 1.0));
   d.lag1_autocorrelation = lag1_autocorrelation(fit);
   d.n_eff = effective_sample_size(n, d.lag1_autocorrelation);
-  d.lack_of_fit = lack_of_fit_against_noise(ss, n, d.n_eff, fit.joint.free_parameters, noise, o);
+  // Called a lack of fit only when the excess sqrt(s² − σ²) is at least min_structure_fraction
+  // of σ, i.e. s above sqrt(1 + fraction²) σ: on thousands of records millikelvin are
+  // significant without mattering.
+  d.lack_of_fit = detail::lack_of_fit_against_noise(
+      ss, n, d.n_eff, fit.joint.free_parameters, noise, o.structure_p,
+      std::sqrt(1 + o.min_structure_fraction * o.min_structure_fraction),
+      fmt::format("the thermocouples' noise (second differences of the traces over {:g} s)", o.noise_spacing_s));
 
   // Per sensor series, and cell means (time bins of the run's duration).
   const int bins = std::max(o.time_bins, 2);
@@ -247,8 +221,8 @@ ThermalDiagnosis diagnose_thermal(const ThermalDataSet& data, const ThermalDiagn
   o.fit.every = diagnosis_fit_options(data, options).every;
   ThermalDiagnosis d;
   // The noise floor of the residuals and of the held-out RMSE: the thermocouples' own noise.
-  const NoiseFloor noise = noise_floor(data, o);
-  d.noise_K = noise.sigma_K;
+  const detail::NoiseFloor noise = noise_floor(data, o);
+  d.noise_K = noise.sigma;
 
   // 1. The baseline.
   d.baseline_fit = fit_thermal(data, model_options(o));

@@ -2,10 +2,12 @@
 // per-condition residuals) and the diagnosis (condition means, pure error). Private; no Ceres.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <tuple>
+#include <vector>
 
 #include "lmcal/io/friction_log.hpp"
 
@@ -31,6 +33,42 @@ using ConditionKey = std::tuple<std::uint32_t, double, double, double, double, d
 inline ConditionKey condition_key(const FrictionLog& log, std::size_t i) {
   return {log.guide[i], log.preload_um[i], log.load_N[i], std::round(log.temperature_C[i]), condition_speed(log, i),
           static_cast<double>(log.direction[i])};
+}
+
+// Values that agree to a quantity's resolution, as one value: each is replaced by the smallest
+// of its cluster, the values sorted and a cluster closed where the next lies more than
+// `tolerance` (relative, of the larger magnitude) beyond its first. A raw log's plateau speeds
+// (each the mean of its plateau: 0.10003 and 0.09998 for one set speed) or run means of one
+// block length that differ in the last bit become one value; set values a design spaces by 20 %
+// stay apart. Clusters span at most `tolerance`, so dense continuous values do not chain.
+inline std::vector<double> snap_to_resolution(const std::vector<double>& values, double tolerance) {
+  std::vector<double> sorted = values;
+  std::sort(sorted.begin(), sorted.end());
+  sorted.erase(std::unique(sorted.begin(), sorted.end()), sorted.end());
+  std::vector<double> first(sorted.size());
+  for (std::size_t k = 0; k < sorted.size(); ++k)
+    first[k] = k > 0 && std::abs(sorted[k] - first[k - 1]) <= tolerance * std::max(std::abs(sorted[k]), std::abs(first[k - 1]))
+                   ? first[k - 1]
+                   : sorted[k];
+  std::vector<double> out;
+  out.reserve(values.size());
+  for (double v : values) out.push_back(first[static_cast<std::size_t>(std::lower_bound(sorted.begin(), sorted.end(), v) - sorted.begin())]);
+  return out;
+}
+
+// condition_key with speed, preload and load matched to `tolerance` (snap_to_resolution) instead
+// of as exact doubles: the diagnosis's conditions, where repeats across runs are what counts. The
+// fit keeps its exact keys.
+inline std::vector<ConditionKey> tolerant_condition_keys(const FrictionLog& log, double tolerance) {
+  std::vector<double> speed(log.size());
+  for (std::size_t i = 0; i < log.size(); ++i) speed[i] = condition_speed(log, i);
+  const std::vector<double> v = snap_to_resolution(speed, tolerance), pc = snap_to_resolution(log.preload_um, tolerance),
+                            load = snap_to_resolution(log.load_N, tolerance);
+  std::vector<ConditionKey> keys;
+  keys.reserve(log.size());
+  for (std::size_t i = 0; i < log.size(); ++i)
+    keys.emplace_back(log.guide[i], pc[i], load[i], std::round(log.temperature_C[i]), v[i], static_cast<double>(log.direction[i]));
+  return keys;
 }
 
 }  // namespace lmcal::detail

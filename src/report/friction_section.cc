@@ -388,7 +388,7 @@ void lack_of_fit_paragraph(Page& page, const LackOfFit& baseline, const LackOfFi
                            const std::vector<std::string>& design_notes) {
   auto words = [&](const LackOfFit& l) {
     return fmt::format("F = {} on ({:.0f}, {:.0f}) dof, p = {}: {}", num(l.statistic, 3), l.df1, l.df2, p_value(l.p_value),
-                       l.fits ? "within the noise" : fmt::format("{} {} beyond it", num(l.lack_rms, 3), unit));
+                       l.fits ? "within the noise" : fmt::format("structure remains, {} {} beyond it", num(l.lack_rms, 3), unit));
   };
   if (baseline.tested)
     page.paragraph(fmt::format("Lack of fit against {} (noise {} {}): the published model {}; with the causes {}.",

@@ -69,6 +69,9 @@ struct CandidateScore {
   // and `precondition` saying what is unknown; empty: `effect` (shown_name).
   std::string shown;
   std::string precondition;
+  // The value at which the cause is absent (the library's neutral value): a cause is accepted
+  // only where its interval excludes it. NaN: no such rule (a switch, a thermal extension).
+  double neutral = std::numeric_limits<double>::quiet_NaN();
   // Candidates of the same round whose change to the fit cannot be told from this one's
   // (the changes they make to the fitted values correlate above 0.99): a tie, named together.
   std::vector<std::string> tied_with;
@@ -98,17 +101,26 @@ struct DiagnosisStep {
 // The range of α over the candidate models of every round (thermal; NaN when none has one).
 std::pair<double, double> candidate_alpha_range(const std::vector<std::vector<CandidateScore>>& rounds);
 
-// Lack of fit against pure error: do the model's residuals exceed the noise? Friction: the
-// condition means (after the run levels) against the spread of repeated conditions across
-// runs. Thermal: the residual variance against the thermocouples' noise floor.
+// Lack of fit: do the model's residuals exceed the noise? Friction: the condition means (after
+// the run levels) against the spread of conditions repeated across runs (pure error), or where
+// the design repeats none, the residual variance against the noise of high-frequency
+// differences of consecutive residuals. Thermal: the residual variance against the
+// thermocouples' noise floor.
 struct LackOfFit {
   bool tested = false;
   std::string basis;       // what the pure error is, or why it was not tested
+  std::string against;     // "pure error" or "noise" ("" when not tested)
   double statistic = 0;    // F
   double df1 = 0, df2 = 0;
   double p_value = 1;
   double lack_rms = 0;     // RMS of the lack of fit beyond the noise, in the residuals' unit
   double pure_error_rms = 0;  // the noise it is judged against
+  // Against the noise: structure remains when the residual RMS exceeds `margin` times the noise
+  // (and F rejects). NaN: not this rule.
+  double margin = std::numeric_limits<double>::quiet_NaN();
+  // Friction: the relative tolerance within which speed, load and preload matched as one
+  // condition (their resolution; NaN: thermal).
+  double condition_tolerance = std::numeric_limits<double>::quiet_NaN();
   bool fits = true;        // not rejected at the diagnosis's structure_p (or not tested)
 };
 

@@ -13,8 +13,9 @@
 //      scored by leave-one-run-out prediction RMSE (each run predicted from the others by one
 //      Gauss-Newton step from the full fit, no refits), AICc, BIC and a likelihood-ratio test;
 //   3. forward selection: the best candidate is accepted only if it is significant (LRT
-//      p < 0.001 and a lower BIC) and lowers the held-out RMSE by at least 2 %; then the
-//      rest are tried on top of it, until nothing more passes;
+//      p < 0.001 and a lower BIC), its 95 % interval excludes its neutral value, and it
+//      lowers the held-out RMSE of the runs' level or shape by at least 2 % without raising
+//      the other by more; then the rest are tried on top of it, until nothing more passes;
 //   4. verdict: the accepted causes with magnitude and interval, held-out RMSE before and
 //      after, how the constants shift once the cause is modelled, and what remains. If the
 //      residuals stay structured and no candidate passes: "unexplained", with the covariate
@@ -56,6 +57,17 @@ struct FrictionDiagnosisOptions {
   // discrepancy: over thousands of run means, 0.02 N beside 0.2 N of noise is significant
   // without mattering.
   double min_structure_fraction = 0.2;
+  // Speeds, loads and preloads that agree within this share of their value are one condition in
+  // the lack-of-fit test and one value in the between-run tests: their resolution (a raw log's
+  // plateau speeds differ in the fifth digit, run means of one block length in the last bit; a
+  // design spaces its set values by 20 % or more). Temperature is matched to 1 K.
+  double condition_tolerance = 0.01;
+  // Where the design repeats too few conditions across runs for a pure error, the residuals are
+  // judged against the noise of their high-frequency differences: structure remains when the
+  // residual RMS exceeds this multiple of that noise (and F rejects at structure_p). Trap:
+  // differences see noise correlated beyond neighbouring samples only in part (an AR(1) φ of 0.5
+  // at one sample: 0.65 σ), which this margin covers up to φ ≈ 0.68.
+  double noise_margin = 2.0;
   std::size_t max_effects = 3;
   // When the residuals stay structured after the named causes: learn an empirical term
   // (friction_terms.hpp) and keep it if it passes the rules a cause must pass.
