@@ -221,10 +221,10 @@ class BatchedAutoDiffCostFunction final : public ceres::CostFunction, public Nor
     if (jacobians == nullptr || jacobians[0] == nullptr) {
       const auto prepared = functor_.prepare(theta);
       const int threads = slice_threads(rows_, kRowsPerThread);
-      std::vector<decltype(functor_.prepare(theta))> own(static_cast<std::size_t>(threads), prepared);
+      std::vector<OwnLine<decltype(functor_.prepare(theta))>> own(static_cast<std::size_t>(threads), {prepared});
       std::vector<char> finite(static_cast<std::size_t>(threads), 1);
       for_each_slice(rows_, threads, [&](int slice, std::size_t begin, std::size_t end) {
-        auto& mine = own[static_cast<std::size_t>(slice)];
+        auto& mine = own[static_cast<std::size_t>(slice)].prepared;
         for (std::size_t i = begin; i < end; ++i) {
           residuals[i] = robust_residual(functor_(mine, i), loss_);
           if (!std::isfinite(residuals[i])) {
@@ -264,6 +264,13 @@ class BatchedAutoDiffCostFunction final : public ceres::CostFunction, public Nor
   static constexpr std::size_t kBatch = 16384;
   static constexpr std::size_t kRowsPerThread = 4096;
 
+  // A thread's copy of the prepared parameters on cache lines of its own: a row writes into it
+  // (the sample's viscosity), and a line shared with the next thread's copy would bounce.
+  template <typename Prepared>
+  struct alignas(128) OwnLine {
+    Prepared prepared;
+  };
+
   // Each row's gradient into `gradient` (p values), then visit(row, residual); false when visit
   // is. By the closed form where the functor has one, else by the smallest Jet that holds the
   // parameters (8, 12 or 16).
@@ -283,10 +290,7 @@ class BatchedAutoDiffCostFunction final : public ceres::CostFunction, public Nor
     const auto p = static_cast<std::size_t>(parameter_block_sizes()[0]);
     const std::size_t batch = std::min(rows_, kBatch);
     const int threads = slice_threads(batch, kRowsPerThread);
-    struct alignas(128) Own {  // a cache line of its own: the threads write theirs at every row
-      Prepared prepared;
-    };
-    std::vector<Own> own(static_cast<std::size_t>(threads), Own{prepared});
+    std::vector<OwnLine<Prepared>> own(static_cast<std::size_t>(threads), {prepared});
     std::vector<double> g(batch * p), r(batch);
     for (std::size_t first = 0; first < rows_; first += batch) {
       const std::size_t n = std::min(batch, rows_ - first);
