@@ -34,7 +34,6 @@ ThermalFitOptions model_options(const ThermalDiagnosisOptions& o) {
   f.cross_validate = true;
   f.fit.starts = 0;
   f.fit.profile = ProfileMode::none;
-  f.fit.bootstrap = 0;  // TMPEXP
   f.sensitivities = true;  // the empirical term's search linearises the model in its global parameters
   return f;
 }
