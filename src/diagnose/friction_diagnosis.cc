@@ -165,7 +165,7 @@ std::vector<Covariate> covariates_of(const FrictionLog& log, double tolerance) {
     for (std::size_t i = 0; i < log.size() && cov.run_level; ++i) {
       double& f = first[log.run[i]];
       if (std::isnan(f)) f = cov.value[i];
-      else if (std::abs(cov.value[i] - f) > tolerance * std::max(std::abs(cov.value[i]), std::abs(f))) cov.run_level = false;
+      else if (!detail::same_to_resolution(cov.value[i], f, tolerance)) cov.run_level = false;
     }
   }
   return c;

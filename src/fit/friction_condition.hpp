@@ -35,6 +35,12 @@ inline ConditionKey condition_key(const FrictionLog& log, std::size_t i) {
           static_cast<double>(log.direction[i])};
 }
 
+// Two values of a quantity that agree to its resolution: within `tolerance` relative to the
+// larger magnitude.
+inline bool same_to_resolution(double a, double b, double tolerance) {
+  return std::abs(a - b) <= tolerance * std::max(std::abs(a), std::abs(b));
+}
+
 // Values that agree to a quantity's resolution, as one value: each is replaced by the smallest
 // of its cluster, the values sorted and a cluster closed where the next lies more than
 // `tolerance` (relative, of the larger magnitude) beyond its first. A raw log's plateau speeds
@@ -47,9 +53,7 @@ inline std::vector<double> snap_to_resolution(const std::vector<double>& values,
   sorted.erase(std::unique(sorted.begin(), sorted.end()), sorted.end());
   std::vector<double> first(sorted.size());
   for (std::size_t k = 0; k < sorted.size(); ++k)
-    first[k] = k > 0 && std::abs(sorted[k] - first[k - 1]) <= tolerance * std::max(std::abs(sorted[k]), std::abs(first[k - 1]))
-                   ? first[k - 1]
-                   : sorted[k];
+    first[k] = k > 0 && same_to_resolution(sorted[k], first[k - 1], tolerance) ? first[k - 1] : sorted[k];
   std::vector<double> out;
   out.reserve(values.size());
   for (double v : values) out.push_back(first[static_cast<std::size_t>(std::lower_bound(sorted.begin(), sorted.end(), v) - sorted.begin())]);
@@ -66,8 +70,10 @@ inline std::vector<ConditionKey> tolerant_condition_keys(const FrictionLog& log,
                             load = snap_to_resolution(log.load_N, tolerance);
   std::vector<ConditionKey> keys;
   keys.reserve(log.size());
-  for (std::size_t i = 0; i < log.size(); ++i)
-    keys.emplace_back(log.guide[i], pc[i], load[i], std::round(log.temperature_C[i]), v[i], static_cast<double>(log.direction[i]));
+  for (std::size_t i = 0; i < log.size(); ++i) {
+    ConditionKey& key = keys.emplace_back(condition_key(log, i));
+    std::get<1>(key) = pc[i], std::get<2>(key) = load[i], std::get<4>(key) = v[i];
+  }
   return keys;
 }
 
