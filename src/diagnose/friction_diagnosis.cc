@@ -37,6 +37,13 @@ constexpr double kMinCauseAcceleration_m_s2 = 0.01;
 // measured the force on an axis whose mounting is known; otherwise it may as well be the weight
 // on an inclined axis or a drive's current offset, and it is reported as what the data show,
 // under a neutral name, with those candidates.
+// Whether the log's accelerations are large enough to matter beside friction (RMS).
+bool accelerates(const FrictionLog& log) {
+  double sum2 = 0;
+  for (double a : log.acceleration_m_s2) sum2 += a * a;
+  return log.size() > 0 && std::sqrt(sum2 / static_cast<double>(log.size())) >= kMinCauseAcceleration_m_s2;
+}
+
 // Whether a log column varies enough for a cause that needs it (FrictionEffectInfo::varies):
 // both directions, or a spread beyond the column's resolution (a condition a combination law
 // did not log is constant at its neutral value).
@@ -62,12 +69,7 @@ bool varies_in(const FrictionLog& log, std::string_view column) {
   if (column == "distance_since_reversal_m") return spread(log.distance_since_reversal_m) > 1e-3;
   // Accelerations that matter beside friction, on a log whose moving mass is not fitted anyway
   // (a trajectory fits it with the law: moving_mass).
-  if (column == "acceleration_m_s2") {
-    if (log.trajectory) return false;
-    double sum2 = 0;
-    for (double a : log.acceleration_m_s2) sum2 += a * a;
-    return std::sqrt(sum2 / static_cast<double>(log.size())) >= kMinCauseAcceleration_m_s2;
-  }
+  if (column == "acceleration_m_s2") return !log.trajectory && accelerates(log);
   return true;
 }
 
@@ -169,6 +171,54 @@ std::vector<Covariate> covariates_of(const FrictionLog& log, double tolerance) {
     }
   }
   return c;
+}
+
+// Along the travel: position, distance and time since the last reversal and acceleration change
+// within a condition (a condition's mean says nothing about them), and neighbouring samples'
+// residuals are correlated. So the run-centred residuals are averaged in cells (run, tenth of the
+// run's samples, sense, speed bin, covariate bin); the stretches of a run and the runs are the
+// replicates. F test: do the covariate's bins explain more of the cell means than the speed bins
+// (in each sense) already do? Ten quantile bins each: a trend or a feature a tenth of the travel
+// wide, not a short ripple (position_ripple's own fit finds those). Only the covariates that
+// vary (a tidy log has none: all 0).
+std::vector<CovariateTest> along_the_travel(const FrictionLog& log, const std::vector<double>& centred) {
+  constexpr std::size_t kStretches = 10;
+  constexpr std::size_t kLabels = 12;  // value_bins' labels are below its max_groups, 12
+  std::vector<std::pair<std::string, const std::vector<double>*>> along;
+  if (varies_in(log, "position_m")) along.emplace_back("position_m (along the travel)", &log.position_m);
+  if (varies_in(log, "distance_since_reversal_m")) {
+    along.emplace_back("distance_since_reversal_m", &log.distance_since_reversal_m);
+    if (std::none_of(log.time_since_reversal_s.begin(), log.time_since_reversal_s.end(), [](double t) { return std::isnan(t); }))
+      along.emplace_back("time_since_reversal_s", &log.time_since_reversal_s);
+  }
+  if (accelerates(log)) along.emplace_back("acceleration_m_s2 (within conditions)", &log.acceleration_m_s2);
+  if (along.empty()) return {};
+  const std::size_t n = log.size();
+  const std::vector<std::size_t> speed = detail::value_bins(log.velocity_m_s);
+  std::vector<std::size_t> count(log.run_names.size(), 0), seen(log.run_names.size(), 0), stretch(n);
+  for (std::size_t i = 0; i < n; ++i) ++count[log.run[i]];
+  for (std::size_t i = 0; i < n; ++i) stretch[i] = seen[log.run[i]]++ * kStretches / count[log.run[i]];
+  std::vector<CovariateTest> tests;
+  for (const auto& [name, values] : along) {
+    const std::vector<std::size_t> bin = detail::value_bins(*values);
+    // cell -> (sum, count); the cell's label for the speed alone and for speed and covariate
+    std::map<std::tuple<std::uint32_t, std::size_t, int, std::size_t, std::size_t>, std::pair<double, double>> cells;
+    for (std::size_t i = 0; i < n; ++i) {
+      auto& c = cells[{log.run[i], stretch[i], log.direction[i] > 0 ? 1 : 0, speed[i], bin[i]}];
+      c.first += centred[i];
+      c.second += 1;
+    }
+    std::vector<double> means;
+    std::vector<std::size_t> coarse, fine;
+    for (const auto& [key, sum] : cells) {
+      const auto& [run, part, sense, v, b] = key;
+      means.push_back(sum.first / sum.second);
+      coarse.push_back(2 * v + static_cast<std::size_t>(sense));
+      fine.push_back(coarse.back() * kLabels + b);
+    }
+    tests.push_back(detail::nested_anova(name, coarse, fine, means));
+  }
+  return tests;
 }
 
 // The law's residuals (measured - law, no offsets) per sample, and per run their mean.
@@ -405,6 +455,7 @@ ResidualDiagnostics diagnose_residuals(const FrictionLog& log, const FrictionFit
     std::iota(order.begin(), order.end(), 0.0);
     d.covariates.push_back(detail::regression_test("run order", {}, {order}, run_e));
   }
+  for (CovariateTest& t : along_the_travel(log, law.centred)) d.covariates.push_back(std::move(t));
   // Pairs: within runs when either varies within runs, else between runs (product term).
   for (std::size_t a = 0; a < k; ++a)
     for (std::size_t b = a + 1; b < k; ++b) {
