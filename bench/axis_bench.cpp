@@ -14,6 +14,11 @@
 //   - BM_AxisFitTrajectory1M: fit_friction on the loaded log (the law, moving_mass and
 //     axis_gravity, covariance as the defaults compute it) with the defaults, and lean (one
 //     start, no per-run fits); samples/s.
+//   - BM_AxisDiagnoseTrajectory100k (issue 38's target, <= 2 s on 2 cores): diagnose_friction
+//     with its defaults on the same axis logged for 6 cycles per speed instead of 49 (~10^5
+//     samples), every library cause the log can show tried (the trajectory's: direction,
+//     gravity, ripple, pre-sliding, ...), the residual tests along the travel, the empirical term
+//     when structure remains.
 // Run: build/bench/lmcal_axis_bench
 #include <benchmark/benchmark.h>
 
@@ -21,6 +26,7 @@
 #include <string>
 #include <vector>
 
+#include "lmcal/diagnose/friction_diagnosis.hpp"
 #include "lmcal/fit/friction_fit.hpp"
 #include "lmcal/io/friction_log.hpp"
 #include "lmcal/rig/axis_rig.hpp"
@@ -37,36 +43,38 @@ struct AxisLog {
   std::int64_t bytes = 0;
 };
 
+AxisLog write_axis_log(const fs::path& folder, int cycles) {
+  const FrictionRigConfig setup = bundled_axis_setup(2027);
+  AxisRigConfig axis;
+  axis.incline_deg = 20;
+  axis.cruise_s = 0.5;
+  axis.cycles = cycles;
+  const AxisRigOutput made = generate_axis_logs(setup, axis, {});
+  AxisLog out;
+  fs::create_directories(folder / "friction");
+  for (const auto& [name, text] : made.run_files) {
+    out.files.push_back(folder / name);
+    bench::write(out.files.back(), text);
+    out.bytes += static_cast<std::int64_t>(text.size());
+  }
+  out.manifest = folder / "friction.toml";
+  bench::write(out.manifest, made.manifest_toml);
+  return out;
+}
+
 const AxisLog& axis_log() {
   static const bench::ScratchDir dir("lmcal_axis_bench");
-  static const AxisLog log = [] {
-    const FrictionRigConfig setup = bundled_axis_setup(2027);
-    AxisRigConfig axis;
-    axis.incline_deg = 20;
-    axis.cruise_s = 0.5;
-    axis.cycles = 49;
-    const AxisRigOutput made = generate_axis_logs(setup, axis, {});
-    AxisLog out;
-    fs::create_directories(dir.path() / "friction");
-    for (const auto& [name, text] : made.run_files) {
-      out.files.push_back(dir.path() / name);
-      bench::write(out.files.back(), text);
-      out.bytes += static_cast<std::int64_t>(text.size());
-    }
-    out.manifest = dir.path() / "friction.toml";
-    bench::write(out.manifest, made.manifest_toml);
-    return out;
-  }();
+  static const AxisLog log = write_axis_log(dir.path(), 49);
   return log;
 }
 
 // The reader's options as `lmcal fit friction --segmentation trajectory --axis-incline 20`
 // gives them (the manifest's [raw] says the same).
-FrictionDataSet load_axis_log() {
+FrictionDataSet load_axis_log(const AxisLog& files = axis_log()) {
   RawFrictionOptions raw;
   raw.segmentation = RawSegmentation::trajectory;
   raw.axis_incline_deg = 20;
-  return load_friction_dataset(axis_log().manifest, nullptr, raw, {"segmentation", "axis_incline_deg"});
+  return load_friction_dataset(files.manifest, nullptr, raw, {"segmentation", "axis_incline_deg"});
 }
 
 void BM_AxisLoadTrajectory1M(benchmark::State& state) {
@@ -109,5 +117,22 @@ FrictionFitOptions lean() {
 
 BENCHMARK_CAPTURE(BM_AxisFitTrajectory1M, defaults, FrictionFitOptions{})->Unit(benchmark::kMillisecond)->Iterations(2);
 BENCHMARK_CAPTURE(BM_AxisFitTrajectory1M, lean, lean())->Unit(benchmark::kMillisecond)->Iterations(3);
+
+void BM_AxisDiagnoseTrajectory100k(benchmark::State& state) {
+  static const bench::ScratchDir dir("lmcal_axis_bench_100k");
+  static const FrictionLog log = load_axis_log(write_axis_log(dir.path(), 6)).log;
+  std::size_t tried = 0, accepted = 0;
+  for (auto _ : state) {
+    const FrictionDiagnosis d = diagnose_friction(log, {});
+    benchmark::DoNotOptimize(d.cv_rmse_after_N);
+    tried = d.rounds.empty() ? 0 : d.rounds.front().size();
+    accepted = d.accepted.size();
+  }
+  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(log.size()));
+  state.counters["samples"] = static_cast<double>(log.size());
+  state.counters["candidates"] = static_cast<double>(tried);
+  state.counters["accepted"] = static_cast<double>(accepted);
+}
+BENCHMARK(BM_AxisDiagnoseTrajectory100k)->Unit(benchmark::kMillisecond)->Iterations(2)->UseRealTime();
 
 }  // namespace
