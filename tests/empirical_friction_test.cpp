@@ -64,6 +64,12 @@ void expect_found(const Outcome& o, const std::string& what) {
   for (const auto& c : f.components) {  // every coefficient with a finite interval around it
     EXPECT_LE(c.coefficient.ci_low, c.coefficient.value);
     EXPECT_GE(c.coefficient.ci_high, c.coefficient.value);
+    // A sparse form is judged as a cause is: each of its terms told from 0 (issue 38 #5; a
+    // superfluous c·P beside V·(T - 40) was kept before).
+    if (f.form == "sparse") {
+      EXPECT_TRUE(c.coefficient.ci_low > 0 || c.coefficient.ci_high < 0)
+          << c.symbol << " [" << c.coefficient.ci_low << ", " << c.coefficient.ci_high << "] in " << f.formula;
+    }
   }
 }
 

@@ -411,6 +411,41 @@ SmoothChoice smooth_term(const FrictionLog& log, const TermSeries& series, const
   return out;
 }
 
+// The empirical term is judged as a cause is (score_candidate): its interval must exclude its
+// neutral value, 0, and the whole model must not lose on held-out runs. Which coefficient
+// speaks for the term: for a sparse form every term must be there, so the one nearest 0 in its
+// standard errors decides; for a smooth term the curve must differ from 0 somewhere, so the basis
+// coefficient farthest from 0 does (one B-spline's coefficient may sit at 0 where the curve
+// does not). Returns that term's index, terms.size() when no coefficient has a finite SE (the
+// interval unknown: not a rejection, the fit's own problem is reported instead).
+bool is_smooth(const std::vector<FrictionTerm>& terms) {
+  return !terms.empty() && terms.front().factors.front().transform == TermTransform::spline;
+}
+
+const ParameterEstimate& term_coefficient(const FrictionFitResult& fit, const std::vector<FrictionTerm>& terms, std::size_t k) {
+  std::size_t at = fit.fit.parameters.size() - term_parameter_count(terms);
+  for (std::size_t j = 0; j < k; ++j) at += terms[j].has_scale() ? 2 : 1;
+  return fit.fit.parameters[at];
+}
+
+std::size_t decisive_term(const FrictionFitResult& fit, const std::vector<FrictionTerm>& terms) {
+  const bool smooth = is_smooth(terms);
+  std::size_t decisive = terms.size();
+  double decisive_t = smooth ? -1.0 : std::numeric_limits<double>::infinity();
+  for (std::size_t k = 0; k < terms.size(); ++k) {
+    const ParameterEstimate& c = term_coefficient(fit, terms, k);
+    const double t = std::abs(c.value) / c.se;
+    if (std::isfinite(t) && (smooth ? t > decisive_t : t < decisive_t)) decisive = k, decisive_t = t;
+  }
+  return decisive;
+}
+
+// The score's value and interval from the decisive coefficient, its neutral value 0.
+void score_the_term(const FrictionFitResult& fit, const std::vector<FrictionTerm>& terms, CandidateScore& score) {
+  score.neutral = 0;
+  if (const std::size_t k = decisive_term(fit, terms); k < terms.size()) set_estimate(score, term_coefficient(fit, terms, k));
+}
+
 }  // namespace
 
 FrictionTermSearch learn_friction_term(const FrictionLog& log, const FrictionFitResult& current,
@@ -500,9 +535,19 @@ FrictionTermSearch learn_friction_term(const FrictionLog& log, const FrictionFit
       for (auto k = drop.rbegin(); k != drop.rend(); ++k) t.terms.erase(t.terms.begin() + static_cast<std::ptrdiff_t>(*k));
       t.fit = refit(t.terms);
     }
+    // A sparse form keeps only the terms its fit can tell from 0, as a cause must be: the
+    // weakest of the others is dropped and the rest refitted, one at a time.
+    while (!is_smooth(t.terms) && t.terms.size() > 1) {
+      CandidateScore weakest;
+      score_the_term(t.fit, t.terms, weakest);
+      if (interval_excludes_neutral(weakest)) break;
+      t.terms.erase(t.terms.begin() + static_cast<std::ptrdiff_t>(decisive_term(t.fit, t.terms)));
+      t.fit = refit(t.terms);
+    }
     ModelFit after = summarise(t.fit);
     if (!undetermined(t.fit).empty()) after.problem = "a term the data cannot determine beside the law";
     t.score.effect = "empirical term";
+    score_the_term(t.fit, t.terms, t.score);
     t.passes = score_candidate(before, after, rules, t.score);
     return t;
   };
