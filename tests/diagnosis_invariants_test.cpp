@@ -128,7 +128,8 @@ void expect_friction_invariants(const FrictionDiagnosis& d, const std::string& l
 // the baseline's, and the signed offset is what is found first.
 class DiagnosisInvariants : public test::TempFolderTest {
  protected:
-  FrictionLog axis_log(std::uint64_t seed, double asymmetry) {
+  // `sensor`: the manifest's [raw] force_sensor, or none stated.
+  FrictionLog axis_log(std::uint64_t seed, double asymmetry, const std::string& sensor = "") {
     const FrictionRigConfig setup = bundled_axis_setup(seed);
     AxisRigConfig axis;
     axis.cycles = 1;
@@ -138,12 +139,14 @@ class DiagnosisInvariants : public test::TempFolderTest {
     set_rig_effect(effects, "direction_asymmetry", asymmetry);
     const AxisRigOutput made = generate_axis_logs(setup, axis, effects);
     for (const auto& [file, text] : made.run_files) write(file, text);
-    return load_friction_dataset(write("friction.toml", made.manifest_toml)).log;
+    std::string manifest = made.manifest_toml;
+    if (!sensor.empty()) manifest.replace(manifest.find("[raw]\n"), 6, fmt::format("[raw]\nforce_sensor = \"{}\"\n", sensor));
+    return load_friction_dataset(write("friction.toml", manifest)).log;
   }
 };
 
 TEST_F(DiagnosisInvariants, ACommonRunZeroDoesNotActAsASignedOneBesideADirectionAsymmetry) {
-  for (std::uint64_t seed : {3, 4}) {
+  for (std::uint64_t seed : {3, 4, 5}) {
     const FrictionDiagnosis d = diagnose_friction(axis_log(seed, 0.1), {});
     for (const auto& round : d.rounds)
       for (const auto& c : round)
@@ -157,6 +160,13 @@ TEST_F(DiagnosisInvariants, ACommonRunZeroDoesNotActAsASignedOneBesideADirection
     EXPECT_EQ(d.summary.find("signed_zero_offset"), std::string::npos) << d.summary;
     EXPECT_NE(d.summary.find("a drive's current offset"), std::string::npos) << d.summary;
     expect_friction_invariants(d, fmt::format("axis seed {}", seed));
+    // The same force measured by a load cell on an axis whose incline is stated: a load cell's
+    // zero is what a constant signed force then is, and it is named so.
+    const FrictionDiagnosis cell = diagnose_friction(axis_log(seed, 0.1, "load_cell"), {});
+    ASSERT_FALSE(cell.accepted.empty()) << cell.summary;
+    EXPECT_EQ(cell.accepted.front().effect, "signed_zero_offset") << "seed " << seed << ": " << cell.summary;
+    EXPECT_EQ(shown_name(cell.accepted.front()), "signed_zero_offset") << cell.summary;
+    EXPECT_EQ(cell.summary.find("signed_constant_force"), std::string::npos) << cell.summary;
   }
 }
 
