@@ -53,7 +53,9 @@ void expect_one_number_per_quantity(const Diagnosis& d, double before, double af
   for (std::size_t k = 0; k < d.steps.size(); ++k) {
     const DiagnosisStep& s = d.steps[k];
     EXPECT_EQ(s.cv_rmse_before, level) << "step " << k + 1 << " (" << s.action << " " << s.name << ")";
-    if (k > 0 && std::isfinite(shape)) EXPECT_EQ(s.cv_shape_rmse_before, shape) << "step " << k + 1;
+    if (k > 0 && std::isfinite(shape)) {
+      EXPECT_EQ(s.cv_shape_rmse_before, shape) << "step " << k + 1;
+    }
     level = s.cv_rmse_after;
     shape = s.cv_shape_rmse_after;
     EXPECT_TRUE(in_gain_range(s.gain_percent)) << s.gain_percent;
@@ -275,17 +277,22 @@ void expect_issue_38_rules(const FrictionDiagnosis& d, const FrictionDiagnosisOp
       EXPECT_EQ(l->against, "pure error");
     }
   }
-  if (d.final.lack_of_fit.tested && !d.final.lack_of_fit.fits)
+  if (d.final.lack_of_fit.tested && !d.final.lack_of_fit.fits) {
     EXPECT_NE(d.summary.find("tructure remains"), std::string::npos);
-  for (const CandidateScore& c : d.accepted)
-    if (std::isfinite(c.ci_low))
+  }
+  for (const CandidateScore& c : d.accepted) {
+    if (std::isfinite(c.ci_low)) {
       EXPECT_TRUE(c.neutral < c.ci_low || c.neutral > c.ci_high)
           << c.effect << " [" << c.ci_low << ", " << c.ci_high << "] neutral " << c.neutral;
-  for (const CovariateTest& t : d.final.covariates)
-    if (t.p_adjusted < o.structure_p && !t.structured)
+    }
+  }
+  for (const CovariateTest& t : d.final.covariates) {
+    if (t.p_adjusted < o.structure_p && !t.structured) {
       EXPECT_TRUE(std::any_of(d.design_notes.begin(), d.design_notes.end(),
                               [&](const std::string& n) { return n.find(t.covariate + " (p = ") == 0; }))
           << t.covariate << " p = " << t.p_value << " left without a note";
+    }
+  }
   const auto j = nlohmann::json::parse(friction_diagnosis_json(d));
   EXPECT_DOUBLE_EQ(j["final_residuals"]["lack_of_fit"].at("condition_tolerance").get<double>(), o.condition_tolerance);
 }
@@ -411,8 +418,9 @@ TEST_F(DiagnosisInvariants, EveryDiagnosisQuotesOneNumberPerQuantity) {
     };
     expect_one_number_per_quantity(t, t.cv_rmse_before_K, t.cv_rmse_after_K, thermal_diagnosis_json(t), "K", no_bounds,
                                    fmt::format("thermal design {} ({})", k, data.runs.front().id));
-    if (t.final.lack_of_fit.tested && !t.final.lack_of_fit.fits)
+    if (t.final.lack_of_fit.tested && !t.final.lack_of_fit.fits) {
       EXPECT_NE(t.summary.find("tructure remains"), std::string::npos) << t.summary;
+    }
     for (const auto& round : t.rounds)
       for (const auto& c : round)
         if (std::isfinite(c.alpha_low)) {

@@ -3,6 +3,7 @@
 #include "lmcal/version.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <bit>
@@ -475,6 +476,15 @@ std::vector<detail::ParameterSpec> one_load_holds_k1(std::vector<detail::Paramet
 
 }  // namespace
 
+std::string held_out_caveat(const FrictionFitResult& fit) {
+  if (fit.cv_undetermined_runs.empty()) return {};
+  return fmt::format("{} {} alone what the law needs (the only {} at a load, preload or temperature): held out, that "
+                     "part of the law stays at the full data's estimate, so {} held-out error is optimistic",
+                     fmt::join(fit.cv_undetermined_runs, ", "), fit.cv_undetermined_runs.size() == 1 ? "varies" : "each vary",
+                     fit.cv_undetermined_runs.size() == 1 ? "run" : "runs",
+                     fit.cv_undetermined_runs.size() == 1 ? "its" : "their");
+}
+
 FrictionFitResult fit_friction(const FrictionLog& logged, const FrictionFitOptions& given) {
   if (logged.size() == 0) throw InvalidParameter("log", "the friction log has no samples");
   // A trajectory's drive force carries its inertia (and an incline's weight): fitted with the law.
@@ -603,7 +613,9 @@ FrictionFitResult fit_friction(const FrictionLog& logged, const FrictionFitOptio
     std::vector<bool> held;
     // A parameter on its bound stays there: a held-out step must not carry it across (a drag below 0).
     for (const auto& p : out.fit.parameters) held.push_back(!p.free || p.held_unidentifiable || p.at_bound);
-    const Eigen::VectorXd held_out = detail::leave_group_out_residuals(final_state, run_of, held);
+    std::vector<std::size_t> alone;
+    const Eigen::VectorXd held_out = detail::leave_group_out_residuals(final_state, run_of, held, &alone);
+    for (std::size_t r : alone) out.cv_undetermined_runs.push_back(log.run_names[r]);
     // A held-out run under random offsets is a new setup with an unknown zero: predicted
     // with the offsets' mean, 0 (its own mean is not taken out). Fixed offsets stay profiled.
     const std::vector<double> prediction_error = unwhitened(held_out, run_of, data.run_shrink);

@@ -113,8 +113,11 @@ FitResult solve_least_squares(const LeastSquaresModel& model, const std::vector<
 // is -J_gᵀ r_g there), and group g's residuals become r_g - J_g Δθ... with r = data - model,
 // ∂r/∂θ = J: r_g + J_g Δθ. Returns every row's held-out residual. `held` parameters stay.
 // Exact for models linear in θ; otherwise the usual one-step approximation of refitting.
+// Where the other groups leave a direction of θ undetermined (only group g varies a condition
+// the model needs), that direction keeps the full fit's estimate and g goes into `undetermined`
+// (its held-out residuals are then optimistic there: say so).
 Eigen::VectorXd leave_group_out_residuals(const FinalState& state, const std::vector<std::size_t>& group_of_row,
-                                          const std::vector<bool>& held);
+                                          const std::vector<bool>& held, std::vector<std::size_t>* undetermined = nullptr);
 
 // The same in parts, for callers that hold out each group with its own parameters held:
 // J_gᵀJ_g and J_gᵀr_g per group over all parameters (computed once, by blocks of consecutive
@@ -125,8 +128,10 @@ struct GroupNormalEquations {
   Eigen::MatrixXd total;           // Σ_g H_g
 };
 GroupNormalEquations group_normal_equations(const FinalState& state, const std::vector<std::size_t>& group_of_row);
-// Δθ with group g left out and `held` parameters kept (zero in the result).
-Eigen::VectorXd leave_group_out_step(const GroupNormalEquations& sums, std::size_t g, const std::vector<bool>& held);
+// Δθ with group g left out and `held` parameters kept (zero in the result); the directions the
+// other groups leave undetermined kept too, and `*undetermined` set when there are any.
+Eigen::VectorXd leave_group_out_step(const GroupNormalEquations& sums, std::size_t g, const std::vector<bool>& held,
+                                     bool* undetermined = nullptr);
 
 // (JᵀJ)⁻¹ over the parameters not held (rows/columns of held ones zero); false with a message
 // when J is rank deficient.

@@ -65,6 +65,7 @@ void friction_model(Page& page, const Calibration& c) {
                              "estimated with the constants). Held-out (leave-one-run-out, each run a new setup) RMSE {} N; "
                              "residual RMSE {} N.",
                              c.friction_log->size(), f.runs.size(), num(f.run_offset_sd_N, 3), num(f.cv_rmse_N), num(f.rmse_N)));
+  if (const std::string caveat = held_out_caveat(f); !caveat.empty()) page.paragraph("Held out: " + caveat + ".");
   empirical_terms(page, f.terms);
   parameter_table(page, friction_fit_as_shown(f));
   caveats(page, f.fit);

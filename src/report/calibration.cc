@@ -441,14 +441,16 @@ nlohmann::json how_sure_json(const FitResult& fit) {
 nlohmann::json friction_json(const FrictionFitResult& f) {
   nlohmann::json constants = nlohmann::json::array();
   for (const auto& p : f.fit.parameters) constants.push_back(detail::parameter_json(p));
-  return {{"rmse_N", number(f.rmse_N)},
-          {"cv_rmse_N", number(f.cv_rmse_N)},
-          {"max_relative_error", number(f.max_relative_error)},
-          {"runs", f.runs.size()},
-          {"parameters", constants},
-          {"uncertainty", how_sure_json(f.fit)},
-          {"converged", f.fit.solver.converged},
-          {"identifiable", f.fit.identifiability.identifiable}};
+  nlohmann::json j = {{"rmse_N", number(f.rmse_N)},
+                      {"cv_rmse_N", number(f.cv_rmse_N)},
+                      {"max_relative_error", number(f.max_relative_error)},
+                      {"runs", f.runs.size()},
+                      {"parameters", constants},
+                      {"uncertainty", how_sure_json(f.fit)},
+                      {"converged", f.fit.solver.converged},
+                      {"identifiable", f.fit.identifiability.identifiable}};
+  if (!f.cv_undetermined_runs.empty()) j["cv_caveat"] = held_out_caveat(f);
+  return j;
 }
 
 nlohmann::json thermal_json(const ThermalFitResult& t, const ThermalFitOptions& o) {
@@ -611,8 +613,8 @@ std::string parameter_lines(const FitResult& fit) {
   for (const auto& p : fit.parameters) {
     if (p.interval == "none" || p.per_run) continue;
     const bool profile = p.interval == "profile";
-    s += fmt::format("    {:<22} {:>11.5g}  [{:.5g}, {:.5g}]{}\n", p.name, p.value, profile ? p.profile_low : p.ci_low,
-                     profile ? p.profile_high : p.ci_high, profile ? " profile" : "");
+    s += fmt::format("    {:<22} {:>11.5g}  [{:.5g}, {:.5g}]{}{}\n", p.name, p.value, profile ? p.profile_low : p.ci_low,
+                     profile ? p.profile_high : p.ci_high, profile ? " profile" : "", p.at_bound ? ", on its bound" : "");
   }
   return s;
 }
@@ -651,6 +653,7 @@ std::string calibration_summary(const Calibration& c) {
                      m.friction_causes.empty() ? "" : fmt::format(" + {}", fmt::join(m.friction_causes, " + ")), m.friction->rmse_N,
                      std::isfinite(held_out) ? fmt::format("held-out {:.3f} N", held_out)
                                              : std::string("no held-out RMSE (one run: none to hold out)"));
+    if (const std::string caveat = held_out_caveat(*m.friction); !caveat.empty()) s += "    held-out: " + caveat + "\n";
     s += parameter_lines(friction_fit_as_shown(*m.friction)) + how_sure_line(m.friction->fit);
   }
   if (m.thermal) {

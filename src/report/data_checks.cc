@@ -97,6 +97,13 @@ std::vector<std::string> calibration_warnings(const Calibration& c) {
   }
   friction_run_warnings(c, out);
   thermal_run_warnings(c, out);
+  // The calibrated models' own warnings (a parameter on its bound, a fit that stopped short):
+  // the summary's parameter lines are theirs, so are these.
+  const CalibratedModel& m = c.calibrated;
+  if (m.friction)
+    for (const std::string& w : m.friction->fit.warnings) out.push_back("the calibrated friction model: " + w);
+  if (m.thermal)
+    for (const std::string& w : m.thermal->joint.warnings) out.push_back("the calibrated rail model: " + w);
   return out;
 }
 

@@ -156,6 +156,10 @@ struct FrictionFitResult {
   // run's own level taken out (its shape only; equal to the first with fixed offsets).
   double cv_rmse_N = std::numeric_limits<double>::quiet_NaN();
   double cv_shape_rmse_N = std::numeric_limits<double>::quiet_NaN();
+  // Runs the others cannot stand in for: each alone varies something the law needs (the only
+  // run at its load, preload or temperature), so held out, that part of the fit stays at the
+  // full data's estimate, and their held-out errors are optimistic (held_out_caveat says so).
+  std::vector<std::string> cv_undetermined_runs;
   // Per run: the zero offset in the predictions — the run's mean of measured - law (fixed
   // offsets), its shrunken estimate (random: mean · nλ/(1 + nλ)), or 0 (none) — and that mean.
   std::vector<double> run_offset_N;
@@ -187,6 +191,10 @@ struct FrictionFitResult {
   FrictionConstants<double> constants() const;
   FrictionEffects<double> effects() const;
 };
+
+// "" or, where cv_undetermined_runs is not empty, the words that go beside the held-out RMSE:
+// which runs alone determine part of the law, and what that means for the number.
+std::string held_out_caveat(const FrictionFitResult& fit);
 
 FrictionFitResult fit_friction(const FrictionLog& log, const FrictionFitOptions& options);
 
