@@ -12,6 +12,7 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <numeric>
+#include <optional>
 #include <set>
 #include <span>
 #include <tuple>
@@ -476,6 +477,37 @@ std::vector<detail::ParameterSpec> one_load_holds_k1(std::vector<detail::Paramet
 
 }  // namespace
 
+namespace {
+
+// The weight fitted along a stated incline against M g sin θ with the mass fitted beside it.
+// axis_gravity is + G·direction in the motion's sense, the shape of any constant offset of the
+// drive's force (a current offset, a sensor zero): it carries both. Where they differ beyond
+// 3 SE and by over 1 % of the weight, the fit says which of the two the difference may be.
+void check_weight_against_mass(const FrictionLog& log, FrictionFitResult& out) {
+  const auto index = [&](std::string_view name) -> std::optional<std::size_t> {
+    for (std::size_t j = 0; j < out.fit.parameters.size(); ++j)
+      if (out.fit.parameters[j].name == name) return j;
+    return std::nullopt;
+  };
+  const auto g = index(AxisGravity::info.name), m = index(MovingMass::info.name);
+  if (!log.incline_stated || !g || !m || out.fit.covariance.rows() != static_cast<Eigen::Index>(out.fit.parameters.size())) return;
+  const ParameterEstimate &G = out.fit.parameters[*g], &M = out.fit.parameters[*m];
+  if (!G.free || !M.free || !std::isfinite(G.se) || !std::isfinite(M.se)) return;
+  const double per_kg = axis_weight_N(1.0, log.axis_incline_deg), weight = M.value * per_kg, difference = G.value - weight;
+  const auto gi = static_cast<Eigen::Index>(*g), mi = static_cast<Eigen::Index>(*m);
+  const double variance = out.fit.covariance(gi, gi) + per_kg * per_kg * out.fit.covariance(mi, mi) -
+                          2 * per_kg * out.fit.covariance(gi, mi);
+  const double se = std::sqrt(std::max(variance, 0.0));
+  if (!(std::abs(difference) > 3 * se && std::abs(difference) > 0.01 * std::abs(weight))) return;
+  out.fit.warnings.push_back(fmt::format(
+      "axis_gravity {:.5g} N is {:+.3g} ± {:.2g} N off the weight the fitted mass gives along the stated incline, "
+      "M g sin θ = {:.5g} N ({:.5g} kg at {:g}°): a constant offset in the drive's force (a current offset, a "
+      "sensor's zero) or an incline other than stated; axis_gravity carries both",
+      G.value, difference, se, weight, M.value, log.axis_incline_deg));
+}
+
+}  // namespace
+
 std::string held_out_caveat(const FrictionFitResult& fit) {
   if (fit.cv_undetermined_runs.empty()) return {};
   return fmt::format("{} {} alone what the law needs (the only {} at a load, preload or temperature): held out, that "
@@ -777,6 +809,7 @@ FrictionFitResult fit_friction(const FrictionLog& logged, const FrictionFitOptio
       out.spread.push_back(s);
     }
   }
+  check_weight_against_mass(log, out);
   out.law = log.law;
   if (log.law.combination()) {
     out.law_temperature_C = law_temperature_C(log);

@@ -15,6 +15,7 @@
 #include "lmcal/error.hpp"
 #include "lmcal/io/catalog.hpp"
 #include "lmcal/io/csv_writer.hpp"
+#include "lmcal/models/friction_effects/axis_gravity.hpp"
 #include "rig/rig_common.hpp"
 
 namespace lmcal {
@@ -39,7 +40,6 @@ AxisReference parse_axis_reference(std::string_view name) {
 
 namespace {
 
-constexpr double kGravity_m_s2 = 9.80665;
 
 struct ReferencePoint {
   double x_m = 0, v_m_s = 0, a_m_s2 = 0;
@@ -159,7 +159,7 @@ class Plant {
   Plant(const FrictionConstants<double>& k, const FrictionEffects<double>& e, const FrictionConditions<double>& c,
         const AxisRigConfig& a)
       : k_(k), e_(e), c_(c.cast<Jet>()), M_(a.moving_mass_kg), v_s_(a.regularisation_m_s),
-        gravity_N_(a.moving_mass_kg * kGravity_m_s2 * std::sin(a.incline_deg * std::numbers::pi / 180)) {}
+        gravity_N_(axis_weight_N(a.moving_mass_kg, a.incline_deg)) {}
 
   double gravity_N() const { return gravity_N_; }
 
@@ -372,8 +372,7 @@ AxisRigOutput generate_axis_logs(const FrictionRigConfig& conditions, const Axis
   for (double V : conditions.velocity_m_s) require_positive("velocity_m_s", V);
 
   AxisRigOutput out;
-  const double gravity_N =
-      axis.moving_mass_kg * kGravity_m_s2 * std::sin(axis.incline_deg * std::numbers::pi / 180);
+  const double gravity_N = axis_weight_N(axis.moving_mass_kg, axis.incline_deg);
   std::string manifest = fmt::format(
       "# SYNTHETIC closed-loop axis log made by the lmcal virtual rig, not measured.\n"
       "name = \"virtual closed-loop axis\"\n\n[raw]\nforce_sign = {}\n",
@@ -407,7 +406,7 @@ AxisRigOutput generate_axis_logs(const FrictionRigConfig& conditions, const Axis
       {"moving_mass_kg", axis.moving_mass_kg},
       {"incline_deg", axis.incline_deg},
       {"gravity_N", gravity_N},
-      {"g_m_s2", kGravity_m_s2},
+      {"g_m_s2", kStandardGravity_m_s2},
       {"force_constant_N_A", axis.force_constant_N_A},
       {"current_noise_A", axis.current_noise_A},
       {"current_noise_ar1", axis.current_noise_ar1},

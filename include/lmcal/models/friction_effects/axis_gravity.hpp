@@ -7,10 +7,20 @@
 
 #include "lmcal/export.hpp"
 
+#include <cmath>
+#include <numbers>
+
 #include "lmcal/models/friction.hpp"
 #include "lmcal/models/friction_effect.hpp"
 
 namespace LMCAL_API lmcal {
+
+inline constexpr double kStandardGravity_m_s2 = 9.80665;  // CGPM 1901
+
+// The weight along the axis, M g sin θ (+x up), N.
+inline double axis_weight_N(double mass_kg, double incline_deg) {
+  return mass_kg * kStandardGravity_m_s2 * std::sin(incline_deg * std::numbers::pi / 180);
+}
 
 struct AxisGravity {
   static constexpr FrictionEffectInfo info{"axis_gravity", "N", "weight along an inclined axis G: + direction G",
