@@ -44,7 +44,7 @@ void print_trace(const ThermalTrace& trace) {
 void print_segmentation(const RunSegmentation& s) {
   if (s.filter_window != 0) {  // read as a trajectory
     std::cout << fmt::format("    run {}: {} samples, {} kept as a trajectory (filter window {} samples, {:.3g} s: noise "
-                             "{:.2g} m/s, {:.2g} m/s²); dropped {} at rest or reversing, {} pre-sliding, {} at steps of "
+                             "{:.2g} m/s, {:.2g} m/s²); dropped {} at rest, reversing or at the log's ends, {} pre-sliding, {} at steps of "
                              "the force",
                              s.run, s.samples, s.kept, s.filter_window, s.filter_window_s, s.velocity_noise_m_s,
                              s.acceleration_noise_m_s2, s.dropped_stationary, s.dropped_settling, s.dropped_acceleration);

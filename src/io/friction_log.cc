@@ -655,7 +655,8 @@ class FileLoader {
       log_.trajectory = true;
       log_.axis_incline_deg = raw_.axis_incline_deg;
       skip(total.dropped_stationary, "at rest or reversing (slower than max(min_speed, 3 σ_v), or within the filter's "
-                                     "reach of such a sample: static friction, not the sliding law)");
+                                     "reach of such a sample: static friction, not the sliding law) or within the "
+                                     "filter's reach of the log's ends (a window cut short)");
       skip(total.dropped_settling, fmt::format("pre-sliding (the first {} mm of travel after rest or a reversal)",
                                                raw_.presliding_m * 1e3));
     } else {

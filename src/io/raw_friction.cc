@@ -444,6 +444,10 @@ Segmented segment_trajectory(const RunSamples& run, Motion motion, const RawFric
     if (std::abs(s.velocity_m_s[i]) >= rest_m_s && !turning) continue;
     for (std::size_t j = i >= reach ? i - reach : 0; j < std::min(n, i + reach + 1); ++j) s.fate[j] = Fate::stationary;
   }
+  // And within the filter's reach of the log's first and last samples: the window is cut short
+  // there, not centred, and its v, a and F are biased (a sinusoidal log that starts and ends at
+  // rest kept its first and last samples at 1-2 mm/s, 2-3 N off the law).
+  for (std::size_t j = 0; j < std::min(n, reach); ++j) s.fate[j] = s.fate[n - 1 - j] = Fate::stationary;
   // Pre-sliding: after rest or a reversal the first `presliding_m` of travel is a nonlinear
   // spring with hysteresis, not the sliding law (PHYSICS.md §8).
   double travelled = 0;

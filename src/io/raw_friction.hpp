@@ -23,7 +23,8 @@ struct RunSamples {
 
 // What became of a sample.
 // A trajectory's: acceleration = within the filter's reach of a step of the force; settling =
-// pre-sliding; stationary = at rest or reversing, or within the filter's reach of it.
+// pre-sliding; stationary = at rest or reversing, or within the filter's reach of it or of the
+// log's ends.
 enum class Fate : std::uint8_t { kept, acceleration, settling, stationary, short_plateau };
 
 struct Segmented {
@@ -76,7 +77,8 @@ std::vector<double> window_difference(const std::vector<double>& t, const std::v
 // Dropped as at rest: samples slower than max(min_speed_m_s, 3σ_v), where static and
 // pre-sliding friction rule (the law is a sliding law); samples within the filter's reach (two
 // half-windows from positions) of one at rest or reversing, whose filtered values mix in static
-// friction or both senses; the first presliding_m of travel after rest or a reversal; and, as
+// friction or both senses; samples within that reach of the log's first or last sample (the
+// window cut short); the first presliding_m of travel after rest or a reversal; and, as
 // Fate::acceleration, samples within the filter's reach of a step of the force (a jump between
 // two samples 5 σ out of its local trend): where in its sample interval the step happened is not
 // in the log, and the ±h/2 that leaves biased the law near every corner of a trapezoidal move.
