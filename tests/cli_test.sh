@@ -360,6 +360,14 @@ check "a bar missing its material is refused at load, naming where to add it" re
 "$LMCAL" predict "$SOURCE/fits/cheng2017/model.toml" "$SOURCE/examples/duty/two_shifts.toml" -o predout --samples 50 >predict.txt
 check "predict writes the bands and a summary" test -s predout/prediction.json -a -s predout/prediction_time.csv
 check "predict summarises the elongation with its band" grep -q 'rail elongation at the end: .* \[.*\] µm' predict.txt
+# --dt as every other command names the time step (issue 41 #5); --time-step, its first name, still read
+"$LMCAL" predict "$SOURCE/fits/cheng2017/model.toml" "$SOURCE/examples/duty/two_shifts.toml" -o predout_dt --samples 20 --dt 60 >/dev/null
+"$LMCAL" predict "$SOURCE/fits/cheng2017/model.toml" "$SOURCE/examples/duty/two_shifts.toml" -o predout_ts --samples 20 --time-step 60 >/dev/null
+check "predict takes --dt and --time-step alike" cmp -s predout_dt/prediction_time.csv predout_ts/prediction_time.csv
+check "predict records the time step under --dt" python3 -c '
+import json, sys
+sys.exit(0 if json.load(open("predout_ts/prediction.json"))["options"]["dt"] == "60" else 1)'
+
 check "predict records the options it ran with" python3 -c '
 import json; assert json.load(open("predout/prediction.json"))["options"]["samples"] == "50"'
 cat >badduty.toml <<'EOF_DUTY'

@@ -347,7 +347,7 @@ void check_prediction_size(const DutyCycle& duty, const PredictionOptions& o) {
     throw InvalidParameter(
         "duty", fmt::format("{}: {} segments, {:.3g} outputs at {} positions, {} draws of a {}-segment rail at {} s steps "
                             "would take some {:.2g} CPU hours and {}: {} (docs/formats.md#limits); fewer --samples, a longer "
-                            "output_every_s, fewer positions or a longer --time-step",
+                            "output_every_s, fewer positions or a longer --dt",
                             duty.file, duty.segments.size(), duty.duration_s() / duty.output_every_s,
                             duty.positions_m.size() + duty.scale.positions_m.size(), o.samples, o.half_rail_segments,
                             o.time_step_s, cost.cpu_s / 3600, io::byte_size(static_cast<std::uintmax_t>(std::min(cost.bytes, 1e18))), what));
