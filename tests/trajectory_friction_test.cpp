@@ -40,7 +40,7 @@ struct Axis {
   double incline_deg = 20;
   double noise_N = 2;
   double count_m = 1e-6;  // the encoder's resolution
-  double weight_N() const { return mass_kg * 9.81 * std::sin(incline_deg * std::numbers::pi / 180); }
+  double weight_N() const { return axis_weight_N(mass_kg, incline_deg); }
 };
 
 struct RunSpec {

@@ -32,11 +32,6 @@ constexpr int kCandidateIterations = 15;
 // error: no precondition for moving_mass_error.
 constexpr double kMinCauseAcceleration_m_s2 = 0.01;
 
-// A cause is named only where its precondition holds. A constant force signed with the motion
-// (signed_zero_offset's signature) is a load cell's or torque sensor's zero only where one
-// measured the force on an axis whose mounting is known; otherwise it may as well be the weight
-// on an inclined axis or a drive's current offset, and it is reported as what the data show,
-// under a neutral name, with those candidates.
 // Whether the log's accelerations are large enough to matter beside friction (RMS).
 bool accelerates(const FrictionLog& log) {
   double sum2 = 0;
@@ -44,6 +39,11 @@ bool accelerates(const FrictionLog& log) {
   return log.size() > 0 && std::sqrt(sum2 / static_cast<double>(log.size())) >= kMinCauseAcceleration_m_s2;
 }
 
+// A cause is named only where its precondition holds. A constant force signed with the motion
+// (signed_zero_offset's signature) is a load cell's or torque sensor's zero only where one
+// measured the force on an axis whose mounting is known; otherwise it may as well be the weight
+// on an inclined axis or a drive's current offset, and it is reported as what the data show,
+// under a neutral name, with those candidates.
 // Whether a log column varies enough for a cause that needs it (FrictionEffectInfo::varies):
 // both directions, or a spread beyond the column's resolution (a condition a combination law
 // did not log is constant at its neutral value).
