@@ -411,6 +411,30 @@ LackOfFit lack_of_fit(const FrictionLog& log, const std::vector<detail::Conditio
   return l;
 }
 
+// ResidualDiagnostics::resolution_floor_N: M̂ times the acceleration noise of the runs' filters
+// (root mean square over the kept samples); 0 without a fitted moving mass.
+double resolution_floor_N(const FrictionLog& log, const FrictionFitResult& fit) {
+  const auto mass = std::find_if(fit.fit.parameters.begin(), fit.fit.parameters.end(),
+                                 [](const ParameterEstimate& p) { return p.name == MovingMass::info.name; });
+  if (mass == fit.fit.parameters.end() || !std::isfinite(mass->value)) return 0;
+  double ss = 0, kept = 0;
+  for (const RunSegmentation& r : log.segmentation) {
+    ss += static_cast<double>(r.kept) * r.acceleration_noise_m_s2 * r.acceleration_noise_m_s2;
+    kept += static_cast<double>(r.kept);
+  }
+  return kept > 0 ? std::abs(mass->value) * std::sqrt(ss / kept) : 0.0;
+}
+
+// The size structure must reach to be called a discrepancy: a share of the residual RMSE, and
+// the resolution floor.
+double min_structure_N(const ResidualDiagnostics& d, const FrictionDiagnosisOptions& o) {
+  return std::max(o.min_structure_fraction * d.rmse_N, d.resolution_floor_N);
+}
+
+constexpr const char* kResolutionFloorWords =
+    "the force the position's resolution makes through the moving mass (M σ_a; a repeating move repeats the encoder's "
+    "quantization)";
+
 // The residuals of `fit` (random zero offsets per run): within-run structure on the condition
 // means of the run-centred residuals; what changes only between runs on the run means,
 // judged against their spread (the offsets' variance is the error term); interactions of
@@ -476,7 +500,8 @@ ResidualDiagnostics diagnose_residuals(const FrictionLog& log, const FrictionFit
   std::erase_if(d.covariates, [](const CovariateTest& t) { return t.n == 0; });
   detail::holm_adjust(d.covariates);
   // Strongest first: the ones that count by size, then the rest by p.
-  for (auto& c : d.covariates) c.structured = c.p_adjusted < structure_p && c.size >= o.min_structure_fraction * d.rmse_N;
+  d.resolution_floor_N = resolution_floor_N(log, fit);
+  for (auto& c : d.covariates) c.structured = c.p_adjusted < structure_p && c.size >= min_structure_N(d, o);
   std::sort(d.covariates.begin(), d.covariates.end(), [](auto& a, auto& b) {
     if (a.structured != b.structured) return a.structured;
     return a.structured ? a.size > b.size : a.p_value < b.p_value;
@@ -527,11 +552,18 @@ std::vector<std::string> design_notes(const FrictionLog& log, const FrictionFitR
     notes.push_back("lack of fit judged against the noise of consecutive residuals, not against pure error (too few "
                     "conditions recur in another run): repeat setups in a second run for a test against pure error");
   // Significant, but under the size that counts: said, not dropped silently.
+  std::vector<std::string> small;
   for (const CovariateTest& t : final.covariates)
     if (t.p_adjusted < o.structure_p && !t.structured)
-      notes.push_back(fmt::format("{} (p = {:.2g}, Holm {:.2g}) left unexplained: its size, {:.3g} N, is under {:g} % of the "
-                                  "sample RMSE ({:.3g} N)",
-                                  t.covariate, t.p_value, t.p_adjusted, t.size, 100 * o.min_structure_fraction, final.rmse_N));
+      small.push_back(fmt::format("{} (p = {:.2g}, Holm {:.2g}; size {:.3g} N)", t.covariate, t.p_value, t.p_adjusted, t.size));
+  if (!small.empty()) {
+    const bool floor_binds = final.resolution_floor_N > o.min_structure_fraction * final.rmse_N;
+    notes.push_back(fmt::format(
+        "left unexplained, significant but each of a size {}: {}",
+        floor_binds ? fmt::format("within {}, {:.3g} N", kResolutionFloorWords, final.resolution_floor_N)
+                    : fmt::format("under {:g} % of the sample RMSE ({:.3g} N)", 100 * o.min_structure_fraction, final.rmse_N),
+        fmt::join(small, "; ")));
+  }
   return notes;
 }
 
@@ -631,6 +663,8 @@ FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagno
   };
   const detail::SelectionRules rules{.lrt_p = o.lrt_p,
                                      .min_cv_gain_percent = o.min_cv_gain_percent,
+                                     .min_effect = d.baseline.resolution_floor_N,
+                                     .effect_floor_basis = kResolutionFloorWords,
                                      .max_effects = o.max_effects,
                                      .parallel = true,
                                      .progress = o.progress};
@@ -692,7 +726,7 @@ std::string friction_diagnosis_json(const FrictionDiagnosis& d) {
     nlohmann::json runs = nlohmann::json::object();
     for (const auto& [run, bias] : r.run_bias_N) runs[run] = number(bias);
     return nlohmann::json{{"rmse_N", number(r.rmse_N)},         {"sigma", number(r.sigma)},
-                          {"durbin_watson", number(r.durbin_watson)}, {"run_bias_N", runs},
+                          {"durbin_watson", number(r.durbin_watson)}, {"resolution_floor_N", number(r.resolution_floor_N)}, {"run_bias_N", runs},
                           {"covariates", detail::covariates_json(r.covariates)}, {"structured", r.structured},
                           {"lack_of_fit", detail::lack_of_fit_json(r.lack_of_fit)}};
   };

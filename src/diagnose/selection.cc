@@ -222,7 +222,9 @@ bool score_candidate(const ModelFit& current, const ModelFit& candidate, const S
   // The whole model, level and shape together: a cause that gains on one criterion must not
   // lose on the other by more than a gain must bring.
   const bool whole = !is_cause(c) || whole_model_loss(c) <= rules.min_cv_gain_percent;
-  const bool better = gain >= rules.min_cv_gain_percent && enough && whole;
+  const double effect = std::sqrt(std::max(current.cv_rmse * current.cv_rmse - candidate.cv_rmse * candidate.cv_rmse, 0.0));
+  const bool above_floor = rules.min_effect <= 0 || effect >= rules.min_effect;
+  const bool better = gain >= rules.min_cv_gain_percent && enough && whole && above_floor;
   if (!candidate.problem.empty()) c.reason = candidate.problem;
   else if (!significant) c.reason = why_not;
   else if (!excludes_neutral)
@@ -236,6 +238,9 @@ bool score_candidate(const ModelFit& current, const ModelFit& candidate, const S
   else if (!enough)
     c.reason = fmt::format("removes {:.0f} % of the held-out RMSE above the noise ({:.4g}), less than {:.0f} %", 100 * removed,
                            rules.noise_floor, 100 * rules.min_excess_removed);
+  else if (!above_floor)
+    c.reason = fmt::format("its effect, {:.3g} RMS on held-out runs, is within {} ({:.3g})", effect,
+                           rules.effect_floor_basis, rules.min_effect);
   else c.reason = "significant and better on held-out runs";
   c.accepted = candidate.problem.empty() && significant && excludes_neutral && better;  // passes; forward_select picks one
   return c.accepted;

@@ -74,6 +74,10 @@ struct SelectionRules {
   // (RMSE² - noise²); a tiny gain on residuals far above the noise is not an explanation.
   double noise_floor = 0;
   double min_excess_removed = 0.1;
+  // A candidate's effect, sqrt(held-out RMSE² before − after), must reach this (> 0: the size of
+  // structure the measurement itself can make; `effect_floor_basis` names it in the reason).
+  double min_effect = 0;
+  std::string effect_floor_basis;
   double tie_correlation = 0.99;  // candidates whose fitted changes correlate above this are a tie
   std::size_t max_effects = 3;
   bool parallel = false;  // fit a round's candidates in parallel (fit_with and summarise thread-safe)

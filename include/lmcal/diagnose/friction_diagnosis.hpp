@@ -40,6 +40,12 @@ struct ResidualDiagnostics {
   std::vector<CovariateTest> covariates;    // strongest first
   bool structured = false;                  // a covariate significant (Holm p < 0.001) and large enough
   LackOfFit lack_of_fit;
+  // A trajectory's: the force its position resolution makes through the moving mass, M σ_a (σ_a
+  // the acceleration noise the filter leaves, RunSegmentation). A move that repeats repeats the
+  // encoder's quantization too, so that force does not average out over the cycles: structure of
+  // the position, speed and acceleration up to this RMS can be the encoder's, and is not called a
+  // discrepancy or a cause. 0 without a fitted mass.
+  double resolution_floor_N = 0;
 };
 
 struct FrictionDiagnosisOptions {
