@@ -116,7 +116,7 @@ TEST(NormalEquations, AccumulatedRowByRowEqualTheStoredJacobians) {
     double f = 0;
     Eigen::MatrixXd JtJ;
     Eigen::VectorXd Jtr;
-    ASSERT_TRUE(normal->normal_equations(kTheta.data(), f, JtJ, Jtr));
+    ASSERT_TRUE(normal->normal_equations(kTheta.data(), {}, f, JtJ, Jtr));
     const Eigen::MatrixXd expected = J.transpose() * J;
     const Eigen::VectorXd expected_g = J.transpose() * r;
     EXPECT_NEAR(f, 0.5 * r.squaredNorm(), 1e-11 * f) << "variant " << variant;

@@ -63,10 +63,14 @@ T robust_residual(const T& r, const RowLoss& loss) {
 // A cost whose Gauss-Newton normal equations can be accumulated row by row, without
 // storing its Jacobian (least_squares.cc then solves it by its own Levenberg-Marquardt):
 // fills ½‖r‖², JᵀJ and Jᵀr at θ over all parameters. False when a residual is not finite.
+// `held` (one flag per parameter, or empty for none): parameters the solver does not step; their
+// rows and columns of JᵀJ and entries of Jᵀr may come out 0 (a Jet then carries the others'
+// derivatives only), the rest are the same bits.
 class NormalEquationsCost {
  public:
   virtual ~NormalEquationsCost() = default;
-  virtual bool normal_equations(const double* theta, double& cost, Eigen::MatrixXd& JtJ, Eigen::VectorXd& Jtr) const = 0;
+  virtual bool normal_equations(const double* theta, const std::vector<bool>& held, double& cost, Eigen::MatrixXd& JtJ,
+                                Eigen::VectorXd& Jtr) const = 0;
   // r(θ) and J(θ) stored column-major (the layout the engine keeps), without Ceres' row-major
   // detour.
   virtual bool residuals_and_jacobian(const double* theta, Eigen::VectorXd& r, Eigen::MatrixXd& J) const = 0;
@@ -181,7 +185,8 @@ class BatchedAutoDiffCostFunction final : public ceres::CostFunction, public Nor
     find_stretches();
   }
 
-  bool normal_equations(const double* theta, double& cost, Eigen::MatrixXd& JtJ, Eigen::VectorXd& Jtr) const override {
+  bool normal_equations(const double* theta, const std::vector<bool>& held, double& cost, Eigen::MatrixXd& JtJ,
+                        Eigen::VectorXd& Jtr) const override {
     const int p = parameter_block_sizes()[0];
     CentredSums sums(p + 1);
     std::vector<double> x(static_cast<std::size_t>(p) + 1);
@@ -190,7 +195,7 @@ class BatchedAutoDiffCostFunction final : public ceres::CostFunction, public Nor
       sums.add(groups_.empty() ? 0 : groups_[i], x.data());
       return std::isfinite(r);
     };
-    if (!rows_with_gradient(theta, x.data(), add)) return false;
+    if (!rows_with_gradient(theta, x.data(), add, held)) return false;
     if (profiled_ && profiled_->profiling && !groups_.empty()) profile(sums, p);
     const Eigen::MatrixXd S = sums.finish(groups_.empty() ? std::vector<double>{} : shrink_or_ones());
     JtJ = S.topLeftCorner(p, p);
@@ -273,14 +278,19 @@ class BatchedAutoDiffCostFunction final : public ceres::CostFunction, public Nor
 
   // Each row's gradient into `gradient` (p values), then visit(row, residual); false when visit
   // is. By the closed form where the functor has one, else by the smallest Jet that holds the
-  // parameters (8, 12 or 16).
+  // parameters not `held` (8, 12 or 16); a held parameter's derivative is 0 (a 9-parameter
+  // trajectory fit holding two constants fits in the 8-wide Jet, a third cheaper per row).
   template <typename Visit>
-  bool rows_with_gradient(const double* theta, double* gradient, const Visit& visit) const {
-    const int p = parameter_block_sizes()[0];
+  bool rows_with_gradient(const double* theta, double* gradient, const Visit& visit,
+                          const std::vector<bool>& held = {}) const {
     if (analytic()) return analytic_rows(theta, gradient, visit);
-    if (p <= 8) return jet_rows<8>(theta, gradient, visit);
-    if (p <= 12) return jet_rows<12>(theta, gradient, visit);
-    return jet_rows<16>(theta, gradient, visit);
+    const int p = parameter_block_sizes()[0];
+    std::vector<int> seeded;  // the parameters a Jet slot carries, in order
+    for (int j = 0; j < p; ++j)
+      if (held.empty() || !held[static_cast<std::size_t>(j)]) seeded.push_back(j);
+    if (seeded.size() <= 8) return jet_rows<8>(theta, seeded, gradient, visit);
+    if (seeded.size() <= 12) return jet_rows<12>(theta, seeded, gradient, visit);
+    return jet_rows<16>(theta, seeded, gradient, visit);
   }
 
   // slice(prepared, begin, end, gradients, residuals) fills rows [begin, end) with each thread's
@@ -329,14 +339,16 @@ class BatchedAutoDiffCostFunction final : public ceres::CostFunction, public Nor
     }
   }
 
+  // Slot k of the Jets carries parameter seeded[k]; the others are constants.
   template <int N>
-  bool jet_rows(const double* theta, double* gradient, const auto& visit) const {
+  bool jet_rows(const double* theta, const std::vector<int>& seeded, double* gradient, const auto& visit) const {
     using Jet = ceres::Jet<double, N>;
     const int p = parameter_block_sizes()[0];
-    std::array<Jet, N> t;
-    for (int j = 0; j < p; ++j) t[j] = Jet(theta[j], j);
-    auto slice = [this](auto& prepared, std::size_t begin, std::size_t end, double* g, double* r) {
-      jet_slice<N>(prepared, begin, end, g, r);
+    std::vector<Jet> t(static_cast<std::size_t>(p));
+    for (int j = 0; j < p; ++j) t[static_cast<std::size_t>(j)] = Jet(theta[j]);
+    for (std::size_t k = 0; k < seeded.size(); ++k) t[static_cast<std::size_t>(seeded[k])] = Jet(theta[seeded[k]], static_cast<int>(k));
+    auto slice = [this, &seeded](auto& prepared, std::size_t begin, std::size_t end, double* g, double* r) {
+      jet_slice<N>(prepared, seeded, begin, end, g, r);
     };
     return in_batches(functor_.prepare(t.data()), slice, gradient, visit);
   }
@@ -344,12 +356,19 @@ class BatchedAutoDiffCostFunction final : public ceres::CostFunction, public Nor
   // Flattened: GCC otherwise leaves Eigen's Jet assignments out of line in the row loop (a
   // call per Jet operation); inlined, the 100 k-sample diagnosis's Jet<16> fits run 1.5x faster.
   template <int N, typename Prepared>
-  [[gnu::flatten]] void jet_slice(Prepared& prepared, std::size_t begin, std::size_t end, double* g, double* r) const {
+  [[gnu::flatten]] void jet_slice(Prepared& prepared, const std::vector<int>& seeded, std::size_t begin, std::size_t end,
+                                  double* g, double* r) const {
     using Jet = ceres::Jet<double, N>;
     const auto p = static_cast<std::size_t>(parameter_block_sizes()[0]);
+    const std::size_t q = seeded.size();
     for (std::size_t i = begin; i < end; ++i, g += p) {
       const Jet value = robust_residual(functor_(prepared, i), loss_);
-      for (std::size_t j = 0; j < p; ++j) g[j] = value.v[j];
+      if (q == p) {
+        for (std::size_t j = 0; j < p; ++j) g[j] = value.v[j];
+      } else {
+        std::fill_n(g, p, 0.0);
+        for (std::size_t k = 0; k < q; ++k) g[seeded[k]] = value.v[k];
+      }
       *r++ = value.a;
     }
   }

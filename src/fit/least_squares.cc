@@ -117,7 +117,7 @@ Polish solve_normal_equations(const NormalEquationsCost& normal, const ceres::Co
   Eigen::MatrixXd H;
   Eigen::VectorXd g;
   double f = 0;
-  if (!normal.normal_equations(theta.data(), f, H, g)) {
+  if (!normal.normal_equations(theta.data(), held, f, H, g)) {
     summary.initial_cost = summary.final_cost = kNaN;
     return finish(ceres::FAILURE, "the residuals are not finite at the start", 0);
   }
@@ -195,7 +195,7 @@ Polish solve_normal_equations(const NormalEquationsCost& normal, const ceres::Co
       summary.final_cost = f;
       radius = std::min(radius / std::max(1.0 / 3.0, 1.0 - std::pow(2 * rho - 1, 3)), 1e16);
       decrease = 2;
-      if (!normal.normal_equations(theta.data(), f, H, g)) return finish(ceres::FAILURE, "the Jacobian is not finite", iteration);
+      if (!normal.normal_equations(theta.data(), held, f, H, g)) return finish(ceres::FAILURE, "the Jacobian is not finite", iteration);
       summary.final_cost = f;
       restrict();
       if (gradient_small()) return finish(ceres::CONVERGENCE, "gradient tolerance reached", iteration);
