@@ -98,7 +98,7 @@ void setup_fit(CLI::App& app, const std::vector<std::string>& argv) {
       ->capture_default_str();
   friction->add_option("--starts", o->starts, "Multi-start local searches")->capture_default_str();
   friction->add_option("--seed", o->seed, "Seed of the multi-start sequence")->capture_default_str();
-  friction->add_flag("!--no-run-fits", o->run_fits, "Skip the per-run fits (spread across runs)");
+  friction->add_flag_callback("--no-run-fits", [o] { o->run_fits = false; }, "Skip the per-run fits (spread across runs)");
   add_uncertainty_options(*friction, o->uncertainty);
   add_keep_unusable(*friction, o->keep_unusable);
   friction->callback([o, &argv] { run_fit_friction(*o, argv); });

@@ -67,8 +67,8 @@ void setup_fit_thermal(CLI::App& fit, const std::vector<std::string>& argv) {
   for (const auto& e : thermal_extension_library()) known += fmt::format("\n    {}: {}", e.name, e.description);
   app->add_option("--extension", o->fit.extensions, "Add a mechanism of the extension library (repeatable):" + known);
   app->add_flag("--cross-validate", o->fit.cross_validate, "Also report the leave-one-run-out prediction RMSE");
-  app->add_flag("!--no-run-fits", o->fit.per_run_fits, "Skip the per-run fits");
-  app->add_flag("!--no-source-comparison", o->fit.compare_sources, "Skip the paper/averaged comparison");
+  app->add_flag_callback("--no-run-fits", [o] { o->fit.per_run_fits = false; }, "Skip the per-run fits");
+  app->add_flag_callback("--no-source-comparison", [o] { o->fit.compare_sources = false; }, "Skip the paper/averaged comparison");
   add_uncertainty_options(*app, o->fit.fit);
   add_keep_unusable(*app, o->keep_unusable);
   app->callback([o, &argv] { run_fit_thermal(*o, argv); });

@@ -374,7 +374,7 @@ void setup_generate(CLI::App& app, const std::vector<std::string>& argv) {
   fleet->add_option("--outlier", o->outliers, "A unit's constant times a factor: --outlier 5:mu_st=1.4 (repeatable)");
   fleet->add_option("--drift", o->drifts, "A dated unit's constant changing linearly over its dates: --drift 2:mu_v=0.25 (repeatable)");
   fleet->add_option("--corrupt", fl.corrupt, "Units whose first set has a corrupt friction log")->delimiter(',');
-  fleet->add_flag("!--no-thermal", fl.thermal, "Friction logs only");
+  fleet->add_flag_callback("--no-thermal", [o] { o->fleet.thermal = false; }, "Friction logs only");
   fleet->callback([o] { run_generate_fleet(*o); });
 
   CLI::App* list = generate->add_subcommand("effects", "List the named effects");

@@ -527,6 +527,14 @@ check "a thermal effect is refused for a friction log" \
 check "a CSV given as a manifest is named as one" \
   exits_with 1 "$SOURCE/measurements/cheng2017/friction.csv: this looks like a CSV file (comma-separated columns); expected a TOML manifest" \
   fit thermal "$SOURCE/measurements/cheng2017/friction.csv"
+check "a missing duty cycle is named as one, not as a manifest" \
+  exits_with 1 "no_such_duty.toml: cannot open duty-cycle file: No such file or directory" \
+  predict "$SOURCE/fits/cheng2017/model.toml" no_such_duty.toml -o predout_missing
+for command in "fit friction" "fit thermal" "generate fleet"; do
+  # shellcheck disable=SC2086  # the command's words
+  check "$command --help shows its off switches without CLI11's {false}" \
+    sh -c "\"$LMCAL\" $command --help | grep -q -- '--no-' && ! \"$LMCAL\" $command --help | grep -q '{false}'"
+done
 check "a CSV given as a friction fit is named as one" \
   exits_with 1 "$SOURCE/measurements/cheng2017/friction.csv: this looks like a CSV file (comma-separated columns); expected a friction fit JSON" \
   fit thermal "$SOURCE/measurements/cheng2017/thermal.toml" --friction "$SOURCE/measurements/cheng2017/friction.csv" -o out

@@ -9,6 +9,7 @@
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <bit>
@@ -468,6 +469,40 @@ TEST_F(TrajectoryFriction, APreloadByClassOrForceAndOneSetupPerCombinationLaw) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("give the same conditions for every file of a log"), std::string::npos) << e.what();
   }
+}
+
+// A run at one load and block length: k1 P/1000 and f0 Lb are one offset within it, so no run's
+// own fit gives k1. The spread across runs says so with the count, in the summary, the JSON and
+// the report alike, never "mean nan sigma nan".
+TEST_F(TrajectoryFriction, ASpreadNoRunDeterminesSaysWhyNotNan) {
+  ClosedLoopAxis rig;
+  FrictionLog log;
+  rig.fit([&](const std::string& f, const std::string& t) { return write(f, t); }, 3, &log);
+  FrictionFitOptions o;
+  o.fit.starts = 1;
+  const FrictionFitResult r = fit_friction(log, o);
+  ASSERT_FALSE(r.spread.empty());
+  const RunSpread* k1 = nullptr;
+  for (const RunSpread& s : r.spread) {
+    SCOPED_TRACE(s.parameter);
+    const auto given = static_cast<std::size_t>(std::count_if(s.per_run.begin(), s.per_run.end(), [](double v) { return std::isfinite(v); }));
+    EXPECT_EQ(s.undetermined.empty(), given == s.per_run.size()) << s.undetermined;
+    if (s.parameter == "k1") {
+      k1 = &s;
+      EXPECT_EQ(given, 0u);
+      EXPECT_NE(s.undetermined.find("2 of 2 runs: one load and block length in the run"), std::string::npos) << s.undetermined;
+    }
+  }
+  ASSERT_NE(k1, nullptr);
+  const std::string summary = friction_fit_summary(r);
+  const std::string spread = summary.substr(summary.find("spread across"));
+  EXPECT_EQ(spread.find("nan"), std::string::npos) << spread;
+  EXPECT_NE(summary.find("k1                   no spread: not determined run by run (2 of 2 runs"), std::string::npos) << summary;
+  const auto j = nlohmann::json::parse(friction_fit_json(r, o, {}));
+  bool in_json = false;
+  for (const auto& s : j.at("spread_across_runs"))
+    if (s.at("parameter") == "k1") in_json = s.at("undetermined").get<std::string>() == k1->undetermined;
+  EXPECT_TRUE(in_json) << j.at("spread_across_runs").dump();
 }
 
 // A trajectory's rows are evaluated on several threads (batched_autodiff.hpp): the fit with its

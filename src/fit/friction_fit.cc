@@ -769,6 +769,8 @@ FrictionFitResult fit_friction(const FrictionLog& logged, const FrictionFitOptio
     run_options.profile = ProfileMode::none;
     std::vector<std::vector<double>> values(specs.size(), std::vector<double>(log.run_names.size(), kNaN));
     std::vector<std::vector<double>> half_widths = values, ses = values;
+    // Why a run gives no value of a parameter (RunSpread::undetermined), per parameter and run.
+    std::vector<std::vector<std::string>> why_not(specs.size(), std::vector<std::string>(log.run_names.size()));
     // The runs' fits are independent: each on a free thread (its rows then on that thread alone).
     detail::for_each_index(log.run_names.size(), [&](std::size_t r) {
       FrictionData run_data{&log, {}, {}, options.start.T_ref_C, data.run_shrink};
@@ -779,16 +781,23 @@ FrictionFitResult fit_friction(const FrictionLog& logged, const FrictionFitOptio
           run_data.samples.push_back(i);
           run_data.inv_sigma.push_back(1.0 / out.sigma_N[i]);
         }
-      if (run_data.samples.size() <= specs.size()) return;
+      auto none = [&](const std::string& why) {
+        for (auto& w : why_not) w[r] = why;
+      };
+      if (run_data.samples.size() <= specs.size()) return none("too few samples for its own fit");
       const FitResult run_fit =
           detail::solve_least_squares(FrictionModel(run_data, slots), one_load_holds_k1(run_specs, log, run_data.samples), run_options);
-      if (!run_fit.solver.usable) return;
-      for (std::size_t j = 0; j < specs.size(); ++j)
-        if (run_fit.parameters[j].free && !run_fit.parameters[j].held_unidentifiable) {
-          values[j][r] = run_fit.parameters[j].value;
-          half_widths[j][r] = 0.5 * (run_fit.parameters[j].ci_high - run_fit.parameters[j].ci_low);
-          ses[j][r] = run_fit.parameters[j].se;
+      if (!run_fit.solver.usable) return none("its own fit failed");
+      for (std::size_t j = 0; j < specs.size(); ++j) {
+        const ParameterEstimate& q = run_fit.parameters[j];
+        if (!q.free) why_not[j][r] = "one load and block length in the run: k1 P/1000 and f0 Lb are one offset there";
+        else if (q.held_unidentifiable) why_not[j][r] = "not identifiable within the run";
+        else {
+          values[j][r] = q.value;
+          half_widths[j][r] = 0.5 * (q.ci_high - q.ci_low);
+          ses[j][r] = q.se;
         }
+      }
     });
     const double runs = static_cast<double>(log.run_names.size());
     for (std::size_t j = 0; j < specs.size(); ++j) {
@@ -798,6 +807,11 @@ FrictionFitResult fit_friction(const FrictionLog& logged, const FrictionFitOptio
       s.per_run = values[j];
       s.per_run_half_width_95 = half_widths[j];
       s.per_run_se = ses[j];
+      std::map<std::string, std::size_t> reasons;
+      for (const std::string& w : why_not[j])
+        if (!w.empty()) ++reasons[w];
+      for (const auto& [why, count] : reasons)
+        s.undetermined += fmt::format("{}{} of {} runs: {}", s.undetermined.empty() ? "" : "; ", count, why_not[j].size(), why);
       s.spread = spread(values[j], options.fit.confidence);
       s.pooled_se = out.fit.parameters[j].se;
       s.ratio = s.spread.sd / (s.pooled_se * std::sqrt(runs));
@@ -936,21 +950,23 @@ std::string friction_fit_json(const FrictionFitResult& r, const FrictionFitOptio
     nlohmann::json per_run_se = nlohmann::json::array();
     for (double v : s.per_run) per_run.push_back(number(v));
     for (double v : s.per_run_se) per_run_se.push_back(number(v));
-    spread.push_back({{"parameter", s.parameter},
-                      {"per_run", per_run},
-                      {"per_run_se", per_run_se},
-                      {"n", s.spread.n},
-                      {"mean", number(s.spread.mean)},
-                      {"sd_eq1", number(s.spread.sd)},
-                      {"ci95", {number(s.spread.low), number(s.spread.high)}},
-                      {"min", number(s.spread.min)},
-                      {"max", number(s.spread.max)},
-                      {"pooled_se", number(s.pooled_se)},
-                      {"ratio_to_pooled", number(s.ratio)},
-                      {"cochran_q", number(s.q)},
-                      {"p", number(s.p)},
-                      {"p_holm", number(s.p_holm)},
-                      {"wider_than_pooled", s.wider_than_pooled}});
+    nlohmann::json row = {{"parameter", s.parameter},
+                          {"per_run", per_run},
+                          {"per_run_se", per_run_se},
+                          {"n", s.spread.n},
+                          {"mean", number(s.spread.mean)},
+                          {"sd_eq1", number(s.spread.sd)},
+                          {"ci95", {number(s.spread.low), number(s.spread.high)}},
+                          {"min", number(s.spread.min)},
+                          {"max", number(s.spread.max)},
+                          {"pooled_se", number(s.pooled_se)},
+                          {"ratio_to_pooled", number(s.ratio)},
+                          {"cochran_q", number(s.q)},
+                          {"p", number(s.p)},
+                          {"p_holm", number(s.p_holm)},
+                          {"wider_than_pooled", s.wider_than_pooled}};
+    if (!s.undetermined.empty()) row["undetermined"] = s.undetermined;  // why per_run has NaN
+    spread.push_back(std::move(row));
   }
   nlohmann::json inputs = nlohmann::json::array();
   for (const auto& [file, hash] : prov.inputs) inputs.push_back({{"file", file}, {"sha256", hash}});
@@ -1101,11 +1117,17 @@ std::string friction_fit_summary(const FrictionFitResult& r) {
     s += fmt::format("spread across {} runs (Eq. 1 sigma; ratio = sigma / (pooled SE * sqrt(runs)), ~1 if only noise; "
                      "p: the pooled fit's test of heterogeneity between runs, Holm across the constants):\n",
                      r.runs.size());
-    for (const auto& sp : r.spread)
-      s += fmt::format("  {:<20} mean {:>11.5g}  sigma {:>9.3g}  [{:.5g}, {:.5g}]  min {:.5g} max {:.5g}  ratio {:.2f}  p {:.2g}{}\n",
+    for (const auto& sp : r.spread) {
+      if (!std::isfinite(sp.spread.sd)) {  // fewer than two runs' own values
+        s += fmt::format("  {:<20} no spread: not determined run by run ({})\n", sp.parameter, sp.undetermined);
+        continue;
+      }
+      s += fmt::format("  {:<20} mean {:>11.5g}  sigma {:>9.3g}  [{:.5g}, {:.5g}]  min {:.5g} max {:.5g}  ratio {:.2f}  p {:.2g}{}{}\n",
                        sp.parameter, sp.spread.mean, sp.spread.sd, sp.spread.low, sp.spread.high, sp.spread.min,
                        sp.spread.max, sp.ratio, sp.p_holm,
-                       sp.wider_than_pooled ? "  WIDER: the runs differ beyond what the model explains" : "");
+                       sp.wider_than_pooled ? "  WIDER: the runs differ beyond what the model explains" : "",
+                       sp.undetermined.empty() ? "" : "  (without " + sp.undetermined + ")");
+    }
   }
   for (const auto& w : f.warnings) s += "warning: " + w + "\n";
   return s;

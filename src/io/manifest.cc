@@ -28,13 +28,13 @@ void Manifest::fail(const toml::source_region& where, const std::string& what) c
 }
 
 toml::table Manifest::parse() const {
-  const std::string text = io::read_text_file(file, "manifest file");
+  const std::string text = io::read_text_file(file, kind);
   try {
     return toml::parse(text, file);
   } catch (const toml::parse_error& e) {
-    const std::string kind = io::looks_like(text);
-    if (!kind.empty() && !kind.starts_with("a TOML"))
-      throw InputError(file, 0, 0, fmt::format("this looks like {}; expected a TOML manifest (key = value lines, [[run]] tables)", kind));
+    const std::string looks = io::looks_like(text);
+    if (!looks.empty() && !looks.starts_with("a TOML"))
+      throw InputError(file, 0, 0, fmt::format("this looks like {}; expected a TOML {} (key = value lines and tables)", looks, kind));
     fail(e.source(), std::string(e.description()));
   }
 }

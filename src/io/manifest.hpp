@@ -20,6 +20,7 @@ struct Manifest {
   std::string file;                 // as errors name it
   std::filesystem::path folder;     // the files it names are relative to it
   InputScope scope;                 // and must lie inside the scope's root (by default `folder`)
+  std::string kind = "manifest file";  // what the file is, as errors name it ("duty-cycle file")
 
   [[noreturn]] void fail(const toml::source_region& where, const std::string& what) const;
   // The manifest's TOML; a syntax error is an InputError at its line and column.

@@ -172,7 +172,7 @@ DutyCycle duty_of_runs(const ThermalDataSet& data, double ambient_C) {
 }
 
 DutyCycle load_duty_cycle(const std::filesystem::path& path, const GuideCatalog* user_catalog, const InputScope& scope) {
-  const Manifest m{path.string(), path.parent_path(), scope};
+  const Manifest m{path.string(), path.parent_path(), scope, "duty-cycle file"};
   const toml::table root = m.parse();
   DutyCycle d;
   d.file = path.string();

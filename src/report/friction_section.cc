@@ -238,11 +238,10 @@ void spread_section(Page& page, const FrictionFitResult& f) {
   const FitResult shown = friction_fit_as_shown(f);  // the spread's names: a combination law's combinations
   for (const auto& sp : f.spread) {
     const auto& pooled = shown.parameter(sp.parameter);
-    const std::size_t runs = sp.per_run.size();
-    const std::string note = sp.spread.n == 0  ? "no run's own fit estimated it (held or undetermined in each)"
-                             : sp.spread.n < 2 ? "one run's fit estimated it: no spread"
-                             : sp.spread.n < runs ? fmt::format("{} of {} runs' fits estimated it", sp.spread.n, runs)
-                                                  : "";
+    // Why runs gave no value (friction_fit.cc says it once, for the summary too).
+    const std::string note = sp.undetermined.empty() ? ""
+                             : sp.spread.n < 2       ? "no spread: not determined run by run (" + sp.undetermined + ")"
+                                                     : "without " + sp.undetermined;
     rows.push_back({sp.parameter, num(pooled.value), num(pooled.se, 3), num(sp.spread.mean), num(sp.spread.sd, 3),
                     bracket(sp.spread.low, sp.spread.high), num(sp.spread.min), num(sp.spread.max), num(sp.ratio, 3),
                     p_value(sp.p_holm), sp.wider_than_pooled ? "the runs differ beyond the model" + (note.empty() ? "" : "; " + note) : note});

@@ -119,6 +119,9 @@ struct RunSpread {
   std::vector<double> per_run_half_width_95;  // each run's own 95 % half-width (its fit's linear interval)
   std::vector<double> per_run_se;             // each run's own SE (its fit's quoted covariance)
   Spread spread;                // Eq. 1 σ, t interval of the mean, min, max
+  // Why runs give no value (NaN in per_run), with their counts: "3 of 3 runs: one load and block
+  // length in the run: …"; empty when every run gives one.
+  std::string undetermined;
   double pooled_se = 0;
   // σ_runs / (SE_pooled · √runs): about 1 when the runs differ only by noise the model
   // explains (a descriptive ratio; the flag below is the test).
