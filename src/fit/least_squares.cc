@@ -798,7 +798,10 @@ void report_solver(const Estimate& e, const FitOptions& options, FitResult& resu
   if (!s.converged) result.warnings.push_back("the solver stopped without converging: " + summary.message);
   if (!s.covariance_ok && result.free_parameters > 0) result.warnings.push_back(s.covariance_message);
   if (e.starts.starts > 1 && e.starts.agreed * 2 < e.starts.starts)
-    result.warnings.push_back(fmt::format("only {} of {} starts reached the best minimum", e.starts.agreed, e.starts.starts));
+    result.warnings.push_back(fmt::format(
+        "only {} of {} starts reached the best minimum (the others stopped in local minima of a higher cost; the result "
+        "is the best one found; more starts (--starts) may find a lower one)",
+        e.starts.agreed, e.starts.starts));
   (void)options;
 }
 
