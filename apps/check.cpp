@@ -64,7 +64,7 @@ void print_segmentation(const RunSegmentation& s) {
 }
 
 void check_friction(const std::vector<std::string>& files, const FrictionInputOptions& options) {
-  const FrictionLog log = load_friction_input(files, options).log;
+  const FrictionLog log = read_friction_input(files, options).log;
   // A log without a guide column or key has one unnamed guide: not counted as a guide.
   const bool guides = !(log.guide_names.size() == 1 && log.guide_names.front().empty());
   std::cout << fmt::format("friction log: {}, {}{}\n", plural(log.size(), "sample"), plural(log.run_names.size(), "run"),

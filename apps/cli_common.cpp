@@ -294,26 +294,32 @@ std::optional<GuideCatalog> user_catalog(const std::string& file) {
   return file.empty() ? std::nullopt : std::optional(load_catalog(file));
 }
 
-FrictionInput load_friction_input(const std::vector<std::string>& files, const FrictionInputOptions& options) {
+FrictionInput read_friction_input(const std::vector<std::string>& files, const FrictionInputOptions& options) {
   FrictionInput in;
   const auto is_manifest = [](const std::string& f) { return std::filesystem::path(f).extension() == ".toml"; };
   const auto manifests = std::count_if(files.begin(), files.end(), is_manifest);
   const std::optional<GuideCatalog> catalog = user_catalog(options.catalog_file);
-  if (catalog) in.inputs.emplace_back(options.catalog_file, sha256_file(options.catalog_file));
+  if (catalog) in.inputs.emplace_back(options.catalog_file, "");
   if (manifests == 0) {
     in.raw = options.parsed();
     in.log = load_friction_logs(std::vector<std::filesystem::path>(files.begin(), files.end()), in.raw);
-    for (const auto& file : files) in.inputs.emplace_back(file, sha256_file(file));
+    for (const auto& file : files) in.inputs.emplace_back(file, "");
     return in;
   }
   if (files.size() != 1)
     throw InvalidParameter("files", "give one friction manifest (.toml), or CSV logs, not both or several manifests");
   FrictionDataSet set = load_friction_dataset(files.front(), catalog ? &*catalog : nullptr, options.parsed(),
                                               options.raw_given(), input_scope());
-  in.inputs.emplace_back(files.front(), sha256_file(files.front()));
-  for (const auto& file : set.files) in.inputs.emplace_back(file.string(), sha256_file(file));
+  in.inputs.emplace_back(files.front(), "");
+  for (const auto& file : set.files) in.inputs.emplace_back(file.string(), "");
   in.raw = set.raw;
   in.log = std::move(set.log);
+  return in;
+}
+
+FrictionInput load_friction_input(const std::vector<std::string>& files, const FrictionInputOptions& options) {
+  FrictionInput in = read_friction_input(files, options);
+  for (auto& [file, sha256] : in.inputs) sha256 = sha256_file(file);
   return in;
 }
 

@@ -263,6 +263,9 @@ struct FrictionInput {
 };
 // CSV logs, or one .toml friction manifest (its runs' conditions and its [raw] settings).
 FrictionInput load_friction_input(const std::vector<std::string>& files, const FrictionInputOptions& options);
+// The same without hashing the files (`inputs` lists them with an empty hash): for `check`,
+// which records nothing.
+FrictionInput read_friction_input(const std::vector<std::string>& files, const FrictionInputOptions& options);
 
 // Checks of an option's value, with messages like a file value's: "-5 is below 0: expected a
 // value of at least 0" (CLI11's own print the type's limits).

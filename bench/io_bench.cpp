@@ -5,16 +5,23 @@
 //   - a raw load-cell run of 1 M samples at 1 kHz (time_s, position_mm, force_N; its conditions
 //     in a friction manifest), from the virtual rig: loading includes deriving v and a and
 //     cutting the run into plateaus. Target: >= 150 MB/s;
-//   - user guide catalogs of 10^3 to 10^5 guides (the limit): linear, 10^5 in under 2 s.
+//   - user guide catalogs of 10^3 to 10^5 guides (the limit): linear, 10^5 in under 2 s;
+//   - `lmcal check friction` of the 1 M-row friction log as a process (start-up, loading and
+//     the report), on 1 and 2 threads (OMP_NUM_THREADS). Target (issue 39): >= 300 MB/s.
 // The files are generated once into a temporary folder (removed at exit). Throughput is
 // reported as bytes/s of CSV text. Target: >= 200 MB/s for the thermal log.
 // Run: build/bench/lmcal_io_bench
 #include <benchmark/benchmark.h>
+#include <spawn.h>
+#include <sys/wait.h>
 
 #include <cmath>
 #include <cstdio>
+#include <cstring>
+#include <fcntl.h>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "lmcal/io/catalog.hpp"
 #include "lmcal/io/friction_log.hpp"
@@ -109,6 +116,46 @@ void BM_LoadFrictionLog(benchmark::State& state) {
   state.counters["file_MB"] = static_cast<double>(fs::file_size(file)) / 1e6;
 }
 BENCHMARK(BM_LoadFrictionLog)->Unit(benchmark::kMillisecond)->MinTime(3.0);
+
+// The lmcal executable `argv` names run with OMP_NUM_THREADS=threads, its output discarded:
+// its exit status, or -1 when it could not be started.
+int run_process(const std::vector<std::string>& argv, int threads) {
+  std::vector<std::string> env_text{"OMP_NUM_THREADS=" + std::to_string(threads)};
+  for (char** e = environ; *e; ++e)
+    if (std::strncmp(*e, "OMP_NUM_THREADS=", 16) != 0) env_text.emplace_back(*e);
+  std::vector<char*> args, env;
+  for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+  for (const std::string& e : env_text) env.push_back(const_cast<char*>(e.c_str()));
+  args.push_back(nullptr);
+  env.push_back(nullptr);
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
+  pid_t pid = 0;
+  const int started = posix_spawn(&pid, args[0], &actions, nullptr, args.data(), env.data());
+  posix_spawn_file_actions_destroy(&actions);
+  if (started != 0) return -1;
+  int status = 0;
+  if (waitpid(pid, &status, 0) != pid || !WIFEXITED(status)) return -1;
+  return WEXITSTATUS(status);
+}
+
+// `lmcal check friction` of the 1 M-row log, the whole process, wall time; its argument the
+// threads. The file is in the page cache after the first run, as for a user who checks a log
+// just written.
+void BM_CheckFrictionLogProcess(benchmark::State& state) {
+  const fs::path& file = friction_log();
+  const std::vector<std::string> argv{LMCAL_CLI, "check", "friction", file.string()};
+  for (auto _ : state) {
+    if (run_process(argv, static_cast<int>(state.range(0))) != 0) {
+      state.SkipWithError("lmcal check friction failed");
+      return;
+    }
+  }
+  state.SetBytesProcessed(state.iterations() * static_cast<std::int64_t>(fs::file_size(file)));
+  state.counters["file_MB"] = static_cast<double>(fs::file_size(file)) / 1e6;
+}
+BENCHMARK(BM_CheckFrictionLogProcess)->ArgName("threads")->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(3.0);
 
 // One setup moving back and forth at four speeds, 25 cycles each, logged at 1 kHz.
 const fs::path& raw_friction_manifest() {

@@ -5,6 +5,7 @@
 #include <fmt/ranges.h>
 
 #include <algorithm>
+#include <atomic>
 #include <bit>
 #include <cctype>
 #include <cerrno>
@@ -13,7 +14,11 @@
 #include <limits>
 #include <map>
 
+#include <sys/mman.h>
+#include <unistd.h>
+
 #include "io/input_file.hpp"
+#include "parallel_slices.hpp"
 #include "lmcal/io/csv_writer.hpp"
 #include "lmcal/error.hpp"
 #include "lmcal/io/limits.hpp"
@@ -67,21 +72,15 @@ bool plain_decimal(const char* p, const char* end, double& out) {
   const bool negative = p != end && *p == '-';
   p += negative;
   std::uint64_t mantissa = 0;
-  int digits = 0;
-  int decimals = -1;  // digits after the point; -1: no point yet
-  for (; p != end; ++p) {
-    const unsigned d = static_cast<unsigned>(*p - '0');
-    if (d < 10) {
-      mantissa = 10 * mantissa + d;
-      ++digits;
-      decimals += decimals >= 0;
-    } else if (*p == '.' && decimals < 0) {
-      decimals = 0;
-    } else {
-      return false;
-    }
-  }
-  if (digits == 0 || digits > 15) return false;
+  // The digits from p on (how many): the whole part, then the decimals after a point.
+  const auto digits = [&] {
+    const char* const first = p;
+    for (unsigned d; p != end && (d = static_cast<unsigned>(*p - '0')) < 10; ++p) mantissa = 10 * mantissa + d;
+    return p - first;
+  };
+  const auto whole = digits();
+  const auto decimals = p != end && *p == '.' ? (++p, digits()) : 0;
+  if (p != end || whole + decimals == 0 || whole + decimals > 15) return false;
   double value = static_cast<double>(mantissa);
   if (decimals > 0) value /= kPow10[decimals];
   out = negative ? -value : value;
@@ -97,13 +96,58 @@ Reader::Reader(const fs::path& file, std::size_t skip_lines) : file_(file.string
   stream_.reset(std::fopen(file.c_str(), "rb"));
   if (!stream_) throw InputError(file_, 0, 0, fmt::format("cannot open file: {}", std::strerror(errno)));
   buffer_.resize(kChunkBytes);
+  data_ = buffer_.data();
+}
+
+Reader::Reader(const Reader& whole, std::string_view slice, long lines_before)
+    : file_(whole.file_), file_size_(whole.file_size_), data_(slice.data()), end_(slice.size()), at_eof_(true),
+      eol_(whole.eol_), line_(lines_before), header_(whole.header_), header_line_(whole.header_line_),
+      skip_lines_(whole.skip_lines_), slice_(true) {}
+
+std::optional<Reader::Rest> Reader::read_rest(int count) const {
+  const std::uintmax_t offset = bytes_read_ - (end_ - pos_);
+  const std::size_t size = static_cast<std::size_t>(file_size_ - std::min(offset, file_size_));
+  Rest rest{.bytes = std::unique_ptr<char[]>(new char[std::max<std::size_t>(size, 1)]), .slices = {}};
+  char* const bytes = rest.bytes.get();
+  prefer_huge_pages(bytes, size);
+  const int fd = fileno(stream_.get());
+  std::atomic<bool> whole = true;
+  // Pieces of at least 4 MiB: each thread's pages are first written by that thread.
+  detail::for_each_slice(size, detail::slice_threads(size, std::size_t{4} << 20), [&](int, std::size_t begin, std::size_t end) {
+    while (begin < end) {
+      const ssize_t got = ::pread(fd, bytes + begin, end - begin, static_cast<off_t>(offset + begin));
+      if (got <= 0) {
+        if (got < 0 && errno == EINTR) continue;
+        whole = false;  // shorter than it was (or unreadable: the line-by-line reader says why)
+        return;
+      }
+      begin += static_cast<std::size_t>(got);
+    }
+  });
+  char probe;
+  if (!whole || ::pread(fd, &probe, 1, static_cast<off_t>(offset + size)) != 0) return std::nullopt;  // it grew
+  // Each slice ends after a line end at or past its share of the bytes.
+  const char* start = bytes;
+  const char* const end = bytes + size;
+  for (int k = 1; k <= count; ++k) {
+    const char* stop = end;
+    if (k < count) {
+      const char* share = std::max<const char*>(start, bytes + size * static_cast<std::size_t>(k) / static_cast<std::size_t>(count));
+      const void* eol = share == end ? nullptr : std::memchr(share, eol_, static_cast<std::size_t>(end - share));
+      stop = eol ? static_cast<const char*>(eol) + 1 : end;
+    }
+    rest.slices.emplace_back(start, static_cast<std::size_t>(stop - start));
+    start = stop;
+  }
+  return rest;
 }
 
 bool Reader::refill() {
   if (at_eof_) return false;
+  // (A slice is at its end from the start: it never refills.)
   // The unread tail is a partial line: keep it, at the front.
   const std::size_t tail = end_ - pos_;
-  if (tail != 0 && pos_ != 0) std::memmove(buffer_.data(), buffer_.data() + pos_, tail);
+  if (tail != 0 && pos_ != 0) std::memmove(buffer_.data(), data_ + pos_, tail);
   pos_ = 0;
   end_ = tail;
   if (end_ == buffer_.size()) {
@@ -128,22 +172,26 @@ bool Reader::refill() {
 
 bool Reader::next_line() {
   for (;;) {
-    const char* begin = buffer_.data() + pos_;
+    const char* begin = data_ + pos_;
     if (const void* nl = std::memchr(begin, eol_, end_ - pos_)) {
       line_begin_ = begin;
       line_end_ = static_cast<const char*>(nl);
-      pos_ = static_cast<std::size_t>(line_end_ - buffer_.data()) + 1;
+      pos_ = static_cast<std::size_t>(line_end_ - data_) + 1;
       break;
     }
     if (!refill()) {
       if (pos_ == end_) return false;
       // The last line, without a line break.
-      line_begin_ = buffer_.data() + pos_;
-      line_end_ = buffer_.data() + end_;
+      line_begin_ = data_ + pos_;
+      line_end_ = data_ + end_;
       pos_ = end_;
       break;
     }
   }
+  // The file reader refuses a line that fills its buffer; a slice, which holds whole lines, any
+  // line that could have (the exact limit is the file reader's to say).
+  if (slice_ && static_cast<std::size_t>(line_end_ - line_begin_) + 2 >= kChunkBytes)
+    fail_at(line_ + 1, 1, "line too long for a slice");
   if (line_end_ != line_begin_ && line_end_[-1] == '\r') --line_end_;
   ++line_;
   return true;
@@ -213,10 +261,10 @@ void Reader::split_quoted() {
 void Reader::start() {
   refill();
   // A UTF-8 byte-order mark (spreadsheet exports) is not part of the first header cell.
-  if (end_ >= 3 && std::memcmp(buffer_.data(), "\xEF\xBB\xBF", 3) == 0) pos_ = 3;
+  if (end_ >= 3 && std::memcmp(data_, "\xEF\xBB\xBF", 3) == 0) pos_ = 3;
   // Lines end in "\n" or "\r\n"; a file with '\r' but no '\n' in its first chunk ends them
   // in '\r' alone (old Mac and some instrument exports).
-  const std::string_view first(buffer_.data(), end_);
+  const std::string_view first(data_, end_);
   if (first.find('\n') == std::string_view::npos && first.find('\r') != std::string_view::npos) eol_ = '\r';
 }
 
@@ -269,7 +317,7 @@ void Reader::read_header() {
 bool Reader::next() {
   while (next_line()) {
     if (is_skipped(line_begin_, line_end_)) continue;
-    if (++rows_ > io::kMaxRows) {
+    if (++rows_ > io::kMaxRows && !slice_) {
       fail_at(line_, 1, fmt::format("more than {} data rows in one file (the limit, docs/formats.md#limits): split the "
                                     "log into several files listed in a manifest",
                                     io::kMaxRows));
@@ -409,8 +457,8 @@ void Reader::fail_at(long line, long column, const std::string& what) const {
 
 std::size_t Reader::estimated_rows() const {
   // Data lines only: a file of blank lines around one row must not reserve for millions.
-  const char* p = buffer_.data() + pos_;
-  const char* const end = buffer_.data() + end_;
+  const char* p = data_ + pos_;
+  const char* const end = data_ + end_;
   std::size_t lines = 0;
   while (p != end) {
     const char* nl = static_cast<const char*>(std::memchr(p, eol_, static_cast<std::size_t>(end - p)));
@@ -427,6 +475,17 @@ std::size_t Reader::estimated_rows() const {
   const double rows =
       static_cast<double>(file_size_ - consumed) * static_cast<double>(lines) / static_cast<double>(rest_bytes);
   return std::min(static_cast<std::size_t>(rows * 1.03) + 16, io::kMaxRows);
+}
+
+void prefer_huge_pages(const void* data, std::size_t bytes) {
+#ifdef MADV_HUGEPAGE
+  constexpr std::uintptr_t kHuge = std::uintptr_t{2} << 20;
+  const auto begin = (reinterpret_cast<std::uintptr_t>(data) + kHuge - 1) & ~(kHuge - 1);
+  const auto end = (reinterpret_cast<std::uintptr_t>(data) + bytes) & ~(kHuge - 1);
+  if (end > begin) ::madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE);
+#else
+  (void)data, (void)bytes;
+#endif
 }
 
 // ---- Names with units ---------------------------------------------------------------------

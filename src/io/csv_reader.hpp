@@ -68,6 +68,11 @@ class Reader {
   // The first `skip_lines` lines (a logger's preamble: whatever they hold) are not read; line
   // numbers in errors still count them.
   explicit Reader(const std::filesystem::path& file, std::size_t skip_lines = 0);
+  // A reader of the data lines in `slice`, a part of the file `whole` reads that starts at a
+  // line's start, after the header (header, line ends and file name as `whole`'s). Its lines
+  // are numbered from `lines_before` + 1; a line of kMaxLineBytes or more is refused as `whole`
+  // would. The data row limit is not checked (a slice does not know the rows before it).
+  Reader(const Reader& whole, std::string_view slice, long lines_before);
   Reader(const Reader&) = delete;
   Reader& operator=(const Reader&) = delete;
 
@@ -104,6 +109,18 @@ class Reader {
 
   // Bytes consumed so far (the file size once next() returned false).
   std::uintmax_t bytes() const { return bytes_read_; }
+  // The file's size when it was opened.
+  std::uintmax_t file_size() const { return file_size_; }
+
+  // The rest of the file after the current line, read whole (the pieces read in parallel) and
+  // cut at line ends into `count` slices in file order, for Reader(whole, slice, lines_before);
+  // nullopt when the file no longer has the size it had when it was opened (it is being written:
+  // read it line by line). A file reader only.
+  struct Rest {
+    std::unique_ptr<char[]> bytes;
+    std::vector<std::string_view> slices;
+  };
+  std::optional<Rest> read_rest(int count) const;
   // Data rows still to come, extrapolated from the line lengths of the first chunk (for reserve()).
   std::size_t estimated_rows() const;
 
@@ -129,7 +146,8 @@ class Reader {
   std::uintmax_t file_size_ = 0;
   std::uintmax_t bytes_read_ = 0;
   std::vector<char> buffer_;
-  std::size_t pos_ = 0, end_ = 0;  // unread part of buffer_
+  const char* data_ = nullptr;     // buffer_, or a slice's bytes
+  std::size_t pos_ = 0, end_ = 0;  // unread part of data_
   bool at_eof_ = false;
   char eol_ = '\n';       // '\r' for a file whose lines end in a bare CR
   long line_ = 0;
@@ -140,6 +158,7 @@ class Reader {
   std::vector<std::string> header_;
   long header_line_ = 0;
   std::size_t skip_lines_ = 0;
+  bool slice_ = false;  // reads a slice of the file in memory
 };
 
 // conversion.apply(value), except that canonical units leave the value untouched: x * 1 + 0
@@ -162,6 +181,18 @@ UnitMatch match_unit(std::string_view name, std::string_view base, Quantity quan
 std::string accepted_names(std::string_view base, Quantity quantity);
 // `base` with the quantity's internal unit: "load_N".
 std::string canonical_name(std::string_view base, Quantity quantity);
+
+// Asks the kernel to back the whole 2 MiB pages inside [data, data + bytes) by transparent huge
+// pages (Linux; elsewhere, or when refused, nothing happens): the first write to a loader's
+// column of a million rows then costs a few page faults rather than thousands.
+void prefer_huge_pages(const void* data, std::size_t bytes);
+
+// column.reserve(rows), the new storage preferring huge pages.
+template <typename T>
+void reserve_rows(std::vector<T>& column, std::size_t rows) {
+  column.reserve(rows);
+  prefer_huge_pages(column.data(), column.capacity() * sizeof(T));
+}
 
 // Binds the header cells to `specs` (in header order). Call it before the first next(): errors
 // point into the header line. Unknown columns are listed in

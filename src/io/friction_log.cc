@@ -8,12 +8,14 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <memory>
 #include <optional>
 
 #include "io/csv_reader.hpp"
 #include "io/friction_files.hpp"
 #include "io/input_file.hpp"
 #include "io/raw_friction.hpp"
+#include "parallel_slices.hpp"
 #include "lmcal/error.hpp"
 #include "lmcal/io/csv_writer.hpp"
 #include "lmcal/io/limits.hpp"
@@ -173,12 +175,18 @@ class FileLoader {
     bind();
   }
 
-  void load() {
-    reserve();
-    std::string scratch;
-    while (reader_.next()) {
-      ++report_.rows_read;
-      read_row(scratch);
+  // Reads the rows: line by line when `sliced` is null; else a large tidy file in slices, one
+  // per thread, setting *sliced first (what then throws is read again line by line by the
+  // caller: see read_slices).
+  void load(bool* sliced) {
+    reserve(log_, log_.size() + reader_.estimated_rows());
+    const int slices = sliced && !is_raw() ? detail::slice_threads(reader_.file_size(), kSliceBytes) : 1;
+    if (slices > 1) {
+      *sliced = true;
+      read_slices(slices);
+    } else {
+      read_rows();
+      report_.bytes = static_cast<double>(reader_.bytes());
     }
     if (report_.rows_read == 0) reader_.fail_at(reader_.header_line(), 0, "no data rows below the header");
     if (is_raw()) {
@@ -194,11 +202,153 @@ class FileLoader {
       reader_.fail_at(reader_.header_line(), 0,
                       fmt::format("no sample kept of the {} rows read: {}", report_.rows_read, fmt::join(why, ", ")));
     }
-    report_.bytes = static_cast<double>(reader_.bytes());
     log_.reports.push_back(std::move(report_));
   }
 
  private:
+  static constexpr std::size_t kNone = static_cast<std::size_t>(-1);
+  static constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+  struct LastSample {
+    double time_s = kNaN;
+    long line = 0;
+    double first_s = kNaN;  // the run's first time in this file (or slice)
+  };
+
+  // Slices of a file read in parallel: at least this many bytes each.
+  static constexpr std::size_t kSliceBytes = std::size_t{4} << 20;
+
+  // A loader of `slice` of `whole`'s file, into `log` with names in `runs` and `guides`: the
+  // same columns and conditions, the rows' state its own.
+  FileLoader(const FileLoader& whole, std::string_view slice, long lines_before, FrictionLog& log, NameIndex& runs,
+             NameIndex& guides)
+      : file_(whole.file_), raw_(whole.raw_), log_(log), runs_(runs), guides_(guides),
+        reader_(whole.reader_, slice, lines_before), columns_(whole.columns_),
+        file_run_name_(whole.file_run_name_), law_(whole.law_), motion_kind_(whole.motion_kind_) {
+    const auto same = [&](const csv::Column* c) { return c ? &columns_[static_cast<std::size_t>(c - whole.columns_.data())] : nullptr; };
+    for (std::size_t spec = 0; spec < kSpecs.size(); ++spec) bound_[spec] = same(whole.bound_[spec]);
+    motion_ = same(whole.motion_);
+  }
+
+  void read_rows() {
+    std::string scratch;
+    while (reader_.next()) {
+      ++report_.rows_read;
+      read_row(scratch);
+    }
+  }
+
+  // What a slice's rows may not do for it to load as it would within the whole file: it throws
+  // this (or the InputError of a bad row), and the caller reads the file line by line.
+  struct SlicesDisagree : std::exception {
+    const char* what() const noexcept override { return "the slices of a file read apart disagree"; }
+  };
+
+  // The rest of the file in `count` slices read in parallel, the first into this log, each
+  // other into a log of its own, joined in file order: names mapped to the log's in the order
+  // they first appear, line numbers counted on. Where the rows of one slice bear on another's
+  // (a run's time going back across a boundary, a combination law's setup differing, the
+  // limits on rows and names) the slices throw SlicesDisagree rather than decide.
+  void read_slices(int count) {
+    std::optional<csv::Reader::Rest> rest = reader_.read_rest(count);
+    if (!rest) {  // being written: line by line
+      read_rows();
+      report_.bytes = static_cast<double>(reader_.bytes());
+      return;
+    }
+    if (!column(kRun)) file_run_name();  // its note once, in this file's report
+    struct Part {
+      FrictionLog log;
+      NameIndex runs{log.run_names}, guides{log.guide_names};
+      std::unique_ptr<FileLoader> loader;
+    };
+    std::vector<std::unique_ptr<Part>> parts;
+    const double rows_per_byte = static_cast<double>(reader_.estimated_rows()) /
+                                 static_cast<double>(std::max<std::uintmax_t>(1, reader_.file_size()));
+    for (std::size_t k = 0; k < rest->slices.size(); ++k) {
+      auto& part = parts.emplace_back(std::make_unique<Part>());
+      if (k == 0) {
+        part->loader.reset(new FileLoader(*this, rest->slices[0], reader_.line(), log_, runs_, guides_));
+        continue;
+      }
+      part->log.law = log_.law;
+      part->loader.reset(new FileLoader(*this, rest->slices[k], 0, part->log, part->runs, part->guides));
+      reserve(part->log, static_cast<std::size_t>(rows_per_byte * static_cast<double>(rest->slices[k].size())) + 16);
+    }
+    detail::for_each_slice(parts.size(), static_cast<int>(parts.size()), [&](int, std::size_t begin, std::size_t end) {
+      for (std::size_t k = begin; k < end; ++k) parts[k]->loader->read_rows();
+    });
+    std::vector<LastSample> last = parts[0]->loader->last_;  // by the log's run index
+    long lines_before = parts[0]->loader->reader_.line();
+    for (std::size_t k = 0; k < parts.size(); ++k) {
+      FileLoader& part = *parts[k]->loader;
+      if (k != 0) {
+        join(part, lines_before, last);
+        lines_before += part.reader_.line();
+      }
+      report_.rows_read += part.report_.rows_read;
+      skipped_ += part.skipped_;
+      backward_rows_ += part.backward_rows_;
+      negative_backward_ += part.negative_backward_;
+      negative_rows_ += part.negative_rows_;
+    }
+    if (report_.rows_read > io::kMaxRows) throw SlicesDisagree();
+    report_.bytes = static_cast<double>(reader_.file_size());
+  }
+
+  // The rows `part` read from a later slice appended to this file's (see read_slices); `last`:
+  // each run's last sample so far, by the log's run index.
+  void join(const FileLoader& part, long lines_before, std::vector<LastSample>& last) {
+    const FrictionLog& from = part.log_;
+    const auto map_names = [](NameIndex& names, const std::vector<std::string>& local) {
+      std::vector<std::uint32_t> map;
+      for (const std::string& name : local) map.push_back(names(name));
+      if (names.size() > io::kMaxRuns) throw SlicesDisagree();
+      return map;
+    };
+    const std::vector<std::uint32_t> run_map = map_names(runs_, from.run_names);
+    const std::vector<std::uint32_t> guide_map = map_names(guides_, from.guide_names);
+    join_law(from.law);
+    if (last.size() < runs_.size()) last.resize(runs_.size());
+    for (std::size_t r = 0; r < part.last_.size(); ++r) {
+      const LastSample& sample = part.last_[r];
+      if (sample.line == 0) continue;
+      LastSample& before = last[run_map[r]];
+      if (sample.first_s < before.time_s) throw SlicesDisagree();
+      before = {sample.time_s, sample.line + lines_before, before.line == 0 ? sample.first_s : before.first_s};
+    }
+    const auto append = [](auto& to, const auto& more) { to.insert(to.end(), more.begin(), more.end()); };
+    for (std::uint32_t r : from.run) log_.run.push_back(run_map[r]);
+    for (std::uint32_t g : from.guide) log_.guide.push_back(guide_map[g]);
+    for (std::uint32_t l : from.line) log_.line.push_back(l + static_cast<std::uint32_t>(lines_before));
+    append(log_.time_s, from.time_s);
+    append(log_.velocity_m_s, from.velocity_m_s);
+    append(log_.load_N, from.load_N);
+    append(log_.preload_um, from.preload_um);
+    append(log_.block_length_mm, from.block_length_mm);
+    append(log_.temperature_C, from.temperature_C);
+    append(log_.friction_N, from.friction_N);
+    append(log_.viscosity40_mm2_s, from.viscosity40_mm2_s);
+    append(log_.direction, from.direction);
+    append(log_.acceleration_m_s2, from.acceleration_m_s2);
+    append(log_.position_m, from.position_m);
+    append(log_.distance_since_reversal_m, from.distance_since_reversal_m);
+    append(log_.time_since_reversal_s, from.time_since_reversal_s);
+  }
+
+  // A combination law's setup as a later slice stated it (see law_conditions): the log's first
+  // values, or SlicesDisagree.
+  void join_law(const FrictionLawConditions& from) {
+    FrictionLawConditions& law = log_.law;
+    for (std::optional<double> FrictionLawConditions::*stated :
+         {&FrictionLawConditions::load_N, &FrictionLawConditions::preload_um, &FrictionLawConditions::block_length_mm,
+          &FrictionLawConditions::preload_N}) {
+      if (!(from.*stated)) continue;
+      if (!(law.*stated)) law.*stated = from.*stated;
+      if (*(law.*stated) != *(from.*stated)) throw SlicesDisagree();
+    }
+    if (!law.preload_class) law.preload_class = from.preload_class;
+  }
+
   const csv::Column* column(Spec spec) const { return bound_[spec]; }
   csv::Column* mutable_column(Spec spec) {
     for (csv::Column& c : columns_)
@@ -365,17 +515,16 @@ class FileLoader {
     }
   }
 
-  void reserve() {
-    const std::size_t capacity = log_.size() + reader_.estimated_rows();
-    for (auto* v : {&log_.time_s, &log_.velocity_m_s, &log_.load_N, &log_.preload_um, &log_.block_length_mm,
-                    &log_.temperature_C, &log_.friction_N, &log_.viscosity40_mm2_s, &log_.acceleration_m_s2,
-                    &log_.position_m, &log_.distance_since_reversal_m, &log_.time_since_reversal_s}) {
-      v->reserve(capacity);
+  static void reserve(FrictionLog& log, std::size_t capacity) {
+    for (auto* v : {&log.time_s, &log.velocity_m_s, &log.load_N, &log.preload_um, &log.block_length_mm,
+                    &log.temperature_C, &log.friction_N, &log.viscosity40_mm2_s, &log.acceleration_m_s2,
+                    &log.position_m, &log.distance_since_reversal_m, &log.time_since_reversal_s}) {
+      csv::reserve_rows(*v, capacity);
     }
-    log_.run.reserve(capacity);
-    log_.guide.reserve(capacity);
-    log_.direction.reserve(capacity);
-    log_.line.reserve(capacity);
+    csv::reserve_rows(log.run, capacity);
+    csv::reserve_rows(log.guide, capacity);
+    csv::reserve_rows(log.direction, capacity);
+    csv::reserve_rows(log.line, capacity);
   }
 
   // The manifest's conditions of run `run_index` (nullptr when it does not list the run);
@@ -431,6 +580,12 @@ class FileLoader {
     return index;
   }
 
+  // The run of a file without a run column: the manifest's, or one named after the file.
+  const std::string& file_run_name() {
+    if (!file_run_name_) file_run_name_ = file_.run.empty() ? default_run_name() : file_.run;
+    return *file_run_name_;
+  }
+
   // A file without a run column or a manifest's run: one run, named after the file.
   std::string default_run_name() {
     std::string name = file_.path.stem().string();
@@ -483,7 +638,7 @@ class FileLoader {
   }
 
   void read_row(std::string& scratch) {
-    if (!column(kRun) && !file_run_) file_run_ = runs_(file_.run.empty() ? default_run_name() : file_.run);
+    if (!column(kRun) && !file_run_) file_run_ = runs_(file_run_name());
     const std::uint32_t run_index =
         column(kRun) ? name_index(runs_, *column(kRun), name_cell(reader_, *column(kRun), scratch), "run") : *file_run_;
     const FrictionRunConditions* given = manifest_conditions(run_index);
@@ -549,7 +704,7 @@ class FileLoader {
       }
       return true;
     }
-    previous = {t, reader_.line()};
+    previous = {t, reader_.line(), previous.line == 0 ? t : previous.first_s};
     return false;
   }
 
@@ -697,12 +852,6 @@ class FileLoader {
     }
   }
 
-  static constexpr std::size_t kNone = static_cast<std::size_t>(-1);
-  static constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-  struct LastSample {
-    double time_s = kNaN;
-    long line = 0;
-  };
 
   const detail::FrictionFile& file_;
   RawFrictionOptions raw_;  // the moving mass with the rotor's reflected inertia (bind_drive)
@@ -715,6 +864,7 @@ class FileLoader {
   std::array<const csv::Column*, kSpecs.size()> bound_{};  // by spec: its column, or nullptr
   csv::Column* motion_ = nullptr;  // a raw log's position or velocity
   std::optional<std::uint32_t> file_run_;  // the manifest's run of a file without a run column
+  std::optional<std::string> file_run_name_;  // its name, once asked for
   FrictionLawConditions law_;              // what this file gives
   std::uint32_t last_run_ = 0;             // the current row's run
   raw::Motion motion_kind_ = raw::Motion::velocity_m_s;
@@ -790,7 +940,8 @@ FrictionConditions<double> FrictionLog::conditions(std::size_t i) const {
           .distance_since_reversal_m = i < distance_since_reversal_m.size() ? distance_since_reversal_m[i] : 0.0};
 }
 
-void FrictionLog::append(std::uint32_t run_index, std::uint32_t guide_index, double time,
+// Flattened: sixteen push_backs inlined (their capacity reserved by the loaders) rather than called.
+[[gnu::flatten]] void FrictionLog::append(std::uint32_t run_index, std::uint32_t guide_index, double time,
                          const FrictionConditions<double>& c, double friction, double viscosity40,
                          std::uint32_t source_line) {
   run.push_back(run_index);
@@ -825,13 +976,24 @@ namespace detail {
 
 FrictionLog load_friction_files(const std::vector<FrictionFile>& files, const RawFrictionOptions& raw) {
   raw.validate();
-  FrictionLog log;
-  log.force_sensor = raw.force_sensor;
-  log.incline_stated = raw.incline_stated;
-  NameIndex runs(log.run_names);
-  NameIndex guides(log.guide_names);
-  for (const FrictionFile& file : files) FileLoader(file, raw, log, runs, guides).load();
-  return log;
+  const auto read = [&](bool* sliced) {
+    FrictionLog log;
+    log.force_sensor = raw.force_sensor;
+    log.incline_stated = raw.incline_stated;
+    NameIndex runs(log.run_names);
+    NameIndex guides(log.guide_names);
+    for (const FrictionFile& file : files) FileLoader(file, raw, log, runs, guides).load(sliced);
+    return log;
+  };
+  // Large files are read in slices in parallel; when that throws (a bad row, slices that
+  // disagree), the files are read again line by line, which says what and where as it always did.
+  bool sliced = false;
+  try {
+    return read(&sliced);
+  } catch (const std::exception&) {
+    if (!sliced) throw;
+  }
+  return read(nullptr);
 }
 
 }  // namespace detail
