@@ -720,6 +720,24 @@ FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagno
   return d;
 }
 
+ResidualDiagnostics diagnose_friction_residuals(const FrictionLog& log, const FrictionFitResult& fit,
+                                                const FrictionDiagnosisOptions& options) {
+  return diagnose_residuals(log, fit, options);
+}
+
+std::string friction_structure_remains(const ResidualDiagnostics& r) {
+  std::vector<std::string> found;
+  if (r.structured) {
+    const CovariateTest& t = r.covariates.front();
+    found.push_back(fmt::format("the residuals follow {} (p = {:.2g}, size {:.3g} N of an RMSE of {:.3g} N)", t.covariate,
+                                t.p_value, t.size, r.rmse_N));
+  }
+  if (r.lack_of_fit.tested && !r.lack_of_fit.fits)
+    found.push_back(fmt::format("they exceed the {} (lack of fit F = {:.3g}, p = {:.2g})", r.lack_of_fit.against,
+                                r.lack_of_fit.statistic, r.lack_of_fit.p_value));
+  return found.empty() ? std::string() : fmt::format("{}", fmt::join(found, "; "));
+}
+
 std::string friction_diagnosis_json(const FrictionDiagnosis& d) {
   using detail::number;
   auto diagnostics = [&](const ResidualDiagnostics& r) {
