@@ -75,15 +75,7 @@ void run_fit_friction(const FitFrictionOptions& o, const std::vector<std::string
   FrictionFitResult result = with_progress("friction fit", [&](const Progress&) { return fit_friction(log, options); });
   if (!result.fit.solver.usable)
     require_usable(fmt::format("the friction fit is not usable: {}", result.fit.solver.unusable_reason), o.keep_unusable);
-  // A fit cannot say what it misses: the diagnosis's residual tests can, and name where to look.
-  if (result.fit.solver.usable && log.run_names.size() >= 2 && options.fit.loss == RobustLoss::none) {
-    const std::string missed = friction_structure_remains(diagnose_friction_residuals(log, result));
-    if (!missed.empty())
-      result.fit.warnings.push_back(fmt::format(
-          "the law misses structure: {}; `lmcal diagnose friction` on these files names a cause where the library has "
-          "one, and `lmcal calibrate` fits the model with it (these constants absorb what the law misses)",
-          missed));
-  }
+  warn_of_missed_structure(log, options, result);  // a fit cannot say what its law misses
   const std::string written = write_outputs(o.output_dir, friction_fit_files(result, log, options, provenance));
   std::cout << "friction fit '" << o.name << "': " << friction_fit_summary(result);
   std::cout << "wrote " << written << "\n";

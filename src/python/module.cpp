@@ -410,7 +410,9 @@ FrictionFit fit_friction_py(const FrictionData& data, const py::dict& o, const s
   set_friction_options(options, o);
   FrictionFit fit{nullptr, data.log, options, {name, data.inputs, command}};
   py::gil_scoped_release release;
-  fit.result = std::make_shared<FrictionFitResult>(fit_friction(*data.log, options));
+  FrictionFitResult result = fit_friction(*data.log, options);
+  warn_of_missed_structure(*data.log, options, result);  // as `lmcal fit friction` does
+  fit.result = std::make_shared<FrictionFitResult>(std::move(result));
   return fit;
 }
 

@@ -114,6 +114,11 @@ ResidualDiagnostics diagnose_friction_residuals(const FrictionLog& log, const Fr
 // What those tests say remains, in one sentence ("the residuals follow velocity_m_s (p = 1e-20,
 // size 0.31 N of an RMSE of 0.84 N)…"), or "" when the law fits to the noise.
 std::string friction_structure_remains(const ResidualDiagnostics& r);
+
+// What `fit friction` and Python's fit_friction add to a usable fit of two runs or more without a
+// robust loss: where those tests find structure, a warning that names the commands that look
+// further (a fit cannot say what its law misses).
+void warn_of_missed_structure(const FrictionLog& log, const FrictionFitOptions& options, FrictionFitResult& fit);
 std::string friction_diagnosis_json(const FrictionDiagnosis& d);
 
 }  // namespace lmcal
