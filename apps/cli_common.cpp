@@ -216,7 +216,8 @@ void FrictionInputOptions::add_to(CLI::App& app) {
     option->capture_default_str();
     options_.emplace_back(option, field);
   };
-  add(group->add_option("--force-sign", force_sign, "follows-motion (positive moving towards +x), opposes-motion or magnitude"),
+  add(completes(group->add_option("--force-sign", force_sign, "follows-motion (positive moving towards +x), opposes-motion or magnitude"),
+                {"follows-motion", "opposes-motion", "magnitude"}),
       "force_sign");
   add(group->add_option("--max-acceleration", raw.max_acceleration_m_s2, "|a| above which a sample is a transient, m/s2"),
       "max_acceleration_m_s2");
@@ -235,9 +236,10 @@ void FrictionInputOptions::add_to(CLI::App& app) {
   add(group->add_option("--skip-lines", raw.skip_lines, kSkipLinesHelp),
       "skip_lines");
   add_drive_options(app);
-  add(group->add_option("--segmentation", segmentation,
+  add(completes(group->add_option("--segmentation", segmentation,
                         "plateaus (a rig's constant-speed plateaus) or trajectory (a drive's log kept whole; the moving "
                         "mass is fitted with the law)"),
+                {"plateaus", "trajectory"}),
       "segmentation");
   add(group->add_option("--trajectory-window", raw.trajectory_window,
                         "Samples of a trajectory's velocity filter (odd; 0: chosen from the data)"),
@@ -249,11 +251,29 @@ void FrictionInputOptions::add_to(CLI::App& app) {
                         "The axis's incline, degrees (90: vertical, +x up; 0 states a horizontal axis); a trajectory "
                         "then fits the weight"),
       "axis_incline_deg");
-  add(group->add_option("--force-sensor", force_sensor,
+  add(completes(group->add_option("--force-sensor", force_sensor,
                         "What measured the force: load_cell, motor_current, torque_sensor or unknown (what a "
                         "diagnosis may name: a load cell's zero needs a load cell)"),
+                {"load_cell", "motor_current", "torque_sensor", "unknown"}),
       "force_sensor");
   app.add_option("--catalog", catalog_file, kCatalogHelp);
+}
+
+namespace {
+std::map<const CLI::Option*, std::vector<std::string>>& value_registry() {
+  static std::map<const CLI::Option*, std::vector<std::string>> values;
+  return values;
+}
+}  // namespace
+
+CLI::Option* completes(CLI::Option* option, std::vector<std::string> values) {
+  value_registry()[option] = std::move(values);
+  return option;
+}
+
+const std::vector<std::string>* completion_values(const CLI::Option* option) {
+  const auto it = value_registry().find(option);
+  return it == value_registry().end() ? nullptr : &it->second;
 }
 
 void FrictionInputOptions::add_drive_options(CLI::App& app) {
@@ -435,8 +455,11 @@ std::vector<double> or_catalog(const std::vector<double>& given, const GuideSpec
 
 void ThermalModelOptions::add_to(CLI::App& app, ThermalFitOptions& fit) {
   app.add_option("--heat", heat, "Heat rate: auto, friction (law) or measured (start_friction_N x V, else the run mean mean_friction_N x V)")->capture_default_str();
-  app.add_option("--source", source, "Heat source model: paper, averaged or moving")->capture_default_str();
-  app.add_option("--scheme", scheme, "Time scheme: backward-euler (be) or crank-nicolson (cn)")->capture_default_str();
+  completes(app.add_option("--source", source, "Heat source model: paper, averaged or moving"), {"paper", "averaged", "moving"})
+      ->capture_default_str();
+  completes(app.add_option("--scheme", scheme, "Time scheme: backward-euler (be) or crank-nicolson (cn)"),
+            {"backward-euler", "be", "crank-nicolson", "cn"})
+      ->capture_default_str();
   // The numeric settings, each with how to copy it (copy_given).
   const auto numeric = [&](CLI::Option* option, auto member) {
     numeric_.emplace_back(option, [member](const ThermalFitOptions& from, ThermalFitOptions& to) { to.*member = from.*member; });
@@ -495,14 +518,16 @@ void add_friction_constant_options(CLI::App& app, FrictionConstantOptions& o) {
   add_assignments(app, "--fix", o.fixed, "Hold a constant at a value: --fix k2=0.03");
   add_assignments(app, "--start", o.start, "Start value: --start mu_st=1 (default: the paper's)");
   app.add_option("--bound", o.bounds, "Bounds: --bound k1=0:1 (repeatable)");
-  app.add_option("--run-offsets", o.run_offsets,
+  completes(app.add_option("--run-offsets", o.run_offsets,
                  "The load cell's zero per run: auto (random with two runs or more and no robust loss; the default), none, "
                  "fixed (free, profiled) or random (a run intercept whose variance is estimated; keeps what changes only "
-                 "between runs informative)");
-  app.add_option("--law-temperature", o.temperature,
+                 "between runs informative)"),
+            {"auto", "none", "fixed", "random"});
+  completes(app.add_option("--law-temperature", o.temperature,
                  "The temperature the law sees: block-mean (the default: each run's mean logged temperature at one setting, "
                  "which averages the thermometer's noise out instead of flattening the law's temperature dependence) or "
-                 "logged (each sample's own)");
+                 "logged (each sample's own)"),
+            {"block-mean", "logged"});
 }
 
 void apply_friction_constant_options(const FrictionConstantOptions& o, FrictionFitOptions& f) {

@@ -192,6 +192,11 @@ void add_assignments(CLI::App& app, const char* name, std::map<std::string, doub
 // --bootstrap (cluster-bootstrap replicates, 0: none), into `fit`.
 void add_uncertainty_options(CLI::App& app, FitOptions& fit);
 
+// The values an option takes, for the shell completion (completion.cpp): `completes(option,
+// {"none", "huber", "cauchy"})` returns the option. add_choice registers its own.
+CLI::Option* completes(CLI::Option* option, std::vector<std::string> values);
+const std::vector<std::string>* completion_values(const CLI::Option* option);
+
 // An option that takes one of named values (any case), without CLI11's map dump in its help
 // or its errors ("--offsets: 'bogus': expected one of auto, fit, hold"):
 // add_choice(app, "--profile", fit.profile, "…", "MODE", {{"auto", …}, …}).
@@ -203,7 +208,9 @@ CLI::Option* add_choice(CLI::App& app, const std::string& name, Enum& target, co
     names += (names.empty() ? "" : ", ") + key;
     if (value == target) current = key;  // the default, as help and the outputs' options show it
   }
-  return app.add_option_function<std::string>(
+  std::vector<std::string> keys;
+  for (const auto& [key, value] : values) keys.push_back(key);
+  return completes(app.add_option_function<std::string>(
                 name,
                 [&target, values, names, name](const std::string& given) {
                   std::string key = given;
@@ -213,7 +220,8 @@ CLI::Option* add_choice(CLI::App& app, const std::string& name, Enum& target, co
                     throw CLI::ValidationError(name, "'" + given + "': expected one of " + names);
                   target = it->second;
                 },
-                help)
+                help),
+                   std::move(keys))
       ->type_name(type_name)
       ->default_str(current);
 }

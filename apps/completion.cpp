@@ -46,9 +46,14 @@ std::vector<std::string> words_of(const CLI::App& app) {
 std::string bash_script(const CLI::App& root) {
   std::vector<std::pair<std::string, const CLI::App*>> paths;
   walk(root, "", paths);
-  std::string cases;
-  for (const auto& [path, app] : paths)
+  std::string cases, value_cases;  // a path's words; an option's values ("path|--option")
+  for (const auto& [path, app] : paths) {
     cases += fmt::format("    \"{}\") words=\"{}\" ;;\n", path, fmt::join(words_of(*app), " "));
+    for (const CLI::Option* o : options_of(*app))
+      if (const std::vector<std::string>* values = completion_values(o))
+        for (const auto& n : o->get_lnames())
+          value_cases += fmt::format("    \"{}|--{}\") words=\"{}\" ;;\n", path, n, fmt::join(*values, " "));
+  }
   std::string commands;  // every subcommand name, to follow the path
   for (const auto& [path, app] : paths)
     if (!path.empty()) commands += " " + app->get_name();
@@ -61,6 +66,14 @@ _lmcal() {{
     candidate="${{path:+$path }}$word"
     case " {} " in *" $word "*) _lmcal_known "$candidate" && path=$candidate ;; esac
   done
+  local prev=${{COMP_WORDS[COMP_CWORD-1]}}
+  if [[ "$prev" == --* ]]; then
+    _lmcal_values "$path|$prev"
+    if [[ -n "$words" ]]; then
+      COMPREPLY=($(compgen -W "$words" -- "$cur"))
+      return 0
+    fi
+  fi
   _lmcal_words "$path"
   if [[ "$cur" == -* || -n "$words" && "$cur" != */* ]]; then
     COMPREPLY=($(compgen -W "$words" -- "$cur"))
@@ -74,10 +87,38 @@ _lmcal_words() {{
 {}    *) words="" ;;
   esac
 }}
+_lmcal_values() {{
+  case "$1" in
+{}    *) words="" ;;
+  esac
+}}
 complete -o filenames -F _lmcal lmcal
 )",
-                     commands, cases);
+                     commands, cases, value_cases);
 }
+
+constexpr const char* kDescription =
+    "lmcal calibrates the friction and thermal models of roller linear-motion guides: it fits the friction law's "
+    "constants (Coulomb, Stribeck, viscous, their temperature dependence) to force logs — a rig's load cell at "
+    "constant speeds, or a drive's own trajectory log of position and motor force — and the rail's heat partition "
+    "and losses to thermocouple runs; it reports every constant with its interval and the method behind it, finds "
+    "what the published model misses and names the physical cause only where its signature is in the data, and "
+    "predicts the rail's elongation over a duty cycle with 95 % bands. `lmcal calibrate FOLDER` does all of it for "
+    "a measurement folder and writes report.html; the other commands are its steps.";
+
+// The man page's examples: a command and what it does.
+constexpr std::pair<const char*, const char*> kExamples[] = {
+    {"lmcal calibrate measurements/cheng2017 -o fits/cheng2017",
+     "The whole calibration of a measurement folder: fits, spread across runs, diagnoses, the calibrated model "
+     "(model.toml) and report.html."},
+    {"lmcal check friction my_log.csv", "What a log holds and what is wrong with it, before any fit."},
+    {"lmcal fit friction my_log.csv -o fits", "The friction law's constants with their 95 % intervals."},
+    {"lmcal diagnose friction friction.toml", "What the law misses, the named cause, and the held-out gain of modelling it."},
+    {"lmcal predict fits/cheng2017/model.toml examples/duty/two_shifts.toml",
+     "The rail's temperature and elongation over a duty cycle, with bands."},
+    {"lmcal generate axis -o axis --reference sinusoid",
+     "A closed-loop axis's own log with a known truth (the virtual rig), to try the rest on."},
+};
 
 std::string roff(std::string text) {
   std::string out;
@@ -97,6 +138,7 @@ std::string man_page(const CLI::App& root) {
       ".TH LMCAL 1 \"\" \"lmcal {}\" \"User Commands\"\n.SH NAME\nlmcal \\- {}\n.SH SYNOPSIS\n.B lmcal\n[\\fIOPTIONS\\fR] "
       "\\fICOMMAND\\fR [\\fIARGS\\fR]\n",
       LMCAL_VERSION, roff(root.get_description().substr(root.get_description().find(':') + 2)));
+  page += ".SH DESCRIPTION\n" + roff(kDescription) + "\n";
   for (const auto& [path, app] : paths) {
     if (app->get_subcommands([](const CLI::App*) { return true; }).size() > 0 && !path.empty() &&
         app->get_options().size() <= 1)
@@ -114,7 +156,9 @@ std::string man_page(const CLI::App& root) {
   page += ".SH EXIT STATUS\n.TP\n0\ndone\n.TP\n1\ninput refused: a file, a value in it, or an option's value\n.TP\n2\n"
           "usage: an unknown command or option, a missing or malformed argument\n.TP\n3\nan internal failure (a bug)\n"
           ".TP\n4\na fit that gives no usable answer (nothing written unless --keep-unusable)\n"
-          ".SH SEE ALSO\nThe README of lmcal; docs/formats.md (the file formats).\n";
+          ".SH EXAMPLES\n";
+  for (const auto& [command, what] : kExamples) page += fmt::format(".TP\n.B {}\n{}\n", roff(command), roff(what));
+  page += ".SH SEE ALSO\nThe README of lmcal; docs/formats.md (the file formats).\n";
   return page;
 }
 

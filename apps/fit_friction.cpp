@@ -94,9 +94,11 @@ void setup_fit(CLI::App& app, const std::vector<std::string>& argv) {
   friction->add_option("-o,--output-dir", o->output_dir, "Output folder")->capture_default_str();
   add_friction_constant_options(*friction, o->constants);
   friction->add_option("--effect", o->effects, "Fit a named effect on top of the law (e.g. seal_drag)")->delimiter(',');
-  friction->add_option("--loss", o->loss, "Robust loss: none, huber or cauchy")->capture_default_str();
+  completes(friction->add_option("--loss", o->loss, "Robust loss: none, huber or cauchy"), {"none", "huber", "cauchy"})
+      ->capture_default_str();
   friction->add_option("--loss-scale", o->loss_scale, "Robust loss scale, in residual sigmas")->capture_default_str();
-  friction->add_option("--weights", o->weights, "Weights: none, per-run or per-condition (from the spread of repeats)")
+  completes(friction->add_option("--weights", o->weights, "Weights: none, per-run or per-condition (from the spread of repeats)"),
+            {"none", "per-run", "per-condition"})
       ->capture_default_str();
   friction->add_option("--starts", o->starts, "Multi-start local searches")->capture_default_str();
   friction->add_option("--seed", o->seed, "Seed of the multi-start sequence")->capture_default_str();

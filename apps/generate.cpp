@@ -283,7 +283,8 @@ void setup_generate(CLI::App& app, const std::vector<std::string>& argv) {
   axis->add_option("--mass", a.moving_mass_kg, "Moving mass, kg")->capture_default_str();
   axis->add_option("--incline", a.incline_deg, "Axis incline, deg (0 horizontal, 90 vertical, +x up)")->capture_default_str();
   axis->add_option("--force-constant", a.force_constant_N_A, "Motor force constant K_f, N/A")->capture_default_str();
-  axis->add_option("--controller", o->axis_controller, "pd or p-pi (cascaded P position, PI velocity)")->capture_default_str();
+  completes(axis->add_option("--controller", o->axis_controller, "pd or p-pi (cascaded P position, PI velocity)"), {"pd", "p-pi"})
+      ->capture_default_str();
   axis->add_option("--pd-bandwidth", a.pd_bandwidth_Hz, "pd: natural frequency, Hz")->capture_default_str();
   axis->add_option("--pd-damping", a.pd_damping, "pd: damping ratio")->capture_default_str();
   axis->add_option("--position-gain", a.position_gain_1_s, "p-pi: position gain, 1/s")->capture_default_str();
@@ -291,7 +292,8 @@ void setup_generate(CLI::App& app, const std::vector<std::string>& argv) {
   axis->add_option("--velocity-integral", a.velocity_integral_Hz, "p-pi: velocity loop integral corner, Hz")
       ->capture_default_str();
   axis->add_option("--feedforward", a.acceleration_feedforward, "Share of M*a_ref fed forward")->capture_default_str();
-  axis->add_option("--reference", o->axis_reference, "trapezoidal or sinusoid")->capture_default_str();
+  completes(axis->add_option("--reference", o->axis_reference, "trapezoidal or sinusoid"), {"trapezoidal", "sinusoid"})
+      ->capture_default_str();
   axis->add_option("--acceleration", a.acceleration_m_s2, "Trapezoidal: acceleration, m/s2")->capture_default_str();
   axis->add_option("--cruise", a.cruise_s, "Trapezoidal: cruise of every move, s (unless --stroke is shorter)")
       ->capture_default_str();

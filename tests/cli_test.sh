@@ -597,10 +597,15 @@ check "bash completes a command" completes calibrate cal
 check "bash completes a subcommand" completes friction generate fr
 check "bash completes an option of a subcommand, in its group too" completes --raw generate friction --ra
 check "bash completes a global option" completes --json --js
+check "bash completes an option's values" completes cauchy fit friction --loss c
+check "bash completes a choice option's values" completes hac calibrate --covariance h
+check "bash completes a value in an option group" completes trajectory fit friction --segmentation t
 "$LMCAL" man >lmcal.1
 check "the man page has every command and option" grep -q '^.SH lmcal generate friction' lmcal.1
 check "the man page lists an option's help" grep -q '^.B \\-\\-friction\\-min\\-gain' lmcal.1
 check "the man page says the exit status" grep -q '^.SH EXIT STATUS' lmcal.1
+check "the man page has a description" grep -q '^.SH DESCRIPTION' lmcal.1
+check "the man page has examples, the main job first" bash -c "grep -A3 '^.SH EXAMPLES' lmcal.1 | grep -q 'lmcal calibrate'"
 check "--json prints the main output" bash -c '"$0" --json fit friction "$1" -o jsonout | python3 -c "import json,sys; assert json.load(sys.stdin)[\"kind\"] == \"friction fit\""' \
   "$LMCAL" "$SOURCE/measurements/cheng2017/friction.csv"
 check "a global option works after the command too" bash -c '"$0" fit friction "$1" -o jsonout2 --json | python3 -c "import json,sys; json.load(sys.stdin)"' \
