@@ -446,10 +446,14 @@ void setup_simulate_thermal(CLI::App& parent, const std::vector<std::string>& ar
   app->add_option("--ambient-trace", o->ambient_trace, "Ambient trace as time_s:temperature_C pairs, e.g. 0:26,21600:27");
   app->add_option("--initial", o->initial_C, "Initial rail temperature, C (default: the ambient at t = 0)");
   o->rail_options.push_back(
-      app->add_option("--source", o->source, "Heat source model: paper, averaged or moving")->capture_default_str());
+      completes(app->add_option("--source", o->source, "Heat source model: paper, averaged or moving"),
+                {"paper", "averaged", "moving"})
+          ->capture_default_str());
   o->model.add_to(*app, "Calibrated model (model.toml of lmcal calibrate): alpha, h, source and mechanisms of its "
                         "[thermal], the friction law of its [friction]");
-  app->add_option("--scheme", o->scheme, "Time scheme: backward-euler (be) or crank-nicolson (cn)")->capture_default_str();
+  completes(app->add_option("--scheme", o->scheme, "Time scheme: backward-euler (be) or crank-nicolson (cn)"),
+            {"backward-euler", "be", "crank-nicolson", "cn"})
+      ->capture_default_str();
   app->add_option("--segments", o->segments, "Segments on the half rail")->capture_default_str();
   app->add_option("--dt", o->time_step_s, "Time step, s")->capture_default_str();
   app->add_option("--duration", o->duration_s, "Simulated time, s")->capture_default_str();
