@@ -75,6 +75,7 @@ check "fit writes json, samples and conditions" test -s fitout/f.json -a -s fito
 check "fit json records the input hash" grep -q '"sha256": "[0-9a-f]\{64\}"' fitout/f.json
 check "fit summary shows all seven constants" test "$(grep -cE '^  (k1|k2|mu_st|v_st_m_s|mu_v|beta_per_K|f0) +[-0-9]' fit.txt)" -eq 7
 check "fit summary reports the spread across runs" grep -q 'spread across 3 runs' fit.txt
+check "fit summary's table has a unit column: f0 in N/mm" grep -qE '^  f0 +[-0-9.e]+ +[0-9.e-]+  N/mm ' fit.txt
 check "a clean log's fit does not say the law misses structure" bash -c "! grep -q 'misses structure' fit.txt"
 "$LMCAL" generate friction -o drag_fit --runs 3 --guides "SRN 35C" --effect seal_drag=100 >/dev/null
 "$LMCAL" fit friction drag_fit/friction.csv -o fitout --name dragfit > fitdrag.txt

@@ -1066,7 +1066,7 @@ std::string friction_fit_summary(const FrictionFitResult& r) {
   s += fmt::format("{} samples, {} runs, {} of {} parameters asked free\n", f.residuals, r.runs.size(), free,
                    f.parameters.size());
   s += law_summary(r);
-  s += fmt::format("  {:<20} {:>12} {:>11}  {:<27} {}\n", "parameter", "value", "SE", "95% interval", "note");
+  s += fmt::format("  {:<20} {:>12} {:>11}  {:<19} {:<27} {}\n", "parameter", "value", "SE", "unit", "95% interval", "note");
   for (std::size_t j = 0; j < f.parameters.size(); ++j) {
     if (!shown(r, j)) continue;
     const ParameterEstimate& p = f.parameters[j];
@@ -1077,7 +1077,7 @@ std::string friction_fit_summary(const FrictionFitResult& r) {
     std::string interval = "";
     if (p.interval == "profile") interval = fmt::format("[{:.5g}, {:.5g}] profile", p.profile_low, p.profile_high);
     else if (p.interval == "linear") interval = fmt::format("[{:.5g}, {:.5g}]", p.ci_low, p.ci_high);
-    s += fmt::format("  {:<20} {:>12.6g} {:>11.3g}  {:<27} {}\n", p.name, p.value, p.se, interval, note);
+    s += fmt::format("  {:<20} {:>12.6g} {:>11.3g}  {:<19} {:<27} {}\n", p.name, p.value, p.se, shown_unit(p.unit), interval, note);
   }
   s += detail::uncertainty_summary(f);
   if (f.identifiability.identifiable) {

@@ -1247,7 +1247,8 @@ std::string thermal_fit_summary(const ThermalFitResult& r) {
                                  : p.interval == "linear" ? fmt::format("[{:.4g}, {:.4g}]", p.ci_low, p.ci_high)
                                  : p.interval != "none" ? fmt::format("[{:.4g}, {:.4g}] {} scale", p.ci_low, p.ci_high, p.interval)
                                                           : std::string("held");
-    s += fmt::format("  {:<24} {:>10.5g} ± {:<9.3g} {}{}\n", p.name, p.value, p.se, interval, p.at_bound ? "  at a bound" : "");
+    s += fmt::format("  {:<24} {:>10.5g} ± {:<9.3g} {:<9} {}{}\n", p.name, p.value, p.se, shown_unit(p.unit), interval,
+                     p.at_bound ? "  at a bound" : "");
   }
   s += fmt::format("  residual sigma {:.3f} K; {}\n", std::sqrt(r.joint.residual_variance), r.joint.solver.termination);
   s += detail::uncertainty_summary(r.joint);

@@ -197,4 +197,7 @@ struct FitResult {
   std::vector<double> values() const;
 };
 
+// A unit as the summaries' tables show it: "-" for a dimensionless "1" or none.
+inline std::string shown_unit(const std::string& unit) { return unit.empty() || unit == "1" ? "-" : unit; }
+
 }  // namespace lmcal
