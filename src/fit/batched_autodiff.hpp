@@ -346,7 +346,10 @@ class BatchedAutoDiffCostFunction final : public ceres::CostFunction, public Nor
     const int p = parameter_block_sizes()[0];
     std::vector<Jet> t(static_cast<std::size_t>(p));
     for (int j = 0; j < p; ++j) t[static_cast<std::size_t>(j)] = Jet(theta[j]);
-    for (std::size_t k = 0; k < seeded.size(); ++k) t[static_cast<std::size_t>(seeded[k])] = Jet(theta[seeded[k]], static_cast<int>(k));
+    for (std::size_t k = 0; k < seeded.size(); ++k) {
+      const auto j = static_cast<std::size_t>(seeded[k]);
+      t[j] = Jet(theta[j], static_cast<int>(k));
+    }
     auto slice = [this, &seeded](auto& prepared, std::size_t begin, std::size_t end, double* g, double* r) {
       jet_slice<N>(prepared, seeded, begin, end, g, r);
     };
