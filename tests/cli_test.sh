@@ -367,6 +367,8 @@ check "a bar missing its material is refused at load, naming where to add it" re
 "$LMCAL" predict "$SOURCE/fits/cheng2017/model.toml" "$SOURCE/examples/duty/two_shifts.toml" -o predout --samples 50 >predict.txt
 check "predict writes the bands and a summary" test -s predout/prediction.json -a -s predout/prediction_time.csv
 check "predict summarises the elongation with its band" grep -q 'rail elongation at the end: .* \[.*\] µm' predict.txt
+check "predict gives the largest elongation with its band" grep -q 'largest [0-9.e+-]* \[[0-9.e+-]*, [0-9.e+-]*\] µm at ' predict.txt
+check "predict gives each segment's end with its band" bash -c "grep -A5 'at the end of each segment' predict.txt | grep -qE '^    shift 1 +[0-9.]+ h  [0-9.e+-]+ \[[0-9.e+-]+, [0-9.e+-]+\]'"
 # --dt as every other command names the time step (issue 41 #5); --time-step, its first name, still read
 "$LMCAL" predict "$SOURCE/fits/cheng2017/model.toml" "$SOURCE/examples/duty/two_shifts.toml" -o predout_dt --samples 20 --dt 60 >/dev/null
 "$LMCAL" predict "$SOURCE/fits/cheng2017/model.toml" "$SOURCE/examples/duty/two_shifts.toml" -o predout_ts --samples 20 --time-step 60 >/dev/null

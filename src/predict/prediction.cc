@@ -573,10 +573,26 @@ std::string prediction_summary(const Prediction& p) {
   std::string out = fmt::format("prediction over {:.4g} h, {} draws (95 % bands):\n", p.time_s.back() / 3600, p.samples);
   for (std::size_t q = 0; q < p.positions_m.size(); ++q)
     out += fmt::format("  rail at x = {} m at the end: {} °C\n", p.positions_m[q], at_end(p.temperature_C[q]));
-  out += fmt::format("  rail elongation at the end: {} µm; largest {:.4g} µm at {:.4g} h\n", at_end(p.elongation_um),
-                     p.elongation_um.value[peak], p.time_s[peak] / 3600);
+  const auto at = [](const Band& b, std::size_t t) { return fmt::format("{:.4g} [{:.4g}, {:.4g}]", b.value[t], b.low[t], b.high[t]); };
+  out += fmt::format("  rail elongation at the end: {} µm; largest {} µm at {:.4g} h\n", at_end(p.elongation_um),
+                     at(p.elongation_um, peak), p.time_s[peak] / 3600);
   for (std::size_t q = 0; q < p.scale_positions_m.size(); ++q)
     out += fmt::format("  scale error at x = {} m at the end: {} µm\n", p.scale_positions_m[q], at_end(p.scale_error_um[q]));
+  // Each segment's last output time (a shift's end, a night's): where a machine is measured.
+  out += "  at the end of each segment: rail elongation, µm";
+  if (!p.positions_m.empty()) out += fmt::format("; rail at x = {} m, °C", p.positions_m.front());
+  out += "\n";
+  constexpr std::size_t kShownEnds = 12;  // a repeated duty's: the first ones (all in prediction_time.csv)
+  std::size_t ends = 0;
+  for (std::size_t t = 0; t <= end; ++t) {
+    if (t < end && p.segment[t + 1] == p.segment[t]) continue;
+    if (++ends > kShownEnds) continue;
+    out += fmt::format("    {:<24} {:>7.4g} h  {}", p.segment[t], p.time_s[t] / 3600, at(p.elongation_um, t));
+    if (!p.positions_m.empty()) out += "  " + at(p.temperature_C.front(), t);
+    out += "\n";
+  }
+  if (ends > kShownEnds)
+    out += fmt::format("    … {} more segment ends (every output time is in prediction_time.csv)\n", ends - kShownEnds);
   for (const auto& f : p.outside)
     out += fmt::format("  outside the calibrated range: {} {} = {:.4g} ({} calibration: [{:.4g}, {:.4g}])\n", f.segment,
                        f.quantity, f.value, f.what, f.low, f.high);
