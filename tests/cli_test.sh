@@ -164,6 +164,19 @@ mkdir -p calset
 check "calibrate writes the fits, the summary and the report" test -s calout/friction.json -a -s calout/calibration.json -a -s calout/report.html
 check "calibrate says the thermal half was skipped" grep -q 'note: no thermal manifest' calibrate.txt
 check "calibrate is quiet on stderr when it is not a terminal" test ! -s calibrate.err
+# The residual plots thin their points within each level and direction: both senses are drawn
+# (a plain every-nth kept one sense only, the conditions alternating direction).
+both_senses() {  # both_senses REPORT PLOT-ID
+  python3 - "$1" "$2" <<'PY'
+import re, sys
+h = open(sys.argv[1]).read()
+i = h.find('id="lmcal-clip-' + sys.argv[2] + '"')
+svg = h[h.rfind('<svg', 0, i):h.find('</svg>', i)]
+from collections import Counter
+columns = Counter(round(float(x)) for x in re.findall(r'<circle[^>]*?cx="([-0-9.]+)"', svg)).most_common(2)
+sys.exit(0 if i >= 0 and len(columns) == 2 and columns[1][1] >= 10 else 1)  # the legend's marks are fewer
+PY
+}
 script -qec "'$LMCAL' calibrate calset -o ttyout --no-diagnosis" /dev/null >tty.txt 2>&1
 check "calibrate shows its steps on a terminal" grep -q '\[2/[0-9]\] friction fit' tty.txt
 "$LMCAL" calibrate calset -o timed --no-diagnosis --timings >/dev/null 2>timings.txt
@@ -634,6 +647,9 @@ same_with_threads() {  # same_with_threads SET
 if [[ -z ${LMCAL_TEST_SERIAL_BUILD:-} ]]; then
   check "calibrate gives the same outputs with 1 and 2 threads (rig-shaped set)" same_with_threads "$SOURCE/measurements/rig"
   check "calibrate gives the same outputs with 1 and 2 threads (Cheng 2017 set)" same_with_threads "$SOURCE/measurements/cheng2017"
+  # 2154 conditions, thinned to about 540 per plot
+  check "the residual plot against direction shows both senses" both_senses threads2/report.html friction-residual-direction
+  check "the diagnosis's plot against direction shows both senses" both_senses threads2/report.html friction-diagnosis-direction
 fi
 
 # The bundled set is exactly what the recorded commands make (the command lines aside).

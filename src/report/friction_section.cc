@@ -184,16 +184,23 @@ Plot condition_residuals(const std::string& id, const std::string& title, const 
     // The conditions (thinned to a readable cloud), and the mean of each level of the covariate
     // with its 95 % interval: what the eye cannot read from thousands of overlapping points.
     const std::string prefix = fits[f].first.empty() ? "" : fits[f].first + ": ";
-    Series s{.label = prefix + "each condition", .mark = Mark::points, .color = colour(f)};
+    Series s{.mark = Mark::points, .color = colour(f)};
     const std::size_t every = stride(conditions.size(), 600);
     std::map<double, std::vector<double>> levels;
-    for (std::size_t i = 0; i < conditions.size(); ++i) {
-      const ConditionResidual& r = conditions[i];
-      levels[std::stod(fmt::format("{:.3g}", r.*x))].push_back(r.bias_N);
-      if (i % every != 0) continue;
+    // Thinned within each stratum (the plotted level and the direction), so that every level in
+    // both senses keeps its share: the conditions alternate direction, and a plain every-4th
+    // kept one sense only.
+    std::map<std::pair<double, double>, std::size_t> seen;
+    for (const ConditionResidual& r : conditions) {
+      const double level = std::stod(fmt::format("{:.3g}", r.*x));
+      levels[level].push_back(r.bias_N);
+      if (seen[{level, r.direction}]++ % every != 0) continue;
       s.x.push_back(r.*x);
       s.y.push_back(r.bias_N);
     }
+    s.label = prefix + (s.x.size() == conditions.size()
+                            ? "each condition"
+                            : fmt::format("each condition ({} of {} shown)", s.x.size(), conditions.size()));
     plot.series.push_back(std::move(s));
     if (levels.size() > 30) continue;  // a covariate that barely repeats: no levels to average
     Series means{.label = prefix + "mean per level (95 %)", .mark = Mark::line_points, .color = colour(f + 4)};
