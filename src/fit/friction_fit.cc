@@ -628,6 +628,8 @@ FrictionFitResult fit_friction(const FrictionLog& logged, const FrictionFitOptio
     warm_start();
     pass_options.starts = 0;
   }
+  // A later pass started from the one before: each parameter's start is still the one it was given.
+  for (std::size_t j = 0; j < specs.size(); ++j) out.fit.parameters[j].start = specs[j].start;
   if (out.variance_passes > 1 || out.fit.solver.starts < multi_start.starts) {
     SolverReport& s = out.fit.solver;
     s.starts = multi_start.starts, s.starts_agreed = multi_start.starts_agreed;

@@ -97,6 +97,17 @@ def test_friction_fit_fields_are_numpy_and_agree(friction_fit):
     assert "[[Variables]]" in report and "k1:" in report and "[[Correlations]]" in report
 
 
+def test_init_is_the_start_not_the_estimate(friction_fit, tmp_path):
+    # lmfit's init: the value the fit started from (the paper's constants by default), also after
+    # the random run offsets' later passes, which start from the one before.
+    paper = {"k1": 0.315, "k2": 0.03, "mu_st": 1.52, "v_st_m_s": 0.015, "mu_v": 0.003, "beta_per_K": 0.067, "f0": 0.029}
+    for name, start in paper.items():
+        assert friction_fit.params[name].init == start, name
+    assert friction_fit.params["k1"].value != friction_fit.params["k1"].init
+    log = lmcal.load_friction_log(os.path.join(SOURCE, "measurements", "cheng2017", "friction.csv"))
+    assert lmcal.fit_friction(log, start={"mu_st": 1.1}).params["mu_st"].init == 1.1
+
+
 def test_the_law_reproduces_the_fits_predictions():
     # Without run offsets, at the logged temperatures, the fit's prediction is the law at its
     # constants, sample by sample.
