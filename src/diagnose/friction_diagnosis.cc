@@ -743,8 +743,8 @@ std::string friction_structure_remains(const ResidualDiagnostics& r) {
                                 t.p_value, t.size, r.rmse_N));
   }
   if (r.lack_of_fit.tested && !r.lack_of_fit.fits)
-    found.push_back(fmt::format("they exceed the {} (lack of fit F = {:.3g}, p = {:.2g})", r.lack_of_fit.against,
-                                r.lack_of_fit.statistic, r.lack_of_fit.p_value));
+    found.push_back(fmt::format("{} exceed the {} (lack of fit F = {:.3g}, p = {:.2g})", found.empty() ? "the residuals" : "they",
+                                r.lack_of_fit.against, r.lack_of_fit.statistic, r.lack_of_fit.p_value));
   return found.empty() ? std::string() : fmt::format("{}", fmt::join(found, "; "));
 }
 
