@@ -1120,8 +1120,9 @@ std::string friction_fit_summary(const FrictionFitResult& r) {
                      "p: the pooled fit's test of heterogeneity between runs, Holm across the constants):\n",
                      r.runs.size());
     for (const auto& sp : r.spread) {
-      if (!std::isfinite(sp.spread.sd)) {  // fewer than two runs' own values
-        s += fmt::format("  {:<20} no spread: not determined run by run ({})\n", sp.parameter, sp.undetermined);
+      if (sp.spread.n < 2) {  // fewer than two runs' own values (the report's rule too)
+        s += fmt::format("  {:<20} no spread: not determined run by run ({})\n", sp.parameter,
+                         sp.undetermined.empty() ? "fewer than two runs' own fits gave it" : sp.undetermined);
         continue;
       }
       s += fmt::format("  {:<20} mean {:>11.5g}  sigma {:>9.3g}  [{:.5g}, {:.5g}]  min {:.5g} max {:.5g}  ratio {:.2f}  p {:.2g}{}{}\n",

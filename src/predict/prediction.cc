@@ -566,14 +566,14 @@ std::string prediction_time_csv(const Prediction& p) {
 
 std::string prediction_summary(const Prediction& p) {
   const std::size_t end = p.time_s.size() - 1;
-  const auto at_end = [&](const Band& b) { return fmt::format("{:.4g} [{:.4g}, {:.4g}]", b.value[end], b.low[end], b.high[end]); };
+  const auto at = [](const Band& b, std::size_t t) { return fmt::format("{:.4g} [{:.4g}, {:.4g}]", b.value[t], b.low[t], b.high[t]); };
+  const auto at_end = [&](const Band& b) { return at(b, end); };
   std::size_t peak = 0;
   for (std::size_t t = 0; t < p.time_s.size(); ++t)
     if (std::abs(p.elongation_um.value[t]) > std::abs(p.elongation_um.value[peak])) peak = t;
   std::string out = fmt::format("prediction over {:.4g} h, {} draws (95 % bands):\n", p.time_s.back() / 3600, p.samples);
   for (std::size_t q = 0; q < p.positions_m.size(); ++q)
     out += fmt::format("  rail at x = {} m at the end: {} °C\n", p.positions_m[q], at_end(p.temperature_C[q]));
-  const auto at = [](const Band& b, std::size_t t) { return fmt::format("{:.4g} [{:.4g}, {:.4g}]", b.value[t], b.low[t], b.high[t]); };
   out += fmt::format("  rail elongation at the end: {} µm; largest {} µm at {:.4g} h\n", at_end(p.elongation_um),
                      at(p.elongation_um, peak), p.time_s[peak] / 3600);
   for (std::size_t q = 0; q < p.scale_positions_m.size(); ++q)
