@@ -158,7 +158,8 @@ std::string man_page(const CLI::App& root) {
           ".TP\n4\na fit that gives no usable answer (nothing written unless --keep-unusable)\n"
           ".SH EXAMPLES\n";
   for (const auto& [command, what] : kExamples) page += fmt::format(".TP\n.B {}\n{}\n", roff(command), roff(what));
-  page += ".SH SEE ALSO\nThe README of lmcal; docs/formats.md (the file formats).\n";
+  page += ".SH SEE ALSO\nThe README of lmcal (a first calibration); docs/commands.md (every command and option); "
+          "docs/formats.md (the file formats); docs/README.md (the rest of the reference).\n";
   return page;
 }
 

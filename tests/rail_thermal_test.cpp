@@ -252,7 +252,7 @@ TEST(RailThermal, RefusesNonPhysicalInputNamingTheParameter) {
 namespace lmcal {
 namespace {
 
-// The figure the README states: how far the published numerics (paper source, 50 segments,
+// The figure docs/model.md states: how far the published numerics (paper source, 50 segments,
 // Δt = 600 s, backward Euler) are from the converged solution for SRN 35C at 0.11 m/s, at
 // spot 1 (x = 0), sampled at the paper's own step times. Nearly all of it is the time step.
 TEST(RailThermal, PublishedNumericsErrorIsAboutOneKelvinAndComesFromTheTimeStep) {
@@ -273,7 +273,7 @@ TEST(RailThermal, PublishedNumericsErrorIsAboutOneKelvinAndComesFromTheTimeStep)
   const double published = max_error(run(TimeScheme::backward_euler, 50, 600), converged);
   const double space_only = max_error(run(TimeScheme::crank_nicolson, 50, 5), converged);
   const double time_only = max_error(run(TimeScheme::backward_euler, 400, 600), converged);
-  EXPECT_NEAR(published, 0.92, 0.03);  // README, "Numerical error of the published setup"
+  EXPECT_NEAR(published, 0.92, 0.03);  // docs/model.md, "Numerical error of the published setup"
   EXPECT_LT(space_only, 0.02);
   EXPECT_NEAR(time_only, published, 0.05 * published);
 }
