@@ -59,7 +59,7 @@ void run_simulate_friction(const FrictionSweepOptions& o, const std::vector<std:
                 const double with_effects_N = friction_force_with_effects_N(law.constants, law.effects, c);
                 double empirical_N = 0;
                 bool outside = false;
-                for (const auto& term : law.terms) empirical_N += steady_term_N(term, c, with_effects_N, &outside);
+                if (!law.terms.empty()) empirical_N = steady_terms_N(law.terms, law.constants, law.effects, c, &outside);
                 const double friction_N = with_effects_N + empirical_N;
                 // The last check before the row leaves: validate() keeps the conditions in a rig's
                 // ranges, but a model's constants may still take the law out of the doubles.
@@ -88,8 +88,8 @@ void run_simulate_friction(const FrictionSweepOptions& o, const std::vector<std:
     record["empirical_terms"] = {
         {"symbols", symbols},
         {"note", "learned from the residuals, not named causes; at steady state (terms in time, sliding distance "
-                 "or a lagged temperature have settled to 0); rows with extrapolated = 1 lie beyond the data they "
-                 "were learned on"},
+                 "or a lagged temperature have settled to 0, the run index and the campaign's time stay where the "
+                 "campaign ended); rows with extrapolated = 1 lie beyond the data they were learned on"},
         {"extrapolated_rows", extrapolated}};
   }
   OutputSet out;

@@ -408,12 +408,59 @@ TEST(ModelFile, EmpiricalTermsRoundTripAndSettleInASteadySweep) {
   FrictionConditions<double> c{.load_N = 3000, .preload_um = 4, .block_length_mm = 120.2, .velocity_m_s = 0.1,
                                .temperature_C = 30};
   bool outside = false;
-  EXPECT_EQ(steady_term_N(r.friction_terms[0], c, 30.0, &outside), 0.0);  // run in
-  EXPECT_DOUBLE_EQ(steady_term_N(r.friction_terms[1], c, 30.0, &outside), -1.52 * 0.1 * (30 - 40));
+  const FrictionConstants<double> k = paper_friction_constants();
+  const FrictionEffects<double> none{};
+  EXPECT_EQ(steady_terms_N({r.friction_terms[0]}, k, none, c, &outside), 0.0);  // run in
+  EXPECT_DOUBLE_EQ(steady_terms_N({r.friction_terms[1]}, k, none, c, &outside), -1.52 * 0.1 * (30 - 40));
   EXPECT_FALSE(outside);
   c.temperature_C = 60;
-  steady_term_N(r.friction_terms[1], c, 30.0, &outside);
+  steady_terms_N({r.friction_terms[1]}, k, none, c, &outside);
   EXPECT_TRUE(outside);  // beyond the 21.8-40.2 C it was learned on
+}
+
+// The input corrections and the law's reweighted parts round-trip and evaluate as the law at a
+// corrected input and as a share of one part: a step of -2 K above 35 C, the viscous part
+// scaled by (P - 2000)^2, the law times a decay over the run index.
+TEST(ModelFile, InputCorrectionsAndReweightedPartsRoundTripAndEvaluate) {
+  ModelFile m = awkward_model();
+  FrictionTerm step{.factors = {{TermCovariate::temperature_C, TermTransform::input_shift},
+                                {TermCovariate::temperature_C, TermTransform::step, 35.5}},
+                    .coefficient = -2,
+                    .seen = {{TermCovariate::temperature_C, 21.8, 40.2}}};
+  FrictionTerm viscous{.factors = {{TermCovariate::viscous_N, TermTransform::linear},
+                                   {TermCovariate::load_N, TermTransform::square, 2000}},
+                       .coefficient = 3e-7,
+                       .seen = {{TermCovariate::load_N, 1000, 3000}}};
+  FrictionTerm campaign{.factors = {{TermCovariate::run_index, TermTransform::decay}, {TermCovariate::law_force_N, TermTransform::linear}},
+                        .coefficient = 0.15,
+                        .scale = 20,
+                        .seen = {{TermCovariate::run_index, 0, 71}}};
+  m.friction_terms = {step, viscous, campaign};
+  m.friction_parameters.push_back({"term1", "K", -2, 0.1, -2.2, -1.8, false});
+  m.friction_parameters.push_back({"term2", "1/(N²)", 3e-7, 1e-8, 2.8e-7, 3.2e-7, false});
+  m.friction_parameters.push_back({"term3", "1", 0.15, 0.01, 0.13, 0.17, false});
+  m.friction_parameters.push_back({"term3_scale", "1", 20, 1, 18, 22, false});
+  const TempFile file(model_file_toml(m));
+  const ModelFile r = read_model_file(file.path());
+  ASSERT_EQ(r.friction_terms.size(), 3u);
+  EXPECT_EQ(model_file_toml(r), model_file_toml(m));
+  EXPECT_EQ(r.friction_terms[0].symbol(1), "F_law(T + c1·[T > 35.5]) - F_law(T)");
+  EXPECT_EQ(r.friction_terms[0].coefficient_unit(), "K");
+
+  const FrictionConstants<double> k = paper_friction_constants();
+  const FrictionEffects<double> none{};
+  FrictionConditions<double> c{.load_N = 3000, .preload_um = 4, .block_length_mm = 120.2, .velocity_m_s = 0.1,
+                               .temperature_C = 40};
+  FrictionConditions<double> cooler = c;
+  cooler.temperature_C = 38;
+  EXPECT_NEAR(steady_terms_N({r.friction_terms[0]}, k, none, c), friction_force_N(k, cooler) - friction_force_N(k, c), 1e-12);
+  c.temperature_C = 30;  // below the step: the law as logged
+  EXPECT_EQ(steady_terms_N({r.friction_terms[0]}, k, none, c), 0.0);
+  const auto b = friction_breakdown(k, c);
+  const double viscous_N = b.viscous_N - k.f0 * c.block_length_mm;
+  EXPECT_NEAR(steady_terms_N({r.friction_terms[1]}, k, none, c), 3e-7 * viscous_N * 1000.0 * 1000.0, 1e-12);
+  // After the campaign a decay over the run index has settled.
+  EXPECT_EQ(steady_terms_N({r.friction_terms[2]}, k, none, c), 0.0);
 }
 
 TEST(ModelFile, ATermWithAnUnknownFactorIsRefusedWithItsPlace) {

@@ -42,20 +42,37 @@ struct Candidate {
   std::size_t family = 0;
 };
 
+// What the current law gives every row beyond the log's columns: its force, its parts (for
+// terms that reweight one) and its slope in the temperature (for terms that shift that input:
+// the column of c·g(x) in F_law(T + c·g(x)) is ∂F_law/∂T · g(x), the law's own derivative).
+struct LawColumns {
+  std::vector<double> law;                     // F_law per row (the current fit's)
+  std::vector<std::vector<double>> part;       // per part (coulomb, stribeck, viscous, seal), per row
+  std::vector<double> dF_dT;                   // ∂F_law/∂T per row, N/K
+};
+
+constexpr TermCovariate kLawParts[] = {TermCovariate::coulomb_N, TermCovariate::stribeck_N, TermCovariate::viscous_N,
+                                       TermCovariate::seal_N};
+
 struct Columns {
   const FrictionLog& log;
   const TermSeries& series;
-  const std::vector<double>& law;  // F_law per row (the current fit's)
+  const LawColumns& law;
   std::vector<double> factor(const TermFactor& f, double scale) const {
     std::vector<double> v(log.size());
+    if (f.transform == TermTransform::input_shift) return law.dF_dT;
+    for (std::size_t k = 0; k < std::size(kLawParts); ++k)
+      if (f.covariate == kLawParts[k]) return law.part[k];
     for (std::size_t i = 0; i < log.size(); ++i) {
       if (f.covariate == TermCovariate::law_force_N) {
-        v[i] = law[i];
+        v[i] = law.law[i];
         continue;
       }
       const double x = term_covariate_value(log, series, i, f.covariate);
-      v[i] = f.transform == TermTransform::decay  ? std::exp(-x / scale)
+      v[i] = f.transform == TermTransform::decay    ? std::exp(-x / scale)
              : f.transform == TermTransform::square ? (x - f.centre) * (x - f.centre)
+             : f.transform == TermTransform::step   ? (x > f.centre ? 1.0 : 0.0)
+             : f.transform == TermTransform::spline ? bspline(f.knots, f.basis, x)
                                                     : x - f.centre;
     }
     return v;
@@ -69,6 +86,34 @@ struct Columns {
     return v;
   }
 };
+
+// The law's columns at the current fit's parameter values: its force `law` (given), its parts
+// and its temperature slope (central difference over ±0.5 K).
+LawColumns law_columns_at(const FrictionLog& log, const std::vector<double>& values, std::vector<double> law, const std::function<double(std::size_t, double)>& law_warmer,
+                          double reference_C) {
+  LawColumns out;
+  out.law = std::move(law);
+  FrictionConstants<double> k;
+  for (std::size_t j = 0; j < 7; ++j) fittable_constant(k, j) = values[j];
+  k.T_ref_C = reference_C;
+  out.part.assign(std::size(kLawParts), std::vector<double>(log.size()));
+  out.dF_dT.resize(log.size());
+  for (std::size_t i = 0; i < log.size(); ++i) {
+    k.nu_ref_mm2_s = log.viscosity40_mm2_s[i];
+    const FrictionConditions<double> c = log.conditions(i);
+    const auto b = friction_breakdown(k, c);
+    const double seal_N = k.f0 * c.block_length_mm;
+    for (std::size_t p = 0; p < std::size(kLawParts); ++p) out.part[p][i] = law_part_N(b, seal_N, kLawParts[p]);
+    out.dF_dT[i] = law_warmer(i, 0.5) - law_warmer(i, -0.5);
+  }
+  return out;
+}
+
+// A part that is the same in every row (the seal offset of one guide) reweighted by a covariate
+// is that covariate's own column: only a part that varies is worth its terms.
+bool varies_across_rows(const std::vector<double>& part) {
+  return std::any_of(part.begin(), part.end(), [&](double v) { return v != part.front(); });
+}
 
 bool varies(const FrictionLog& log, const TermSeries& series, TermCovariate c) {
   std::set<double> values;
@@ -86,10 +131,37 @@ bool temperature_changes_within_runs(const FrictionLog& log, const TermSeries& s
   return false;
 }
 
-// `law_warmer(i, ΔT)`: the current law at row i with the temperature ΔT higher.
-std::vector<Candidate> dictionary(const FrictionLog& log, const TermSeries& series, const std::vector<double>& law,
+// The mean and the middle of the range of a covariate over the rows.
+std::pair<double, double> mean_and_middle(const FrictionLog& log, const TermSeries& series, TermCovariate c) {
+  double sum = 0, lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (std::size_t i = 0; i < log.size(); ++i) {
+    const double x = term_covariate_value(log, series, i, c);
+    sum += x, lo = std::min(lo, x), hi = std::max(hi, x);
+  }
+  return {sum / static_cast<double>(log.size()), 0.5 * (lo + hi)};
+}
+
+// Where a step in the temperature may sit: in each gap of more than 1 K (a logged temperature's
+// noise is no level) between the temperatures the log holds, with a twentieth of the rows or
+// more on either side; a log whose temperatures spread without gaps gets its quartiles.
+std::vector<double> temperature_thresholds(const FrictionLog& log) {
+  std::vector<double> t = log.temperature_C;
+  std::sort(t.begin(), t.end());
+  const std::size_t n = t.size(), least = std::max<std::size_t>(1, n / 20);
+  std::vector<double> out;
+  for (std::size_t k = least; k + least <= n; ++k)
+    if (t[k] - t[k - 1] > 1.0) out.push_back(0.5 * (t[k] + t[k - 1]));
+  if (out.empty() && n >= 8 && t.back() - t.front() > 1.0)
+    for (std::size_t q : {n / 4, n / 2, 3 * n / 4}) out.push_back(t[q]);
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
+
+// The dictionary. `law_warmer(i, ΔT)`: the current law at row i with the temperature ΔT higher.
+std::vector<Candidate> dictionary(const FrictionLog& log, const TermSeries& series, const LawColumns& law_columns,
                                   const std::function<double(std::size_t, double)>& law_warmer, double reference_C) {
-  const Columns columns{log, series, law};
+  const std::vector<double>& law = law_columns.law;
+  const Columns columns{log, series, law_columns};
   std::vector<Candidate> out;
   std::size_t family = 0;
   auto add = [&](FrictionTerm term) {
@@ -112,7 +184,6 @@ std::vector<Candidate> dictionary(const FrictionLog& log, const TermSeries& seri
   const TermFactor law_factor{TermCovariate::law_force_N};
   for (TermCovariate c : base)
     if (c == TermCovariate::velocity_m_s || c == TermCovariate::temperature_C) add({.factors = {law_factor, linear(c)}});
-  if (!series.timed) return out;
 
   // Families with a scale: one column per grid value.
   const std::vector<double> shares{0.01, 0.02, 0.05, 0.1, 0.2, 0.5, 1.0};
@@ -123,70 +194,193 @@ std::vector<Candidate> dictionary(const FrictionLog& log, const TermSeries& seri
     for (double share : shares) {
       FrictionTerm t{.factors = {TermFactor{c, TermTransform::decay}}, .scale = share * span,
                      .scale_lower = 1e-3 * span, .scale_upper = 10 * span};
-      t.factors.insert(t.factors.end(), with.begin(), with.end());
+      // An input shift leads its term (term_form_problem); any other factor follows the decay.
+      const bool shift = !with.empty() && with.front().transform == TermTransform::input_shift;
+      t.factors.insert(shift ? t.factors.begin() : t.factors.end(), with.begin(), with.end());
       std::vector<double> column = columns.column(t);
       out.push_back({std::move(t), std::move(column), family});
     }
     ++family;
   };
-  decay_family(TermCovariate::sliding_distance_m, {});
-  decay_family(TermCovariate::sliding_distance_m, {law_factor});
-  if (varies(log, series, TermCovariate::load_N)) decay_family(TermCovariate::sliding_distance_m, {linear(TermCovariate::load_N)});
-  decay_family(TermCovariate::time_in_run_s, {});
-  decay_family(TermCovariate::time_in_run_s, {law_factor});
-  if (temperature_changes_within_runs(log, series)) {
-    for (double tau : {15.0, 30.0, 60.0, 120.0, 240.0, 480.0, 960.0, 1920.0}) {
-      FrictionTerm t{.factors = {TermFactor{TermCovariate::temperature_C, TermTransform::lagged_temperature}},
-                     .scale = tau, .scale_lower = 1.0, .scale_upper = 1e5};
-      const std::vector<double> change = lagged_temperature_change(log, series, tau);
-      std::vector<double> column(log.size());
-      for (std::size_t i = 0; i < log.size(); ++i) column[i] = law_warmer(i, change[i]) - law[i];
+  if (series.timed) {
+    decay_family(TermCovariate::sliding_distance_m, {});
+    decay_family(TermCovariate::sliding_distance_m, {law_factor});
+    if (varies(log, series, TermCovariate::load_N)) decay_family(TermCovariate::sliding_distance_m, {linear(TermCovariate::load_N)});
+    decay_family(TermCovariate::time_in_run_s, {});
+    decay_family(TermCovariate::time_in_run_s, {law_factor});
+    if (temperature_changes_within_runs(log, series)) {
+      for (double tau : {15.0, 30.0, 60.0, 120.0, 240.0, 480.0, 960.0, 1920.0}) {
+        FrictionTerm t{.factors = {TermFactor{TermCovariate::temperature_C, TermTransform::lagged_temperature}},
+                       .scale = tau, .scale_lower = 1.0, .scale_upper = 1e5};
+        const std::vector<double> change = lagged_temperature_change(log, series, tau);
+        std::vector<double> column(log.size());
+        for (std::size_t i = 0; i < log.size(); ++i) column[i] = law_warmer(i, change[i]) - law[i];
+        out.push_back({std::move(t), std::move(column), family});
+      }
+      ++family;
+    }
+  }
+
+  // The law at a corrected temperature, F_law(T + c·g(x)), linearised: ∂F_law/∂T · g(x) — a step
+  // above a temperature, a drift over the campaign, a warm-up within each run the logged
+  // temperature does not show.
+  const bool campaign = series.run_rows.size() >= 3;  // runs enough to follow a trend over them
+  const TermFactor shift_T{TermCovariate::temperature_C, TermTransform::input_shift};
+  if (varies(log, series, TermCovariate::temperature_C) || series.timed || campaign) {
+    const std::vector<double> thresholds = temperature_thresholds(log);
+    for (double threshold : thresholds) {
+      FrictionTerm t{.factors = {shift_T, TermFactor{TermCovariate::temperature_C, TermTransform::step, threshold}}};
+      std::vector<double> column = columns.column(t);
       out.push_back({std::move(t), std::move(column), family});
     }
-    ++family;
+    family += thresholds.empty() ? 0 : 1;
+    const TermCovariate clock = series.timed ? TermCovariate::campaign_time_s : TermCovariate::run_index;
+    if (series.timed || campaign)
+      add({.factors = {shift_T, TermFactor{clock, TermTransform::linear, mean_and_middle(log, series, clock).second}}});
+    if (series.timed) decay_family(TermCovariate::time_in_run_s, {shift_T});
+  }
+  // The law's own parts reweighted by a covariate: c · F_part · (x − x̄), c · F_part · (x − x_mid)².
+  std::vector<TermCovariate> reweighting;
+  for (TermCovariate c : {TermCovariate::velocity_m_s, TermCovariate::load_N, TermCovariate::temperature_C})
+    if (varies(log, series, c)) reweighting.push_back(c);
+  if (campaign) reweighting.push_back(TermCovariate::run_index);
+  if (series.timed) reweighting.push_back(TermCovariate::sliding_distance_m);
+  for (std::size_t k = 0; k < std::size(kLawParts); ++k) {
+    if (!varies_across_rows(law_columns.part[k])) continue;
+    const TermFactor part{kLawParts[k]};
+    for (TermCovariate c : reweighting) {
+      const auto [mean, middle] = mean_and_middle(log, series, c);
+      add({.factors = {part, TermFactor{c, TermTransform::linear, mean}}});
+      if (c == TermCovariate::velocity_m_s || c == TermCovariate::load_N || c == TermCovariate::temperature_C)
+        add({.factors = {part, TermFactor{c, TermTransform::square, middle}}});
+    }
+  }
+  // Campaign covariates: the friction changing from run to run in the order they were made.
+  if (campaign) {
+    add({.factors = {law_factor, TermFactor{TermCovariate::run_index, TermTransform::linear,
+                                            mean_and_middle(log, series, TermCovariate::run_index).second}}});
+    decay_family(TermCovariate::run_index, {law_factor});
   }
   return out;
+}
+
+// A law part's name in words ("" for the law's force and for covariates).
+const char* part_words(TermCovariate c) {
+  switch (c) {
+    case TermCovariate::coulomb_N: return "Coulomb term";
+    case TermCovariate::stribeck_N: return "Stribeck term";
+    case TermCovariate::viscous_N: return "viscous term";
+    case TermCovariate::seal_N: return "seal offset Lb·f0";
+    default: return "";
+  }
 }
 
 // What a term does, in words.
 std::string term_words(const FrictionTerm& t) {
   if (t.lagged_temperature())
     return "the law evaluated at a temperature that trails the logged one through a first-order lag of time constant tau";
-  std::string words;
-  bool relative = false;
+  std::string words, share;
   for (const auto& f : t.factors) {
     if (f.covariate == TermCovariate::law_force_N) {
-      relative = true;
+      share = "a share of the law's force, ";
       continue;
     }
+    if (is_law_covariate(f.covariate)) {
+      share = fmt::format("a share of the law's {}, ", part_words(f.covariate));
+      continue;
+    }
+    if (f.transform == TermTransform::input_shift) continue;
     const std::string x = term_covariate_name(f.covariate);
     words += words.empty() ? "" : " and ";
     switch (f.transform) {
       case TermTransform::linear: words += f.centre == 0 ? "in proportion to " + x : fmt::format("in proportion to {} - {:g}", x, f.centre); break;
-      case TermTransform::square: words += "with the square of " + x; break;
+      case TermTransform::square: words += f.centre == 0 ? "with the square of " + x : fmt::format("with the square of {} - {:g}", x, f.centre); break;
       case TermTransform::decay: words += "decaying exponentially with " + x; break;
       case TermTransform::spline: words += "a smooth function (cubic B-spline) of " + x; break;
-      case TermTransform::lagged_temperature: break;
+      case TermTransform::step: words += fmt::format("where {} > {:g}", x, f.centre); break;
+      case TermTransform::lagged_temperature:
+      case TermTransform::input_shift: break;
     }
   }
-  return (relative ? "a share of the law's force, " : "a force ") + words;
+  if (const auto input = t.shifted_input())
+    return fmt::format("the law evaluated at the logged {} plus a correction ({}) {}",
+                       *input == TermCovariate::velocity_m_s ? "speed" : "temperature", term_covariate_unit(*input),
+                       words.empty() ? "that is constant" : words);
+  return (share.empty() ? "a force " : share) + words;
 }
 
 bool has(const FrictionTerm& t, TermCovariate c, TermTransform how) {
   return std::any_of(t.factors.begin(), t.factors.end(), [&](const TermFactor& f) { return f.covariate == c && f.transform == how; });
 }
 
-// The mechanisms a term resembles, in words ("" when none comes to mind).
-std::string resemblance(const FrictionTerm& t) {
+bool has_spline(const FrictionTerm& t) {
+  return std::any_of(t.factors.begin(), t.factors.end(), [](const TermFactor& f) { return f.transform == TermTransform::spline; });
+}
+
+// The law part a term reweights, if it does.
+std::optional<TermCovariate> reweighted_part(const FrictionTerm& t) {
+  for (const auto& f : t.factors)
+    if (is_law_covariate(f.covariate) && f.covariate != TermCovariate::law_force_N) return f.covariate;
+  return std::nullopt;
+}
+
+// What an input correction resembles: the law sees a temperature off the logged one.
+std::string input_resemblance(const FrictionTerm& t, const std::string& chronology) {
   using C = TermCovariate;
   using X = TermTransform;
-  if (t.factors.front().transform == X::spline)
+  if (t.shifted_input() == C::velocity_m_s) return "the law seeing a speed off the logged one (an encoder's or a drive's scale)";
+  if (has_spline(t))
+    return fmt::format("the law seeing a temperature off the logged one by an amount that changes smoothly with {} "
+                       "(the contacts' temperature is not the logged one)",
+                       term_covariate_name(t.factors.back().covariate));
+  for (const auto& f : t.factors)
+    if (f.transform == X::step)
+      return fmt::format("the law seeing a temperature {:+.3g} K off the logged one where T > {:g} C (a thermocouple that "
+                         "reads off when hot, or oil whose viscosity falls otherwise than nu(T) above it)",
+                         t.coefficient, f.centre);
+  if (has(t, C::campaign_time_s, X::linear))
+    return fmt::format("the law seeing a temperature drifting by {:+.3g} K per hour over the campaign that the logged one "
+                       "does not show (a thermocouple drifting, the room or the oil changing over the day; the runs in "
+                       "order of {})",
+                       t.coefficient * 3600, chronology == "time_s" ? "their clocks" : "the file");
+  if (has(t, C::run_index, X::linear))
+    return fmt::format("the law seeing a temperature drifting by {:+.3g} K per run over the campaign that the logged one "
+                       "does not show (runs in order of {})",
+                       t.coefficient, chronology == "time_s" ? "their clocks" : "the file");
+  if (has(t, C::time_in_run_s, X::decay))
+    return fmt::format("the law seeing a temperature {:+.3g} K off the logged one at each run's start, settling over about "
+                       "{:.3g} s (a warm-up the logged temperature does not show)",
+                       t.coefficient, t.scale);
+  return fmt::format("the law seeing a temperature {:+.3g} K off the logged one", t.coefficient);
+}
+
+// The mechanisms a term resembles, in words ("" when none comes to mind); `chronology` says
+// how the runs were put in order (TermSeries::chronology).
+std::string resemblance(const FrictionTerm& t, const std::string& chronology) {
+  using C = TermCovariate;
+  using X = TermTransform;
+  if (t.shifted_input()) return input_resemblance(t, chronology);
+  if (const auto part = reweighted_part(t)) {
+    const TermFactor& by = t.factors.back();
+    return fmt::format("the law's {} following {} otherwise than the law has it{}", part_words(*part),
+                       term_covariate_name(by.covariate),
+                       *part == C::viscous_N && by.covariate == C::load_N ? " (its viscous term mu_v pc V nu Lb has no load in it)"
+                       : *part == C::coulomb_N && by.covariate == C::velocity_m_s ? " (a Coulomb level that changes with speed)"
+                       : by.covariate == C::run_index ? " (changing from run to run over the campaign)"
+                                                     : "");
+  }
+  if (has_spline(t))
     return fmt::format("a dependence on {} of a shape none of the law's terms or the dictionary's simple forms has",
                        term_covariate_name(t.factors.front().covariate));
   if (t.lagged_temperature())
     return fmt::format("the lubricant's temperature trailing the logged one by tau = {:.3g} s (a thermocouple away "
                        "from the contacts, or oil that warms slower than what is logged)",
                        t.scale);
+  if (has(t, C::run_index, X::decay) || has(t, C::run_index, X::linear))
+    return fmt::format("friction changing from run to run over the campaign{} (running-in, seals bedding in, the lubricant "
+                       "ageing; the runs in order of {})",
+                       has(t, C::run_index, X::decay) ? fmt::format(", over about {:.3g} runs", t.scale) : "",
+                       chronology == "time_s" ? "their clocks" : "the file");
   if (has(t, C::sliding_distance_m, X::decay))
     return fmt::format("running-in: friction falling as the contacts and seals wear in, over about {:.3g} m of sliding",
                        t.scale);
@@ -211,7 +405,9 @@ TermCovariate main_covariate(const FrictionTerm& t) {
   for (const auto& f : t.factors)
     if (f.transform == TermTransform::decay) return f.covariate;
   for (const auto& f : t.factors)
-    if (f.covariate != TermCovariate::law_force_N) return f.covariate;
+    if (!is_law_covariate(f.covariate) && f.transform != TermTransform::input_shift) return f.covariate;
+  for (const auto& f : t.factors)
+    if (f.transform == TermTransform::input_shift) return f.covariate;
   return TermCovariate::law_force_N;
 }
 
@@ -334,7 +530,8 @@ struct SmoothChoice {
   std::string why_not;
 };
 
-SmoothChoice smooth_term(const FrictionLog& log, const TermSeries& series, const SparseProblem& linear, double min_gain_percent) {
+SmoothChoice smooth_term(const FrictionLog& log, const TermSeries& series, const Columns& columns, const SparseProblem& linear,
+                         double min_gain_percent) {
   SmoothChoice out;
   SparseProblem p;
   p.y = linear.y;
@@ -343,15 +540,10 @@ SmoothChoice smooth_term(const FrictionLog& log, const TermSeries& series, const
   p.fixed = linear.fixed;
   std::vector<std::vector<std::size_t>> blocks;
   std::vector<std::vector<FrictionTerm>> block_terms;
-  for (TermCovariate c : {TermCovariate::velocity_m_s, TermCovariate::load_N, TermCovariate::temperature_C}) {
-    // Only a covariate that varies within runs: what changes only between runs is the random
-    // run offsets' to explain, and a spline over a handful of run levels would fit them.
-    bool within = false;
-    for (const auto& rows : series.run_rows)
-      for (std::size_t k = 1; k < rows.size() && !within; ++k)
-        within = std::abs(term_covariate_value(log, series, rows[k], c) - term_covariate_value(log, series, rows[0], c)) >
-                 (c == TermCovariate::temperature_C ? 1.0 : 0.0);  // a logged temperature's noise is no change
-    if (!within) continue;
+  // The blocks of splines in covariate c (times the factor `times`, when given): 1 to 4
+  // interior knots at quantiles of its values (fewer for a covariate of few values), or one
+  // cubic over the whole range (`cubic_only`).
+  auto add_blocks = [&](TermCovariate c, std::optional<TermFactor> times, bool cubic_only) {
     std::vector<double> x(log.size());
     for (std::size_t i = 0; i < log.size(); ++i) x[i] = term_covariate_value(log, series, i, c);
     std::vector<double> sorted = x;
@@ -359,12 +551,10 @@ SmoothChoice smooth_term(const FrictionLog& log, const TermSeries& series, const
     std::vector<double> distinct;
     for (double v : sorted)
       if (distinct.empty() || v > distinct.back() + 1e-9 * std::max(1.0, std::abs(v))) distinct.push_back(v);
-    if (distinct.size() < 4) continue;
-    // A logged temperature scatters around its setting: knots inside that scatter would fit
-    // the thermocouple's noise through the law's temperature slope (errors in variables), so
-    // in temperature the smooth term is one cubic over the whole range.
-    const std::size_t most = c == TermCovariate::temperature_C ? 0 : std::min<std::size_t>(4, distinct.size() - 4);
-    for (std::size_t interior = c == TermCovariate::temperature_C ? 0 : 1; interior <= most; ++interior) {
+    if (distinct.size() < 4) return;
+    const std::vector<double> multiplier = times ? columns.factor(*times, 0) : std::vector<double>(log.size(), 1.0);
+    const std::size_t most = cubic_only ? 0 : std::min<std::size_t>(4, distinct.size() - 4);
+    for (std::size_t interior = cubic_only ? 0 : 1; interior <= most; ++interior) {
       std::vector<double> knots(4, sorted.front());
       for (std::size_t k = 1; k <= interior; ++k) {
         const double q = sorted[k * sorted.size() / (interior + 1)];
@@ -376,8 +566,9 @@ SmoothChoice smooth_term(const FrictionLog& log, const TermSeries& series, const
       std::vector<FrictionTerm> terms;
       for (int b = 1; b < bases; ++b) {
         FrictionTerm t{.factors = {TermFactor{.covariate = c, .transform = TermTransform::spline, .basis = b, .knots = knots}}};
+        if (times) t.factors.insert(t.factors.begin(), *times);
         std::vector<double> column(log.size());
-        for (std::size_t i = 0; i < log.size(); ++i) column[i] = bspline(knots, b, x[i]);
+        for (std::size_t i = 0; i < log.size(); ++i) column[i] = times ? multiplier[i] * bspline(knots, b, x[i]) : bspline(knots, b, x[i]);
         block.push_back(p.candidates.size());
         p.candidates.push_back(std::move(column));
         terms.push_back(std::move(t));
@@ -386,7 +577,32 @@ SmoothChoice smooth_term(const FrictionLog& log, const TermSeries& series, const
       blocks.push_back(std::move(block));
       block_terms.push_back(std::move(terms));
     }
+  };
+  for (TermCovariate c : {TermCovariate::velocity_m_s, TermCovariate::load_N, TermCovariate::temperature_C}) {
+    // Only a covariate that varies within runs: what changes only between runs is the random
+    // run offsets' to explain, and a spline over a handful of run levels would fit them.
+    bool within = false;
+    for (const auto& rows : series.run_rows)
+      for (std::size_t k = 1; k < rows.size() && !within; ++k)
+        within = std::abs(term_covariate_value(log, series, rows[k], c) - term_covariate_value(log, series, rows[0], c)) >
+                 (c == TermCovariate::temperature_C ? 1.0 : 0.0);  // a logged temperature's noise is no change
+    // A logged temperature scatters around its setting: knots inside that scatter would fit
+    // the thermocouple's noise through the law's temperature slope (errors in variables), so
+    // in temperature the smooth term is one cubic over the whole range.
+    if (within) add_blocks(c, std::nullopt, c == TermCovariate::temperature_C);
   }
+  // A part of the law times a smooth function of speed, load or the run index, and the law at a
+  // temperature corrected by a smooth function of the campaign's time (or the run index): these
+  // vary within runs through the part or the law's slope, whatever the covariate does.
+  const bool campaign = series.run_rows.size() >= 3;
+  for (TermCovariate part : kLawParts) {
+    if (!varies_across_rows(columns.factor(TermFactor{part}, 0))) continue;
+    for (TermCovariate c : {TermCovariate::velocity_m_s, TermCovariate::load_N}) add_blocks(c, TermFactor{part}, false);
+    if (campaign) add_blocks(TermCovariate::run_index, TermFactor{part}, false);
+  }
+  const TermFactor shift_T{TermCovariate::temperature_C, TermTransform::input_shift};
+  if (series.timed) add_blocks(TermCovariate::campaign_time_s, shift_T, false);
+  else if (campaign) add_blocks(TermCovariate::run_index, shift_T, false);
   if (blocks.empty()) {
     out.why_not = "no covariate varies enough for a smooth term";
     return out;
@@ -401,7 +617,8 @@ SmoothChoice smooth_term(const FrictionLog& log, const TermSeries& series, const
     if (scores[b].cv_rmse <= scores[best].cv_rmse * (1 + min_gain_percent / 100) && blocks[b].size() < blocks[best].size())
       best = b;
   if (100 * (1 - scores[best].cv_rmse / fixed) < min_gain_percent) {
-    out.why_not = fmt::format("nor does a smooth term (cubic B-splines) in speed, load or temperature (best {:.2f} %)",
+    out.why_not = fmt::format("nor does a smooth term (cubic B-splines in speed, load or temperature, alone, times a part "
+                              "of the law, or as the law's temperature input; best {:.2f} %)",
                               100 * (1 - scores[best].cv_rmse / fixed));
     return out;
   }
@@ -419,7 +636,7 @@ SmoothChoice smooth_term(const FrictionLog& log, const TermSeries& series, const
 // does not). Returns that term's index, terms.size() when no coefficient has a finite SE (the
 // interval unknown: not a rejection, the fit's own problem is reported instead).
 bool is_smooth(const std::vector<FrictionTerm>& terms) {
-  return !terms.empty() && terms.front().factors.front().transform == TermTransform::spline;
+  return !terms.empty() && has_spline(terms.front());
 }
 
 const ParameterEstimate& term_coefficient(const FrictionFitResult& fit, const std::vector<FrictionTerm>& terms, std::size_t k) {
@@ -470,6 +687,8 @@ FrictionTermSearch learn_friction_term(const FrictionLog& log, const FrictionFit
     y[i] = log.friction_N[i] - law[i];
   }
   const auto law_warmer = [&](std::size_t i, double dT) { return law_at(log, i, params, values, reference_C, dT); };
+  const LawColumns law_columns = law_columns_at(log, values, law, law_warmer, reference_C);
+  const Columns columns{log, series, law_columns};
   SparseProblem problem;
   problem.y = y;
   problem.group.assign(log.run.begin(), log.run.end());
@@ -485,7 +704,7 @@ FrictionTermSearch learn_friction_term(const FrictionLog& log, const FrictionFit
       column[i] = (law_at(log, i, params, up, reference_C) - law_at(log, i, params, down, reference_C)) / (2 * h);
     problem.fixed.push_back(std::move(column));
   }
-  std::vector<Candidate> candidates = dictionary(log, series, law, law_warmer, reference_C);
+  std::vector<Candidate> candidates = dictionary(log, series, law_columns, law_warmer, reference_C);
   f.dictionary_size = candidates.size();
   for (auto& c : candidates) {
     problem.candidates.push_back(std::move(c.column));
@@ -570,7 +789,7 @@ FrictionTermSearch learn_friction_term(const FrictionLog& log, const FrictionFit
   // Where no sparse form wins: a smooth term in the one covariate whose spline predicts
   // held-out runs best — tried when the sparse form failed, or when its linearised held-out
   // RMSE beats the sparse form's by the gain a term must bring; kept if it does so fitted.
-  const SmoothChoice smooth = smooth_term(log, series, problem, rules.min_cv_gain_percent);
+  const SmoothChoice smooth = smooth_term(log, series, columns, problem, rules.min_cv_gain_percent);
   f.dictionary_size += smooth.tried;
   const bool smooth_better = !smooth.terms.empty() && kept &&
                              smooth.cv_rmse < chosen.cv_rmse * (1 - rules.min_cv_gain_percent / 100);
@@ -599,8 +818,9 @@ FrictionTermSearch learn_friction_term(const FrictionLog& log, const FrictionFit
   // Every covariate's range in these data: the terms are extrapolations beyond.
   auto range_of = [&](TermCovariate c) {
     TermRange r{c, std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity()};
+    const std::vector<double> part = is_law_covariate(c) ? columns.factor(TermFactor{c}, 0) : std::vector<double>{};
     for (std::size_t i = 0; i < n; ++i) {
-      const double x = c == TermCovariate::law_force_N ? law[i] : term_covariate_value(log, series, i, c);
+      const double x = is_law_covariate(c) ? part[i] : term_covariate_value(log, series, i, c);
       r.min = std::min(r.min, x);
       r.max = std::max(r.max, x);
     }
@@ -611,7 +831,9 @@ FrictionTermSearch learn_friction_term(const FrictionLog& log, const FrictionFit
   const std::size_t first = joint.fit.parameters.size() - term_parameter_count(joint.terms);
   for (std::size_t t = 0, at = first; t < joint.terms.size(); ++t) {
     FrictionTerm& term = joint.terms[t];
-    for (const auto& factor : term.factors) term.seen.push_back(range_of(factor.covariate));
+    for (const auto& factor : term.factors)
+      if (std::none_of(term.seen.begin(), term.seen.end(), [&](const TermRange& r) { return r.covariate == factor.covariate; }))
+        term.seen.push_back(range_of(factor.covariate));
     if (term.lagged_temperature()) term.seen.push_back(range_of(TermCovariate::time_in_run_s));
     for (const auto& r : term.seen) used.emplace(term_covariate_name(r.covariate), r);
     EmpiricalComponent c;
@@ -624,11 +846,11 @@ FrictionTermSearch learn_friction_term(const FrictionLog& log, const FrictionFit
       c.scale = within_bounds(joint.fit.parameters[at++]);
     }
     formula += (formula.empty() ? "" : " + ") + c.symbol;
-    const std::string r = resemblance(term);
+    const std::string r = resemblance(term, series.chronology);
     if (!r.empty() && resembles.find(r) == std::string::npos) resembles += (resembles.empty() ? "" : "; or ") + r;
     f.components.push_back(std::move(c));
   }
-  f.form = joint.terms.front().factors.front().transform == TermTransform::spline ? "smooth" : "sparse";
+  f.form = is_smooth(joint.terms) ? "smooth" : "sparse";
   f.formula = formula;
   f.resembles = resembles;
   for (const auto& [name, r] : used) f.ranges.push_back({name, r.min, r.max});

@@ -672,23 +672,27 @@ FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagno
   std::vector<std::string> not_tried;
   auto selection =
       detail::forward_select(causes_that_can_show(log, not_tried), baseline, fit_candidate, summarise, rules);
-  const FrictionFitResult& current = selection.current;
+  std::vector<std::string> accepted = selection.accepted;
+  FrictionFitResult current = selection.current;
   d.rounds = std::move(selection.rounds);
+  d.steps = std::move(selection.steps);
+  auto model_fit = [&](const FrictionFitResult& fit) { return summarise(fit, std::string()).first; };
 
   // 4. What remains; beyond the library, an empirical term when structure remains.
   // Searched unless named causes were found and nothing is left: structure the residual tests
   // miss (running-in, shared between the runs' levels and their pure error) shows only as a
   // term that predicts held-out runs, and the term must pass the rules a cause passes.
+  auto search_with = [&](const std::vector<std::string>& causes, const FrictionFitResult& named) {
+    return detail::learn_friction_term(
+        log, named, [&](const std::vector<FrictionTerm>& terms) { return fit_candidate(causes, named, terms); }, model_fit,
+        rules, o.fit.start.T_ref_C);
+  };
+  std::optional<detail::FrictionTermSearch> search;
   auto search_term = [&] {
     if (o.progress) o.progress("empirical term", 0, 1);
-    auto search = detail::learn_friction_term(
-        log, current,
-        [&](const std::vector<FrictionTerm>& terms) { return fit_candidate(selection.accepted, current, terms); },
-        [&](const FrictionFitResult& fit) { return summarise(fit, std::string()).first; }, rules, o.fit.start.T_ref_C);
-    d.empirical = std::move(search.finding);
-    if (search.fit) d.empirical_fit = std::move(*search.fit);
+    search = search_with(accepted, current);
   };
-  if (o.learn_term && selection.accepted.empty()) {
+  if (o.learn_term && accepted.empty()) {
     // Searched whatever the residuals' tests say: they run on a thread of their own meanwhile
     // (they only read the log and the fit).
     auto tests = std::async(std::launch::async, [&] { return diagnose_residuals(log, current, o); });
@@ -699,15 +703,41 @@ FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagno
     const bool left = d.final.structured || (d.final.lack_of_fit.tested && !d.final.lack_of_fit.fits);
     if (o.learn_term && left) search_term();
   }
+  // A cause accepted before the term may only have stood in for what the term models (a
+  // Coulomb level changing with temperature for the law seeing another temperature above
+  // 35 C): each must still pass, as a candidate, on top of the others and the term (learned
+  // anew without it), or it is dropped — its own step, the model refitted without it.
+  for (std::size_t i = accepted.size(); search && search->fit && i-- > 0;) {
+    std::vector<std::string> others = accepted;
+    others.erase(others.begin() + static_cast<std::ptrdiff_t>(i));
+    // The model without it: the forward selection's own where it passed through it.
+    const bool on_path = others.size() < selection.path.size() &&
+                         std::equal(others.begin(), others.end(), selection.accepted.begin());
+    FrictionFitResult named = on_path ? selection.path[others.size()] : fit_candidate(others, current);
+    detail::FrictionTermSearch without = search_with(others, named);
+    if (!without.fit) continue;
+    CandidateScore c;
+    if (detail::score_candidate(model_fit(*without.fit), model_fit(*search->fit), rules, c)) continue;
+    d.dropped.push_back(fmt::format("{} (accepted in round {}, it adds nothing once the empirical term is in: {})",
+                                    accepted[i], i + 1, c.reason));
+    d.steps.push_back(detail::make_step("drop cause", accepted[i], model_fit(current), model_fit(named)));
+    accepted = std::move(others);
+    current = std::move(named);
+    d.final = diagnose_residuals(log, current, o);
+    search = std::move(without);
+  }
+  if (search) {
+    d.empirical = std::move(search->finding);
+    if (search->fit) d.empirical_fit = std::move(*search->fit);
+  }
 
   // 5. Verdict. The steps carry each model's held-out RMSE: the causes, then the term.
-  d.steps = std::move(selection.steps);
   if (d.empirical.found)
-    d.steps.push_back(detail::make_step("add empirical term", d.empirical.formula, summarise(current, std::string()).first,
-                                        summarise(d.empirical_fit, std::string()).first));
+    d.steps.push_back(detail::make_step("add empirical term", d.empirical.formula, model_fit(current),
+                                        model_fit(d.empirical_fit)));
   d.cv_rmse_before_N = baseline.cv_rmse_N;
   d.cv_rmse_after_N = detail::final_cv_rmse(d.steps, d.cv_rmse_before_N);
-  d.accepted = detail::accepted_scores(d.rounds, selection.accepted,
+  d.accepted = detail::accepted_scores(d.rounds, accepted,
                                        [&](const std::string& name) { return &current.fit.parameter(name); });
   for (auto& round : d.rounds)
     for (CandidateScore& c : round) read_precondition(c, log);
@@ -716,6 +746,7 @@ FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagno
     d.shifts.push_back(parameter_shift(baseline.fit.parameters[j], current.fit.parameters[j]));
 
   detail::conclude(d, "The published law", "N", d.cv_rmse_before_N, current.cv_rmse_N, d.baseline.rmse_N);
+  for (const auto& why : d.dropped) d.summary += " Dropped: " + why + ".";
   d.design_notes = design_notes(log, baseline, d.baseline.lack_of_fit, d.final, o);
   if (!not_tried.empty())
     d.design_notes.push_back(fmt::format("not tried, their precondition absent: {}", fmt::join(not_tried, "; ")));
@@ -775,6 +806,7 @@ std::string friction_diagnosis_json(const FrictionDiagnosis& d) {
   j["schema_version"] = kOutputSchemaVersion;
   j["baseline_residuals"] = diagnostics(d.baseline);
   j["final_residuals"] = diagnostics(d.final);
+  j["dropped_for_the_empirical_term"] = d.dropped;
   return j.dump(2) +
          "\n";
 }

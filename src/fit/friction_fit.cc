@@ -165,6 +165,8 @@ std::vector<detail::ParameterSpec> parameter_specs(const FrictionFitOptions& o, 
   }
   for (std::size_t t = 0; t < o.terms.size(); ++t) {
     const FrictionTerm& term = o.terms[t];
+    if (const std::string problem = term_form_problem(term); !problem.empty())
+      throw InvalidParameter("terms", fmt::format("term {}: {}", t + 1, problem));
     // A coefficient has no natural bound; the lag's share of the temperature change is kept
     // within what a lag can mean.
     const bool lag = term.lagged_temperature();
@@ -572,7 +574,7 @@ FrictionFitResult fit_friction(const FrictionLog& logged, const FrictionFitOptio
   for (const auto& term : options.terms)
     for (const auto& f : term.factors)
       if (!series.timed && (f.covariate == TermCovariate::time_in_run_s || f.covariate == TermCovariate::sliding_distance_m ||
-                            f.transform == TermTransform::lagged_temperature))
+                            f.covariate == TermCovariate::campaign_time_s || f.transform == TermTransform::lagged_temperature))
         throw InvalidParameter("terms", "a term in time, sliding distance or a lagged temperature needs a time_s column");
   FrictionData data{&log, {}, {}, options.start.T_ref_C, {}};
   data.terms = &options.terms;

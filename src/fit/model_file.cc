@@ -416,9 +416,7 @@ std::vector<std::string> read_terms(const std::string& file, const toml::table& 
       term.factors.push_back(*factor);
     }
     const std::size_t k = m.friction_terms.size() + 1;
-    const bool lag = term.lagged_temperature();
-    if (term.factors.empty() || term.factors.size() > 2 || (lag && term.factors.size() != 1))
-      fail(file, t->source(), "a term has one or two factors (a lagged temperature alone)");
+    if (const std::string problem = term_form_problem(term); !problem.empty()) fail(file, t->source(), problem);
     const std::string coefficient = fmt::format("term{}", k), scale = fmt::format("term{}_scale", k);
     if (string_at(file, *t, "coefficient") != coefficient)
       fail(file, t->get("coefficient")->source(), fmt::format("expected coefficient = \"{}\" (terms in order)", coefficient));

@@ -25,9 +25,22 @@ const char* symbol_of(TermCovariate c) {
     case TermCovariate::time_in_run_s: return "t";
     case TermCovariate::sliding_distance_m: return "s";
     case TermCovariate::law_force_N: return "F_law";
+    case TermCovariate::run_index: return "k";
+    case TermCovariate::campaign_time_s: return "t_c";
+    case TermCovariate::coulomb_N: return "F_C";
+    case TermCovariate::stribeck_N: return "F_St";
+    case TermCovariate::viscous_N: return "F_v";
+    case TermCovariate::seal_N: return "F_0";
   }
   return "?";
 }
+
+constexpr TermCovariate kCovariates[] = {
+    TermCovariate::velocity_m_s,    TermCovariate::load_N,         TermCovariate::preload_um,
+    TermCovariate::block_length_mm, TermCovariate::temperature_C,  TermCovariate::direction,
+    TermCovariate::time_in_run_s,   TermCovariate::sliding_distance_m, TermCovariate::law_force_N,
+    TermCovariate::run_index,       TermCovariate::campaign_time_s, TermCovariate::coulomb_N,
+    TermCovariate::stribeck_N,      TermCovariate::viscous_N,      TermCovariate::seal_N};
 
 }  // namespace
 
@@ -42,6 +55,12 @@ const char* term_covariate_name(TermCovariate c) {
     case TermCovariate::time_in_run_s: return "time_in_run_s";
     case TermCovariate::sliding_distance_m: return "sliding_distance_m";
     case TermCovariate::law_force_N: return "friction_law_N";
+    case TermCovariate::run_index: return "run_index";
+    case TermCovariate::campaign_time_s: return "campaign_time_s";
+    case TermCovariate::coulomb_N: return "coulomb_N";
+    case TermCovariate::stribeck_N: return "stribeck_N";
+    case TermCovariate::viscous_N: return "viscous_N";
+    case TermCovariate::seal_N: return "seal_N";
   }
   return "?";
 }
@@ -56,7 +75,13 @@ const char* term_covariate_unit(TermCovariate c) {
     case TermCovariate::direction: return "1";
     case TermCovariate::time_in_run_s: return "s";
     case TermCovariate::sliding_distance_m: return "m";
-    case TermCovariate::law_force_N: return "N";
+    case TermCovariate::law_force_N:
+    case TermCovariate::coulomb_N:
+    case TermCovariate::stribeck_N:
+    case TermCovariate::viscous_N:
+    case TermCovariate::seal_N: return "N";
+    case TermCovariate::run_index: return "1";
+    case TermCovariate::campaign_time_s: return "s";
   }
   return "?";
 }
@@ -72,10 +97,22 @@ bool FrictionTerm::lagged_temperature() const {
                      [](const TermFactor& f) { return f.transform == TermTransform::lagged_temperature; });
 }
 
+std::optional<TermCovariate> FrictionTerm::shifted_input() const {
+  for (const auto& f : factors)
+    if (f.transform == TermTransform::input_shift) return f.covariate;
+  return std::nullopt;
+}
+
+bool FrictionTerm::uses_law() const {
+  return std::any_of(factors.begin(), factors.end(), [](const TermFactor& f) { return is_law_covariate(f.covariate); });
+}
+
 std::string FrictionTerm::symbol(std::size_t k) const {
   if (lagged_temperature()) return fmt::format("F_law(T + c{0}·(lag(T; tau{0}) - T)) - F_law(T)", k);
   std::string s = fmt::format("c{}", k);
+  const auto input = shifted_input();
   for (const auto& f : factors) {
+    if (f.transform == TermTransform::input_shift) continue;
     const char* x = symbol_of(f.covariate);
     const std::string centred = f.centre == 0 ? std::string(x) : fmt::format("({} - {:g})", x, f.centre);
     switch (f.transform) {
@@ -83,8 +120,14 @@ std::string FrictionTerm::symbol(std::size_t k) const {
       case TermTransform::square: s += "·" + centred + "²"; break;
       case TermTransform::decay: s += fmt::format("·exp(-{}/l{})", x, k); break;
       case TermTransform::spline: s += fmt::format("·B{}({})", f.basis, x); break;
-      case TermTransform::lagged_temperature: break;
+      case TermTransform::step: s += fmt::format("·[{} > {:g}]", x, f.centre); break;
+      case TermTransform::lagged_temperature:
+      case TermTransform::input_shift: break;
     }
+  }
+  if (input) {
+    const char* x = symbol_of(*input);
+    return fmt::format("F_law({0} + {1}) - F_law({0})", x, s);
   }
   return s;
 }
@@ -94,15 +137,16 @@ std::string FrictionTerm::coefficient_unit() const {
   std::string per;
   bool relative = false;
   for (const auto& f : factors) {
-    if (f.covariate == TermCovariate::law_force_N) relative = true;
+    if (is_law_covariate(f.covariate)) relative = true;
     if (f.transform == TermTransform::decay || f.transform == TermTransform::spline ||
-        f.covariate == TermCovariate::law_force_N)
+        f.transform == TermTransform::step || f.transform == TermTransform::input_shift || is_law_covariate(f.covariate))
       continue;
     const std::string u = term_covariate_unit(f.covariate);
     if (u == "1") continue;
     per += (per.empty() ? "" : "·") + u + (f.transform == TermTransform::square ? "²" : "");
   }
-  const std::string numerator = relative ? "1" : "N";
+  const auto input = shifted_input();
+  const std::string numerator = input ? term_covariate_unit(*input) : relative ? "1" : "N";
   return per.empty() ? numerator : numerator + "/(" + per + ")";
 }
 
@@ -124,10 +168,28 @@ std::vector<std::string> FrictionTerm::covariates() const {
   return out;
 }
 
+std::string term_form_problem(const FrictionTerm& term) {
+  const auto& f = term.factors;
+  if (f.empty() || f.size() > 2) return "a term has one or two factors";
+  if (term.lagged_temperature() && f.size() != 1) return "a lagged temperature is a term alone";
+  std::size_t scales = 0;
+  for (std::size_t j = 0; j < f.size(); ++j) {
+    scales += f[j].transform == TermTransform::decay || f[j].transform == TermTransform::lagged_temperature;
+    if (f[j].transform == TermTransform::input_shift) {
+      if (j != 0) return "an input shift is a term's first factor";
+      if (f[j].covariate != TermCovariate::temperature_C && f[j].covariate != TermCovariate::velocity_m_s)
+        return "an input shift corrects temperature_C or velocity_m_s";
+      if (term.uses_law()) return "an input shift's size does not depend on the law";
+    }
+    if (is_law_covariate(f[j].covariate) && (f[j].transform != TermTransform::linear || f[j].centre != 0))
+      return "the law and its parts enter as plain factors (linear, no centre)";
+  }
+  if (scales > 1) return "a term has at most one decay or lag";
+  return "";
+}
+
 std::optional<TermCovariate> find_term_covariate(std::string_view name) {
-  for (TermCovariate c : {TermCovariate::velocity_m_s, TermCovariate::load_N, TermCovariate::preload_um,
-                          TermCovariate::block_length_mm, TermCovariate::temperature_C, TermCovariate::direction,
-                          TermCovariate::time_in_run_s, TermCovariate::sliding_distance_m, TermCovariate::law_force_N})
+  for (TermCovariate c : kCovariates)
     if (name == term_covariate_name(c)) return c;
   return std::nullopt;
 }
@@ -137,7 +199,9 @@ constexpr std::pair<TermTransform, const char*> kTransforms[] = {{TermTransform:
                                                                  {TermTransform::square, "square"},
                                                                  {TermTransform::decay, "decay"},
                                                                  {TermTransform::lagged_temperature, "lagged_temperature"},
-                                                                 {TermTransform::spline, "spline"}};
+                                                                 {TermTransform::spline, "spline"},
+                                                                 {TermTransform::step, "step"},
+                                                                 {TermTransform::input_shift, "input_shift"}};
 }  // namespace
 
 double bspline(const std::vector<double>& knots, int k, double x) {
@@ -223,37 +287,49 @@ std::optional<TermFactor> parse_factor(std::string_view text) {
   return f;
 }
 
-double steady_term_N(const FrictionTerm& term, const FrictionConditions<double>& c, double law_N, bool* outside) {
-  auto value_of = [&](TermCovariate covariate) {
-    switch (covariate) {
-      case TermCovariate::velocity_m_s: return c.velocity_m_s;
-      case TermCovariate::load_N: return c.load_N;
-      case TermCovariate::preload_um: return c.preload_um;
-      case TermCovariate::block_length_mm: return c.block_length_mm;
-      case TermCovariate::temperature_C: return c.temperature_C;
-      case TermCovariate::direction: return c.direction;
-      case TermCovariate::law_force_N: return law_N;
-      default: return kNaN;  // time and distance: no steady value
-    }
+namespace {
+
+// Each run's place in the campaign (TermSeries::run_index, chronology) and, with a time
+// column, the campaign's time of every row. The runs' clocks are a campaign clock when, taken
+// in the order of their first reading, each starts after the one before has ended; otherwise
+// the runs follow each other in the order written, median_step apart.
+void put_runs_in_order(const FrictionLog& log, double median_step, TermSeries& s) {
+  const std::size_t runs = s.run_rows.size();
+  std::vector<std::size_t> order;
+  for (std::size_t r = 0; r < runs; ++r)
+    if (!s.run_rows[r].empty()) order.push_back(r);
+  // Written order: by each run's first row.
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return s.run_rows[a].front() < s.run_rows[b].front(); });
+  auto first_time = [&](std::size_t r) { return log.time_s[s.run_rows[r].front()]; };
+  auto last_time = [&](std::size_t r) {
+    double last = -std::numeric_limits<double>::infinity();
+    for (std::size_t i : s.run_rows[r]) last = std::max(last, log.time_s[i]);
+    return last;
   };
-  if (outside)
-    for (const auto& r : term.seen) {
-      const double x = value_of(r.covariate);
-      if (!std::isnan(x) && (x < r.min || x > r.max)) *outside = true;
+  if (s.timed && order.size() >= 2) {
+    std::vector<std::size_t> by_clock = order;
+    std::stable_sort(by_clock.begin(), by_clock.end(), [&](std::size_t a, std::size_t b) { return first_time(a) < first_time(b); });
+    bool campaign_clock = true;
+    for (std::size_t k = 1; k < by_clock.size() && campaign_clock; ++k)
+      campaign_clock = first_time(by_clock[k]) > last_time(by_clock[k - 1]);
+    if (campaign_clock) {
+      order = by_clock;
+      s.chronology = "time_s";
     }
-  if (term.lagged_temperature()) return 0;  // the lagged temperature has caught up
-  double value = term.coefficient;
-  for (const auto& f : term.factors) {
-    if (f.transform == TermTransform::decay) return 0;  // settled
-    if (f.transform == TermTransform::spline) {
-      value *= bspline(f.knots, f.basis, value_of(f.covariate));
-      continue;
-    }
-    const double x = value_of(f.covariate) - f.centre;
-    value *= f.transform == TermTransform::square ? x * x : x;
   }
-  return value;
+  s.run_index.assign(runs, kNaN);
+  for (std::size_t k = 0; k < order.size(); ++k) s.run_index[order[k]] = static_cast<double>(k);
+  if (!s.timed) return;
+  double start = 0;
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    const std::size_t r = order[k];
+    if (s.chronology == "time_s") start = first_time(r) - first_time(order.front());
+    for (std::size_t i : s.run_rows[r]) s.campaign_time_s[i] = start + s.time_in_run_s[i];
+    start += last_time(r) - first_time(r) + median_step;
+  }
 }
+
+}  // namespace
 
 TermSeries term_series(const FrictionLog& log) {
   TermSeries s;
@@ -263,7 +339,11 @@ TermSeries term_series(const FrictionLog& log) {
   s.timed = n > 0 && std::none_of(log.time_s.begin(), log.time_s.end(), [](double t) { return std::isnan(t); });
   s.time_in_run_s.assign(n, kNaN);
   s.sliding_distance_m.assign(n, kNaN);
-  if (!s.timed) return s;
+  s.campaign_time_s.assign(n, kNaN);
+  if (!s.timed) {
+    put_runs_in_order(log, 0, s);
+    return s;
+  }
   // The typical step, for the boundary between runs.
   std::vector<double> steps;
   for (const auto& rows : s.run_rows)
@@ -275,6 +355,7 @@ TermSeries term_series(const FrictionLog& log) {
   }
   for (const auto& rows : s.run_rows)
     for (std::size_t i : rows) s.time_in_run_s[i] = log.time_s[i] - log.time_s[rows.front()];
+  put_runs_in_order(log, median_step, s);
   // Distance in row order: runs in the order they are written.
   double distance = 0;
   for (std::size_t i = 0; i < n; ++i) {
@@ -296,7 +377,13 @@ double term_covariate_value(const FrictionLog& log, const TermSeries& series, st
     case TermCovariate::direction: return log.direction[i];
     case TermCovariate::time_in_run_s: return series.time_in_run_s[i];
     case TermCovariate::sliding_distance_m: return series.sliding_distance_m[i];
-    case TermCovariate::law_force_N: return kNaN;  // the law's, at the parameters: not a column
+    case TermCovariate::run_index: return series.run_index[log.run[i]];
+    case TermCovariate::campaign_time_s: return series.campaign_time_s[i];
+    case TermCovariate::law_force_N:
+    case TermCovariate::coulomb_N:
+    case TermCovariate::stribeck_N:
+    case TermCovariate::viscous_N:
+    case TermCovariate::seal_N: return kNaN;  // the law's, at the parameters: not a column
   }
   return kNaN;
 }

@@ -31,6 +31,9 @@ struct EffectEntry {
   std::optional<std::size_t> friction_slot;
   double ThermalRigEffects::*thermal = nullptr;
   double HiddenFrictionEffects::*hidden = nullptr;
+  // false: the truth file lists it only when one of these later effects is on (they came after
+  // data sets were committed, and data made without them keeps its bytes).
+  bool listed_when_neutral = true;
 
   double& ref(RigEffects& e) const {
     return friction_slot ? e.friction[*friction_slot] : hidden ? e.hidden.*hidden : e.thermal.*thermal;
@@ -46,18 +49,38 @@ const std::vector<EffectEntry>& effect_table() {
       if (f.dynamics) continue;  // the drive's mass and weight: the axis rig's own settings (axis_rig.hpp)
       t.push_back({{f.name, f.unit, f.neutral, f.description}, slot});
     }
-    auto hidden = [&](const char* name, const char* unit, double neutral, const char* description,
-                      double HiddenFrictionEffects::*member) {
-      t.push_back({{name, unit, neutral, description}, std::nullopt, nullptr, member});
+    // The hidden friction effects; the later ones (listed_when_neutral false) came after data
+    // sets were committed.
+    struct Hidden {
+      const char* name;
+      const char* unit;
+      double neutral;
+      const char* description;
+      double HiddenFrictionEffects::*member;
+      bool listed_when_neutral;
     };
-    hidden("running_in", "1", 0.0, "not in the library: F (1 + a exp(-s/l)), s the sliding distance since the log's start",
-           &HiddenFrictionEffects::running_in);
-    hidden("running_in_scale_m", "m", HiddenFrictionEffects{}.running_in_scale_m, "the running-in's distance scale l",
-           &HiddenFrictionEffects::running_in_scale_m);
-    hidden("lubricant_lag_s", "s", 0.0,
-           "not in the library: the law at the lubricant's temperature, lagging the logged one with time constant tau",
-           &HiddenFrictionEffects::lubricant_lag_s);
-    hidden("temperature_speed", "N/(K m/s)", 0.0, "not in the library: F + c (T - T_i) V", &HiddenFrictionEffects::temperature_speed);
+    using H = HiddenFrictionEffects;
+    const Hidden hidden[] = {
+        {"running_in", "1", 0.0, "not in the library: F (1 + a exp(-s/l)), s the sliding distance since the log's start",
+         &H::running_in, true},
+        {"running_in_scale_m", "m", H{}.running_in_scale_m, "the running-in's distance scale l", &H::running_in_scale_m, true},
+        {"lubricant_lag_s", "s", 0.0,
+         "not in the library: the law at the lubricant's temperature, lagging the logged one with time constant tau",
+         &H::lubricant_lag_s, true},
+        {"temperature_speed", "N/(K m/s)", 0.0, "not in the library: F + c (T - T_i) V", &H::temperature_speed, true},
+        {"hot_offset_K", "K", 0.0, "not in the library: the law at T + d where T > hot_above_C", &H::hot_offset_K, false},
+        {"hot_above_C", "C", H{}.hot_above_C, "the temperature above which hot_offset_K applies", &H::hot_above_C, false},
+        {"temperature_drift_K_per_h", "K/h", 0.0,
+         "not in the library: the law at T + r t, t the rig's clock since the log's start", &H::temperature_drift_K_per_h,
+         false},
+        {"run_decay", "1", 0.0, "not in the library: F (1 + a exp(-k/l)), k the run's place in the order made",
+         &H::run_decay, false},
+        {"run_decay_scale", "runs", H{}.run_decay_scale, "the run decay's scale l", &H::run_decay_scale, false},
+        {"viscous_load_curvature", "1", 0.0,
+         "not in the library: the viscous part (not the seal's) times 1 + a (P/1 kN - 2)^2", &H::viscous_load_curvature,
+         false}};
+    for (const Hidden& h : hidden)
+      t.push_back({{h.name, h.unit, h.neutral, h.description}, std::nullopt, nullptr, h.member, h.listed_when_neutral});
     auto thermal = [&](const char* name, const char* unit, const char* description, double ThermalRigEffects::*member,
                        double neutral = 0.0) { t.push_back({{name, unit, neutral, description}, std::nullopt, member}); };
     thermal("convection_velocity", "W/m2K/sqrt(m/s)", "forced convection h = h0 + c sqrt(V)",
@@ -102,8 +125,11 @@ namespace rig {
 
 nlohmann::json effects_json(const RigEffects& effects) {
   nlohmann::json j = nlohmann::json::object();
+  bool later_on = false;
+  for (const auto& e : effect_table()) later_on = later_on || (!e.listed_when_neutral && e.value(effects) != e.info.neutral);
   for (const auto& e : effect_table()) {
     const double value = e.value(effects);
+    if (!e.listed_when_neutral && !later_on) continue;
     j[e.info.name] = {{"value", value}, {"unit", e.info.unit}, {"active", value != e.info.neutral}};
   }
   return j;
@@ -165,6 +191,7 @@ FrictionRigOutput generate_friction_log(const FrictionRigConfig& config, const R
   require_positive("load_cell_range_N", config.load_cell_range_N);
   require_positive("running_in_scale_m", effects.hidden.running_in_scale_m);
   require_non_negative("lubricant_lag_s", effects.hidden.lubricant_lag_s);
+  require_positive("run_decay_scale", effects.hidden.run_decay_scale);
 
   FrictionRigOutput out;
   FrictionLog& log = out.log;
@@ -189,7 +216,16 @@ FrictionRigOutput generate_friction_log(const FrictionRigConfig& config, const R
     });
   const std::size_t per_run = config.one_setup_per_run ? 1 : setups.size();
   const int run_count = config.runs * static_cast<int>(setups.size() / per_run);
+  // The first setup of each run, in the order the runs are made.
+  std::vector<std::size_t> run_first(static_cast<std::size_t>(run_count));
+  for (std::size_t r = 0; r < run_first.size(); ++r) run_first[r] = config.one_setup_per_run ? r % setups.size() : 0;
+  if (config.shuffle_runs) {  // Fisher-Yates from a stream of its own
+    Rng order(derive_seed(config.seed ^ rig::kLaterStreamKey, 1));
+    for (std::size_t r = run_first.size(); r > 1; --r)
+      std::swap(run_first[r - 1], run_first[static_cast<std::size_t>(order.uniform() * static_cast<double>(r))]);
+  }
   double distance_m = 0;  // slid since the log's start (the hidden running-in)
+  double clock_s = 0;     // the rig's clock since the log's start (the hidden temperature drift)
   for (int r = 0; r < run_count; ++r) {
     Rng rng(derive_seed(config.seed, static_cast<std::uint64_t>(r)));
     const double offset_N = config.run_offset_N * rng.normal();
@@ -201,7 +237,7 @@ FrictionRigOutput generate_friction_log(const FrictionRigConfig& config, const R
     // The lubricant's temperature (hidden lag): its state at the last logged sample, and the
     // temperature it was relaxing towards since.
     double lubricant_C = std::numeric_limits<double>::quiet_NaN(), lubricant_target_C = 0, lubricant_time_s = 0;
-    const std::size_t first = config.one_setup_per_run ? static_cast<std::size_t>(r) % setups.size() : 0;
+    const std::size_t first = run_first[static_cast<std::size_t>(r)];
     for (std::size_t k = first; k < first + per_run; ++k) {
       const Setup& setup = setups[k];
       const GuideSpec& spec = find_guide(setup.model, config.catalog);
@@ -222,8 +258,16 @@ FrictionRigOutput generate_friction_log(const FrictionRigConfig& config, const R
             lubricant_now_C = lubricant_target_C + (lubricant_C - lubricant_target_C) *
                                                        std::exp(-(time_s - lubricant_time_s) / hidden.lubricant_lag_s);
           if (hidden.lubricant_lag_s > 0) at_lubricant.temperature_C = lubricant_now_C;
+          if (setup.T > hidden.hot_above_C) at_lubricant.temperature_C += hidden.hot_offset_K;
+          at_lubricant.temperature_C += hidden.temperature_drift_K_per_h * clock_s / 3600;
           double F = friction_force_with_effects_N(config.constants, effects.friction, at_lubricant);
           if (hidden.running_in != 0) F *= 1 + hidden.running_in * std::exp(-distance_m / hidden.running_in_scale_m);
+          if (hidden.run_decay != 0) F *= 1 + hidden.run_decay * std::exp(-r / hidden.run_decay_scale);
+          if (hidden.viscous_load_curvature != 0) {
+            const auto b = friction_breakdown(config.constants, at_lubricant);
+            const double viscous_N = b.viscous_N - config.constants.f0 * c.block_length_mm;
+            F += hidden.viscous_load_curvature * viscous_N * std::pow(setup.P / 1000 - 2, 2);
+          }
           F += hidden.temperature_speed * (setup.T - config.constants.T_ref_C) * V;
           // Draw the noise even for skipped conditions, so the sequence does not depend on them;
           // the load cell's noise series runs over the logged samples only.
@@ -242,6 +286,7 @@ FrictionRigOutput generate_friction_log(const FrictionRigConfig& config, const R
           lubricant_time_s = time_s;
           time_s += config.seconds_per_sample;
           distance_m += V * config.seconds_per_sample;
+          clock_s += config.seconds_per_sample;
         }
     }
   }
@@ -262,6 +307,7 @@ FrictionRigOutput generate_friction_log(const FrictionRigConfig& config, const R
                "temperature_C is the true temperature plus noise"}};
   if (config.noise_ar1 != 0) truth["noise_ar1"] = config.noise_ar1;
   if (config.temperature_outermost) truth["temperature_outermost"] = true;
+  if (config.shuffle_runs) truth["shuffle_runs"] = true;
   out.truth_json = truth.dump(2) + "\n";
   return out;
 }

@@ -88,8 +88,12 @@ struct FrictionDiagnosis {
   ResidualDiagnostics final;
   std::vector<std::vector<CandidateScore>> rounds;  // the candidates of every forward step
   std::vector<CandidateScore> accepted;
-  // From the baseline to the final model (the causes, then the empirical term when found): each
-  // step's before is the previous step's after; cv_rmse_after_N is the last step's after.
+  // Causes accepted before the empirical term that no longer pass on top of it (they stood in
+  // for what it models), and why: left out of `accepted` and the final fit.
+  std::vector<std::string> dropped;
+  // From the baseline to the final model (the causes, each cause dropped, then the empirical
+  // term when found): each step's before is the previous step's after; cv_rmse_after_N is the
+  // last step's after.
   std::vector<DiagnosisStep> steps;
   double cv_rmse_before_N = 0, cv_rmse_after_N = 0, cv_gain_percent = 0;
   std::vector<ParameterShift> shifts;

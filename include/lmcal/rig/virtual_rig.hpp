@@ -79,6 +79,16 @@ struct HiddenFrictionEffects {
   double running_in_scale_m = 500;   // ℓ, m
   double lubricant_lag_s = 0;        // τ > 0: the law at the lubricant's temperature, a first-order lag (τ) of the logged one
   double temperature_speed = 0;      // c: F ← F + c (T - T_i) V, N per (K·m/s)
+  // The law at a temperature off the logged one (an input the law does not see):
+  double hot_offset_K = 0;           // d: the law at T + d where the true T > hot_above_C
+  double hot_above_C = 35;
+  double temperature_drift_K_per_h = 0;  // r: the law at T + r·t, t the rig's clock since the log's start
+  // Friction falling over the campaign: F ← F (1 + a exp(-k/ℓ)), k = 0, 1, … the run's place in
+  // the order the runs were made (FrictionRigConfig::shuffle_runs makes it differ from the design's).
+  double run_decay = 0;              // a
+  double run_decay_scale = 20;       // ℓ, runs
+  // The viscous part alone (Lb μv pc V ν, not the seal's Lb f0) × (1 + a (P/1 kN − 2)²).
+  double viscous_load_curvature = 0; // a
 };
 
 struct RigEffects {
@@ -116,6 +126,9 @@ struct FrictionRigConfig {
   // setup at each temperature before the next), as a rig with a heated bath does; false:
   // temperature is the innermost setup loop.
   bool temperature_outermost = false;
+  // true: the runs are made in a random order (seeded), not in the design's; with
+  // one_setup_per_run, what a run's place in the campaign follows is then not its setup.
+  bool shuffle_runs = false;
   double noise_N = 0.15;                // load-cell noise per sample, σ
   double noise_ar1 = 0;                 // lag-1 autocorrelation of that noise within a run, [0, 1)
   double run_offset_N = 0.2;            // zero offset per run, σ
