@@ -245,6 +245,9 @@ void setup_generate(CLI::App& app, const std::vector<std::string>& argv) {
                      "Each setup (guide, preload, load, temperature) a run of its own, swept over speed and direction");
   friction->add_flag("--temperature-outermost", f.temperature_outermost,
                      "The temperature changes slowest: every other setup at one temperature before the next");
+  friction->add_flag("--shuffle-runs", f.shuffle_runs,
+                     "Make the runs in a random (seeded) order, not the design's: a run's place in the campaign then "
+                     "does not follow its setup");
 
   friction->add_option("--noise", f.noise_N, "Load-cell noise per sample (sigma), N")->capture_default_str();
   friction->add_option("--run-offset", f.run_offset_N, "Zero offset per run (sigma), N")->capture_default_str();

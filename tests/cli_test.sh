@@ -124,6 +124,14 @@ check "a run without diagnosis leaves no earlier run's diagnosis beside its outp
   'test -s calin_again/calibration.json && test ! -e calin_again/friction_diagnosis.json && test -z "$(find calin_again -name ".*")"'
 "$LMCAL" simulate friction --model calin/model.toml --temperature 26,60 -o simin.csv > simin.txt
 check "simulate friction adds the term's columns" grep -q 'empirical_N,extrapolated,friction_N' simin.csv
+# An input correction (the law at T - 2 K above 35 C) learned, carried and applied: the law at the
+# corrected temperature above the step, the law as logged below it.
+"$LMCAL" generate friction -o hot --runs 4 --guides "SRN 35C" --effect hot_offset_K=-2 --shuffle-runs >/dev/null
+check "--shuffle-runs is recorded in the truth" grep -q '"shuffle_runs": true' hot/friction_truth.json
+"$LMCAL" calibrate hot -o calhot > calhot.txt 2>&1
+check "the law seeing another temperature above a step is learned" grep -q 'F_law(T + c1·\[T > 3[5-9]' calhot.txt
+"$LMCAL" simulate friction --model calhot/model.toml --temperature 30,40 -o simhot.csv >/dev/null
+check "the input correction applies above its step only" awk -F, 'NR > 1 { if ($6 == 30) { n30++; if ($13 != 0) bad = 1 } if ($6 == 40) { n40++; if ($13 == 0) bad = 1 } } END { exit bad || !n30 || !n40 }' simhot.csv
 
 # --- thermal fit -------------------------------------------------------------------------------
 "$LMCAL" generate thermal -o thermaldata --velocity 0.083,0.11 --duration 7200 --record-every 30 >/dev/null
