@@ -2,7 +2,7 @@
 # Run names that are markup (issue 23 #1: a name reached the report's tables as raw HTML):
 # the bundled friction log with three runs renamed to an image with an error handler, a closing
 # title and a script, and an attribute break-out, calibrated; the names must reach the CSV
-# outputs as written and the report (in headless Chromium) only as text.
+# outputs as written and the report (in headless Chromium, its hover tooltips too) only as text.
 set -euo pipefail
 lmcal="$1"
 root="$(cd "$(dirname "$0")/.." && pwd)"
@@ -16,3 +16,7 @@ sed -e 's|^run01,|"<img src=x onerror=alert(1)>",|' \
 "$lmcal" calibrate "$out/set" -o "$out/fit" >/dev/null
 grep -q '<img src=x onerror=alert(1)>' "$out/fit/friction_samples.csv" || { echo "FAIL: the name did not reach the samples CSV"; exit 1; }
 bash "$root/tests/report_render_test.sh" "$out/fit/report.html" 20
+# The names escaped in the SVG (it parses; every plot titled, with its ticks, inside its box) and
+# shown as text in the hover tooltips.
+python3 "$root/tests/report_svg_test.py" "$out/fit/report.html"
+python3 "$root/tests/report_hover_test.py" "$out/fit/report.html"

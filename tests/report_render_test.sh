@@ -2,8 +2,9 @@
 # The bundled set's report (fits/cheng2017/report.html; calibration_test checks a fresh run
 # reproduces it) in a real browser, headless Chromium: it loads without script errors and
 # every plot the page lists draws with a size, no text is drawn outside its plot, every
-# axis that should name runs or units shows the names, and no x tick labels overlap (the page's
-# own check, read from the DOM); no markup from the data (run names) became elements.
+# axis that should name runs or units shows the names, no tick labels overlap, every plot has a
+# title and two tick labels on each axis (the page's own check, read from the DOM); no markup
+# from the data (run names) became elements.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 report="${1:-$root/fits/cheng2017/report.html}"  # or the report given
@@ -30,9 +31,10 @@ for id in $listed; do
 done
 if grep -q 'data-errors=' "$tmp/dom.html"; then fail "script errors: $(grep -o 'data-errors="[^"]*"' "$tmp/dom.html")"; fi
 # What only the browser's fonts can tell (the page's own check): no text outside its plot, every
-# axis that should name its runs or units names them, no x tick labels running into each other.
+# axis that should name its runs or units names them, no x or y tick labels running into each
+# other, every plot with data titled and with two tick labels on each axis.
 grep -q 'data-rendered=' "$tmp/dom.html" || fail "the page's check did not run"
-for what in clipped unnamed overlap; do
+for what in clipped unnamed overlap lacking; do
   if grep -q "data-$what=" "$tmp/dom.html"; then fail "$what: $(grep -o "data-$what=\"[^\"]*\"" "$tmp/dom.html" | head -c 600)"; fi
 done
 if grep -E 'CONSOLE|Uncaught|Failed to load resource' "$tmp/browser.log"; then fail "the browser reported errors (above)"; fi
@@ -40,4 +42,4 @@ if grep -E 'CONSOLE|Uncaught|Failed to load resource' "$tmp/browser.log"; then f
 # element with an event handler, no image or frame (names such as <img src=x onerror=...> show
 # as text).
 if grep -q 'data-injected=' "$tmp/dom.html"; then fail "markup from the data: $(grep -o 'data-injected="[^"]*"' "$tmp/dom.html")"; fi
-echo "ok: the report loads, all $count plots draw, no text is clipped and every named axis shows its names"
+echo "ok: the report loads, all $count plots draw titled with their ticks, no text is clipped and every named axis shows its names"

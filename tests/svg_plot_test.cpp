@@ -27,6 +27,11 @@ std::size_t count_of(const std::string& text, const std::string& what) {
   return n;
 }
 
+// Code points of UTF-8 text: the width of a line in glyphs.
+double glyphs(const std::string& text) {
+  return static_cast<double>(std::count_if(text.begin(), text.end(), [](char c) { return (static_cast<unsigned char>(c) & 0xC0) != 0x80; }));
+}
+
 // Empty when every tag is closed in order; else what went wrong, and where.
 std::string tag_balance_error(const std::string& svg) {
   std::vector<std::string> open;
@@ -97,6 +102,32 @@ std::vector<std::string> tick_labels(const std::string& svg, bool x_axis) {
   std::vector<std::string> labels;
   for (std::sregex_iterator it(group.begin(), group.end(), label), end; it != end; ++it) labels.push_back((*it)[1]);
   return labels;
+}
+
+// The texts whose extent, as the layout estimates it (6.2 px a glyph at 11 px, in proportion at
+// other sizes, bold 1.1 times wider), leaves the viewBox; upright ones (rotate(-90)) run up from
+// their anchor.
+std::vector<std::string> text_outside_view(const std::string& svg) {
+  std::smatch box;
+  if (!std::regex_search(svg, box, std::regex(R"re(viewBox="0 0 ([0-9.]+) ([0-9.]+)")re"))) return {"no viewBox"};
+  const double width = std::stod(box[1]), height = std::stod(box[2]);
+  static const std::regex text(R"re(<text x="([-0-9.]+)" y="([-0-9.]+)" text-anchor="(start|middle|end)"([^>]*)>([^<]*)</text>)re");
+  std::vector<std::string> outside;
+  for (std::sregex_iterator it(svg.begin(), svg.end(), text), end; it != end; ++it) {
+    const double x = std::stod((*it)[1]), y = std::stod((*it)[2]);
+    const std::string anchor = (*it)[3], extra = (*it)[4], content = (*it)[5];
+    std::smatch size_match;
+    const double size = std::regex_search(extra, size_match, std::regex(R"re(font-size="([0-9.]+)")re")) ? std::stod(size_match[1]) : 11;
+    const double length = glyphs(content) * 6.2 * size / 11 * (extra.find("bold") != std::string::npos ? 1.1 : 1);
+    const double before = anchor == "start" ? 0 : anchor == "middle" ? length / 2 : length;  // along the text
+    double lo_x = x - before, hi_x = x - before + length, lo_y = y - 0.8 * size, hi_y = y + 0.25 * size;
+    if (extra.find("rotate(-90") != std::string::npos) {
+      lo_x = x - 0.8 * size, hi_x = x + 0.25 * size;
+      lo_y = y - (length - before), hi_y = y + before;
+    }
+    if (lo_x < -0.5 || hi_x > width + 0.5 || lo_y < -0.5 || hi_y > height + 0.5) outside.push_back(content);
+  }
+  return outside;
 }
 
 Plot points_on_fixed_limits(std::vector<double> x, std::vector<double> y) {
@@ -207,21 +238,45 @@ TEST(SvgPlot, ASeriesWithoutPointsIsALegendKeyOnly) {
   EXPECT_EQ(svg.find(">gone<"), std::string::npos);
 }
 
-// A long title is set smaller and fitted to the plot's width, never clipped at both ends.
-TEST(SvgPlot, ALongTitleFitsTheWidth) {
-  Plot plot{.id = "title", .title = std::string(120, 'T'), .width_px = 300};
+// The lines of the plot's title as drawn, and their font size.
+std::pair<std::vector<std::string>, double> title_lines(const std::string& svg) {
+  static const std::regex line(R"re(<text x="[-0-9.]+" y="[-0-9.]+" text-anchor="middle" class="title" font-size="([0-9.]+)" font-weight="bold">([^<]*)</text>)re");
+  std::vector<std::string> lines;
+  double size = 0;
+  for (std::sregex_iterator it(svg.begin(), svg.end(), line), end; it != end; ++it) {
+    lines.push_back((*it)[2]);
+    size = std::stod((*it)[1]);
+  }
+  return {lines, size};
+}
+
+// A long title wraps onto lines that fit the plot's width (6.2 px a glyph at 11 px, bold 13 px
+// about 1.3 times that), never squeezed or clipped at both ends; the whole title stays the
+// plot's <title>.
+TEST(SvgPlot, ALongTitleWrapsToTheWidth) {
+  Plot plot{.id = "title", .title = "α of each run alone (±t·SE) and the pooled 95 % interval", .width_px = 300};
   plot.series.push_back({.x = {0, 1}, .y = {0, 1}});
-  const std::string svg = render_svg(plot);
-  const std::smatch m = [&] {
-    std::smatch found;
-    std::regex_search(svg, found, std::regex("font-size=\"([0-9.]+)\" font-weight=\"bold\" textLength=\"([0-9.]+)\""));
-    return found;
-  }();
-  ASSERT_EQ(m.size(), 3u) << "a fitted title";
-  EXPECT_LT(std::stod(m[1]), 13);
-  EXPECT_LE(std::stod(m[2]), 300 - 12);
+  std::string svg = render_svg(plot);
+  auto [lines, size] = title_lines(svg);
+  ASSERT_EQ(lines.size(), 2u) << svg;
+  EXPECT_EQ(size, 13);
+  EXPECT_EQ(lines[0] + " " + lines[1], plot.title);
+  for (const auto& line : lines) EXPECT_LE(6.2 * 13 / 11 * 1.1 * glyphs(line), 300 - 12) << line;
+  EXPECT_EQ(svg.find("textLength"), std::string::npos);
+  EXPECT_NE(svg.find("<title>" + plot.title + "</title>"), std::string::npos);
+  EXPECT_GE(frame_of(svg).y, 19 + 16);  // the frame under the second line
+
+  plot.title = std::string(40, 'T') + " " + std::string(40, 'U') + " " + std::string(40, 'V') + " " + std::string(40, 'W');
+  std::tie(lines, size) = title_lines(render_svg(plot));
+  ASSERT_EQ(lines.size(), 3u);  // 11 px, and cut only beyond three lines
+  EXPECT_EQ(size, 11);
+  EXPECT_EQ(lines[0], std::string(40, 'T'));
+  EXPECT_TRUE(lines[2].starts_with("VVV") && lines[2].ends_with("…")) << lines[2];
+
   plot.title = "short";
-  EXPECT_NE(render_svg(plot).find("font-size=\"13\" font-weight=\"bold\">short<"), std::string::npos);
+  std::tie(lines, size) = title_lines(render_svg(plot));
+  EXPECT_EQ(lines, std::vector<std::string>{"short"});
+  EXPECT_EQ(size, 13);
 }
 
 TEST(SvgPlot, ErrorBarsSpanYPlusMinusError) {
@@ -302,7 +357,7 @@ TEST(SvgPlot, NonFiniteValuesAreSkippedAndBreakTheLine) {
   const std::string svg = render_svg(plot);
   EXPECT_EQ(circles_of_series(svg, 0).size(), 4u);  // (0,0) (1,1) (4,4) (6,6)
   std::smatch m;
-  ASSERT_TRUE(std::regex_search(svg, m, std::regex(R"re(<path fill="none" d="([^"]*)")re")));
+  ASSERT_TRUE(std::regex_search(svg, m, std::regex(R"re(<path class="line" fill="none" d="([^"]*)")re")));
   EXPECT_EQ(count_of(m[1], "M"), 3u) << m[1];  // runs {0,1}, {4}, {6}
   EXPECT_FALSE(has_non_finite_text(svg));
 }
@@ -417,6 +472,98 @@ TEST(SvgPlot, PointsCarryTheirValuesAsTooltips) {
   EXPECT_EQ(tag_balance_error(svg), "");
 }
 
+// Estimated x tick label extents (6.2 px a glyph, centred on their ticks) that overlap.
+bool x_labels_overlap(const std::string& svg) {
+  static const std::regex label(R"re(<text x="([-0-9.]+)" y="[-0-9.]+" text-anchor="middle" class="x-tick">([^<]*)</text>)re");
+  std::vector<std::pair<double, double>> spans;
+  for (std::sregex_iterator it(svg.begin(), svg.end(), label), end; it != end; ++it) {
+    const double x = std::stod((*it)[1]), half = 3.1 * glyphs((*it)[2]);
+    spans.emplace_back(x - half, x + half);
+  }
+  std::sort(spans.begin(), spans.end());
+  for (std::size_t i = 1; i < spans.size(); ++i)
+    if (spans[i].first < spans[i - 1].second) return true;
+  return false;
+}
+
+// Every numeric axis says what it spans with two labelled ticks or more: a narrow range on the
+// short axis of a per-run plot (names upright under it; it had one tick label, or none), a
+// narrow range on a log axis, a huge and a tiny one, and labels too long to stand at the
+// step the axis' length asks for (a coarser step, not labels running into each other).
+TEST(SvgPlot, EveryAxisHasTwoLabelledTicksThatDoNotCollide) {
+  std::vector<Plot> plots;
+  plots.push_back({.id = "per-run", .title = "k2 per run", .x_label = "run", .y_label = "k2 (1/um)", .width_px = 300, .height_px = 220});
+  for (int r = 1; r <= 10; ++r) plots.back().x_tick_labels.emplace_back(r, fmt::format("run{:02}", r));
+  plots.back().series.push_back({.x = {1, 2, 3, 4, 5, 6, 7, 8, 9, 10},
+                                 .y = {0.02961, 0.02958, 0.02955, 0.02962, 0.0296, 0.02957, 0.02959, 0.02956, 0.02963, 0.02954},
+                                 .mark = Mark::points});
+  plots.push_back({.id = "narrow-log", .log_y = true, .height_px = 130});
+  plots.back().series.push_back({.x = {0, 1}, .y = {12.1, 12.4}});
+  plots.push_back({.id = "long-labels", .width_px = 200});
+  plots.back().series.push_back({.x = {1234567.1234, 1234567.2}, .y = {1e-12, 3e-12}});
+  plots.push_back({.id = "huge", .log_x = true});
+  plots.back().series.push_back({.x = {1e-290, 1e290}, .y = {-1e299, 1e299}});
+  for (const Plot& plot : plots) {
+    SCOPED_TRACE(plot.id);
+    const std::string svg = render_svg(plot);
+    EXPECT_GE(tick_labels(svg, false).size(), 2u) << svg;
+    if (plot.x_tick_labels.empty()) EXPECT_GE(tick_labels(svg, true).size(), 2u);
+    EXPECT_FALSE(x_labels_overlap(svg)) << svg;
+    EXPECT_EQ(text_outside_view(svg), std::vector<std::string>{});
+  }
+}
+
+// Labels longer than the plot wraps onto a second line, inside the plot; a legend longer than
+// the plot says how many entries it leaves out; a reference label near the right edge turns left.
+TEST(SvgPlot, LongLabelsAndLegendsStayInsideThePlot) {
+  Plot plot{.id = "labels",
+            .title = "Convection coefficient per run",
+            .x_label = "speed of the block along the rail during the heating phase of the run (m/s)",
+            .y_label = "heat transfer coefficient of the rail's free surface (W/m2K)",
+            .width_px = 300,
+            .height_px = 220};
+  plot.series.push_back({.x = {0, 1}, .y = {0, 1}});
+  for (int k = 0; k < 20; ++k) plot.series.push_back({.label = fmt::format("series {}", k), .x = {0.5}, .y = {0.5}, .mark = Mark::points});
+  const std::string svg = render_svg(plot);
+  EXPECT_EQ(text_outside_view(svg), std::vector<std::string>{});
+  EXPECT_EQ(count_of(svg, "class=\"x-label\""), 2u);
+  EXPECT_EQ(count_of(svg, "class=\"y-label\""), 2u);
+  EXPECT_NE(svg.find("… and "), std::string::npos);
+  EXPECT_EQ(tag_balance_error(svg), "");
+
+  Plot reference{.id = "reference", .width_px = 300};
+  reference.series.push_back({.x = {0, 1}, .y = {0, 1}});
+  reference.references.push_back({.horizontal = false, .at = 0.98, .label = "the fitted value"});
+  const std::string turned = render_svg(reference);
+  EXPECT_NE(turned.find("text-anchor=\"end\">the fitted value</text>"), std::string::npos);
+  EXPECT_EQ(text_outside_view(turned), std::vector<std::string>{});
+}
+
+// A line says the span of its values on hover (no script), and the svg carries each axis'
+// scale ("lo hi px_lo px_hi log"), from which the page's script reads a vertex's values back.
+TEST(SvgPlot, LinesCarryTheirSpanAndTheSvgItsScales) {
+  Plot plot{.id = "line", .x_label = "time (h)", .y_label = "elongation (µm)", .log_y = true};
+  plot.series.push_back({.label = "model", .tooltip = "model (95 % band)", .x = {0, 1, 2}, .y = {1, 10, 100}});
+  const std::string svg = render_svg(plot);
+  EXPECT_NE(svg.find("<title>model (95 % band): time (h) 0 to 2, elongation (µm) 1 to 100 (3 points)</title></path>"),
+            std::string::npos)
+      << svg;
+  EXPECT_NE(svg.find("data-x-label=\"time (h)\" data-y-label=\"elongation (µm)\""), std::string::npos);
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(svg, m, std::regex(R"re(data-x="([^ ]+) ([^ ]+) ([^ ]+) ([^ ]+) 0" data-y="([^ ]+) ([^ ]+) ([^ ]+) ([^ ]+) 1")re")));
+  std::smatch d;
+  ASSERT_TRUE(std::regex_search(svg, d, std::regex(R"re(d="M([-0-9.]+) ([-0-9.]+)L([-0-9.]+) ([-0-9.]+))re")));
+  const auto back = [&](int k, double pixel) {  // the value at `pixel` on axis k (0: x, 1: y)
+    const double lo = std::stod(m[1 + 4 * k]), hi = std::stod(m[2 + 4 * k]), p0 = std::stod(m[3 + 4 * k]), p1 = std::stod(m[4 + 4 * k]);
+    const double scaled = lo + (pixel - p0) / (p1 - p0) * (hi - lo);
+    return k == 1 ? std::pow(10.0, scaled) : scaled;
+  };
+  EXPECT_NEAR(back(0, std::stod(d[3])), 1, 1e-3);
+  EXPECT_NEAR(back(1, std::stod(d[4])), 10, 1e-3 * 10);
+  EXPECT_NE(svg.find("data-label=\"model (95 % band)\" data-series=\"0\""), std::string::npos);
+  EXPECT_NE(svg.find(">model</text>"), std::string::npos);  // the legend keeps the label
+}
+
 TEST(SvgPlot, EscapesEveryUserString) {
   Plot plot{.id = "p\"><script>", .title = "Force <F> & \"v\" 'x'", .x_label = "a<b", .y_label = "c&d"};
   plot.series.push_back({.label = "fit </g>", .x = {0, 1}, .y = {0, 1}, .color = "red\"/><x"});
@@ -495,6 +642,9 @@ TEST(SvgPlot, OddInputStaysWellFormed) {
     EXPECT_FALSE(has_non_finite_text(svg));
     EXPECT_EQ(svg.find("no data"), std::string::npos);
     EXPECT_LT(svg.size(), 20000u);  // clamped coordinates stay short
+    EXPECT_GE(tick_labels(svg, true).size(), 2u);
+    EXPECT_GE(tick_labels(svg, false).size(), 2u);
+    EXPECT_EQ(text_outside_view(svg), std::vector<std::string>{});
   }
 }
 

@@ -121,14 +121,22 @@ Plot velocity_panel(const Calibration& c, const Varied& varied) {
                                  setup.empty() ? "" : " (" + setup + ")"),
             .x_label = "velocity (m/s)",
             .y_label = "friction force (N)"};
+  // Every velocity's mean where that is cheap; a drive's trajectory log (a velocity per sample)
+  // thinned evenly along the velocity within each value, said in the legend.
+  std::size_t velocities = 0;
+  for (const auto& [value, by_velocity] : measured) velocities += by_velocity.size();
+  const std::size_t every = stride(velocities, kMostPoints);
   std::size_t index = 0;
   for (const auto& [value, by_velocity] : measured) {
-    Series points{.label = varies ? fmt::format("{} {}", num(value), varied.unit) : "measured", .mark = Mark::points,
-                  .color = colour(index)};
+    const std::string name = varies ? fmt::format("{} {}", num(value), varied.unit) : "measured";
+    Series points{.label = name, .tooltip = name, .mark = Mark::points, .color = colour(index)};
+    std::size_t seen = 0;
     for (const auto& [v, sum] : by_velocity) {
+      if (seen++ % every != 0) continue;
       points.x.push_back(v);
       points.y.push_back(sum.first / static_cast<double>(sum.second));
     }
+    if (points.x.size() < by_velocity.size()) points.label += " " + shown_of(points.x.size(), by_velocity.size());
     const auto& [sample, temperature_sum, n] = groups.at(value);
     const double temperature_C = temperature_sum / static_cast<double>(n);
     FrictionConstants<double> k = c.friction->constants();
@@ -139,7 +147,8 @@ Plot velocity_panel(const Calibration& c, const Varied& varied) {
     };
     const auto& [published_offset, extended_offset] = offsets.at(value);
     plot.series.push_back(std::move(points));
-    plot.series.push_back({.x = grid,
+    plot.series.push_back({.tooltip = "published law, " + name,
+                           .x = grid,
                            .y = shifted(law_over_velocity(log, sample, temperature_C, k, c.friction->effects(), grid),
                                         published_offset / static_cast<double>(n)),
                            .color = colour(index)});
@@ -147,7 +156,8 @@ Plot velocity_panel(const Calibration& c, const Varied& varied) {
       const auto& fit = c.friction_diagnosis->final_fit;
       FrictionConstants<double> ke = fit.constants();
       ke.T_ref_C = k.T_ref_C;
-      plot.series.push_back({.x = grid,
+      plot.series.push_back({.tooltip = "law + causes, " + name,
+                             .x = grid,
                              .y = shifted(law_over_velocity(log, sample, temperature_C, ke, fit.effects(), grid),
                                           extended_offset / static_cast<double>(n)),
                              .color = colour(index),
@@ -184,8 +194,8 @@ Plot condition_residuals(const std::string& id, const std::string& title, const 
     // The conditions (thinned to a readable cloud), and the mean of each level of the covariate
     // with its 95 % interval: what the eye cannot read from thousands of overlapping points.
     const std::string prefix = fits[f].first.empty() ? "" : fits[f].first + ": ";
-    Series s{.mark = Mark::points, .color = colour(f)};
-    const std::size_t every = stride(conditions.size(), 600);
+    Series s{.tooltip = prefix + "condition", .mark = Mark::points, .color = colour(f)};
+    const std::size_t every = stride(conditions.size(), kMostPoints);
     std::map<double, std::vector<double>> levels;
     // Thinned within each stratum (the plotted level and the direction), so that every level in
     // both senses keeps its share: the conditions alternate direction, and a plain every-4th
@@ -198,12 +208,11 @@ Plot condition_residuals(const std::string& id, const std::string& title, const 
       s.x.push_back(r.*x);
       s.y.push_back(r.bias_N);
     }
-    s.label = prefix + (s.x.size() == conditions.size()
-                            ? "each condition"
-                            : fmt::format("each condition ({} of {} shown)", s.x.size(), conditions.size()));
+    s.label = prefix + "each condition" + (s.x.size() == conditions.size() ? "" : " " + shown_of(s.x.size(), conditions.size()));
     plot.series.push_back(std::move(s));
     if (levels.size() > 30) continue;  // a covariate that barely repeats: no levels to average
-    Series means{.label = prefix + "mean per level (95 %)", .mark = Mark::line_points, .color = colour(f + 4)};
+    Series means{.label = prefix + "mean per level (95 %)", .tooltip = prefix + "level mean ± 95 %", .mark = Mark::line_points,
+                 .color = colour(f + 4)};
     for (const auto& [level, values] : levels) {
       const Spread sp = spread(values);
       means.x.push_back(level);
@@ -263,8 +272,8 @@ void diagnosis_section(Page& page, const Calibration& c) {
   const FrictionDiagnosis& d = *c.friction_diagnosis;
   page.heading(3, "What the published law gets wrong");
   verdict_paragraph(page, d.verdict, d.summary);
-  page.paragraph(fmt::format("Held-out (leave-one-run-out) RMSE: {} N before, {} N after: a gain of {:.1f} %.",
-                             num(d.cv_rmse_before_N), num(d.cv_rmse_after_N), d.cv_gain_percent));
+  page.paragraph(fmt::format("Held-out (leave-one-run-out) RMSE: {} N before, {} N after: a gain of {}.",
+                             num(d.cv_rmse_before_N), num(d.cv_rmse_after_N), percent(d.cv_gain_percent, 1)));
   lack_of_fit_paragraph(page, d.baseline.lack_of_fit, d.final.lack_of_fit, "N", d.design_notes);
   candidate_tables(page, d.rounds, "N");
   steps_table(page, d.steps, d.cv_rmse_before_N, "N");
@@ -362,8 +371,8 @@ void candidate_tables(Page& page, const std::vector<std::vector<CandidateScore>>
       const bool shape = std::isfinite(cand.cv_shape_gain_percent);
       rows.push_back({shown_name(cand), num(cand.value) + (cand.unit.empty() || cand.unit == "1" ? "" : " " + cand.unit),
                       bracket(cand.ci_low, cand.ci_high) + (cand.interval == "linear" ? "" : " (" + cand.interval + ")"),
-                      p_value(cand.lrt_p), num(cand.cv_rmse), fmt::format("{:+.2f} %", cand.cv_gain_percent),
-                      shape ? num(cand.cv_shape_rmse) + fmt::format(" ({:+.2f} %)", cand.cv_shape_gain_percent) : "–",
+                      p_value(cand.lrt_p), num(cand.cv_rmse), percent(cand.cv_gain_percent, 2, true),
+                      shape ? num(cand.cv_shape_rmse) + " (" + percent(cand.cv_shape_gain_percent, 2, true) + ")" : "–",
                       (cand.accepted ? "accepted: " : "") + cand.reason});
       if (alpha) rows.back().insert(rows.back().begin() + 3, num(cand.alpha) + " " + bracket(cand.alpha_low, cand.alpha_high));
     }
@@ -384,7 +393,7 @@ void steps_table(Page& page, const std::vector<DiagnosisStep>& steps, double bas
   for (const auto& s : steps)
     rows.push_back({s.action, s.name, num(s.cv_rmse_before), num(s.cv_rmse_after),
                     std::isfinite(s.cv_shape_rmse_before) ? num(s.cv_shape_rmse_before) + " → " + num(s.cv_shape_rmse_after) : "–",
-                    fmt::format("{:+.1f} % ({})", s.gain_percent, s.criterion == "shape" ? "runs' shape" : "held-out RMSE")});
+                    fmt::format("{} ({})", percent(s.gain_percent, 1, true), s.criterion == "shape" ? "runs' shape" : "held-out RMSE")});
   page.table({"step", "what", std::string("held-out RMSE before (") + unit + ")", std::string("after (") + unit + ")",
               std::string("of the runs' shape (") + unit + ")", "gain (counted on)"},
              rows);
@@ -452,10 +461,10 @@ void empirical_section(Page& page, const EmpiricalFinding& e, const std::string&
     rows.push_back({component.symbol, component.words, covariates, coefficient, coefficient_interval, scale, scale_interval});
   }
   page.table({"term", "what it does", "covariates", "coefficient", "95 % interval", "scale", "95 % interval"}, rows);
-  page.paragraph(fmt::format("{}: RMSE {} {} before the term, {} {} with it: a gain of {:.1f} % "
+  page.paragraph(fmt::format("{}: RMSE {} {} before the term, {} {} with it: a gain of {} "
                              "(LRT p = {}, ΔBIC = {}). Kept: {}.",
                              "H" + held_out_criterion_words(e.criterion).substr(1), num(e.cv_rmse_before), unit,
-                             num(e.cv_rmse_after), unit, e.cv_gain_percent, p_value(e.lrt_p),
+                             num(e.cv_rmse_after), unit, percent(e.cv_gain_percent, 1), p_value(e.lrt_p),
                              num(e.delta_bic, 3), e.reason));
   page.paragraph(e.resembles.empty() ? "It resembles no mechanism we know of."
                                      : "It resembles " + e.resembles + ". A resemblance, not a diagnosis: to name the "

@@ -206,7 +206,7 @@ Plot autocorrelation_plot(const std::string& id, const std::string& title, const
   plot.references.push_back({});  // zero
   plot.series.push_back(
       {.label = "independent (±1.96/√n)", .x = {0.5, kLags + 0.5}, .y = {band, band}, .color = "#999999", .dashed = true});
-  plot.series.push_back({.x = {0.5, kLags + 0.5}, .y = {-band, -band}, .color = "#999999", .dashed = true});
+  plot.series.push_back({.tooltip = "independent (−1.96/√n)", .x = {0.5, kLags + 0.5}, .y = {-band, -band}, .color = "#999999", .dashed = true});
   plot.width_px = 640;
   return plot;
 }
@@ -267,7 +267,7 @@ Plot per_run_plot(const std::string& id, const std::string& title, const Paramet
   const bool legend = !pooled_label.empty();
   Plot plot{.id = id, .title = title, .x_label = "run",
             .y_label = pooled.unit.empty() || pooled.unit == "1" ? pooled.name : fmt::format("{} ({})", pooled.name, pooled.unit)};
-  Series points{.label = legend ? "each run alone" : "", .mark = Mark::points, .color = colour(0)};
+  Series points{.label = legend ? "each run alone" : "", .tooltip = "run alone (±t·SE)", .mark = Mark::points, .color = colour(0)};
   for (std::size_t r = 0; r < runs.value.size(); ++r) {
     points.x.push_back(static_cast<double>(r + 1));
     points.y.push_back(runs.value[r]);
@@ -278,9 +278,11 @@ Plot per_run_plot(const std::string& id, const std::string& title, const Paramet
   const std::vector<double> across{0.5, static_cast<double>(runs.value.size()) + 0.5};
   const auto [low, high] = quoted_bounds(pooled);
   plot.series.push_back(std::move(points));
-  plot.series.push_back({.label = pooled_label, .x = across, .y = {pooled.value, pooled.value}, .color = colour(1)});
-  plot.series.push_back({.label = legend ? "its 95 % interval" : "", .x = across, .y = {low, low}, .color = colour(1), .dashed = true});
-  plot.series.push_back({.x = across, .y = {high, high}, .color = colour(1), .dashed = true});
+  const std::string pooled_name = legend ? pooled_label : "pooled";
+  plot.series.push_back({.label = pooled_label, .tooltip = pooled_name, .x = across, .y = {pooled.value, pooled.value}, .color = colour(1)});
+  plot.series.push_back({.label = legend ? "its 95 % interval" : "", .tooltip = pooled_name + ", 95 % interval low", .x = across,
+                         .y = {low, low}, .color = colour(1), .dashed = true});
+  plot.series.push_back({.tooltip = pooled_name + ", 95 % interval high", .x = across, .y = {high, high}, .color = colour(1), .dashed = true});
   return plot;
 }
 

@@ -28,20 +28,23 @@ th{background:#f2f2f2}td.num{text-align:right;font-variant-numeric:tabular-nums}
 .verdict.empirical-term-found{border-left-style:double;border-left-width:6px;background:#fbf3f8}
 .empirical{border:1px dashed #CC79A7;border-radius:6px;padding:0 16px 8px;margin-top:16px}.empirical h4{margin:12px 0 4px}
 .warning{color:#9a3b00}code{background:#f4f4f4;padding:1px 4px}
+.lmcal-tip{position:fixed;z-index:10;pointer-events:none;max-width:420px;background:#fff;border:1px solid #888;border-radius:4px;
+padding:3px 7px;font-size:12px;box-shadow:0 1px 4px rgba(0,0,0,.25)}
 )";
 
 // Marks <body data-rendered> with "all N" when every listed plot drew, or with those that
 // did not; <body data-errors> collects script errors. Then what only a browser's fonts can
 // tell: <body data-clipped> lists text drawn outside its plot (a title cut at both ends),
 // <body data-unnamed> plots whose x axis does not show the names it should (runs, units;
-// svg data-x-names), <body data-overlap> plots whose x tick labels run into each other. For
+// svg data-x-names), <body data-overlap> plots whose x or y tick labels run into each other,
+// <body data-lacking> plots with data but without a title or two tick labels on each axis. For
 // the browser test; the page itself needs no script.
 constexpr const char* kCheck = R"(
 window.addEventListener('error',function(e){document.body.dataset.errors=(document.body.dataset.errors||'')+e.message+';'});
 window.addEventListener('load',function(){var ids=document.body.dataset.plots.split(' ').filter(Boolean),missing=[];
 ids.forEach(function(id){var s=document.querySelector('svg[data-plot="'+id+'"]');var b=s&&s.getBoundingClientRect();
 if(!b||!(b.width>0&&b.height>0)||!s.querySelector('.series,text'))missing.push(id)});
-var clipped=[],unnamed=[],overlap=[];
+var clipped=[],unnamed=[],overlap=[],lacking=[];
 document.querySelectorAll('svg.plot').forEach(function(s){var id=s.dataset.plot,p=s.getBoundingClientRect();
 s.querySelectorAll('text').forEach(function(t){var r=t.getBoundingClientRect();
 if(r.width>0&&(r.left<p.left-0.5||r.right>p.right+0.5||r.top<p.top-0.5||r.bottom>p.bottom+0.5))clipped.push(id+': '+t.textContent)});
@@ -51,16 +54,63 @@ var tells=function(t,n){if(t===n)return true;var p=t.slice(0,-1);return t.slice(
 names.filter(function(m){return m.indexOf(p)===0}).length===1};
 if(names.some(function(n){return !shown.some(function(t){return tells(t,n)})}))unnamed.push(id)}
 var rs=ticks.map(function(t){return t.getBoundingClientRect()}).sort(function(a,b){return a.left-b.left});
-for(var i=1;i<rs.length;i++)if(rs[i].left<rs[i-1].right){overlap.push(id);break}});
+for(var i=1;i<rs.length;i++)if(rs[i].left<rs[i-1].right){overlap.push(id);break}
+var ys=[].slice.call(s.querySelectorAll('g.tick-labels text:not(.x-tick)'));
+var ry=ys.map(function(t){return t.getBoundingClientRect()}).sort(function(a,b){return a.top-b.top});
+for(var j=1;j<ry.length;j++)if(ry[j].top<ry[j-1].bottom-0.5){overlap.push(id+' (y)');break}
+if(s.hasAttribute('data-x')&&(!s.querySelector('text.title')||ticks.length<2||ys.length<2))lacking.push(id)});
 if(clipped.length)document.body.dataset.clipped=clipped.join('; ');
 if(unnamed.length)document.body.dataset.unnamed=unnamed.join(' ');
 if(overlap.length)document.body.dataset.overlap=overlap.join(' ');
+if(lacking.length)document.body.dataset.lacking=lacking.join(' ');
 var injected=[];document.querySelectorAll('*').forEach(function(e){for(var i=0;i<e.attributes.length;i++)
 if(/^on/i.test(e.attributes[i].name))injected.push(e.tagName+' '+e.attributes[i].name)});
 document.querySelectorAll('img,iframe,object,embed').forEach(function(e){injected.push(e.tagName)});
 if(document.scripts.length!==1)injected.push(document.scripts.length+' scripts');
 if(injected.length)document.body.dataset.injected=injected.join('; ');
 document.body.dataset.rendered=missing.length?'missing '+missing.join(' '):'all '+ids.length});
+)";
+
+// Hover: the point or line vertex nearest the pointer (within 10 px, inside the frame) gets a
+// tooltip with its values and a ring. A point's values are its <title> (which the page reads
+// without script too); a line's are read back from its pixels through the svg's axis scales
+// (data-x, data-y: "lo hi px_lo px_hi log"), with its band's ends where it has one. The
+// <title>s of a hovered plot are moved into the script's list, so that the browser's own
+// tooltip does not show beside it. Text only (textContent): no name from the data becomes markup.
+constexpr const char* kHover = R"(
+(function(){var tip=null,ring=null;
+function scale(s,a){var v=(s.getAttribute('data-'+a)||'').split(' ').map(Number);return v.length===5&&v.every(isFinite)&&v[3]!==v[2]?v:null}
+function at(k,p){var v=k[0]+(p-k[2])*(k[1]-k[0])/(k[3]-k[2]);return k[4]?Math.pow(10,v):v}
+function shown(k,v){if(k[4]||v===0||Math.abs(v)>=1e7||Math.abs(v)<1e-6)return String(Number(v.toPrecision(4)));
+var r=Math.abs((k[1]-k[0])/(k[3]-k[2]))/2;return v.toFixed(Math.max(0,Math.min(12,-Math.floor(Math.log10(r)))))}
+function vertices(d){var out=[],re=/[ML](-?[0-9.]+) (-?[0-9.]+)/g,m;while((m=re.exec(d)))out.push([+m[1],+m[2]]);return out}
+function points(s){if(s.lmcalPoints)return s.lmcalPoints;var pts=[],kx=scale(s,'x'),ky=scale(s,'y'),named=s.hasAttribute('data-x-names');
+var xl=s.getAttribute('data-x-label')||'',yl=s.getAttribute('data-y-label')||'';
+s.querySelectorAll('g.data circle').forEach(function(c){var t=c.querySelector('title');if(!t)return;
+pts.push({x:+c.getAttribute('cx'),y:+c.getAttribute('cy'),text:t.textContent});c.removeChild(t)});
+if(kx&&ky)s.querySelectorAll('g.data path.line').forEach(function(p){var g=p.parentNode,name=g.getAttribute('data-label'),t=p.querySelector('title');
+if(t)p.removeChild(t);var band={},b=s.querySelector('path.band[data-series="'+g.getAttribute('data-series')+'"]');
+if(b)vertices(b.getAttribute('d')).forEach(function(v){(band[v[0]]=band[v[0]]||[]).push(v[1])});
+vertices(p.getAttribute('d')).forEach(function(v){var y=shown(ky,at(ky,v[1])),e=band[v[0]];
+if(e&&e.length===2)y+=' ['+shown(ky,at(ky,Math.max(e[0],e[1])))+', '+shown(ky,at(ky,Math.min(e[0],e[1])))+']';
+pts.push({x:v[0],y:v[1],text:(name?name+': ':'')+(named?'':xl+' '+shown(kx,at(kx,v[0]))+', ')+yl+' '+y})})});
+return s.lmcalPoints=pts}
+function hide(){if(tip)tip.hidden=true;if(ring&&ring.parentNode)ring.parentNode.removeChild(ring)}
+function hover(s,e){var m=s.getScreenCTM(),f=s.querySelector('rect.frame');if(!m||!f)return hide();
+var q=new DOMPoint(e.clientX,e.clientY).matrixTransform(m.inverse()),fx=+f.getAttribute('x'),fy=+f.getAttribute('y');
+var fw=+f.getAttribute('width'),fh=+f.getAttribute('height'),best=null,bd=100;
+points(s).forEach(function(p){if(p.x<fx-1||p.x>fx+fw+1||p.y<fy-1||p.y>fy+fh+1)return;
+var d=(p.x-q.x)*(p.x-q.x)+(p.y-q.y)*(p.y-q.y);if(d<bd){bd=d;best=p}});
+if(!best)return hide();
+if(!tip){tip=document.createElement('div');tip.className='lmcal-tip';tip.setAttribute('role','tooltip');document.body.appendChild(tip)}
+tip.textContent=best.text;tip.hidden=false;var x=e.clientX+14,y=e.clientY+14;
+if(x+tip.offsetWidth>innerWidth-4)x=Math.max(4,e.clientX-14-tip.offsetWidth);if(y+tip.offsetHeight>innerHeight-4)y=Math.max(4,e.clientY-14-tip.offsetHeight);
+tip.style.left=x+'px';tip.style.top=y+'px';
+if(!ring){ring=document.createElementNS('http://www.w3.org/2000/svg','circle');ring.setAttribute('class','hover-ring');ring.setAttribute('r','4.5');
+ring.setAttribute('fill','none');ring.setAttribute('stroke','#000');ring.setAttribute('stroke-width','1.5');ring.setAttribute('pointer-events','none')}
+ring.setAttribute('cx',best.x);ring.setAttribute('cy',best.y);if(ring.parentNode!==s)s.appendChild(ring)}
+document.querySelectorAll('svg.plot').forEach(function(s){s.addEventListener('mousemove',function(e){hover(s,e)});
+s.addEventListener('mouseleave',hide)})})();
 )";
 
 // The verdicts, and the published models' headline numbers under their label.
@@ -192,9 +242,9 @@ std::string report::html_document(std::string_view title, const Page& body) {
   return fmt::format(
       "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
       "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n"
-      "<title>{}</title>\n<style>{}</style>\n</head>\n<body data-plots=\"{}\">\n{}<script>{}</script>\n"
+      "<title>{}</title>\n<style>{}</style>\n</head>\n<body data-plots=\"{}\">\n{}<script>{}{}</script>\n"
       "</body>\n</html>\n",
-      escape_xml(title), kStyle, ids, body.html(), kCheck);
+      escape_xml(title), kStyle, ids, body.html(), kCheck, kHover);
 }
 
 std::string calibration_report_html(const Calibration& c) {

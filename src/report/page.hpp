@@ -88,6 +88,13 @@ inline std::string num(double v, int digits = 4) {
   return std::isfinite(v) ? fmt::format("{:.{}g}", v, digits) : "–";
 }
 
+// A percentage with `decimals` decimals ("+0.12 %" with `sign`), "–" when it is not finite (a fit
+// that failed gives none; the row's reason says why).
+inline std::string percent(double v, int decimals, bool sign = false) {
+  if (!std::isfinite(v)) return "–";
+  return sign ? fmt::format("{:+.{}f} %", v, decimals) : fmt::format("{:.{}f} %", v, decimals);
+}
+
 // A p-value to 2 significant digits; below what a double resolves, "< 1e-16" (not "0").
 inline std::string p_value(double p) { return std::isfinite(p) && p < 1e-16 ? "< 1e-16" : num(p, 2); }
 // "p = 0.032", or "p < 1e-16".
@@ -148,5 +155,29 @@ inline std::string plot_id(std::string_view text) {
 
 // Every n-th index so that at most `most` of `count` remain.
 inline std::size_t stride(std::size_t count, std::size_t most) { return std::max<std::size_t>(1, (count + most - 1) / most); }
+
+// The most points of one cloud a plot draws; a thinned cloud says how many it shows (shown_of).
+inline constexpr std::size_t kMostPoints = 600;
+
+// "(540 of 2154 shown)": a thinned series' legend label ends with it.
+inline std::string shown_of(std::size_t shown, std::size_t of) { return fmt::format("({} of {} shown)", shown, of); }
+
+// The indices of `values` a line keeps to draw every value's extent with at most 2 × `buckets`
+// vertices: each run of consecutive values, in order, by its lowest and highest (all where they
+// are few). A line through them spans what a line through all would, at the plot's resolution.
+inline std::vector<std::size_t> extremes(const std::vector<double>& values, std::size_t buckets) {
+  std::vector<std::size_t> kept;
+  const std::size_t every = stride(values.size(), std::max<std::size_t>(buckets, 1));
+  for (std::size_t begin = 0; begin < values.size(); begin += every) {
+    const std::size_t end = std::min(values.size(), begin + every);
+    const auto [low, high] = std::minmax_element(values.begin() + static_cast<std::ptrdiff_t>(begin),
+                                                 values.begin() + static_cast<std::ptrdiff_t>(end));
+    const auto first = static_cast<std::size_t>(std::min(low, high) - values.begin());
+    const auto second = static_cast<std::size_t>(std::max(low, high) - values.begin());
+    kept.push_back(first);
+    if (second != first) kept.push_back(second);
+  }
+  return kept;
+}
 
 }  // namespace lmcal::report

@@ -24,6 +24,7 @@ constexpr double kLargest = 1e300;  // beyond this a value counts as non-finite:
 constexpr double kCharPx = 6.2;     // mean glyph advance of the 11 px sans-serif text
 constexpr double kLegendRowPx = 16;
 constexpr double kLegendLinePx = 13;  // a wrapped legend label's next line
+constexpr double kLabelLinePx = 13;   // an axis label's second line
 
 // A pixel coordinate: at most 2 decimals, trailing zeros dropped, never "-0".
 std::string px(double v) {
@@ -82,6 +83,18 @@ std::vector<std::string> wrap(const std::string& text, double max_px) {
     at = end + 1;
   }
   if (!line.empty() || lines.empty()) lines.push_back(line);
+  return lines;
+}
+
+// `text` on at most `most` lines of at most `max_px` each: broken at spaces, the rest of what
+// does not fit on the last line, and a line (a word) too long cut with "…".
+std::vector<std::string> wrap_lines(const std::string& text, double max_px, std::size_t most) {
+  std::vector<std::string> lines = wrap(text, max_px);
+  if (lines.size() > most) {
+    for (std::size_t k = most; k < lines.size(); ++k) lines[most - 1] += " " + lines[k];
+    lines.resize(most);
+  }
+  for (std::string& line : lines) line = shortened(line, max_px);
   return lines;
 }
 
@@ -177,9 +190,38 @@ std::vector<Tick> log_ticks(const Axis& axis, int target) {
   return ticks;
 }
 
-std::vector<Tick> ticks_of(const Axis& axis, double length_px, double spacing_px) {
+// The axis' two ends, labelled with the digits that tell them apart: the ticks of last resort.
+std::vector<Tick> end_ticks(const Axis& axis) {
+  const double lo = axis.log ? std::pow(10.0, axis.lo) : axis.lo, hi = axis.log ? std::pow(10.0, axis.hi) : axis.hi;
+  const double step = std::abs(hi - lo) / 10;
+  return {{axis.lo, tick_label(lo, step)}, {axis.hi, tick_label(hi, step)}};
+}
+
+// Whether neighbouring x tick labels (centred under their ticks) run into each other.
+bool labels_collide(const std::vector<Tick>& ticks, const Axis& axis) {
+  for (std::size_t i = 1; i < ticks.size(); ++i)
+    if (std::abs(axis.to_px(ticks[i].at) - axis.to_px(ticks[i - 1].at)) <
+        (text_px(ticks[i].label) + text_px(ticks[i - 1].label)) / 2 + kCharPx)
+      return true;
+  return false;
+}
+
+// About one tick per `spacing_px`, and never fewer than two labelled ones: a finer step where the
+// range holds fewer (a narrow range on a short axis), the axis' ends where no step does. Along x
+// (`along_x`) a coarser step where the labels would run into each other.
+std::vector<Tick> ticks_of(const Axis& axis, double length_px, double spacing_px, bool along_x) {
+  const auto at = [&](int target) { return axis.log ? log_ticks(axis, target) : linear_ticks(axis, target); };
   const int target = std::max(2, static_cast<int>(length_px / spacing_px));
-  return axis.log ? log_ticks(axis, target) : linear_ticks(axis, target);
+  const int finest = std::max(target, static_cast<int>(length_px / (along_x ? 2 * kCharPx : 12.0)));
+  std::vector<Tick> ticks = at(target);
+  for (int finer = target + 1; ticks.size() < 2 && finer <= finest; ++finer) ticks = at(finer);
+  if (along_x)
+    for (int coarser = target - 1; coarser >= 2 && ticks.size() > 2 && labels_collide(ticks, axis); --coarser) {
+      std::vector<Tick> fewer = at(coarser);
+      if (fewer.size() >= 2) ticks = std::move(fewer);
+    }
+  if (ticks.size() < 2 || (along_x && labels_collide(ticks, axis))) return end_ticks(axis);
+  return ticks;
 }
 
 // A drawable pair on the axis scales; `starts_run` when the pair before it was not drawable.
@@ -229,9 +271,15 @@ void write_line(Out out, double x1, double y1, double x2, double y2, std::string
   fmt::format_to(out, "<line x1=\"{}\" y1=\"{}\" x2=\"{}\" y2=\"{}\"{}/>\n", px(x1), px(y1), px(x2), px(y2), extra);
 }
 
+// What tooltips call the series: its tooltip name, else its legend label.
+const std::string& name_of(const Series& series) { return series.tooltip.empty() ? series.label : series.tooltip; }
+
+// "name: " before a tooltip's values, or nothing for a series without a name.
+std::string name_prefix(const Series& series) { return name_of(series).empty() ? "" : name_of(series) + ": "; }
+
 // A point's tooltip (the browser's own, from <title>): its series, and its values with the axes' names.
 std::string tooltip(const Series& series, std::size_t i, const Plot& plot) {
-  std::string text = series.label.empty() ? "" : series.label + ": ";
+  std::string text = name_prefix(series);
   const auto named = std::find_if(plot.x_tick_labels.begin(), plot.x_tick_labels.end(),
                                   [&](const auto& tick) { return tick.first == series.x[i]; });
   text += named != plot.x_tick_labels.end() ? fmt::format("{} {}", plot.x_label, named->second)
@@ -241,15 +289,31 @@ std::string tooltip(const Series& series, std::size_t i, const Plot& plot) {
   return escape_xml(text);
 }
 
-void write_series(Out out, const Series& series, const std::vector<Sample>& samples, std::string_view color,
-                  const Axis& ax, const Axis& ay, const Plot& plot) {
-  fmt::format_to(out, "<g class=\"series\" data-label=\"{}\" fill=\"{}\" stroke=\"{}\" stroke-width=\"1.5\">\n",
-                 escape_xml(series.label), color, color);
+// A line's tooltip: its series, and the span of its values (the page's script gives a vertex's
+// own values on hover; the x span left out where the x axis names its positions).
+std::string line_tooltip(const Series& series, const std::vector<Sample>& samples, const Plot& plot) {
+  const auto span = [&](double Sample::*member, bool log) {
+    const auto [lo, hi] = std::minmax_element(samples.begin(), samples.end(),
+                                              [&](const Sample& a, const Sample& b) { return a.*member < b.*member; });
+    const auto value = [&](double scaled) { return log ? std::pow(10.0, scaled) : scaled; };
+    return fmt::format("{:.4g} to {:.4g}", value((*lo).*member), value((*hi).*member));
+  };
+  std::string text = name_prefix(series);
+  if (plot.x_tick_labels.empty()) text += fmt::format("{} {}, ", plot.x_label, span(&Sample::x, plot.log_x));
+  text += fmt::format("{} {} ({} points)", plot.y_label, span(&Sample::y, plot.log_y), samples.size());
+  return escape_xml(text);
+}
+
+void write_series(Out out, const Series& series, std::size_t index, const std::vector<Sample>& samples,
+                  std::string_view color, const Axis& ax, const Axis& ay, const Plot& plot) {
+  fmt::format_to(out, "<g class=\"series\" data-label=\"{}\" data-series=\"{}\" fill=\"{}\" stroke=\"{}\" stroke-width=\"1.5\">\n",
+                 escape_xml(name_of(series)), index, color, color);
   if (series.mark != Mark::points) {
     std::string d;
     for (const Sample& s : samples)
       fmt::format_to(std::back_inserter(d), "{}{} {}", s.starts_run ? "M" : "L", px(ax.to_px(s.x)), px(ay.to_px(s.y)));
-    fmt::format_to(out, "<path fill=\"none\"{} d=\"{}\"/>\n", series.dashed ? " stroke-dasharray=\"6 4\"" : "", d);
+    fmt::format_to(out, "<path class=\"line\" fill=\"none\"{} d=\"{}\"><title>{}</title></path>\n",
+                   series.dashed ? " stroke-dasharray=\"6 4\"" : "", d, line_tooltip(series, samples, plot));
   }
   std::string bars;
   for (const Sample& s : samples) {
@@ -309,6 +373,36 @@ std::string clip_id(std::string_view id) {
   std::string out = "lmcal-clip-";
   for (const char c : id) out += std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' ? c : '_';
   return out;
+}
+
+// Whether every line is at most `max_px` wide.
+bool all_fit(const std::vector<std::string>& lines, double max_px) {
+  return std::all_of(lines.begin(), lines.end(), [&](const std::string& line) { return text_px(line) <= max_px; });
+}
+
+// The title's lines: 13 px bold on up to two lines, else 11 px on up to three, the last cut with
+// "…" where even they do not hold it (the whole title stays in the <title> and aria-label).
+struct TitleLayout {
+  std::vector<std::string> lines;
+  double size_px = 13, line_px = 16;
+  double baseline(std::size_t k) const { return 6 + size_px + line_px * static_cast<double>(k); }
+  // The frame's top: under the last line.
+  double bottom() const { return lines.empty() ? 12 : baseline(lines.size() - 1) + 11; }
+};
+
+TitleLayout title_layout(const std::string& title, double width) {
+  if (title.empty()) return {};
+  // Bold glyphs of s px are about s/11 · 1.1 as wide as the 11 px ones kCharPx measures.
+  const auto room = [&](double size) { return (width - 12) / (size / 11.0 * 1.1); };
+  if (std::vector<std::string> lines = wrap(title, room(13)); lines.size() <= 2 && all_fit(lines, room(13)))
+    return {std::move(lines), 13, 16};
+  return {wrap_lines(title, room(11), 3), 11, 14};
+}
+
+// An axis scale for the page's script, which reads a hovered line's values back from its
+// pixels: "lo hi px_lo px_hi log" (lo and hi on the axis scale, log10 on a log axis).
+std::string scale_attribute(const Axis& axis) {
+  return fmt::format("{:.10g} {:.10g} {} {} {}", axis.lo, axis.hi, px(axis.px_lo), px(axis.px_hi), axis.log ? 1 : 0);
 }
 
 }  // namespace
@@ -394,9 +488,18 @@ std::string render_svg(const Plot& plot) {
       legend_text_px = std::max(legend_text_px, text_px(plot.series[i].label));
     }
 
-  // Layout: y ticks first (their labels set the left margin), x ticks once the width is known.
-  const double top = plot.title.empty() ? 12 : 30;
-  double bottom = height - (plot.x_label.empty() ? 26 : 42);
+  // Layout: the title and the axis labels (on up to two lines each; their widths in a browser's
+  // font +15 %), y ticks (their labels set the left margin), x ticks once the width is known.
+  const TitleLayout heading = title_layout(plot.title, width);
+  const std::vector<std::string> x_label = plot.x_label.empty() ? std::vector<std::string>{}
+                                                                : wrap_lines(plot.x_label, (width - 8) / 1.15, 2);
+  const std::vector<std::string> y_label = plot.y_label.empty() ? std::vector<std::string>{}
+                                                                : wrap_lines(plot.y_label, (height - 8) / 1.15, 2);
+  const auto label_lines_px = [](const std::vector<std::string>& lines) {
+    return lines.empty() ? 0.0 : kLabelLinePx * static_cast<double>(lines.size() - 1);
+  };
+  const double top = heading.bottom();
+  double bottom = height - (x_label.empty() ? 26 : 42 + label_lines_px(x_label));
   Axis ax{plot.log_x}, ay{plot.log_y};
   ay.px_hi = top;
   std::vector<Tick> x_ticks, y_ticks;
@@ -409,15 +512,24 @@ std::string render_svg(const Plot& plot) {
   const auto place = [&] {  // the frame for this bottom: y ticks set the left margin
     ay.px_lo = bottom;
     double y_tick_px = 0;
-    if (has_data) y_ticks = ticks_of(ay, bottom - top, 45);
+    if (has_data) y_ticks = ticks_of(ay, bottom - top, 45, false);
     for (const Tick& t : y_ticks) y_tick_px = std::max(y_tick_px, text_px(t.label));
-    left = (plot.y_label.empty() ? 10 : 26) + std::max(y_tick_px, 3 * kCharPx) + 8;
+    left = (y_label.empty() ? 10 : 26 + label_lines_px(y_label)) + std::max(y_tick_px, 3 * kCharPx) + 8;
     right = width - 14 - legend_px;
     ax.px_lo = left;
     ax.px_hi = right;
   };
   place();
-  if (has_data) x_ticks = ticks_of(ax, right - left, 75);
+  if (has_data) {
+    x_ticks = ticks_of(ax, right - left, 75, true);
+    // A last label wider than the margin beside it: the frame narrows to hold it.
+    if (!x_ticks.empty())
+      if (const double over = ax.to_px(x_ticks.back().at) + text_px(x_ticks.back().label) / 2 - (width - 2); over > 0) {
+        right -= over;
+        ax.px_hi = right;
+        x_ticks = ticks_of(ax, right - left, 75, true);
+      }
+  }
   // Named positions (runs, units): side by side where they fit, else turned upright (the frame
   // rises by the longest, at most 0.3 of the height: longer names are cut, "…"), else (too many
   // to stand side by side even upright) the numbers stand.
@@ -451,12 +563,17 @@ std::string render_svg(const Plot& plot) {
   // The names the x axis should show, for a check in the browser that it does ("|"-separated).
   std::string names;
   for (const auto& [at, label] : plot.x_tick_labels) names += (names.empty() ? "" : "|") + label;
+  // The axes' scales and names, for the page's script that gives a hovered line's values.
+  const std::string scales = has_data ? fmt::format(" data-x=\"{}\" data-y=\"{}\" data-x-label=\"{}\" data-y-label=\"{}\"",
+                                                    scale_attribute(ax), scale_attribute(ay), escape_xml(plot.x_label),
+                                                    escape_xml(plot.y_label))
+                                      : "";
   fmt::format_to(out,
                  "<svg xmlns=\"http://www.w3.org/2000/svg\" class=\"plot\" data-plot=\"{}\" viewBox=\"0 0 {} {}\" "
                  "width=\"{}\" height=\"{}\" role=\"img\" aria-label=\"{}\" font-family=\"sans-serif\" "
-                 "font-size=\"11\"{}>\n<title>{}</title>\n",
+                 "font-size=\"11\"{}{}>\n<title>{}</title>\n",
                  id, width, height, width, height, title,
-                 names.empty() ? "" : fmt::format(" data-x-names=\"{}\"", escape_xml(names)), title);
+                 names.empty() ? "" : fmt::format(" data-x-names=\"{}\"", escape_xml(names)), scales, title);
   fmt::format_to(out, "<rect class=\"background\" width=\"{}\" height=\"{}\" fill=\"#fff\"/>\n", width, height);
   const std::string frame = fmt::format("x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\"", px(left), px(top),
                                         px(right - left), px(bottom - top));
@@ -476,8 +593,9 @@ std::string render_svg(const Plot& plot) {
       if (upright)  // reads upwards, ending under its tick
         write_text(out, x + 4, bottom + 8, "end", t.label,
                    fmt::format(" class=\"x-tick\" transform=\"rotate(-90 {} {})\"", px(x + 4), px(bottom + 8)));
-      else
-        write_text(out, x, bottom + 15, "middle", t.label, " class=\"x-tick\"");
+      else  // under its tick, moved in where it would run past the plot's ends
+        write_text(out, std::clamp(x, std::min(text_px(t.label) / 2 + 2, width / 2), std::max(width - text_px(t.label) / 2 - 2, width / 2)),
+                   bottom + 15, "middle", t.label, " class=\"x-tick\"");
     }
     for (const Tick& t : y_ticks) write_text(out, left - 6, ay.to_px(t.at) + 4, "end", t.label);
     fmt::format_to(out, "</g>\n");
@@ -491,12 +609,16 @@ std::string render_svg(const Plot& plot) {
       if (!at || !axis.contains(*at)) continue;
       const double p = axis.to_px(*at);
       constexpr std::string_view style = " class=\"reference\" stroke=\"#555\" stroke-width=\"1\" stroke-dasharray=\"4 3\"";
+      // A label reads along its line inside the frame: cut to the frame's width, and left of a
+      // vertical line where it would run past the plot's right edge.
+      const std::string label = shortened(ref.label, right - left - 8);
       if (ref.horizontal) {
         write_line(out, left, p, right, p, style);
-        if (!ref.label.empty()) write_text(std::back_inserter(labels), right - 4, p - 4, "end", ref.label);
+        if (!label.empty()) write_text(std::back_inserter(labels), right - 4, p - 4, "end", label);
       } else {
         write_line(out, p, top, p, bottom, style);
-        if (!ref.label.empty()) write_text(std::back_inserter(labels), p + 4, top + 12, "start", ref.label);
+        const bool before = p + 4 + 1.15 * text_px(label) > width - 2;
+        if (!label.empty()) write_text(std::back_inserter(labels), before ? p - 4 : p + 4, top + 12, before ? "end" : "start", label);
       }
     }
     // Every band under every series' marks.
@@ -504,12 +626,12 @@ std::string render_svg(const Plot& plot) {
       const std::string d = band_path(samples[i], ax, ay);
       if (d.empty()) continue;
       banded[i] = true;
-      fmt::format_to(out, "<path class=\"band\" data-label=\"{}\" fill=\"{}\" fill-opacity=\"0.2\" stroke=\"none\" d=\"{}\"/>\n",
-                     escape_xml(plot.series[i].label), color_of(plot, i), d);
+      fmt::format_to(out, "<path class=\"band\" data-label=\"{}\" data-series=\"{}\" fill=\"{}\" fill-opacity=\"0.2\" stroke=\"none\" d=\"{}\"/>\n",
+                     escape_xml(plot.series[i].label), i, color_of(plot, i), d);
     }
     for (std::size_t i = 0; i < plot.series.size(); ++i) {
       if (samples[i].empty()) continue;
-      write_series(out, plot.series[i], samples[i], color_of(plot, i), ax, ay, plot);
+      write_series(out, plot.series[i], i, samples[i], color_of(plot, i), ax, ay, plot);
     }
     fmt::format_to(out, "</g>\n");
     if (!labels.empty()) fmt::format_to(out, "<g class=\"reference-labels\" fill=\"#555\">\n{}</g>\n", labels);
@@ -518,31 +640,40 @@ std::string render_svg(const Plot& plot) {
   }
 
   fmt::format_to(out, "<rect class=\"frame\" {} fill=\"none\" stroke=\"#333\" stroke-width=\"1\"/>\n", frame);
-  if (!plot.title.empty()) {
-    // A title wider than the plot is set smaller (down to 8 px) rather than clipped at both ends;
-    // bold 13 px glyphs are about 13/11 · 1.1 of the 11 px ones.
-    const double wide = text_px(plot.title) * 13.0 / 11.0 * 1.1;
-    const double size = std::clamp(13.0 * (width - 12) / std::max(wide, 1.0), 8.0, 13.0);
-    write_text(out, width / 2, 19, "middle", plot.title,
-               fmt::format(" font-size=\"{}\" font-weight=\"bold\"{}", px(size),
-                           wide * size / 13.0 > width - 12 ? " textLength=\"" + px(width - 12) + "\" lengthAdjust=\"spacingAndGlyphs\"" : ""));
+  for (std::size_t k = 0; k < heading.lines.size(); ++k)
+    write_text(out, width / 2, heading.baseline(k), "middle", heading.lines[k],
+               fmt::format(" class=\"title\" font-size=\"{}\" font-weight=\"bold\"", px(heading.size_px)));
+  if (!x_label.empty()) {
+    // Under the frame's middle, moved in where it would run past the plot's ends.
+    double half = 0;
+    for (const std::string& line : x_label) half = std::max(half, 0.575 * text_px(line));
+    const double x = std::clamp((left + right) / 2, std::min(half + 2, width / 2), std::max(width - half - 2, width / 2));
+    for (std::size_t k = 0; k < x_label.size(); ++k)
+      write_text(out, x, height - 8 - kLabelLinePx * static_cast<double>(x_label.size() - 1 - k), "middle", x_label[k],
+                 " class=\"x-label\"");
   }
-  if (!plot.x_label.empty()) write_text(out, (left + right) / 2, height - 8, "middle", plot.x_label);
-  if (!plot.y_label.empty()) {
-    // Beside the frame's middle, but inside the plot where it is longer than the frame (its
-    // width in a browser's font: +15 %).
-    const double half = 0.575 * text_px(plot.y_label);
-    const double x = 14, y = half * 2 + 4 < height ? std::clamp((top + bottom) / 2, half + 2, height - half - 2) : height / 2;
-    write_text(out, x, y, "middle", plot.y_label, fmt::format(" transform=\"rotate(-90 {} {})\"", px(x), px(y)));
+  for (std::size_t k = 0; k < y_label.size(); ++k) {
+    // Beside the frame's middle, but inside the plot where it is longer than the frame.
+    const double half = 0.575 * text_px(y_label[k]);
+    const double x = 14 + kLabelLinePx * static_cast<double>(k);
+    const double y = std::clamp((top + bottom) / 2, std::min(half + 2, height / 2), std::max(height - half - 2, height / 2));
+    write_text(out, x, y, "middle", y_label[k],
+               fmt::format(" class=\"y-label\" transform=\"rotate(-90 {} {})\"", px(x), px(y)));
   }
 
   if (!legend.empty()) {
     fmt::format_to(out, "<g class=\"legend\">\n");
     double y = top + 8;  // of the next entry; a long label wraps onto lines of its own
+    const double x = right + 10;
     for (std::size_t row = 0; row < legend.size(); ++row) {
       const Series& series = plot.series[legend[row]];
       const std::string color = color_of(plot, legend[row]);
-      const double x = right + 10;
+      const std::vector<std::string> lines = wrap_lines(series.label, 0.9 * (width - x - 26 - 4), 4);
+      if (y + 4 + kLegendLinePx * static_cast<double>(lines.size() - 1) > height - 4) {  // no room below: said so
+        write_text(out, x, std::min(y, height - 4) + 4 - kLegendRowPx / 2, "start",
+                   shortened(fmt::format("… and {} more", legend.size() - row), width - x - 4));
+        break;
+      }
       if (banded[legend[row]])
         fmt::format_to(out, "<rect x=\"{}\" y=\"{}\" width=\"20\" height=\"10\" fill=\"{}\" fill-opacity=\"0.2\"/>\n", px(x),
                        px(y - 5), color);
@@ -553,7 +684,6 @@ std::string render_svg(const Plot& plot) {
       if (series.mark != Mark::line)
         fmt::format_to(out, "<circle cx=\"{}\" cy=\"{}\" r=\"2.2\" fill=\"{}\" stroke=\"{}\" stroke-width=\"1.5\"/>\n",
                        px(x + 10), px(y), color, color);
-      const std::vector<std::string> lines = wrap(series.label, 0.9 * (width - x - 26 - 4));
       for (std::size_t k = 0; k < lines.size(); ++k) write_text(out, x + 26, y + 4 + kLegendLinePx * static_cast<double>(k), "start", lines[k]);
       y += kLegendRowPx + kLegendLinePx * static_cast<double>(lines.size() - 1);
     }

@@ -20,9 +20,10 @@ Plot time_plot(const Calibration& c, std::size_t r) {
             .y_label = "temperature (°C)"};
   const auto& sensors = f.sensor_names[r];
   for (std::size_t s = 0; s < sensors.size(); ++s) {
-    // One legend entry per sensor, in its colour: its points measured, its line the model.
-    Series measured{.label = sensors[s] + " (points; line: model)", .mark = Mark::points, .color = colour(s)};
-    Series simulated{.color = colour(s)};
+    // One legend entry per sensor, in its colour: its points measured (evenly in time, how many
+    // of how many said), its line the model.
+    Series measured{.tooltip = sensors[s] + " measured", .mark = Mark::points, .color = colour(s)};
+    Series simulated{.tooltip = sensors[s] + " model", .color = colour(s)};
     std::vector<const ThermalFitResult::Sample*> mine;
     for (const auto& sample : f.samples)
       if (sample.run == r && sample.sensor == s) mine.push_back(&sample);
@@ -37,6 +38,8 @@ Plot time_plot(const Calibration& c, std::size_t r) {
       measured.x.push_back(mine[k]->time_s / kHour_s);
       measured.y.push_back(mine[k]->measured_C);
     }
+    measured.label = fmt::format("{} (points{}; line: model)", sensors[s],
+                                 measured.x.size() < mine.size() ? fmt::format(", {} of {} shown", measured.x.size(), mine.size()) : "");
     plot.series.push_back(std::move(measured));
     plot.series.push_back(std::move(simulated));
   }
@@ -45,7 +48,7 @@ Plot time_plot(const Calibration& c, std::size_t r) {
   const CalibratedModel& m = c.calibrated;
   if (m.thermal && !m.thermal_causes.empty()) {
     for (std::size_t s = 0; s < sensors.size(); ++s) {
-      Series calibrated{.color = colour(s), .dashed = true};
+      Series calibrated{.tooltip = sensors[s] + " calibrated model", .color = colour(s), .dashed = true};
       std::vector<const ThermalFitResult::Sample*> mine;
       for (const auto& sample : m.thermal->samples)
         if (sample.run == r && sample.sensor == s) mine.push_back(&sample);
@@ -104,23 +107,36 @@ Plot position_plot(const Calibration& c, std::size_t r) {
   return plot;
 }
 
-// Residuals over time, one line per run and sensor (thinned), from one fit.
+// Residuals over time, one line per run and sensor, from one fit: every record's extent (each
+// run of records by its lowest and highest), said in the legend when records were merged so.
 Plot residual_time_plot(const std::string& id, const std::string& title, const ThermalFitResult& f,
                         const std::vector<ThermalRun>& runs, std::optional<std::pair<double, double>> y_limits = {}) {
   Plot plot{.id = id, .title = title, .x_label = "time (h)", .y_label = "measured - model (K)"};
   plot.references.push_back({});
+  std::size_t most_records = 0, merged = 1;
   for (std::size_t r = 0; r < runs.size(); ++r)
     for (std::size_t s = 0; s < f.sensor_names[r].size(); ++s) {
-      Series line{.label = s == 0 ? runs[r].id : "", .color = colour(r)};
+      Series line{.label = s == 0 ? runs[r].id : "", .tooltip = runs[r].id + " " + f.sensor_names[r][s], .color = colour(r)};
       std::vector<const ThermalFitResult::Sample*> mine;
+      std::vector<double> residual;
       for (const auto& sample : f.samples)
-        if (sample.run == r && sample.sensor == s) mine.push_back(&sample);
-      for (std::size_t k = 0; k < mine.size(); k += stride(mine.size(), 2 * kPointsPerSeries)) {
+        if (sample.run == r && sample.sensor == s) {
+          mine.push_back(&sample);
+          residual.push_back(sample.measured_C - sample.simulated_C);
+        }
+      for (const std::size_t k : extremes(residual, kPointsPerSeries)) {
         line.x.push_back(mine[k]->time_s / kHour_s);
-        line.y.push_back(mine[k]->measured_C - mine[k]->simulated_C);
+        line.y.push_back(residual[k]);
       }
+      most_records = std::max(most_records, mine.size());
+      merged = std::max(merged, stride(mine.size(), kPointsPerSeries));
       plot.series.push_back(std::move(line));
     }
+  if (merged > 1)
+    plot.series.push_back({.label = fmt::format("lines: each {} records' lowest and highest ({} per sensor)",
+                                                merged, most_records),
+                           .color = "#444444",
+                           .legend_only = true});
   if (y_limits) plot.y_min = y_limits->first, plot.y_max = y_limits->second;
   return plot;
 }
@@ -195,9 +211,9 @@ void diagnosis_section(Page& page, const Calibration& c) {
   const ThermalDiagnosis& d = *c.thermal_diagnosis;
   page.heading(3, "What the published rail model gets wrong");
   verdict_paragraph(page, d.verdict, d.summary);
-  page.paragraph(fmt::format("Held-out (leave-one-run-out) RMSE: {} K before, {} K after: a gain of {:.1f} %; the "
+  page.paragraph(fmt::format("Held-out (leave-one-run-out) RMSE: {} K before, {} K after: a gain of {}; the "
                              "thermocouples' noise is {} K.",
-                             num(d.cv_rmse_before_K), num(d.cv_rmse_after_K), d.cv_gain_percent, num(d.noise_K, 3)));
+                             num(d.cv_rmse_before_K), num(d.cv_rmse_after_K), percent(d.cv_gain_percent, 1), num(d.noise_K, 3)));
   candidate_tables(page, d.rounds, "K");
   steps_table(page, d.steps, d.cv_rmse_before_K, "K");
   for (const auto& skipped : d.skipped) page.paragraph("Not tried: " + skipped);

@@ -17,7 +17,15 @@
 // line: {.label = "term (95 % band)", .x = x, .y = mean, .band_low = low, .band_high = high}.
 //
 // Every point carries its values as a tooltip (an SVG <title>: the browser shows it on hover,
-// no script): "label: x_label x, y_label y ± error", a named x position by its name.
+// no script): "name: x_label x, y_label y ± error", a named x position by its name; every line
+// the span of its values. The <svg> carries its axes' scales (data-x, data-y: "lo hi px_lo px_hi
+// log") and names, so that a page's script can give a hovered line's values at each vertex (the
+// HTML report's does; report::html_document).
+//
+// Text is never lost: a title too wide for the plot wraps (13 px on two lines, else 11 px on
+// three, cut with "…" only beyond that; the whole title stays in the <title>), axis labels wrap
+// onto a second line, every numeric axis has at least two labelled ticks (a finer step on a
+// short axis or a narrow range, else its two ends) and x tick labels do not run into each other.
 //
 // A series marked legend_only is a legend entry and nothing else: a line style or colour
 // explained once for curves drawn in their points' colours.
@@ -49,6 +57,9 @@ enum class Mark { line, points, line_points };
 
 struct Series {
   std::string label;           // legend text; empty: not in the legend
+  // What tooltips call the series ("tc1 measured"); empty: its label. A legend label that says
+  // how many points are shown need not repeat in every point's tooltip.
+  std::string tooltip;
   std::vector<double> x, y;    // paired by index (the shorter length counts)
   std::vector<double> y_error; // empty, or per point: symmetric error bar y ± e (e ≥ 0)
   Mark mark = Mark::line;
