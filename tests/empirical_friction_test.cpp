@@ -9,6 +9,8 @@
 #include <functional>
 #include <string>
 
+#include <nlohmann/json.hpp>
+
 #include "lmcal/diagnose/friction_diagnosis.hpp"
 #include "lmcal/rig/virtual_rig.hpp"
 
@@ -228,6 +230,32 @@ TEST(EmpiricalFriction, LearnsTheViscousTermAloneScaledByLoad) {
   }
 }
 
+// Runs that differ by a factor nothing logged follows: no term predicts it (a new run's factor is
+// unknown), the run-scale test finds it and its spread, and says so.
+TEST(EmpiricalFriction, RunsThatDifferByAFactorAreFoundBeyondTheirZeros) {
+  for (std::uint64_t seed : {1u, 2u, 3u}) {
+    RigEffects e;
+    e.hidden.run_scale_sigma = 0.05;
+    const FrictionRigOutput rig = generate_friction_log(small_rig(seed), e);
+    // The spread of the factors the rig drew (their sample SD, in %).
+    const nlohmann::json truth = nlohmann::json::parse(rig.truth_json);
+    double sum = 0, ss = 0, runs = 0;
+    for (const auto& run : truth["runs"]) {
+      const double u = 100 * (run["friction_scale"].get<double>() - 1);
+      sum += u, ss += u * u, ++runs;
+    }
+    const double drawn_sd = std::sqrt((ss - sum * sum / runs) / (runs - 1));
+    const FrictionDiagnosis d = diagnose_friction(rig.log, {});
+    const RunScaleTest& t = d.run_scale;
+    std::printf("runs x (1 + 0.05 z), drawn SD %.2f %%: %s\n", drawn_sd, t.reason.c_str());
+    ASSERT_TRUE(t.tested) << t.reason;
+    EXPECT_TRUE(t.differ) << t.reason;
+    EXPECT_NEAR(t.tau_percent, drawn_sd, 0.3 * drawn_sd) << t.reason << "\n" << d.summary;
+    EXPECT_NE(d.summary.find("differs by a factor from run to run"), std::string::npos) << d.summary;
+    EXPECT_FALSE(d.empirical.found) << "no term predicts a new run's factor: " << d.empirical.formula;
+  }
+}
+
 TEST(FrictionTerms, CubicBSplinesAreNonNegativeAndSumToOne) {
   const std::vector<double> knots{0, 0, 0, 0, 0.3, 0.7, 1, 1, 1, 1};
   for (double x : {0.0, 0.1, 0.3, 0.5, 0.99, 1.0}) {
@@ -244,9 +272,9 @@ TEST(FrictionTerms, CubicBSplinesAreNonNegativeAndSumToOne) {
 }
 
 // Clean data — the law, noise with memory, zero offsets, one setup per run or all setups in
-// every run — must not grow a term: at most one in twenty.
+// every run — must not grow a term nor find runs that differ by a factor: at most one in twenty.
 TEST(EmpiricalFriction, CleanDataGrowsNoTerm) {
-  int grown = 0;
+  int grown = 0, scaled = 0;  // terms grown, and runs found to differ by a factor
   std::string which;
   for (std::uint64_t seed = 1; seed <= 20; ++seed) {
     FrictionRigConfig config = small_rig(100 + seed);
@@ -260,9 +288,14 @@ TEST(EmpiricalFriction, CleanDataGrowsNoTerm) {
       ++grown;
       which += " seed " + std::to_string(seed) + ": " + d.empirical.formula;
     }
+    if (d.run_scale.differ) {
+      ++scaled;
+      which += " seed " + std::to_string(seed) + ": " + d.run_scale.reason;
+    }
     EXPECT_EQ(d.verdict.find("empirical"), std::string::npos) << d.summary;
   }
   EXPECT_LE(grown, 1) << which;
+  EXPECT_LE(scaled, 1) << which;
 }
 
 // What the library has is named as itself, and no term is learned beside it.

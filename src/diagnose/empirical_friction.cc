@@ -553,7 +553,13 @@ SmoothChoice smooth_term(const FrictionLog& log, const TermSeries& series, const
       if (distinct.empty() || v > distinct.back() + 1e-9 * std::max(1.0, std::abs(v))) distinct.push_back(v);
     if (distinct.size() < 4) return;
     const std::vector<double> multiplier = times ? columns.factor(*times, 0) : std::vector<double>(log.size(), 1.0);
-    const std::size_t most = cubic_only ? 0 : std::min<std::size_t>(4, distinct.size() - 4);
+    // A campaign covariate is almost one value per run: a spline with a knot every few runs
+    // would follow each run's own level and shape (a factor of its own, which no new run shares),
+    // so it gets a knot per six runs at most, and none under twelve runs.
+    const std::size_t runs = series.run_rows.size();
+    if (is_campaign_covariate(c) && runs < 12) return;
+    const std::size_t knots_allowed = is_campaign_covariate(c) ? runs / 6 : 4;
+    const std::size_t most = cubic_only ? 0 : std::min<std::size_t>({4, knots_allowed, distinct.size() - 4});
     for (std::size_t interior = cubic_only ? 0 : 1; interior <= most; ++interior) {
       std::vector<double> knots(4, sorted.front());
       for (std::size_t k = 1; k <= interior; ++k) {

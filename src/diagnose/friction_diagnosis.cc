@@ -21,6 +21,7 @@
 #include "fit/friction_condition.hpp"
 #include "cause_starts.hpp"
 #include "empirical_friction.hpp"
+#include "run_scale.hpp"
 #include "selection.hpp"
 
 namespace lmcal {
@@ -747,6 +748,19 @@ FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagno
 
   detail::conclude(d, "The published law", "N", d.cv_rmse_before_N, current.cv_rmse_N, d.baseline.rmse_N);
   for (const auto& why : d.dropped) d.summary += " Dropped: " + why + ".";
+  {
+    const FrictionFitResult& last = d.empirical.found ? d.empirical_fit : current;
+    std::vector<double> residual_N(n), model_N(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      model_N[i] = last.predicted_N[i] - last.run_offset_N[log.run[i]];
+      residual_N[i] = log.friction_N[i] - model_N[i];
+    }
+    d.run_scale = detail::test_run_scale(log, residual_N, model_N, o.lrt_p);
+    if (d.run_scale.differ)
+      d.summary += fmt::format(" The runs' friction also differs by a factor from run to run beyond their zeros: about "
+                               "{:.2g} % ({}); nothing logged predicts it, so a new run's level is uncertain by that share.",
+                               d.run_scale.tau_percent, d.run_scale.reason);
+  }
   d.design_notes = design_notes(log, baseline, d.baseline.lack_of_fit, d.final, o);
   if (!not_tried.empty())
     d.design_notes.push_back(fmt::format("not tried, their precondition absent: {}", fmt::join(not_tried, "; ")));
@@ -807,6 +821,19 @@ std::string friction_diagnosis_json(const FrictionDiagnosis& d) {
   j["baseline_residuals"] = diagnostics(d.baseline);
   j["final_residuals"] = diagnostics(d.final);
   j["dropped_for_the_empirical_term"] = d.dropped;
+  {
+    const RunScaleTest& t = d.run_scale;
+    nlohmann::json runs = nlohmann::json::array();
+    for (std::size_t r = 0; r < t.run.size(); ++r)
+      runs.push_back({{"run", t.run[r]}, {"factor_percent", number(t.factor_percent[r])}, {"se_percent", number(t.se_percent[r])}});
+    j["run_scale"] = {{"tested", t.tested}, {"differ", t.differ},     {"q", number(t.q)},
+                      {"dof", number(t.dof)}, {"p", number(t.p)},     {"tau_percent", number(t.tau_percent)}, {"floor_percent", number(t.floor_percent)},
+                      {"runs", runs},         {"reason", t.reason},
+                      {"method", "within each run, the final model's residual (its zero left in) on its force with an "
+                                 "intercept; Cochran's Q over the runs' factors, SEs widened for lag-1 autocorrelation; "
+                                 "tau by DerSimonian-Laird; the runs differ when p < the LRT level and tau exceeds the "
+                                 "runs' zeros' spread as a share of the mean force"}};
+  }
   return j.dump(2) +
          "\n";
 }

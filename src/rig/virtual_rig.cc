@@ -76,6 +76,8 @@ const std::vector<EffectEntry>& effect_table() {
         {"run_decay", "1", 0.0, "not in the library: F (1 + a exp(-k/l)), k the run's place in the order made",
          &H::run_decay, false},
         {"run_decay_scale", "runs", H{}.run_decay_scale, "the run decay's scale l", &H::run_decay_scale, false},
+        {"run_scale_sigma", "1", 0.0, "not in the library: each run's friction x (1 + s z), z ~ N(0, 1) per run",
+         &H::run_scale_sigma, false},
         {"viscous_load_curvature", "1", 0.0,
          "not in the library: the viscous part (not the seal's) times 1 + a (P/1 kN - 2)^2", &H::viscous_load_curvature,
          false}};
@@ -224,6 +226,13 @@ FrictionRigOutput generate_friction_log(const FrictionRigConfig& config, const R
     for (std::size_t r = run_first.size(); r > 1; --r)
       std::swap(run_first[r - 1], run_first[static_cast<std::size_t>(order.uniform() * static_cast<double>(r))]);
   }
+  // Each run's hidden scale, from a stream of its own (the runs' streams stay as they were).
+  std::vector<double> run_scale(run_first.size(), 1.0);
+  if (effects.hidden.run_scale_sigma != 0) {
+    Rng scales(derive_seed(config.seed ^ rig::kLaterStreamKey, 2));
+    for (double& scale : run_scale)
+      scale = rig::positive_factor("run_scale_sigma", effects.hidden.run_scale_sigma, scales.normal(), "a run's friction");
+  }
   double distance_m = 0;  // slid since the log's start (the hidden running-in)
   double clock_s = 0;     // the rig's clock since the log's start (the hidden temperature drift)
   for (int r = 0; r < run_count; ++r) {
@@ -232,6 +241,7 @@ FrictionRigOutput generate_friction_log(const FrictionRigConfig& config, const R
     Ar1Noise load_cell(config.noise_N, config.noise_ar1);
     const std::string run_name = fmt::format("run{:02d}", r + 1);
     runs.push_back({{"run", run_name}, {"zero_offset_N", offset_N}});
+    if (effects.hidden.run_scale_sigma != 0) runs.back()["friction_scale"] = run_scale[static_cast<std::size_t>(r)];
     const std::uint32_t run_index = index_of(log.run_names, run_name);
     double time_s = 0;
     // The lubricant's temperature (hidden lag): its state at the last logged sample, and the
@@ -263,6 +273,7 @@ FrictionRigOutput generate_friction_log(const FrictionRigConfig& config, const R
           double F = friction_force_with_effects_N(config.constants, effects.friction, at_lubricant);
           if (hidden.running_in != 0) F *= 1 + hidden.running_in * std::exp(-distance_m / hidden.running_in_scale_m);
           if (hidden.run_decay != 0) F *= 1 + hidden.run_decay * std::exp(-r / hidden.run_decay_scale);
+          F *= run_scale[static_cast<std::size_t>(r)];
           if (hidden.viscous_load_curvature != 0) {
             const auto b = friction_breakdown(config.constants, at_lubricant);
             const double viscous_N = b.viscous_N - config.constants.f0 * c.block_length_mm;

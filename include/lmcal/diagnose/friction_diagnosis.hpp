@@ -24,6 +24,7 @@
 
 #include "lmcal/export.hpp"
 
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -81,6 +82,21 @@ struct FrictionDiagnosisOptions {
   Progress progress;  // the candidate fits, round by round
 };
 
+// Whether the runs' friction differs by a factor beyond their zeros, on the final model
+// (src/diagnose/run_scale.hpp says how): what a new run's level cannot be predicted better than.
+struct RunScaleTest {
+  bool tested = false;
+  bool differ = false;  // Cochran's Q significant at the selection's LRT level
+  std::size_t runs = 0;
+  double q = std::numeric_limits<double>::quiet_NaN(), dof = std::numeric_limits<double>::quiet_NaN();
+  double p = std::numeric_limits<double>::quiet_NaN();
+  double tau_percent = std::numeric_limits<double>::quiet_NaN();  // spread of the factors beyond their SEs, % of the friction
+  double floor_percent = 0;  // the runs' zeros' spread as a share of the mean force: τ must exceed it
+  std::vector<std::string> run;                                  // per run tested
+  std::vector<double> factor_percent, se_percent;                // its factor − 1 and SE, %
+  std::string reason;
+};
+
 struct FrictionDiagnosis {
   std::string verdict;          // "no significant discrepancy", "explained", "unexplained"
   std::string summary;          // the verdict in plain words
@@ -106,6 +122,8 @@ struct FrictionDiagnosis {
   // fit of the law with the causes and that term (empty unless found).
   EmpiricalFinding empirical;
   FrictionFitResult empirical_fit;
+  // On the final model (with the term when found): do the runs differ by a factor?
+  RunScaleTest run_scale;
 };
 
 FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagnosisOptions& options);

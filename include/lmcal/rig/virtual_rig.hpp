@@ -87,6 +87,9 @@ struct HiddenFrictionEffects {
   // the order the runs were made (FrictionRigConfig::shuffle_runs makes it differ from the design's).
   double run_decay = 0;              // a
   double run_decay_scale = 20;       // ℓ, runs
+  // Each run's friction × (1 + s·z_run), z_run ~ N(0, 1) from a stream of its own: runs that
+  // differ by a factor nothing logged follows.
+  double run_scale_sigma = 0;        // s
   // The viscous part alone (Lb μv pc V ν, not the seal's Lb f0) × (1 + a (P/1 kN − 2)²).
   double viscous_load_curvature = 0; // a
 };
