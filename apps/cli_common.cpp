@@ -276,6 +276,33 @@ const std::vector<std::string>* completion_values(const CLI::Option* option) {
   return it == value_registry().end() ? nullptr : &it->second;
 }
 
+namespace {
+std::map<const CLI::Option*, std::vector<std::string>>& alias_registry() {
+  static std::map<const CLI::Option*, std::vector<std::string>> aliases;
+  return aliases;
+}
+}  // namespace
+
+CLI::Option* hidden_alias(CLI::Option* option, const std::string& name) {
+  alias_registry()[option].push_back(name);
+  return option;
+}
+
+std::vector<std::string> shown_long_names(const CLI::Option* option) {
+  std::vector<std::string> names = option->get_lnames();
+  if (const auto it = alias_registry().find(option); it != alias_registry().end())
+    std::erase_if(names, [&](const std::string& n) { return std::find(it->second.begin(), it->second.end(), n) != it->second.end(); });
+  return names;
+}
+
+std::string HelpFormatter::make_option_name(const CLI::Option* option, bool is_positional) const {
+  if (is_positional || !alias_registry().contains(option)) return CLI::Formatter::make_option_name(option, is_positional);
+  std::vector<std::string> names;
+  for (const auto& n : option->get_snames()) names.push_back("-" + n);
+  for (const auto& n : shown_long_names(option)) names.push_back("--" + n);
+  return fmt::format("{}", fmt::join(names, ","));
+}
+
 void FrictionInputOptions::add_drive_options(CLI::App& app) {
   auto* group = app.add_option_group("Rotary drive", "How a log's motor speed (velocity_rpm, velocity_rad_s) and torque "
                                                      "(torque_Nm, torque_percent) become the carriage's (docs/formats.md)");

@@ -197,6 +197,20 @@ void add_uncertainty_options(CLI::App& app, FitOptions& fit);
 CLI::Option* completes(CLI::Option* option, std::vector<std::string> values);
 const std::vector<std::string>* completion_values(const CLI::Option* option);
 
+// An old spelling an option still reads without showing it (`lmcal predict --time-step`, now
+// --dt as every command names the time step): `name` (no dashes) is one of the option's long
+// names. The help (HelpFormatter), the man page, the completion and "did you mean" leave it out;
+// the outputs record the option under its first name.
+CLI::Option* hidden_alias(CLI::Option* option, const std::string& name);
+// The option's long names without its hidden aliases.
+std::vector<std::string> shown_long_names(const CLI::Option* option);
+// CLI11's help without the hidden aliases; set on the root app before the subcommands are added
+// (they copy it).
+class HelpFormatter : public CLI::Formatter {
+ public:
+  std::string make_option_name(const CLI::Option* option, bool is_positional) const override;
+};
+
 // An option that takes one of named values (any case), without CLI11's map dump in its help
 // or its errors ("--offsets: 'bogus': expected one of auto, fit, hold"):
 // add_choice(app, "--profile", fit.profile, "…", "MODE", {{"auto", …}, …}).

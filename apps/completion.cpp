@@ -37,7 +37,7 @@ std::vector<std::string> words_of(const CLI::App& app) {
   for (const CLI::App* sub : app.get_subcommands([](const CLI::App*) { return true; }))
     if (!sub->get_name().empty()) words.push_back(sub->get_name());
   for (const CLI::Option* o : options_of(app)) {
-    for (const auto& n : o->get_lnames()) words.push_back("--" + n);
+    for (const auto& n : shown_long_names(o)) words.push_back("--" + n);
     for (const auto& n : o->get_snames()) words.push_back("-" + n);
   }
   return words;
@@ -51,7 +51,7 @@ std::string bash_script(const CLI::App& root) {
     cases += fmt::format("    \"{}\") words=\"{}\" ;;\n", path, fmt::join(words_of(*app), " "));
     for (const CLI::Option* o : options_of(*app))
       if (const std::vector<std::string>* values = completion_values(o))
-        for (const auto& n : o->get_lnames())
+        for (const auto& n : shown_long_names(o))
           value_cases += fmt::format("    \"{}|--{}\") words=\"{}\" ;;\n", path, n, fmt::join(*values, " "));
   }
   std::string commands;  // every subcommand name, to follow the path
@@ -146,7 +146,7 @@ std::string man_page(const CLI::App& root) {
     page += path.empty() ? ".SH GLOBAL OPTIONS\n" : fmt::format(".SH lmcal {}\n{}\n", roff(path), roff(app->get_description()));
     for (const CLI::Option* o : options_of(*app)) {
       if (o->get_lnames() == std::vector<std::string>{"help"}) continue;
-      std::string name = o->get_name(false, true);
+      std::string name = HelpFormatter().make_option_name(o, false);
       if (o->get_lnames().empty() && o->get_snames().empty()) {
         for (char& c : name) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
       }

@@ -38,6 +38,7 @@ int main(int argc, char** argv) {
     if (name != "lmcal") version += fmt::format("  {:<14} {}\n", name, v);
   version.pop_back();
   app.set_version_flag("--version", version, "Print lmcal's version, commit and libraries, and exit");
+  app.formatter(std::make_shared<lmcal::cli::HelpFormatter>());  // before the subcommands: they copy it
   app.set_config("--config", "", "Read options from a TOML file");
   app.allow_config_extras(CLI::config_extras_mode::error);  // a misspelt key is refused, as in a manifest
   app.fallthrough();  // the global options work after the command too: lmcal fit friction LOG --json
@@ -51,11 +52,12 @@ int main(int argc, char** argv) {
                "ROOT); refused by default, so that a folder someone else wrote cannot make lmcal read other files");
   app.add_flag("--json", mode.json, "Print the command's main JSON output (calibration.json, friction.json, …) on stdout "
                                     "instead of the summary");
-  // After the options, before the command runs: stdout silenced for -q and --json.
+  // After the options, before the command runs: stdout silenced for -q and --json, else its
+  // prose wrapped to the terminal (not the man page's roff nor the completion script).
   std::optional<lmcal::cli::StdoutGate> gate;
   app.parse_complete_callback([&gate, &app] {
     lmcal::cli::record_resolved_options(app);
-    gate.emplace();
+    gate.emplace(!app.got_subcommand("man") && !app.got_subcommand("completion"));
   });
   app.require_subcommand(1);
   lmcal::cli::setup_simulate(app, args);

@@ -1,5 +1,7 @@
 #include "output_mode.hpp"
 
+#include "terminal.hpp"
+
 #include <fstream>
 #include <iostream>
 
@@ -61,19 +63,26 @@ void record_resolved_options(const CLI::App& app) {
   collect_options(*command, output_mode().options);
 }
 
-StdoutGate::StdoutGate() : saved_(std::cout.rdbuf()) {
+StdoutGate::StdoutGate(bool wrap) : saved_(std::cout.rdbuf()) {
   const OutputMode& m = output_mode();
-  if (m.json || m.verbosity == Verbosity::quiet) std::cout.rdbuf(nullptr);  // writes fail silently
+  if (m.json || m.verbosity == Verbosity::quiet) {
+    std::cout.rdbuf(nullptr);  // writes fail silently
+  } else if (const std::size_t width = wrap ? stdout_columns() : 0; width > 0) {
+    wrapping_ = std::make_unique<WrappingBuffer>(saved_, width);
+    std::cout.rdbuf(wrapping_.get());
+  }
 }
 
 StdoutGate::~StdoutGate() {
   std::cout.rdbuf(saved_);
   std::cout.clear();
+  wrapping_.reset();  // its last line, if it had no newline
 }
 
 bool StdoutGate::print_machine_output() {
   std::cout.rdbuf(saved_);
   std::cout.clear();
+  wrapping_.reset();
   const OutputMode& m = output_mode();
   if (m.machine_output.empty()) return false;
   std::ifstream in(m.machine_output, std::ios::binary);

@@ -11,6 +11,7 @@
 
 #include <filesystem>
 #include <iosfwd>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -37,11 +38,12 @@ OutputMode& output_mode();
 // one that sums the command up (calibration.json, fleet.json), which later files do not replace.
 void offer_machine_output(const std::filesystem::path& file, bool main = false);
 
-// Before the command: silences stdout for -q and --json. After it: prints the recorded JSON
-// for --json (an error when the command wrote none), and restores stdout.
+// Before the command: silences stdout for -q and --json, else wraps its lines to the terminal
+// (`wrap`: not for the man page or the completion script; terminal.hpp says when). After it:
+// prints the recorded JSON for --json (an error when the command wrote none), and restores stdout.
 class StdoutGate {
  public:
-  StdoutGate();
+  explicit StdoutGate(bool wrap);
   ~StdoutGate();
   StdoutGate(const StdoutGate&) = delete;
   StdoutGate& operator=(const StdoutGate&) = delete;
@@ -50,6 +52,7 @@ class StdoutGate {
 
  private:
   std::streambuf* saved_;
+  std::unique_ptr<std::streambuf> wrapping_;
 };
 
 }  // namespace lmcal::cli

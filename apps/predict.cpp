@@ -46,8 +46,9 @@ void setup_predict(CLI::App& app, const std::vector<std::string>& argv) {
   predict->add_option("--seed", o->prediction.seed, "Seed of the draws")->capture_default_str();
   predict->add_option("--confidence", o->prediction.confidence, "Coverage of the bands")->capture_default_str();
   predict->add_option("--segments", o->prediction.half_rail_segments, "Rail model segments (half rail)")->capture_default_str();
-  // --dt as every other command names it; --time-step, its first name, still read.
-  predict->add_option("--dt,--time-step", o->prediction.time_step_s, "Rail model time step, s")->capture_default_str();
+  // --dt as every other command names it; --time-step, its first name, still read (not shown).
+  hidden_alias(predict->add_option("--dt,--time-step", o->prediction.time_step_s, "Rail model time step, s")->capture_default_str(),
+               "time-step");
   predict->add_option("--catalog", o->catalog_file, kCatalogHelp);
   predict->add_flag("--any-guide", o->prediction.any_guide,
                     "Predict a duty on another guide than the model was calibrated on (refused otherwise; noted in the outputs)")

@@ -1,5 +1,7 @@
 #include "usage.hpp"
 
+#include "cli_common.hpp"
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -48,7 +50,7 @@ std::vector<std::string> option_names(const CLI::App& app) {
   std::vector<std::string> names;
   for (const CLI::App* a = &app; a; a = a->get_parent())
     for (const CLI::Option* o : a->get_options()) {
-      for (const auto& n : o->get_lnames()) names.push_back("--" + n);
+      for (const auto& n : shown_long_names(o)) names.push_back("--" + n);
       for (const auto& n : o->get_snames()) names.push_back("-" + n);
     }
   return names;

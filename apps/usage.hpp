@@ -6,6 +6,7 @@
 //   2  usage: an unknown command or option (with the nearest known one: "unknown command
 //      'calibrat'; did you mean 'calibrate'?"), a missing or malformed argument
 //   3  an internal failure (a bug: please report it with the command)
+//   4  a fit that gives no usable answer (nothing written unless --keep-unusable)
 //
 // Every message starts with "lmcal: error:" on stderr.
 #pragma once

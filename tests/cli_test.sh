@@ -6,6 +6,7 @@ set -uo pipefail
 SOURCE=$(cd "$(dirname "$0")/.." && pwd)
 DATA="$SOURCE/tests/data"
 source "$SOURCE/tests/support/checks.sh"
+unset COLUMNS  # stdout as a pipe gets it: unwrapped (the checks that wrap set it themselves)
 
 # The value of column NAME (found by its header) in the rows where column KEY equals VALUE.
 column_where() {  # column_where FILE NAME KEY VALUE
@@ -172,6 +173,27 @@ mkdir -p calset
 check "calibrate writes the fits, the summary and the report" test -s calout/friction.json -a -s calout/calibration.json -a -s calout/report.html
 check "calibrate says the thermal half was skipped" grep -q 'note: no thermal manifest' calibrate.txt
 check "calibrate is quiet on stderr when it is not a terminal" test ! -s calibrate.err
+# Issue 41 #5: prose wrapped to the terminal at word boundaries (COLUMNS, or the terminal's own
+# width), hanging under a label's text; nothing lost; a pipe without COLUMNS unwrapped.
+COLUMNS=60 "$LMCAL" calibrate calset -o calout --no-diagnosis >wrapped60.txt 2>/dev/null
+script -qec "stty cols 70 rows 50; '$LMCAL' calibrate calset -o ttyout --no-diagnosis 2>/dev/null" /dev/null | tr -d '\r' >wrapped70.txt
+fits_width() {  # fits_width FILE WIDTH: no line wider, unless it is one word after its indent
+  python3 - "$1" "$2" <<'PY'
+import sys
+lines = open(sys.argv[1], encoding="utf-8").read().splitlines()
+long = [l for l in lines if len(l) > int(sys.argv[2]) and " " in l.strip()]
+sys.exit(1 if long or len(lines) < 10 else 0)
+PY
+}
+same_words() { diff <(tr -s ' \n' '\n\n' <"$1") <(tr -s ' \n' '\n\n' <"$2") >/dev/null; }
+check "calibrate wraps its lines to COLUMNS" fits_width wrapped60.txt 60
+check "calibrate wraps its lines to the terminal's width" fits_width wrapped70.txt 70
+check "wrapping loses no word" same_words calibrate.txt wrapped60.txt
+check "a pipe without COLUMNS is not wrapped" bash -c "awk 'length > 100 { n++ } END { exit !n }' calibrate.txt"
+check "a wrapped line hangs under its label's text" \
+  bash -c "grep -A1 '^    95 % intervals: ' wrapped60.txt | tail -1 | grep -qE '^ {20}[^ ]'"
+check "the man page and the completion script are not wrapped" \
+  bash -c "cmp -s <('$LMCAL' man) <(COLUMNS=30 '$LMCAL' man) && cmp -s <('$LMCAL' completion bash) <(COLUMNS=30 '$LMCAL' completion bash)"
 # The residual plots thin their points within each level and direction: both senses are drawn
 # (a plain every-nth kept one sense only, the conditions alternating direction).
 both_senses() {  # both_senses REPORT PLOT-ID
@@ -394,6 +416,10 @@ check "predict gives each segment's end with its band" bash -c "grep -A5 'at the
 "$LMCAL" predict "$SOURCE/fits/cheng2017/model.toml" "$SOURCE/examples/duty/two_shifts.toml" -o predout_dt --samples 20 --dt 60 >/dev/null
 "$LMCAL" predict "$SOURCE/fits/cheng2017/model.toml" "$SOURCE/examples/duty/two_shifts.toml" -o predout_ts --samples 20 --time-step 60 >/dev/null
 check "predict takes --dt and --time-step alike" cmp -s predout_dt/prediction_time.csv predout_ts/prediction_time.csv
+check "predict's help shows --dt, not the old --time-step" \
+  bash -c "'$LMCAL' predict --help | grep -q -- '--dt FLOAT' && ! '$LMCAL' predict --help | grep -q -- '--time-step'"
+check "the completion and the man page leave the old --time-step out" \
+  bash -c "! '$LMCAL' completion bash | grep -q -- '--time-step' && ! '$LMCAL' man | grep -q 'time.-step'"
 check "predict records the time step under --dt" python3 -c '
 import json, sys
 sys.exit(0 if json.load(open("predout_ts/prediction.json"))["options"]["dt"] == "60" else 1)'
