@@ -3,6 +3,7 @@
 // Writes DIR/NAME.json and prints the verdict in plain words.
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <iostream>
@@ -29,21 +30,57 @@ struct DiagnoseFrictionOptions {
   FrictionDiagnosisOptions diagnosis;
 };
 
+// The width of the widest name of `items` (in code points, as fmt pads), at least `least`: a
+// column that holds them all.
+template <class Items, class Name>
+std::size_t widest(const Items& items, const Name& name, std::size_t least) {
+  std::size_t width = least;
+  for (const auto& item : items) {
+    const std::string text = name(item);
+    width = std::max(width, static_cast<std::size_t>(std::count_if(text.begin(), text.end(), [](char c) {
+                              return (static_cast<unsigned char>(c) & 0xC0) != 0x80;
+                            })));
+  }
+  return width;
+}
+
 // The residuals against the covariates, and every forward step's candidates.
 void print_covariates(const std::vector<CovariateTest>& covariates, const char* unit) {
+  const std::size_t width = widest(covariates, [](const CovariateTest& c) -> const std::string& { return c.covariate; }, 24);
   for (const auto& c : covariates)
-    std::cout << fmt::format("  {:<24} strength {:.3f}  size {:.4g} {}  p {:.2g}{}\n", c.covariate, c.correlation, c.size, unit,
+    std::cout << fmt::format("  {:<{}} strength {:.3f}  size {:.4g} {}  p {:.2g}{}\n", c.covariate, width, c.correlation, c.size, unit,
                              c.p_value, c.structured ? "  <- structured" : "");
+}
+
+// A candidate's estimate with its unit ("149.9 ± 0.401 N s2/m2"), or why it has none: a fit that
+// failed (its reason follows), a switch (on or off: no value, and not nested, so BIC decides
+// rather than a likelihood-ratio test), a parameter the data do not identify (no standard error).
+std::string estimate_text(const CandidateScore& c) {
+  const std::string unit = c.unit.empty() || c.unit == "1" ? "" : " " + c.unit;
+  if (!std::isfinite(c.cv_rmse)) return "n/a (the fit failed)";
+  if (!std::isfinite(c.value)) return "n/a (a switch: BIC decides)";
+  if (!std::isfinite(c.se)) return fmt::format("{:.4g}{} ± n/a (not identified)", c.value, unit);
+  return fmt::format("{:.4g} ± {:.3g}{}", c.value, c.se, unit);
+}
+
+// A held-out RMSE with its gain, "0.6829 N (+38.45 %)"; "n/a" where the fit failed.
+std::string held_out_text(double rmse, double gain_percent, const char* unit) {
+  if (!std::isfinite(rmse) || !std::isfinite(gain_percent)) return "n/a";
+  return fmt::format("{:.4f} {} ({:+.2f} %)", rmse, unit, gain_percent);
 }
 
 void print_rounds(const std::vector<std::vector<CandidateScore>>& rounds, const char* unit) {
   for (std::size_t r = 0; r < rounds.size(); ++r) {
-    std::cout << fmt::format("candidates, step {} (held-out RMSE gain against the model so far):\n", r + 1);
+    std::cout << fmt::format("candidates, step {} (estimate, likelihood-ratio test, held-out RMSE and gain against the model "
+                             "so far, decision):\n",
+                             r + 1);
+    const std::size_t width = widest(rounds[r], [](const CandidateScore& c) -> const std::string& { return shown_name(c); }, 20);
+    const std::size_t estimate_width = widest(rounds[r], estimate_text, 20);
     for (const auto& c : rounds[r])
-      std::cout << fmt::format("  {:<20} {:>10.4g} ± {:<9.3g} LRT p {:<8.2g} held-out {:.4f} {} ({:+.2f} %){}  {}{}\n", shown_name(c),
-                               c.value, c.se, c.lrt_p, c.cv_rmse, unit, c.cv_gain_percent,
+      std::cout << fmt::format("  {:<{}} {:<{}} LRT p {:<8} held-out {}{}  {}{}\n", shown_name(c), width, estimate_text(c), estimate_width,
+                               std::isfinite(c.lrt_p) ? fmt::format("{:.2g}", c.lrt_p) : "n/a", held_out_text(c.cv_rmse, c.cv_gain_percent, unit),
                                std::isfinite(c.cv_shape_gain_percent)
-                                   ? fmt::format(", shape {:.4f} {} ({:+.2f} %)", c.cv_shape_rmse, unit, c.cv_shape_gain_percent)
+                                   ? ", shape " + held_out_text(c.cv_shape_rmse, c.cv_shape_gain_percent, unit)
                                    : "",
                                c.accepted ? "ACCEPTED: " : "", c.reason);
   }

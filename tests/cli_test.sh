@@ -109,6 +109,15 @@ check "a diagnosis records the options it ran with, given and default" python3 -
 import json; o = json.load(open("fitout/dfix.json"))["options"]
 assert o["fix"] == "f0=0.029" and o["run-offsets"] == "random" and o["min-gain"] is not None and o["catalog"] is None, o'
 check "diagnosis prints its lack-of-fit test" grep -q '^lack of fit' diagfix.txt
+# Issue 41 #5: every estimate with its unit, and no 'nan' without its reason: a candidate the
+# data do not identify (the drive log) or whose fit failed (the rig's heater schedule).
+check "diagnosis gives each candidate's estimate with its unit" grep -qE '^  seal_drag +[-0-9.e+]+ ± [0-9.e+-]+ N s2/m2 +LRT p' diag.txt
+"$LMCAL" diagnose friction "$SOURCE/measurements/axis/friction.toml" -o fitout --name dax >diagaxis.txt 2>&1
+"$LMCAL" diagnose thermal "$SOURCE/measurements/rig/thermal.toml" -o fitout --name drig >diagrig.txt 2>&1
+check "a candidate the data do not identify says so, no nan" \
+  bash -c "grep -q '± n/a (not identified) *LRT p n/a' diagaxis.txt && ! grep -qiw nan diagaxis.txt"
+check "a candidate whose fit failed says so, no nan or inf" \
+  bash -c "grep -q 'n/a (the fit failed) *LRT p n/a *held-out n/a' diagrig.txt && ! grep -qiwE 'nan|inf' diagrig.txt"
 check "diagnosis refuses an unknown run-offset model" refused "unknown model 'sometimes'" diagnose friction drag/friction.csv -o out --run-offsets sometimes
 # Beyond the library: running-in (not a library effect) learned as an empirical term, carried by
 # the calibrated model and applied (settled) by simulate friction.
@@ -173,6 +182,11 @@ mkdir -p calset
 check "calibrate writes the fits, the summary and the report" test -s calout/friction.json -a -s calout/calibration.json -a -s calout/report.html
 check "calibrate says the thermal half was skipped" grep -q 'note: no thermal manifest' calibrate.txt
 check "calibrate is quiet on stderr when it is not a terminal" test ! -s calibrate.err
+"$LMCAL" generate friction -o oneset --runs 1 --guides "SRN 35C" >/dev/null
+"$LMCAL" generate thermal -o oneset --velocity 0.1 --repeats 1 >/dev/null
+"$LMCAL" calibrate oneset -o oneout >onerun.txt 2>&1
+check "a one-run set's summary says why there is no held-out RMSE, and prints no nan" \
+  bash -c "grep -q '^  rail model .*: no held-out RMSE (one run: none to hold out)' onerun.txt && ! grep -qiw nan onerun.txt"
 # Issue 41 #5: prose wrapped to the terminal at word boundaries (COLUMNS, or the terminal's own
 # width), hanging under a label's text; nothing lost; a pipe without COLUMNS unwrapped.
 COLUMNS=60 "$LMCAL" calibrate calset -o calout --no-diagnosis >wrapped60.txt 2>/dev/null
@@ -192,6 +206,7 @@ check "wrapping loses no word" same_words calibrate.txt wrapped60.txt
 check "a pipe without COLUMNS is not wrapped" bash -c "awk 'length > 100 { n++ } END { exit !n }' calibrate.txt"
 check "a wrapped line hangs under its label's text" \
   bash -c "grep -A1 '^    95 % intervals: ' wrapped60.txt | tail -1 | grep -qE '^ {20}[^ ]'"
+check "the parameter tables carry a unit column" bash -c "grep -qE '^    parameter +value +unit +95 % interval' calibrate.txt"
 check "the man page and the completion script are not wrapped" \
   bash -c "cmp -s <('$LMCAL' man) <(COLUMNS=30 '$LMCAL' man) && cmp -s <('$LMCAL' completion bash) <(COLUMNS=30 '$LMCAL' completion bash)"
 # The residual plots thin their points within each level and direction: both senses are drawn
@@ -557,6 +572,10 @@ check "plan thermal writes the runs to log as a manifest to complete" grep -q '^
 check "plan thermal reports how far the planned runs separate a tie" grep -q 'correlation of their estimates' tplan.txt
 check "plan thermal needs the calibrated model" \
   refused "a thermal plan needs the calibrated model" plan thermal "$SOURCE/measurements/cheng2017/thermal.toml" -o out
+"$LMCAL" plan friction onepc/friction.csv -o planone >planone.txt
+check "plan says why an SE it cannot give is missing (one preload class), in units, no inf or nan" \
+  bash -c "grep -qE '^  k2 +n/a \(not determined yet\) -> n/a \(still not determined\) 1/um$' planone.txt &&
+           grep -qE '^  k1 +[0-9.e+-]+ -> [0-9.e+-]+ +-$' planone.txt && ! grep -qiwE 'nan|inf' planone.txt"
 check "plan refuses a parameter the fit does not have" \
   refused "'k9' is not a free parameter of the fit" plan friction "$SOURCE/measurements/cheng2017/friction.csv" --parameters k9 -o out
 

@@ -325,8 +325,7 @@ std::string friction_plan_summary(const FrictionPlan& plan) {
                        c.velocity_m_s, c.load_N, c.preload_um, c.temperature_C, c.direction);
   }
   out += "expected standard errors, now -> after:\n";
-  for (const auto& p : plan.parameters)
-    out += fmt::format("  {:<22} {:>11.4g} -> {:<11.4g} {}\n", p.name, p.se_before, p.se_after, p.unit);
+  for (const auto& p : plan.parameters) out += detail::expected_se_line(p);
   for (const auto& n : plan.notes) out += "  note: " + n + "\n";
   return out;
 }

@@ -351,9 +351,7 @@ std::string thermal_plan_summary(const ThermalPlan& plan) {
     out += fmt::format("  {:>2}. V = {:g} m/s  P = {:g} N  {:g} h\n", r + 1, plan.picks[r].candidate.velocity_m_s,
                        plan.picks[r].candidate.load_N, plan.picks[r].candidate.duration_s / 3600);
   out += "expected standard errors, now -> after:\n";
-  for (const auto& p : plan.parameters)
-    out += fmt::format("  {:<22} {:>11.4g} -> {:<11.4g} {}{}\n", p.name, p.se_before, p.se_after, p.unit,
-                       p.determined_before ? "" : " (not in the model)");
+  for (const auto& p : plan.parameters) out += detail::expected_se_line(p, p.determined_before ? "" : " (not in the model)");
   for (const auto& n : plan.notes) out += "  note: " + n + "\n";
   return out;
 }

@@ -607,16 +607,39 @@ std::string calibration_json(const Calibration& c) {
 
 namespace {
 
-// "name value [low, high]" for the free parameters of a fit (per-run nuisance left out).
+// "[low, high]" with each end as `number` formats it ("{:.5g}"), or, where the fit gave no
+// interval (a parameter the data do not determine has no standard error), says so.
+std::string interval_text(double low, double high, std::string_view number) {
+  if (!std::isfinite(low) || !std::isfinite(high)) return "n/a (no standard error: not determined by the data)";
+  return fmt::format("[{}, {}]", fmt::format(fmt::runtime(number), low), fmt::format(fmt::runtime(number), high));
+}
+
+// "name value unit [low, high]" for the free parameters of a fit (per-run nuisance left out),
+// under a header; a dimensionless parameter's unit "-", an interval the fit could not give "n/a"
+// with the reason.
 std::string parameter_lines(const FitResult& fit) {
-  std::string s;
+  const auto shown = [](const ParameterEstimate& p) { return p.interval != "none" && !p.per_run; };
+  const auto unit = [](const ParameterEstimate& p) { return p.unit.empty() || p.unit == "1" ? std::string("-") : p.unit; };
+  std::size_t name_width = 9, unit_width = 4;  // "parameter", "unit"
+  for (const auto& p : fit.parameters)
+    if (shown(p)) name_width = std::max(name_width, p.name.size()), unit_width = std::max(unit_width, unit(p).size());
+  std::string s = fmt::format("    {:<{}} {:>11}  {:<{}}  {}\n", "parameter", name_width, "value", "unit", unit_width, "95 % interval");
   for (const auto& p : fit.parameters) {
-    if (p.interval == "none" || p.per_run) continue;
+    if (!shown(p)) continue;
     const bool profile = p.interval == "profile";
-    s += fmt::format("    {:<22} {:>11.5g}  [{:.5g}, {:.5g}]{}{}\n", p.name, p.value, profile ? p.profile_low : p.ci_low,
-                     profile ? p.profile_high : p.ci_high, profile ? " profile" : "", p.at_bound ? ", on its bound" : "");
+    const double low = profile ? p.profile_low : p.ci_low, high = profile ? p.profile_high : p.ci_high;
+    s += fmt::format("    {:<{}} {:>11.5g}  {:<{}}  {}{}{}\n", p.name, name_width, p.value, unit(p), unit_width,
+                     interval_text(low, high, "{:.5g}"), profile ? " profile" : "", p.at_bound ? ", on its bound" : "");
   }
   return s;
+}
+
+// "held-out RMSE 0.229 N", or why there is none: a run is predicted from the others, so one run
+// leaves none to hold out; a robust loss or a fit that is not usable is not cross-validated.
+std::string held_out_text(double rmse, std::string_view unit, int decimals, std::size_t runs) {
+  if (std::isfinite(rmse)) return fmt::format("held-out RMSE {:.{}f} {}", rmse, decimals, unit);
+  return runs < 2 ? "no held-out RMSE (one run: none to hold out)"
+                  : "no held-out RMSE (not cross-validated: a robust loss, or a fit that is not usable)";
 }
 
 std::string how_sure_line(const FitResult& fit) {
@@ -647,19 +670,16 @@ std::string calibration_summary(const Calibration& c) {
   const CalibratedModel& m = c.calibrated;
   s += "THE CALIBRATED MODEL (model.toml): the published models with the causes the diagnoses accepted\n";
   if (m.friction) {
-    // Held out: a run predicted from the others; with one run there is none to hold out.
-    const double held_out = m.friction->cv_rmse_N;
     s += fmt::format("  friction law{}: RMSE {:.3f} N, {}\n",
                      m.friction_causes.empty() ? "" : fmt::format(" + {}", fmt::join(m.friction_causes, " + ")), m.friction->rmse_N,
-                     std::isfinite(held_out) ? fmt::format("held-out {:.3f} N", held_out)
-                                             : std::string("no held-out RMSE (one run: none to hold out)"));
+                     held_out_text(m.friction->cv_rmse_N, "N", 3, m.friction->runs.size()));
     if (const std::string caveat = held_out_caveat(*m.friction); !caveat.empty()) s += "    held-out: " + caveat + "\n";
     s += parameter_lines(friction_fit_as_shown(*m.friction)) + how_sure_line(m.friction->fit);
   }
   if (m.thermal) {
-    s += fmt::format("  rail model{} ({} source): held-out RMSE {:.4f} K\n",
+    s += fmt::format("  rail model{} ({} source): {}\n",
                      m.thermal_causes.empty() ? "" : fmt::format(" + {}", fmt::join(m.thermal_causes, " + ")),
-                     to_string(m.thermal_options.source), m.thermal->cv_rmse_K);
+                     to_string(m.thermal_options.source), held_out_text(m.thermal->cv_rmse_K, "K", 4, m.thermal->runs.size()));
     s += parameter_lines(m.thermal->joint) + how_sure_line(m.thermal->joint);
     const auto& share = m.thermal->joint.uncertainty.input_variance_share;
     if (!share.empty() && std::isfinite(share[0]))
@@ -677,8 +697,9 @@ std::string calibration_summary(const Calibration& c) {
     s += fmt::format("  diagnosis: {}: {}\n", c.friction_diagnosis->verdict, report::without_verdict(c.friction_diagnosis->summary));
   if (c.thermal) {
     const auto& a = c.thermal->joint.parameter("alpha");
-    s += fmt::format("  thermal: {}; alpha {:.3f} [{:.3f}, {:.3f}] ({} source), {}\n", report::plural(c.thermal_data->runs.size(), "run"),
-                     a.value, a.ci_low, a.ci_high, to_string(c.thermal_options.source), across_runs(c.thermal->alpha_spread));
+    s += fmt::format("  thermal: {}; alpha {:.3f} {} ({} source), {}\n", report::plural(c.thermal_data->runs.size(), "run"),
+                     a.value, interval_text(a.ci_low, a.ci_high, "{:.3f}"), to_string(c.thermal_options.source),
+                     across_runs(c.thermal->alpha_spread));
   }
   if (c.thermal_diagnosis)
     s += fmt::format("  diagnosis: {}: {}\n", c.thermal_diagnosis->verdict, report::without_verdict(c.thermal_diagnosis->summary));
