@@ -72,8 +72,9 @@ class NormalEquationsCost {
   virtual bool normal_equations(const double* theta, const std::vector<bool>& held, double& cost, Eigen::MatrixXd& JtJ,
                                 Eigen::VectorXd& Jtr) const = 0;
   // r(θ) and J(θ) stored column-major (the layout the engine keeps), without Ceres' row-major
-  // detour.
-  virtual bool residuals_and_jacobian(const double* theta, Eigen::VectorXd& r, Eigen::MatrixXd& J) const = 0;
+  // detour; the columns of `held` parameters may come out 0, as in normal_equations.
+  virtual bool residuals_and_jacobian(const double* theta, const std::vector<bool>& held, Eigen::VectorXd& r,
+                                      Eigen::MatrixXd& J) const = 0;
 };
 
 // Sums of x xᵀ over rows x = [J_i, r_i], centred within groups the way
@@ -204,7 +205,8 @@ class BatchedAutoDiffCostFunction final : public ceres::CostFunction, public Nor
     return std::isfinite(cost);
   }
 
-  bool residuals_and_jacobian(const double* theta, Eigen::VectorXd& r, Eigen::MatrixXd& J) const override {
+  bool residuals_and_jacobian(const double* theta, const std::vector<bool>& held, Eigen::VectorXd& r,
+                              Eigen::MatrixXd& J) const override {
     const int p = parameter_block_sizes()[0];
     r.resize(static_cast<Eigen::Index>(rows_));
     J.resize(static_cast<Eigen::Index>(rows_), p);
@@ -215,7 +217,7 @@ class BatchedAutoDiffCostFunction final : public ceres::CostFunction, public Nor
       for (int j = 0; j < p; ++j) J(row, j) = gradient[static_cast<std::size_t>(j)];
       return std::isfinite(value);
     };
-    const bool ok = rows_with_gradient(theta, gradient.data(), store);
+    const bool ok = rows_with_gradient(theta, gradient.data(), store, held);
     if (ok && !groups_.empty()) centre_columns(r, J);
     return ok;
   }
