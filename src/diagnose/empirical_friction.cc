@@ -10,6 +10,7 @@
 #include <set>
 
 #include "lmcal/fit/statistics.hpp"
+#include "parallel_slices.hpp"
 #include "sparse_regression.hpp"
 
 namespace lmcal::detail {
@@ -19,21 +20,33 @@ namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr std::size_t kMaxFitParameters = 16;  // the batched cost's largest Jet
 
-// The law with the fit's named effects at row i, for the parameter values `values` (the seven
-// constants, then the effects, as in `params`).
-double law_at(const FrictionLog& log, std::size_t i, const std::vector<ParameterEstimate>& params,
-              const std::vector<double>& values, double reference_C, double warmer_K = 0) {
-  FrictionConstants<double> k;
-  for (std::size_t j = 0; j < 7; ++j) fittable_constant(k, j) = values[j];
-  k.nu_ref_mm2_s = log.viscosity40_mm2_s[i];
-  k.T_ref_C = reference_C;
-  FrictionEffects<double> e;
-  for (std::size_t j = 7; j < params.size(); ++j)
-    if (const auto slot = find_friction_effect(params[j].name)) e[*slot] = values[j];
-  FrictionConditions<double> c = log.conditions(i);
-  c.temperature_C += warmer_K;
-  return friction_force_with_effects_N(k, e, c);
-}
+// The law with the fit's named effects for the parameter values `values` (the seven constants,
+// then the effects, as in `params`), at row i of the log with the temperature `warmer_K`
+// higher. The constants and effects are set once: by name per row, a 10⁵-row log's finite
+// differences looked the effects up millions of times.
+class LawAt {
+ public:
+  LawAt(const FrictionLog& log, const std::vector<ParameterEstimate>& params, const std::vector<double>& values,
+        double reference_C)
+      : log_(log) {
+    for (std::size_t j = 0; j < 7; ++j) fittable_constant(k_, j) = values[j];
+    k_.T_ref_C = reference_C;
+    for (std::size_t j = 7; j < params.size(); ++j)
+      if (const auto slot = find_friction_effect(params[j].name)) e_[*slot] = values[j];
+  }
+  double operator()(std::size_t i, double warmer_K = 0) const {
+    FrictionConstants<double> k = k_;
+    k.nu_ref_mm2_s = log_.viscosity40_mm2_s[i];
+    FrictionConditions<double> c = log_.conditions(i);
+    c.temperature_C += warmer_K;
+    return friction_force_with_effects_N(k, e_, c);
+  }
+
+ private:
+  const FrictionLog& log_;
+  FrictionConstants<double> k_;
+  FrictionEffects<double> e_;
+};
 
 // A dictionary entry: the term it stands for (coefficient to be fitted) and its column.
 struct Candidate {
@@ -469,22 +482,27 @@ FrictionTermSearch learn_friction_term(const FrictionLog& log, const FrictionFit
     law[i] = current.predicted_N[i] - current.run_offset_N[log.run[i]];
     y[i] = log.friction_N[i] - law[i];
   }
-  const auto law_warmer = [&](std::size_t i, double dT) { return law_at(log, i, params, values, reference_C, dT); };
+  const LawAt current_law(log, params, values, reference_C);
+  const auto law_warmer = [&](std::size_t i, double dT) { return current_law(i, dT); };
   SparseProblem problem;
   problem.y = y;
   problem.group.assign(log.run.begin(), log.run.end());
   problem.level = problem.group;
-  for (std::size_t j = 0; j < params.size(); ++j) {
-    const ParameterEstimate& p = params[j];
-    if (!p.free || p.held_unidentifiable || p.at_bound) continue;
-    const double h = 1e-6 * std::max(std::abs(p.value), 1e-3);
+  std::vector<std::size_t> moved;  // the parameters the fit moves
+  for (std::size_t j = 0; j < params.size(); ++j)
+    if (params[j].free && !params[j].held_unidentifiable && !params[j].at_bound) moved.push_back(j);
+  problem.fixed.resize(moved.size());
+  // Central differences, one column per parameter: independent, each on a free thread.
+  for_each_index(moved.size(), [&](std::size_t m) {
+    const std::size_t j = moved[m];
+    const double h = 1e-6 * std::max(std::abs(params[j].value), 1e-3);
     std::vector<double> up = values, down = values, column(n);
     up[j] += h;
     down[j] -= h;
-    for (std::size_t i = 0; i < n; ++i)
-      column[i] = (law_at(log, i, params, up, reference_C) - law_at(log, i, params, down, reference_C)) / (2 * h);
-    problem.fixed.push_back(std::move(column));
-  }
+    const LawAt law_up(log, params, up, reference_C), law_down(log, params, down, reference_C);
+    for (std::size_t i = 0; i < n; ++i) column[i] = (law_up(i) - law_down(i)) / (2 * h);
+    problem.fixed[m] = std::move(column);
+  });
   std::vector<Candidate> candidates = dictionary(log, series, law, law_warmer, reference_C);
   f.dictionary_size = candidates.size();
   for (auto& c : candidates) {

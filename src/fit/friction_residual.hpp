@@ -6,7 +6,9 @@
 // 60 % longer.
 #pragma once
 
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <memory>
 #include <vector>
 
@@ -30,6 +32,23 @@ struct FrictionResidual {
     FrictionEffects<T> e;
     const T* terms = nullptr;    // the terms' parameters
     std::vector<T> lag_change;   // lag_τ(T) - T per log row, when a term lags the temperature
+    // ν(T) (Eq. 6) at the oil and temperature of the last row that needed it: the rows of a run
+    // or a set point share them, and an exp per row and pass was a tenth of a fit's time. The
+    // same bits as computing it again (the same operations on the same values).
+    std::uint64_t nu40_bits = 0, temperature_bits = 0;
+    bool has_viscosity = false;
+    T viscosity{};
+
+    // k with ν_ref = nu40 (the row's oil), and ν at temperature_C.
+    const T& viscosity_at(double nu40, double temperature_C) {
+      k.nu_ref_mm2_s = T(nu40);
+      const auto nu40_now = std::bit_cast<std::uint64_t>(nu40), temperature_now = std::bit_cast<std::uint64_t>(temperature_C);
+      if (!has_viscosity || nu40_now != nu40_bits || temperature_now != temperature_bits) {
+        viscosity = viscosity_mm2_s(k, temperature_C);
+        nu40_bits = nu40_now, temperature_bits = temperature_now, has_viscosity = true;
+      }
+      return viscosity;
+    }
   };
 
   template <typename T>
@@ -58,12 +77,12 @@ struct FrictionResidual {
     const std::size_t entry = rows.empty() ? j : rows[j];
     const std::size_t i = data->samples[entry];
     const FrictionLog& log = *data->log;
-    p.k.nu_ref_mm2_s = log.viscosity40_mm2_s[i];
-    const FrictionConstants<double>& k = p.k;
     const FrictionConditions<double> c = log.conditions(i);
+    const double nu_at_T = p.viscosity_at(log.viscosity40_mm2_s[i], c.temperature_C);
+    const FrictionConstants<double>& k = p.k;
     // The law's value from its one definition (the residual-only evaluation computes the
     // same, to the last bit), the derivatives from its pieces.
-    const FrictionBreakdown<double> b = friction_breakdown(k, c);
+    const FrictionBreakdown<double> b = friction_breakdown_at_viscosity(k, c, nu_at_T);
     const double x = c.temperature_C - k.T_ref_C, nu = b.viscosity_mm2_s;
     const double pc = c.preload_um, Lb = c.block_length_mm, V = c.velocity_m_s;
     const double viscous_per_mu = Lb * pc * V * nu, stribeck_per_mu = pc * Lb / nu * b.stribeck_decay;
@@ -83,15 +102,15 @@ struct FrictionResidual {
     const std::size_t entry = rows.empty() ? j : rows[j];
     const std::size_t i = data->samples[entry];
     const FrictionLog& log = *data->log;
-    p.k.nu_ref_mm2_s = T(log.viscosity40_mm2_s[i]);
     if constexpr (kTerms) {
+      p.k.nu_ref_mm2_s = T(log.viscosity40_mm2_s[i]);
       const T predicted = friction_with_terms_N(p.k, p.e, log, *data->series, i, *data->terms, p.terms,
                                                 p.lag_change.empty() ? nullptr : &p.lag_change);
       return (log.friction_N[i] - predicted) * data->inv_sigma[entry];
     } else {
       const FrictionConditions<double> c = log.conditions(i);
-      const T predicted =
-          effect_slots.empty() ? T(friction_force_N(p.k, c)) : T(friction_force_with_effects_N(p.k, p.e, c));
+      const auto b = friction_breakdown_at_viscosity(p.k, c, p.viscosity_at(log.viscosity40_mm2_s[i], c.temperature_C));
+      const T predicted = effect_slots.empty() ? T(b.total_N()) : T(friction_force_with_effects_N(p.k, p.e, c, b));
       return (log.friction_N[i] - predicted) * data->inv_sigma[entry];
     }
   }
