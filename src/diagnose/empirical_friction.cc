@@ -105,9 +105,13 @@ std::vector<Candidate> dictionary(const FrictionLog& log, const TermSeries& seri
   const Columns columns{log, series, law};
   std::vector<Candidate> out;
   std::size_t family = 0;
-  auto add = [&](FrictionTerm term) {
-    std::vector<double> column = columns.column(term);
-    out.push_back({std::move(term), std::move(column), family++});
+  // The terms first, their columns (independent of each other) at the end on the free threads.
+  auto add = [&](FrictionTerm term) { out.push_back({std::move(term), {}, family++}); };
+  const auto with_columns = [&] {
+    for_each_index(out.size(), [&](std::size_t k) {
+      if (out[k].column.empty()) out[k].column = columns.column(out[k].term);
+    });
+    return std::move(out);
   };
   auto linear = [&](TermCovariate c) {
     return TermFactor{c, TermTransform::linear, c == TermCovariate::temperature_C ? reference_C : 0.0};
@@ -125,7 +129,7 @@ std::vector<Candidate> dictionary(const FrictionLog& log, const TermSeries& seri
   const TermFactor law_factor{TermCovariate::law_force_N};
   for (TermCovariate c : base)
     if (c == TermCovariate::velocity_m_s || c == TermCovariate::temperature_C) add({.factors = {law_factor, linear(c)}});
-  if (!series.timed) return out;
+  if (!series.timed) return with_columns();
 
   // Families with a scale: one column per grid value.
   const std::vector<double> shares{0.01, 0.02, 0.05, 0.1, 0.2, 0.5, 1.0};
@@ -137,8 +141,7 @@ std::vector<Candidate> dictionary(const FrictionLog& log, const TermSeries& seri
       FrictionTerm t{.factors = {TermFactor{c, TermTransform::decay}}, .scale = share * span,
                      .scale_lower = 1e-3 * span, .scale_upper = 10 * span};
       t.factors.insert(t.factors.end(), with.begin(), with.end());
-      std::vector<double> column = columns.column(t);
-      out.push_back({std::move(t), std::move(column), family});
+      out.push_back({std::move(t), {}, family});
     }
     ++family;
   };
@@ -158,7 +161,7 @@ std::vector<Candidate> dictionary(const FrictionLog& log, const TermSeries& seri
     }
     ++family;
   }
-  return out;
+  return with_columns();
 }
 
 // What a term does, in words.
@@ -404,8 +407,12 @@ SmoothChoice smooth_term(const FrictionLog& log, const TermSeries& series, const
     out.why_not = "no covariate varies enough for a smooth term";
     return out;
   }
-  const std::vector<SupportScore> scores = score_supports(p, blocks);
-  const double fixed = score_supports(p, {{}}).front().cv_rmse;
+  // The blocks and, last, the model alone (no candidate): one set of Gram sums for all.
+  std::vector<std::vector<std::size_t>> supports = blocks;
+  supports.emplace_back();
+  std::vector<SupportScore> scores = score_supports(p, supports);
+  const double fixed = scores.back().cv_rmse;
+  scores.pop_back();
   // The best, and among those within the tolerance of it the one with the fewest basis functions.
   std::size_t best = 0;
   for (std::size_t b = 1; b < scores.size(); ++b)
