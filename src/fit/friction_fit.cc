@@ -680,16 +680,20 @@ FrictionFitResult fit_friction(const FrictionLog& logged, const FrictionFitOptio
   std::vector<double> lag_change;
   for (std::size_t t = 0, at = 0; t < out.terms.size(); at += out.terms[t].has_scale() ? 2 : 1, ++t)
     if (out.terms[t].lagged_temperature()) lag_change = lagged_temperature_change(log, series, term_values[at + 1]);
-  for (std::size_t i = 0; i < log.size(); ++i) {
-    FrictionConstants<double> ki = k;
-    ki.nu_ref_mm2_s = log.viscosity40_mm2_s[i];
-    ki.T_ref_C = options.start.T_ref_C;
-    out.predicted_N.push_back(
-        !out.terms.empty()
-            ? friction_with_terms_N(ki, e, log, series, i, out.terms, term_values.data(), lag_change.empty() ? nullptr : &lag_change)
-        : slots.empty() ? friction_force_N(ki, log.conditions(i))
-                        : friction_force_with_effects_N(ki, e, log.conditions(i)));
-  }
+  // Each sample's prediction on its own: slices of the samples on the threads, the same bits.
+  out.predicted_N.resize(log.size());
+  detail::for_each_slice(log.size(), detail::slice_threads(log.size(), 16384), [&](int, std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      FrictionConstants<double> ki = k;
+      ki.nu_ref_mm2_s = log.viscosity40_mm2_s[i];
+      ki.T_ref_C = options.start.T_ref_C;
+      out.predicted_N[i] =
+          !out.terms.empty()
+              ? friction_with_terms_N(ki, e, log, series, i, out.terms, term_values.data(), lag_change.empty() ? nullptr : &lag_change)
+          : slots.empty() ? friction_force_N(ki, log.conditions(i))
+                          : friction_force_with_effects_N(ki, e, log.conditions(i));
+    }
+  });
   // Per run: the mean residual of the law, and the zero offset the predictions carry.
   std::vector<double> run_sum(runs, 0.0), run_count(runs, 0.0);
   for (std::size_t i = 0; i < log.size(); ++i) {
