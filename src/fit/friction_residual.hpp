@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdint>
 #include <memory>
+#include <numbers>
 #include <vector>
 
 #include "batched_autodiff.hpp"
@@ -68,21 +69,57 @@ struct FrictionResidual {
   }
 
   // The published law alone (no effects, no terms) has a closed-form gradient.
-  // So has the law with the drive's terms of a trajectory (moving_mass, axis_gravity): each adds
-  // a force linear in its own parameter and free of the law's (closed_form_effect). A 10⁶-sample
-  // trajectory fit's rows cost a third of their Jet<8> evaluation.
+  // So has the law with effects that add a force of their own parameters only, free of the
+  // law's (closed_form_effect): the drive's terms of a trajectory (moving_mass, axis_gravity)
+  // and the effects along its travel (position_ripple, presliding, with their parts). A 10⁶-sample
+  // trajectory fit's rows cost a third of their Jet<8> evaluation; a diagnosis's ripple and
+  // pre-sliding candidates (Jet<12>, sin and exp per row, 15 iterations twice) a third.
   bool analytic() const {
     return !kTerms && std::all_of(effect_slots.begin(), effect_slots.end(), closed_form_effect);
   }
   static bool closed_form_effect(std::size_t slot) {
-    return slot == FrictionEffectLibrary::slot_of<MovingMass>() || slot == FrictionEffectLibrary::slot_of<AxisGravity>();
+    using L = FrictionEffectLibrary;
+    for (const std::size_t s : {L::slot_of<MovingMass>(), L::slot_of<AxisGravity>(), L::slot_of<PositionRipple>(),
+                                L::slot_of<PositionRipplePeriod>(), L::slot_of<PositionRipplePhase>(), L::slot_of<Presliding>(),
+                                L::slot_of<PreslidingDistance>()})
+      if (slot == s) return true;
+    return false;
+  }
+
+  // ∂F/∂(each effect of `effect_slots`) at conditions c into g, for the closed-form effects (see
+  // correction_N in each one's header): M a·direction; G·direction; with θ = 2πx/λ + φ, sin θ,
+  // A cos θ · (−2πx/λ²) and A cos θ; with E = exp(−s/s0), −E and −ΔF E s/s0². The ripple's
+  // angle and the pre-sliding decay once per row, only where fitted.
+  void effect_gradient(const FrictionEffects<double>& e, const FrictionConditions<double>& c, double w, double* g) const {
+    using L = FrictionEffectLibrary;
+    const auto fitted = [&](std::size_t slot) { return std::find(effect_slots.begin(), effect_slots.end(), slot) != effect_slots.end(); };
+    double sine = 0, cosine = 0, turns = 0, decay = 0;
+    const double period = e.of<PositionRipplePeriod>(), distance = e.of<PreslidingDistance>();
+    if (fitted(L::slot_of<PositionRipple>())) {
+      turns = 2 * std::numbers::pi * c.position_m / period;
+      const double angle = turns + e.of<PositionRipplePhase>();
+      sine = std::sin(angle), cosine = std::cos(angle);
+    }
+    if (fitted(L::slot_of<Presliding>())) decay = std::exp(-c.distance_since_reversal_m / distance);
+    for (std::size_t m = 0; m < effect_slots.size(); ++m) {
+      const std::size_t slot = effect_slots[m];
+      double d = 0;
+      if (slot == L::slot_of<MovingMass>()) d = c.acceleration_m_s2 * c.direction;
+      else if (slot == L::slot_of<AxisGravity>()) d = c.direction;
+      else if (slot == L::slot_of<PositionRipple>()) d = sine;
+      else if (slot == L::slot_of<PositionRipplePeriod>()) d = e.of<PositionRipple>() * cosine * (-turns / period);
+      else if (slot == L::slot_of<PositionRipplePhase>()) d = e.of<PositionRipple>() * cosine;
+      else if (slot == L::slot_of<Presliding>()) d = -decay;
+      else d = -e.of<Presliding>() * decay * c.distance_since_reversal_m / (distance * distance);  // PreslidingDistance
+      g[7 + m] = w * d;
+    }
   }
 
   // Residual of entry j and its gradient over θ = [k1, k2, μSt, V_St, μv, β, f0] (Eqs. 3-7):
   // with x = T - T_ref, ν = ν_ref e^{-βx}, E = e^{-V/V_St}, S = μSt pc Lb E / ν (Stribeck),
   //   ∂F/∂k1 = P/1000, ∂F/∂k2 = -pc P/1000, ∂F/∂μSt = S/μSt, ∂F/∂V_St = S V/V_St²,
   //   ∂F/∂μv = Lb pc V ν, ∂F/∂β = x (S - μv Lb pc V ν), ∂F/∂f0 = Lb;
-  // then the drive's terms: ∂F/∂M = a·direction (moving_mass), ∂F/∂G = direction (axis_gravity).
+  // then the closed-form effects' (effect_gradient).
   double gradient(Prepared<double>& p, std::size_t j, double* g) const {
     const std::size_t entry = rows.empty() ? j : rows[j];
     const std::size_t i = data->samples[entry];
@@ -105,9 +142,7 @@ struct FrictionResidual {
     g[5] = w * x * (k.mu_st * stribeck_per_mu - k.mu_v * viscous_per_mu);
     g[6] = w * Lb;
     if (effect_slots.empty()) return (log.friction_N[i] - b.total_N()) * data->inv_sigma[entry];
-    for (std::size_t m = 0; m < effect_slots.size(); ++m)
-      g[7 + m] = w * (effect_slots[m] == FrictionEffectLibrary::slot_of<MovingMass>() ? c.acceleration_m_s2 * c.direction
-                                                                                      : c.direction);
+    effect_gradient(p.e, c, w, g);
     // The value as the residual-only evaluation computes it, to the last bit.
     return (log.friction_N[i] - friction_force_with_effects_N(k, p.e, c, b)) * data->inv_sigma[entry];
   }
