@@ -72,8 +72,9 @@ struct FrictionResidual {
   // So has the law with effects that add a force of their own parameters only, free of the
   // law's (closed_form_effect): the drive's terms of a trajectory (moving_mass, axis_gravity)
   // and the effects along its travel (position_ripple, presliding, with their parts). A 10⁶-sample
-  // trajectory fit's rows cost a third of their Jet<8> evaluation; a diagnosis's ripple and
-  // pre-sliding candidates (Jet<12>, sin and exp per row, 15 iterations twice) a third.
+  // trajectory fit's normal-equation pass took 104 ms in Jet<8>, ~35 ms so; a diagnosis's ripple
+  // and pre-sliding candidates (Jet<12>, 15 iterations on a tenth of the rows and 15 on all)
+  // about a fifth less.
   bool analytic() const {
     return !kTerms && std::all_of(effect_slots.begin(), effect_slots.end(), closed_form_effect);
   }
@@ -95,12 +96,14 @@ struct FrictionResidual {
     const auto fitted = [&](std::size_t slot) { return std::find(effect_slots.begin(), effect_slots.end(), slot) != effect_slots.end(); };
     double sine = 0, cosine = 0, turns = 0, decay = 0;
     const double period = e.of<PositionRipplePeriod>(), distance = e.of<PreslidingDistance>();
-    if (fitted(L::slot_of<PositionRipple>())) {
+    if (fitted(L::slot_of<PositionRipple>()) || fitted(L::slot_of<PositionRipplePeriod>()) ||
+        fitted(L::slot_of<PositionRipplePhase>())) {
       turns = 2 * std::numbers::pi * c.position_m / period;
       const double angle = turns + e.of<PositionRipplePhase>();
       sine = std::sin(angle), cosine = std::cos(angle);
     }
-    if (fitted(L::slot_of<Presliding>())) decay = std::exp(-c.distance_since_reversal_m / distance);
+    if (fitted(L::slot_of<Presliding>()) || fitted(L::slot_of<PreslidingDistance>()))
+      decay = std::exp(-c.distance_since_reversal_m / distance);
     for (std::size_t m = 0; m < effect_slots.size(); ++m) {
       const std::size_t slot = effect_slots[m];
       double d = 0;
