@@ -10,6 +10,7 @@
 #include <set>
 
 #include "lmcal/fit/statistics.hpp"
+#include "parallel_slices.hpp"
 #include "sparse_regression.hpp"
 
 namespace lmcal::detail {
@@ -19,21 +20,33 @@ namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr std::size_t kMaxFitParameters = 16;  // the batched cost's largest Jet
 
-// The law with the fit's named effects at row i, for the parameter values `values` (the seven
-// constants, then the effects, as in `params`).
-double law_at(const FrictionLog& log, std::size_t i, const std::vector<ParameterEstimate>& params,
-              const std::vector<double>& values, double reference_C, double warmer_K = 0) {
-  FrictionConstants<double> k;
-  for (std::size_t j = 0; j < 7; ++j) fittable_constant(k, j) = values[j];
-  k.nu_ref_mm2_s = log.viscosity40_mm2_s[i];
-  k.T_ref_C = reference_C;
-  FrictionEffects<double> e;
-  for (std::size_t j = 7; j < params.size(); ++j)
-    if (const auto slot = find_friction_effect(params[j].name)) e[*slot] = values[j];
-  FrictionConditions<double> c = log.conditions(i);
-  c.temperature_C += warmer_K;
-  return friction_force_with_effects_N(k, e, c);
-}
+// The law with the fit's named effects for the parameter values `values` (the seven constants,
+// then the effects, as in `params`), at row i of the log with the temperature `warmer_K`
+// higher. The constants and effects are set once: by name per row, a 10⁵-row log's finite
+// differences looked the effects up millions of times.
+class LawAt {
+ public:
+  LawAt(const FrictionLog& log, const std::vector<ParameterEstimate>& params, const std::vector<double>& values,
+        double reference_C)
+      : log_(log) {
+    for (std::size_t j = 0; j < 7; ++j) fittable_constant(k_, j) = values[j];
+    k_.T_ref_C = reference_C;
+    for (std::size_t j = 7; j < params.size(); ++j)
+      if (const auto slot = find_friction_effect(params[j].name)) e_[*slot] = values[j];
+  }
+  double operator()(std::size_t i, double warmer_K = 0) const {
+    FrictionConstants<double> k = k_;
+    k.nu_ref_mm2_s = log_.viscosity40_mm2_s[i];
+    FrictionConditions<double> c = log_.conditions(i);
+    c.temperature_C += warmer_K;
+    return friction_force_with_effects_N(k, e_, c);
+  }
+
+ private:
+  const FrictionLog& log_;
+  FrictionConstants<double> k_;
+  FrictionEffects<double> e_;
+};
 
 // A dictionary entry: the term it stands for (coefficient to be fitted) and its column.
 struct Candidate {
@@ -98,14 +111,16 @@ LawColumns law_columns_at(const FrictionLog& log, const std::vector<double>& val
   k.T_ref_C = reference_C;
   out.part.assign(std::size(kLawParts), std::vector<double>(log.size()));
   out.dF_dT.resize(log.size());
-  for (std::size_t i = 0; i < log.size(); ++i) {
-    k.nu_ref_mm2_s = log.viscosity40_mm2_s[i];
+  // Row by row, each independent: on the free threads.
+  for_each_index(log.size(), [&](std::size_t i) {
+    FrictionConstants<double> ki = k;
+    ki.nu_ref_mm2_s = log.viscosity40_mm2_s[i];
     const FrictionConditions<double> c = log.conditions(i);
-    const auto b = friction_breakdown(k, c);
-    const double seal_N = k.f0 * c.block_length_mm;
+    const auto b = friction_breakdown(ki, c);
+    const double seal_N = ki.f0 * c.block_length_mm;
     for (std::size_t p = 0; p < std::size(kLawParts); ++p) out.part[p][i] = law_part_N(b, seal_N, kLawParts[p]);
     out.dF_dT[i] = law_warmer(i, 0.5) - law_warmer(i, -0.5);
-  }
+  });
   return out;
 }
 
@@ -164,9 +179,13 @@ std::vector<Candidate> dictionary(const FrictionLog& log, const TermSeries& seri
   const Columns columns{log, series, law_columns};
   std::vector<Candidate> out;
   std::size_t family = 0;
-  auto add = [&](FrictionTerm term) {
-    std::vector<double> column = columns.column(term);
-    out.push_back({std::move(term), std::move(column), family++});
+  // The terms first, their columns (independent of each other) at the end on the free threads.
+  auto add = [&](FrictionTerm term) { out.push_back({std::move(term), {}, family++}); };
+  const auto with_columns = [&] {
+    for_each_index(out.size(), [&](std::size_t k) {
+      if (out[k].column.empty()) out[k].column = columns.column(out[k].term);
+    });
+    return std::move(out);
   };
   auto linear = [&](TermCovariate c) {
     return TermFactor{c, TermTransform::linear, c == TermCovariate::temperature_C ? reference_C : 0.0};
@@ -197,8 +216,7 @@ std::vector<Candidate> dictionary(const FrictionLog& log, const TermSeries& seri
       // An input shift leads its term (term_form_problem); any other factor follows the decay.
       const bool shift = !with.empty() && with.front().transform == TermTransform::input_shift;
       t.factors.insert(shift ? t.factors.begin() : t.factors.end(), with.begin(), with.end());
-      std::vector<double> column = columns.column(t);
-      out.push_back({std::move(t), std::move(column), family});
+      out.push_back({std::move(t), {}, family});
     }
     ++family;
   };
@@ -229,9 +247,7 @@ std::vector<Candidate> dictionary(const FrictionLog& log, const TermSeries& seri
   if (varies(log, series, TermCovariate::temperature_C) || series.timed || campaign) {
     const std::vector<double> thresholds = temperature_thresholds(log);
     for (double threshold : thresholds) {
-      FrictionTerm t{.factors = {shift_T, TermFactor{TermCovariate::temperature_C, TermTransform::step, threshold}}};
-      std::vector<double> column = columns.column(t);
-      out.push_back({std::move(t), std::move(column), family});
+      out.push_back({{.factors = {shift_T, TermFactor{TermCovariate::temperature_C, TermTransform::step, threshold}}}, {}, family});
     }
     family += thresholds.empty() ? 0 : 1;
     const TermCovariate clock = series.timed ? TermCovariate::campaign_time_s : TermCovariate::run_index;
@@ -261,7 +277,7 @@ std::vector<Candidate> dictionary(const FrictionLog& log, const TermSeries& seri
                                             mean_and_middle(log, series, TermCovariate::run_index).second}}});
     decay_family(TermCovariate::run_index, {law_factor});
   }
-  return out;
+  return with_columns();
 }
 
 // A law part's name in words ("" for the law's force and for covariates).
@@ -613,8 +629,12 @@ SmoothChoice smooth_term(const FrictionLog& log, const TermSeries& series, const
     out.why_not = "no covariate varies enough for a smooth term";
     return out;
   }
-  const std::vector<SupportScore> scores = score_supports(p, blocks);
-  const double fixed = score_supports(p, {{}}).front().cv_rmse;
+  // The blocks and, last, the model alone (no candidate): one set of Gram sums for all.
+  std::vector<std::vector<std::size_t>> supports = blocks;
+  supports.emplace_back();
+  std::vector<SupportScore> scores = score_supports(p, supports);
+  const double fixed = scores.back().cv_rmse;
+  scores.pop_back();
   // The best, and among those within the tolerance of it the one with the fewest basis functions.
   std::size_t best = 0;
   for (std::size_t b = 1; b < scores.size(); ++b)
@@ -692,24 +712,29 @@ FrictionTermSearch learn_friction_term(const FrictionLog& log, const FrictionFit
     law[i] = current.predicted_N[i] - current.run_offset_N[log.run[i]];
     y[i] = log.friction_N[i] - law[i];
   }
-  const auto law_warmer = [&](std::size_t i, double dT) { return law_at(log, i, params, values, reference_C, dT); };
+  const LawAt current_law(log, params, values, reference_C);
+  const auto law_warmer = [&](std::size_t i, double dT) { return current_law(i, dT); };
   const LawColumns law_columns = law_columns_at(log, values, law, law_warmer, reference_C);
   const Columns columns{log, series, law_columns};
   SparseProblem problem;
   problem.y = y;
   problem.group.assign(log.run.begin(), log.run.end());
   problem.level = problem.group;
-  for (std::size_t j = 0; j < params.size(); ++j) {
-    const ParameterEstimate& p = params[j];
-    if (!p.free || p.held_unidentifiable || p.at_bound) continue;
-    const double h = 1e-6 * std::max(std::abs(p.value), 1e-3);
+  std::vector<std::size_t> moved;  // the parameters the fit moves
+  for (std::size_t j = 0; j < params.size(); ++j)
+    if (params[j].free && !params[j].held_unidentifiable && !params[j].at_bound) moved.push_back(j);
+  problem.fixed.resize(moved.size());
+  // Central differences, one column per parameter: independent, each on a free thread.
+  for_each_index(moved.size(), [&](std::size_t m) {
+    const std::size_t j = moved[m];
+    const double h = 1e-6 * std::max(std::abs(params[j].value), 1e-3);
     std::vector<double> up = values, down = values, column(n);
     up[j] += h;
     down[j] -= h;
-    for (std::size_t i = 0; i < n; ++i)
-      column[i] = (law_at(log, i, params, up, reference_C) - law_at(log, i, params, down, reference_C)) / (2 * h);
-    problem.fixed.push_back(std::move(column));
-  }
+    const LawAt law_up(log, params, up, reference_C), law_down(log, params, down, reference_C);
+    for (std::size_t i = 0; i < n; ++i) column[i] = (law_up(i) - law_down(i)) / (2 * h);
+    problem.fixed[m] = std::move(column);
+  });
   std::vector<Candidate> candidates = dictionary(log, series, law_columns, law_warmer, reference_C);
   f.dictionary_size = candidates.size();
   for (auto& c : candidates) {

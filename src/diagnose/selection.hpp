@@ -10,6 +10,8 @@
 #include <tuple>
 #include <string>
 #include <utility>
+#include <numeric>
+#include <functional>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -82,6 +84,10 @@ struct SelectionRules {
   std::size_t max_effects = 3;
   bool parallel = false;  // fit a round's candidates in parallel (fit_with and summarise thread-safe)
   Progress progress;  // told of every candidate fit (of every round when parallel)
+  // In parallel, the candidates with the larger expected cost (none: all alike) are started
+  // first, so that no thread is left with a long fit at the end of a round; only the order the
+  // fits start in changes, not their results, which are kept in library order.
+  std::function<double(const std::string& candidate)> expected_cost;
 };
 
 // AICc and BIC of a Gaussian least-squares fit with k parameters over n (effective) residuals.
@@ -162,8 +168,15 @@ Selection<Fit> forward_select(const std::vector<std::string>& library, Fit basel
     std::vector<CandidateScore> round(candidates);
     std::exception_ptr failure;
     if (rules.parallel && rules.progress) rules.progress(step + ": " + std::to_string(candidates) + " candidates", 0, 1);
+    std::vector<std::size_t> start_order(candidates);
+    std::iota(start_order.begin(), start_order.end(), std::size_t{0});
+    if (rules.parallel && rules.expected_cost)
+      std::stable_sort(start_order.begin(), start_order.end(), [&](std::size_t a, std::size_t b) {
+        return rules.expected_cost(effects_left[a]) > rules.expected_cost(effects_left[b]);
+      });
 #pragma omp parallel for schedule(dynamic) if (rules.parallel)
-    for (std::size_t i = 0; i < candidates; ++i) {
+    for (std::size_t started = 0; started < candidates; ++started) {
+      const std::size_t i = start_order[started];
       try {
         if (!rules.parallel && rules.progress) rules.progress(step + ", " + effects_left[i], i, candidates);
         std::vector<std::string> effects = s.accepted;

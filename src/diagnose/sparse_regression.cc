@@ -9,6 +9,7 @@
 #include <numeric>
 
 #include "lmcal/error.hpp"
+#include "parallel_slices.hpp"
 
 namespace lmcal::detail {
 
@@ -54,18 +55,19 @@ GroupGrams group_grams(const SparseProblem& p) {
   g.xx.assign(groups, Eigen::MatrixXd::Zero(K, K));
   g.xy.assign(groups, Eigen::VectorXd::Zero(K));
   g.yy.assign(groups, 0.0);
-  // Rows in blocks per group: rank updates of a block are much faster than row by row.
+  // Rows in blocks per group: rank updates of a block are much faster than row by row. The
+  // groups' sums are independent: each group on a free thread (its own sums in its own order).
   constexpr std::size_t kBlock = 256;
   std::vector<std::vector<std::size_t>> rows(groups);
   for (std::size_t i = 0; i < n; ++i) rows[p.group[i]].push_back(i);
-  Eigen::MatrixXd X(static_cast<Eigen::Index>(kBlock), K);
-  Eigen::VectorXd y(static_cast<Eigen::Index>(kBlock));
-  for (std::size_t gr = 0; gr < groups; ++gr) {
+  for_each_index(groups, [&](std::size_t gr) {
+    Eigen::MatrixXd X(static_cast<Eigen::Index>(kBlock), K);
+    Eigen::VectorXd y(static_cast<Eigen::Index>(kBlock));
     for (std::size_t start = 0; start < rows[gr].size(); start += kBlock) {
       const std::size_t m = std::min(kBlock, rows[gr].size() - start);
       for (std::size_t r = 0; r < m; ++r) {
         const std::size_t i = rows[gr][start + r];
-        const auto l = static_cast<Eigen::Index>(centre ? level_index[level[i]] : 0);
+        const auto l = static_cast<Eigen::Index>(centre ? level_index.at(level[i]) : 0);
         for (std::size_t j = 0; j < k; ++j)
           X(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(j)) =
               column(j)[i] - (centre ? mean(l, static_cast<Eigen::Index>(j)) : 0.0);
@@ -76,7 +78,7 @@ GroupGrams group_grams(const SparseProblem& p) {
       g.xy[gr].noalias() += X.topRows(M).transpose() * y.head(M);
       g.yy[gr] += y.head(M).squaredNorm();
     }
-  }
+  });
   g.XX = Eigen::MatrixXd::Zero(K, K);
   g.Xy = Eigen::VectorXd::Zero(K);
   for (std::size_t gr = 0; gr < groups; ++gr) {

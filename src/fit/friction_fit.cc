@@ -59,45 +59,57 @@ struct ConditionKeyHash {
 };
 
 // Samples grouped by condition (guide, preload, load, temperature to 1 K, speed, direction),
-// groups in key order.
+// groups in key order; each group's samples in log order, stored one group after the other (a
+// trajectory's samples are each a condition of their own: a vector per group cost a heap
+// allocation per sample).
 struct ConditionGroups {
   std::vector<ConditionKey> keys;
-  std::vector<std::vector<std::size_t>> members;
+  std::vector<std::size_t> first;     // per group: where its samples start in `samples` (and a last entry: the end)
+  std::vector<std::size_t> samples;   // group by group
   std::vector<std::size_t> group_of;  // per sample
+  std::span<const std::size_t> members(std::size_t g) const { return {samples.data() + first[g], first[g + 1] - first[g]}; }
 };
 
 ConditionGroups group_conditions(const FrictionLog& log) {
   std::unordered_map<ConditionKey, std::size_t, ConditionKeyHash> index;
-  ConditionGroups g;
-  std::vector<std::size_t> first_group(log.size());
+  std::vector<ConditionKey> keys;  // in the order they first appear
+  std::vector<std::size_t> first_group(log.size()), count;
   std::size_t group = 0;
   for (std::size_t i = 0; i < log.size(); ++i) {
     // A log holds each condition for a stretch of samples: look up only where it changes.
     const ConditionKey key = condition_key(log, i);
-    if (i == 0 || !(key == g.keys[group])) {
-      const auto [it, inserted] = index.try_emplace(key, g.keys.size());
+    if (i == 0 || !(key == keys[group])) {
+      const auto [it, inserted] = index.try_emplace(key, keys.size());
       if (inserted) {
-        g.keys.push_back(it->first);
-        g.members.emplace_back();
+        keys.push_back(it->first);
+        count.push_back(0);
       }
       group = it->second;
     }
-    g.members[group].push_back(i);
+    ++count[group];
     first_group[i] = group;
   }
   // Key order, so that outputs do not depend on the hash.
-  std::vector<std::size_t> order(g.keys.size());
+  std::vector<std::size_t> order(keys.size());
   std::iota(order.begin(), order.end(), std::size_t{0});
-  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return g.keys[a] < g.keys[b]; });
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return keys[a] < keys[b]; });
   std::vector<std::size_t> rank(order.size());
   ConditionGroups sorted;
+  sorted.first.assign(order.size() + 1, 0);
   for (std::size_t r = 0; r < order.size(); ++r) {
     rank[order[r]] = r;
-    sorted.keys.push_back(g.keys[order[r]]);
-    sorted.members.push_back(std::move(g.members[order[r]]));
+    sorted.keys.push_back(keys[order[r]]);
+    sorted.first[r + 1] = sorted.first[r] + count[order[r]];
   }
+  // The samples into their groups' places in log order (a counting sort).
   sorted.group_of.resize(log.size());
-  for (std::size_t i = 0; i < log.size(); ++i) sorted.group_of[i] = rank[first_group[i]];
+  sorted.samples.resize(log.size());
+  std::vector<std::size_t> next(sorted.first.begin(), sorted.first.end() - 1);
+  for (std::size_t i = 0; i < log.size(); ++i) {
+    const std::size_t g = rank[first_group[i]];
+    sorted.group_of[i] = g;
+    sorted.samples[next[g]++] = i;
+  }
   return sorted;
 }
 
@@ -110,7 +122,7 @@ std::vector<double> sample_sigmas(const FrictionLog& log, FrictionWeighting weig
   std::vector<double> deviation(n, kNaN);
   std::vector<double> group_sd(groups.keys.size(), kNaN);
   for (std::size_t g = 0; g < groups.keys.size(); ++g) {
-    const auto& members = groups.members[g];
+    const auto members = groups.members(g);
     if (members.size() < 2) continue;
     double mean = 0;
     for (std::size_t i : members) mean += log.friction_N[i];
@@ -682,16 +694,20 @@ FrictionFitResult fit_friction(const FrictionLog& logged, const FrictionFitOptio
   std::vector<double> lag_change;
   for (std::size_t t = 0, at = 0; t < out.terms.size(); at += out.terms[t].has_scale() ? 2 : 1, ++t)
     if (out.terms[t].lagged_temperature()) lag_change = lagged_temperature_change(log, series, term_values[at + 1]);
-  for (std::size_t i = 0; i < log.size(); ++i) {
-    FrictionConstants<double> ki = k;
-    ki.nu_ref_mm2_s = log.viscosity40_mm2_s[i];
-    ki.T_ref_C = options.start.T_ref_C;
-    out.predicted_N.push_back(
-        !out.terms.empty()
-            ? friction_with_terms_N(ki, e, log, series, i, out.terms, term_values.data(), lag_change.empty() ? nullptr : &lag_change)
-        : slots.empty() ? friction_force_N(ki, log.conditions(i))
-                        : friction_force_with_effects_N(ki, e, log.conditions(i)));
-  }
+  // Each sample's prediction on its own: slices of the samples on the threads, the same bits.
+  out.predicted_N.resize(log.size());
+  detail::for_each_slice(log.size(), detail::slice_threads(log.size(), 16384), [&](int, std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      FrictionConstants<double> ki = k;
+      ki.nu_ref_mm2_s = log.viscosity40_mm2_s[i];
+      ki.T_ref_C = options.start.T_ref_C;
+      out.predicted_N[i] =
+          !out.terms.empty()
+              ? friction_with_terms_N(ki, e, log, series, i, out.terms, term_values.data(), lag_change.empty() ? nullptr : &lag_change)
+          : slots.empty() ? friction_force_N(ki, log.conditions(i))
+                          : friction_force_with_effects_N(ki, e, log.conditions(i));
+    }
+  });
   // Per run: the mean residual of the law, and the zero offset the predictions carry.
   std::vector<double> run_sum(runs, 0.0), run_count(runs, 0.0);
   for (std::size_t i = 0; i < log.size(); ++i) {
@@ -740,7 +756,7 @@ FrictionFitResult fit_friction(const FrictionLog& logged, const FrictionFitOptio
   const ConditionGroups groups = group_conditions(log);
   for (std::size_t g = 0; g < groups.keys.size(); ++g) {
     const ConditionKey& key = groups.keys[g];
-    const auto& members = groups.members[g];
+    const auto members = groups.members(g);
     ConditionResidual c{log.guide_names.empty() ? "" : log.guide_names[std::get<0>(key)],
                         std::get<1>(key), std::get<2>(key), std::get<3>(key), std::get<4>(key), std::get<5>(key),
                         members.size(), 0, 0, 0, 0, 0};

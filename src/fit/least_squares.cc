@@ -263,7 +263,7 @@ namespace {
 Polish linear_solve(const LeastSquaresModel& model, const ceres::CostFunction& cost,
                     const std::vector<ParameterSpec>& specs, const std::vector<bool>& held, std::vector<double> theta,
                     const RowLoss& loss, Eigen::MatrixXd& J) {
-  const Eigen::VectorXd r0 = evaluate_residuals(model, theta, loss, &J);
+  const Eigen::VectorXd r0 = evaluate_residuals(model, theta, loss, &J, {}, held);
   std::vector<Eigen::Index> free;
   for (std::size_t j = 0; j < specs.size(); ++j)
     if (!held[j]) free.push_back(static_cast<Eigen::Index>(j));
@@ -302,7 +302,7 @@ Polish linear_solve(const LeastSquaresModel& model, const ceres::CostFunction& c
   // (The residuals too: a rank-deficient J, say a parameter the data do not see, came here
   // without them and crashed the covariance that reads them.)
   Polish out = polish(cost, specs, held, theta);
-  out.residuals = evaluate_residuals(model, out.theta, loss, &J);
+  out.residuals = evaluate_residuals(model, out.theta, loss, &J, {}, held);
   return out;
 }
 }  // namespace
@@ -504,7 +504,8 @@ bool at_bound(const ParameterSpec& s, double v) {
 }  // namespace
 
 Eigen::VectorXd evaluate_residuals(const LeastSquaresModel& model, const std::vector<double>& theta,
-                                   const RowLoss& loss, Eigen::MatrixXd* jacobian, const std::vector<std::size_t>& rows) {
+                                   const RowLoss& loss, Eigen::MatrixXd* jacobian, const std::vector<std::size_t>& rows,
+                                   const std::vector<bool>& held) {
   const auto cost = model.cost_function(rows, loss);
   const std::size_t n = rows.empty() ? model.num_residuals() : rows.size();
   Eigen::VectorXd r(static_cast<Eigen::Index>(n));
@@ -514,7 +515,7 @@ Eigen::VectorXd evaluate_residuals(const LeastSquaresModel& model, const std::ve
       if (!std::isfinite(r[i])) throw NonFiniteResiduals(fmt::format("residual {} of {} is {}", i + 1, r.size(), r[i]));
   };
   if (const auto* columns = dynamic_cast<const NormalEquationsCost*>(cost.get()); columns && jacobian) {
-    check(columns->residuals_and_jacobian(theta.data(), r, *jacobian));
+    check(columns->residuals_and_jacobian(theta.data(), held, r, *jacobian));
     return r;
   }
   Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> J(static_cast<Eigen::Index>(n),
@@ -710,7 +711,8 @@ Estimate estimate(const LeastSquaresModel& model, const std::vector<ParameterSpe
         state.residuals = e.fit.residuals;
       } else {
         e.fit = polish(*cost, specs, held, theta, options.max_iterations);
-        state.residuals = evaluate_residuals(model, e.fit.theta, loss, &state.jacobian);
+        // The held parameters' columns are read by nothing after: not differentiated (a narrower Jet).
+        state.residuals = evaluate_residuals(model, e.fit.theta, loss, &state.jacobian, {}, held);
       }
       theta = state.theta = e.fit.theta;
       state.held = held;

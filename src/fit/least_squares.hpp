@@ -85,7 +85,7 @@ struct FinalState {
   std::vector<double> theta;
   std::vector<bool> held;      // held parameters (given, or not identifiable)
   Eigen::VectorXd residuals;
-  Eigen::MatrixXd jacobian;    // all parameters
+  Eigen::MatrixXd jacobian;    // all parameters (a held one's column may be 0: evaluate_residuals)
   Eigen::MatrixXd bread;       // (JᵀJ)⁻¹ over the free parameters, rows/columns of held ones zero
   bool covariance_ok = false;
   std::string covariance_message;
@@ -146,9 +146,12 @@ class NonFiniteResiduals : public std::runtime_error {
 };
 
 // Residuals r(θ) and, if `jacobian` is given, ∂r/∂θ (rows x parameters), over `rows`.
-// NonFiniteResiduals when they cannot be evaluated or one is not finite.
+// `held` (one flag per parameter, or empty): parameters whose columns the caller does not read;
+// a cost that accumulates its rows (NormalEquationsCost) may leave them 0 and differentiate in
+// the others only (the same bits in theirs). NonFiniteResiduals when they cannot be evaluated
+// or one is not finite.
 Eigen::VectorXd evaluate_residuals(const LeastSquaresModel& model, const std::vector<double>& theta,
                                    const RowLoss& loss = {}, Eigen::MatrixXd* jacobian = nullptr,
-                                   const std::vector<std::size_t>& rows = {});
+                                   const std::vector<std::size_t>& rows = {}, const std::vector<bool>& held = {});
 
 }  // namespace lmcal::detail

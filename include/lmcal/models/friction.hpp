@@ -143,11 +143,12 @@ auto viscosity_mm2_s(const FrictionConstants<P>& k, const C& temperature_C) {
   return k.nu_ref_mm2_s * exp(-k.beta_per_K * (temperature_C - k.T_ref_C));
 }
 
-// Eqs. 3-7, term by term. The scalar of the result is whatever P ⊗ C promotes to.
-template <typename P, typename C>
-auto friction_breakdown(const FrictionConstants<P>& k, const FrictionConditions<C>& c) {
+// Eqs. 3-5 and 7, term by term, at the viscosity `nu` = ν(T) that Eq. 6 gives at c's temperature
+// (a fit computes it once for the rows at one temperature). The scalar of the result is
+// whatever P ⊗ C promotes to.
+template <typename P, typename C, typename N>
+auto friction_breakdown_at_viscosity(const FrictionConstants<P>& k, const FrictionConditions<C>& c, const N& nu) {
   using std::exp;
-  const auto nu = viscosity_mm2_s(k, c.temperature_C);
   using R = decltype(std::declval<P>() * std::declval<C>());
   FrictionBreakdown<R> out;
   out.viscosity_mm2_s = nu;
@@ -156,6 +157,12 @@ auto friction_breakdown(const FrictionConstants<P>& k, const FrictionConditions<
   out.viscous_N = c.block_length_mm * (k.mu_v * c.preload_um * c.velocity_m_s * nu + k.f0);
   out.stribeck_N = k.mu_st * c.preload_um * c.block_length_mm / nu * out.stribeck_decay;
   return out;
+}
+
+// Eqs. 3-7, term by term.
+template <typename P, typename C>
+auto friction_breakdown(const FrictionConstants<P>& k, const FrictionConditions<C>& c) {
+  return friction_breakdown_at_viscosity(k, c, viscosity_mm2_s(k, c.temperature_C));
 }
 
 // Eq. 7: total friction force, N.

@@ -170,11 +170,11 @@ bool held_neutral(const T& value, double neutral) {
 }
 }  // namespace detail
 
-// The published law with every effect of `e` applied, N.
-template <typename P, typename C, typename E>
+// The published law with every effect of `e` applied, N, from the law's terms at c
+// (friction_breakdown(k, c), computed by the caller).
+template <typename P, typename C, typename E, typename B>
 auto friction_force_with_effects_N(const FrictionConstants<P>& k, const FrictionEffects<E>& e,
-                                   const FrictionConditions<C>& c) {
-  const auto b = friction_breakdown(k, c);
+                                   const FrictionConditions<C>& c, const FrictionBreakdown<B>& b) {
   const auto law_N = b.total_N();
   using R = decltype(law_N * e[0]);
   R total(law_N);
@@ -192,6 +192,13 @@ auto friction_force_with_effects_N(const FrictionConstants<P>& k, const Friction
   const R with_law_effects = total;
   add_stage(FrictionEffectStage::on_total, with_law_effects);
   return total;
+}
+
+// The published law with every effect of `e` applied, N.
+template <typename P, typename C, typename E>
+auto friction_force_with_effects_N(const FrictionConstants<P>& k, const FrictionEffects<E>& e,
+                                   const FrictionConditions<C>& c) {
+  return friction_force_with_effects_N(k, e, c, friction_breakdown(k, c));
 }
 
 // Eqs. 9-10 with the effects: Q_f = F · V, W.

@@ -37,6 +37,71 @@ double distinct_resamples(std::size_t G) {
   return c;
 }
 
+// Each run's H_c = J_cᵀJ_c and g_c = J_cᵀr_c (and K_c = J_cᵀE_c with an external input),
+// adding the rows' outer products in row order, each row's nonzero entries only: a row of a
+// thermal fit touches a third of the parameters (its run's), and a product with an exact 0
+// adds nothing to a sum that starts at +0, so the sums are the same bits as the dense outer
+// products'.
+void run_sums_sparse(const ScoreInputs& in, const Eigen::MatrixXd* external_jacobian, std::vector<Eigen::MatrixXd>& H,
+                     std::vector<Eigen::VectorXd>& g, std::vector<Eigen::MatrixXd>& K) {
+  const bool external = external_jacobian != nullptr;  // null: no external input
+  const auto m = in.jacobian.cols();
+  std::vector<Eigen::Index> nonzero;
+  for (Eigen::Index i = 0; i < in.jacobian.rows(); ++i) {
+    const std::size_t c = in.rows.cluster[static_cast<std::size_t>(i)];
+    const auto row = in.jacobian.row(i);
+    if (!row.allFinite()) {  // 0 · inf is not 0: the dense sums
+      H[c].noalias() += row.transpose() * row;
+      g[c] += in.residuals[i] * row.transpose();
+      if (external) K[c].noalias() += row.transpose() * external_jacobian->row(i);
+      continue;
+    }
+    nonzero.clear();
+    for (Eigen::Index j = 0; j < m; ++j)
+      if (row[j] != 0) nonzero.push_back(j);
+    for (const Eigen::Index b : nonzero) {
+      const double x = row[b];
+      for (const Eigen::Index a : nonzero) H[c](a, b) += x * row[a];
+      g[c][b] += in.residuals[i] * x;
+      if (external) K[c].row(b) += x * external_jacobian->row(i);
+    }
+  }
+}
+
+// The same sums where every entry of J is finite and there is no external input, the same
+// bits (see run_sums_sparse: a product with an exact 0 changes no sum), without a branch per
+// entry: every entry of the lower triangle and of g_c summed over the run's rows in row order,
+// in flat arrays the compiler can keep in registers and vectorise across entries (each entry's
+// own sum stays in row order); the upper triangle mirrored (x_a·x_b is x_b·x_a exactly). A
+// 10⁶-row trajectory fit spent a tenth of its time in the branchy loop.
+void run_sums(const ScoreInputs& in, std::vector<Eigen::MatrixXd>& H, std::vector<Eigen::VectorXd>& g) {
+  const auto m = static_cast<std::size_t>(in.jacobian.cols());
+  const auto n = static_cast<std::size_t>(in.jacobian.rows());
+  const double* J = in.jacobian.data();  // column-major: entry (i, a) at J[a·n + i]
+  std::vector<double> row(m);
+  std::vector<std::vector<double>> lower(H.size(), std::vector<double>(m * m, 0.0)), score(H.size(), std::vector<double>(m, 0.0));
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::size_t c = in.rows.cluster[i];
+    for (std::size_t a = 0; a < m; ++a) row[a] = J[a * n + i];
+    double* h = lower[c].data();
+    double* s = score[c].data();
+    const double r = in.residuals[static_cast<Eigen::Index>(i)];
+    for (std::size_t a = 0; a < m; ++a) {
+      const double x = row[a];
+      double* h_row = h + a * m;  // H(a, b) for b <= a
+      for (std::size_t b = 0; b <= a; ++b) h_row[b] += row[b] * x;
+      s[a] += r * x;
+    }
+  }
+  for (std::size_t c = 0; c < H.size(); ++c)
+    for (std::size_t a = 0; a < m; ++a) {
+      g[c][static_cast<Eigen::Index>(a)] = score[c][a];
+      for (std::size_t b = 0; b <= a; ++b)
+        H[c](static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b)) =
+            H[c](static_cast<Eigen::Index>(b), static_cast<Eigen::Index>(a)) = lower[c][a * m + b];
+    }
+}
+
 }  // namespace
 
 std::vector<Eigen::VectorXd> standard_normal_draws(std::size_t count, Eigen::Index size, std::uint64_t seed) {
@@ -74,29 +139,8 @@ BootstrapResult cluster_bootstrap(const ScoreInputs& in, std::size_t replicates,
   std::vector<Eigen::VectorXd> g(G, Eigen::VectorXd::Zero(m));
   if (external)
     for (auto& k : K) k = Eigen::MatrixXd::Zero(m, external_jacobian->cols());
-  // Per row, only its nonzero entries: a row of a thermal fit touches a third of the
-  // parameters (its run's), and a product with an exact 0 adds nothing to a sum that starts
-  // at +0, so the sums are the same bits as the dense outer products'.
-  std::vector<Eigen::Index> nonzero;
-  for (Eigen::Index i = 0; i < in.jacobian.rows(); ++i) {
-    const std::size_t c = in.rows.cluster[static_cast<std::size_t>(i)];
-    const auto row = in.jacobian.row(i);
-    if (!row.allFinite()) {  // 0 · inf is not 0: the dense sums
-      H[c].noalias() += row.transpose() * row;
-      g[c] += in.residuals[i] * row.transpose();
-      if (external) K[c].noalias() += row.transpose() * external_jacobian->row(i);
-      continue;
-    }
-    nonzero.clear();
-    for (Eigen::Index j = 0; j < m; ++j)
-      if (row[j] != 0) nonzero.push_back(j);
-    for (const Eigen::Index b : nonzero) {
-      const double x = row[b];
-      for (const Eigen::Index a : nonzero) H[c](a, b) += x * row[a];
-      g[c][b] += in.residuals[i] * x;
-      if (external) K[c].row(b) += x * external_jacobian->row(i);
-    }
-  }
+  if (!external && in.jacobian.allFinite()) run_sums(in, H, g);
+  else run_sums_sparse(in, external ? external_jacobian : nullptr, H, g, K);
 
   const auto count = static_cast<long>(replicates);
   std::exception_ptr failure;  // a replicate's std::bad_alloc leaves the region, then is rethrown

@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "covariance.hpp"
+#include "parallel_slices.hpp"
 
 namespace lmcal::detail {
 
@@ -44,7 +45,11 @@ double andrews_bandwidth(const std::vector<Eigen::MatrixXd>& series) {
   for (const auto& s : series) length += static_cast<double>(s.rows());
   length /= static_cast<double>(series.size());
   constexpr Eigen::Index kLags[] = {0, 1, 2, 4, 8};
-  for (Eigen::Index a = 0; a < m; ++a) {
+  // Each component's ρ on a free thread (its sums over the series in their order), the terms of
+  // α̂(1) then added in component order: the same bits on any number of threads.
+  std::vector<double> num_of(static_cast<std::size_t>(m), 0.0), den_of(static_cast<std::size_t>(m), 0.0);
+  for_each_index(static_cast<std::size_t>(m), [&](std::size_t component) {
+    const auto a = static_cast<Eigen::Index>(component);
     // The five autocovariances in one pass over the component.
     double sums[std::size(kLags)] = {};
     for (const auto& s : series) {
@@ -57,7 +62,7 @@ double andrews_bandwidth(const std::vector<Eigen::MatrixXd>& series) {
       return sums[std::find(std::begin(kLags), std::end(kLags), lag) - std::begin(kLags)];
     };
     const double c0 = autocovariance(0);
-    if (!(c0 > 0)) continue;
+    if (!(c0 > 0)) return;
     // Longer lags count only where lag 1 and they themselves stand out of the noise (3/√N):
     // the k-th root of a chance 0.02 would be 0.6 at lag 8.
     const double noise = 3 / std::sqrt(length * static_cast<double>(series.size()));
@@ -67,9 +72,11 @@ double andrews_bandwidth(const std::vector<Eigen::MatrixXd>& series) {
       if (rho > noise && c > noise) rho = std::max(rho, std::pow(c, 1.0 / static_cast<double>(lag)));
     }
     rho = std::clamp(rho, -0.97, 0.97);
-    num += 4 * rho * rho / (std::pow(1 - rho, 6) * std::pow(1 + rho, 2));
-    den += 1 / std::pow(1 - rho, 4);
-  }
+    num_of[component] = 4 * rho * rho / (std::pow(1 - rho, 6) * std::pow(1 + rho, 2));
+    den_of[component] = 1 / std::pow(1 - rho, 4);
+  });
+  // (A component without variance left its terms at +0, which add nothing.)
+  for (std::size_t a = 0; a < num_of.size(); ++a) num += num_of[a], den += den_of[a];
   if (!(den > 0)) return 0;
   return 1.1447 * std::cbrt(num / den * length);
 }
@@ -99,9 +106,13 @@ CovarianceEstimate hac_covariance(const ScoreInputs& in, double max_bandwidth_fr
   // values up to b = 0.5; independent runs average out).
   Eigen::MatrixXd meat = Eigen::MatrixXd::Zero(in.jacobian.cols(), in.jacobian.cols());
   double b_sum = 0;
-  for (const auto& s : series) {
+  // Each run's meat on a free thread, added in run order.
+  std::vector<Eigen::MatrixXd> run_meat(series.size());
+  for_each_index(series.size(), [&](std::size_t c) { run_meat[c] = bartlett_meat(series[c], lags); });
+  for (std::size_t c = 0; c < series.size(); ++c) {
+    const auto& s = series[c];
     const double b = std::min(1.0, static_cast<double>(lags + 1) / std::max<double>(1.0, static_cast<double>(s.rows())));
-    meat += bartlett_meat(s, lags) / (1 - b + b * b / 3);
+    meat += run_meat[c] / (1 - b + b * b / 3);
     b_sum += b;
   }
   const double G = static_cast<double>(std::max<std::size_t>(series.size(), 1));
