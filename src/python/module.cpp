@@ -44,6 +44,7 @@
 #include "lmcal/predict/prediction.hpp"
 #include "lmcal/report/calibration.hpp"
 #include "lmcal/report/html_report.hpp"
+#include "lmcal/rig/virtual_rig.hpp"
 
 namespace py = pybind11;
 namespace fs = std::filesystem;
@@ -692,6 +693,38 @@ py::dict simulate_thermal_py(const py::dict& o) {
   return d;
 }
 
+// `lmcal generate friction` (the virtual rig) in memory: its options by the names of
+// FrictionRigConfig (lmcal.generate_friction checks their types), effects by rig effect name.
+FrictionRigOutput generate_friction_py(const py::dict& o) {
+  FrictionRigConfig config;
+  for (const auto& [key, value] : o) {
+    const auto name = key.cast<std::string>();
+    const auto list = [&] { return value.cast<std::vector<double>>(); };
+    if (name == "guides") config.guides = value.cast<std::vector<std::string>>();
+    else if (name == "preload_um") config.preload_um = list();
+    else if (name == "load_N") config.load_N = list();
+    else if (name == "velocity_m_s") config.velocity_m_s = list();
+    else if (name == "temperature_C") config.temperature_C = list();
+    else if (name == "runs") config.runs = value.cast<int>();
+    else if (name == "one_setup_per_run") config.one_setup_per_run = value.cast<bool>();
+    else if (name == "temperature_outermost") config.temperature_outermost = value.cast<bool>();
+    else if (name == "shuffle_runs") config.shuffle_runs = value.cast<bool>();
+    else if (name == "noise_N") config.noise_N = value.cast<double>();
+    else if (name == "noise_ar1") config.noise_ar1 = value.cast<double>();
+    else if (name == "run_offset_N") config.run_offset_N = value.cast<double>();
+    else if (name == "temperature_noise_K") config.temperature_noise_K = value.cast<double>();
+    else if (name == "seed") config.seed = value.cast<std::uint64_t>();
+    else if (name == "constants") config.constants = constants_from(value.cast<std::map<std::string, double>>());
+    else if (name != "effects") throw InvalidParameter(name, "not an option of the virtual rig");
+  }
+  require_autocorrelation("noise_ar1", config.noise_ar1);
+  RigEffects effects;
+  if (o.contains("effects"))
+    for (const auto& [name, value] : o["effects"].cast<std::map<std::string, double>>()) set_rig_effect(effects, name, value);
+  py::gil_scoped_release release;
+  return generate_friction_log(config, effects);
+}
+
 // ---- prediction -------------------------------------------------------------------------------
 
 // `lmcal predict MODEL DUTY`: prediction.json's text, the summary, and the bands as arrays.
@@ -891,6 +924,10 @@ PYBIND11_MODULE(_lmcal, m) {
   m.def("predict", &predict_py);
   m.def("friction_law", &friction_law);
   m.def("simulate_thermal", &simulate_thermal_py);
+  m.def("generate_friction", [](const py::dict& o) {
+    const FrictionRigOutput made = generate_friction_py(o);
+    return std::pair(FrictionData{std::make_shared<FrictionLog>(made.log), {}}, made.truth_json);
+  });
   m.def("guide", [](const std::string& model, const std::optional<std::string>& catalog) {
     const auto user = user_catalog(catalog);
     const GuideSpec& spec = find_guide(model, user ? &*user : nullptr);

@@ -27,7 +27,7 @@ import math
 import numbers
 import os
 from collections.abc import Mapping
-from typing import Any, Callable, Optional, Sequence
+from typing import Any, Callable, NamedTuple, Optional, Sequence
 
 import numpy as np
 
@@ -40,7 +40,8 @@ __all__ = [
     "InputError", "InvalidParameterError", "FrictionLog", "ThermalDataSet", "Parameter", "FrictionFit",
     "ThermalFit", "FrictionDiagnosis", "ThermalDiagnosis", "Calibration", "ThermalSimulation",
     "Prediction", "predict", "load_friction_log", "load_thermal_dataset", "fit_friction", "fit_thermal", "diagnose_friction",
-    "diagnose_thermal", "calibrate", "simulate_friction", "simulate_thermal", "guide", "friction_effect_names",
+    "diagnose_thermal", "calibrate", "simulate_friction", "simulate_thermal", "generate_friction", "GeneratedFriction",
+    "guide", "friction_effect_names",
 ]
 
 Progress = Callable[[str, int, int], Any]
@@ -139,8 +140,9 @@ class FrictionLog:
     """Load-cell samples, one per row: run, velocity_m_s, load_N, preload_um, block_length_mm,
     temperature_C, friction_N (and time_s, viscosity40_mm2_s, direction, guide)."""
 
-    def __init__(self, handle):
+    def __init__(self, handle, origin: str = "columns"):
         self._h = handle
+        self._origin = origin  # what the log came from when no file
 
     @classmethod
     def from_columns(cls, data, **raw) -> "FrictionLog":
@@ -181,7 +183,7 @@ class FrictionLog:
         return self._h.csv()
 
     def __repr__(self) -> str:
-        files = ", ".join(os.path.basename(f) for f, _ in self.inputs) or "columns"
+        files = ", ".join(os.path.basename(f) for f, _ in self.inputs) or self._origin
         return f"<lmcal.FrictionLog: {len(self)} samples in {len(self.run_names)} runs from {files}>"
 
 
@@ -705,6 +707,42 @@ def simulate_thermal(*, guide: str = "SRN 35C", velocity_m_s: float = 0.11, load
         duration_s=duration_s, output_every_s=output_every_s, time_step_s=time_step_s, segments=segments,
         source=source, scheme=scheme))
     return ThermalSimulation(**d)
+
+
+class GeneratedFriction(NamedTuple):
+    """A virtual rig's log and its truth (friction_truth.json of ``lmcal generate friction``)."""
+    log: FrictionLog
+    truth: dict
+
+
+def generate_friction(*, seed: int = 1, effects: Optional[Mapping[str, float]] = None,
+                      constants: Optional[Mapping[str, float]] = None, guides=None, preload_um=None, load_N=None,
+                      velocity_m_s=None, temperature_C=None, runs: Optional[int] = None,
+                      one_setup_per_run: Optional[bool] = None, temperature_outermost: Optional[bool] = None,
+                      shuffle_runs: Optional[bool] = None, noise_N: Optional[float] = None,
+                      noise_ar1: Optional[float] = None, run_offset_N: Optional[float] = None,
+                      temperature_noise_K: Optional[float] = None) -> GeneratedFriction:
+    """A synthetic friction log with a known truth: ``lmcal generate friction`` (the virtual
+    rig) in memory, the same samples for the same options and seed. ``effects``: rig effect
+    name -> value (``lmcal generate effects`` lists them); ``constants``: the true law's
+    (default the paper's); guides, preload_um, load_N, velocity_m_s, temperature_C: the values
+    swept (a number or a list each); None: the command's default."""
+    def numbers_of(name, value):
+        values = np.atleast_1d(np.asarray(value))
+        if values.ndim != 1 or values.dtype.kind not in "iuf":
+            raise TypeError(f"{name}: expected a number or a list of numbers, got {value!r}")
+        return [float(v) for v in values]
+
+    sweeps = {name: numbers_of(name, value) for name, value in
+              (("preload_um", preload_um), ("load_N", load_N), ("velocity_m_s", velocity_m_s),
+               ("temperature_C", temperature_C)) if value is not None}
+    options = _given(seed=seed, runs=runs, one_setup_per_run=one_setup_per_run, temperature_outermost=temperature_outermost,
+                     shuffle_runs=shuffle_runs, noise_N=noise_N, noise_ar1=noise_ar1, run_offset_N=run_offset_N,
+                     temperature_noise_K=temperature_noise_K, effects=_number_map(effects, "effects"),
+                     constants=_number_map(constants, "constants"),
+                     guides=[guides] if isinstance(guides, str) else guides, **sweeps)
+    handle, truth = _lmcal.generate_friction(options)
+    return GeneratedFriction(FrictionLog(handle, origin="the virtual rig"), json.loads(truth))
 
 
 def guide(model: str, *, catalog: Optional[str] = None) -> dict:

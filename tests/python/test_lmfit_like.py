@@ -1,0 +1,101 @@
+"""The Python package as lmfit users expect it (issue 41 #8): ``init`` the start, starts and
+fixed values inside their bounds, errors from columns naming the column and the row, a fit
+evaluated at new conditions (``eval``), ``plot()`` and ``to_dataframe()`` with their optional
+packages imported only when asked for, ``simulate_friction(guide=...)`` and the virtual rig in
+memory (``generate_friction``), each checked against the command where the command has it.
+
+Run by ctest (test `python`), as test_lmcal.py."""
+
+import json
+import math
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import lmcal
+
+SOURCE = os.environ.get("LMCAL_SOURCE", os.path.join(os.path.dirname(__file__), "..", ".."))
+CLI = os.environ.get("LMCAL_CLI", "lmcal")
+SET = os.path.join(SOURCE, "measurements", "cheng2017")
+THERMAL_TOML = os.path.join(SET, "thermal.toml")
+MODEL = os.path.join(SOURCE, "fits", "cheng2017", "model.toml")
+DUTY = os.path.join(SOURCE, "examples", "duty", "two_shifts.toml")
+PAPER = {"k1": 0.315, "k2": 0.03, "mu_st": 1.52, "v_st_m_s": 0.015, "mu_v": 0.003, "beta_per_K": 0.067, "f0": 0.029}
+
+
+def cli(*args):
+    return subprocess.run([CLI, *map(str, args)], check=True, capture_output=True, text=True)
+
+
+def read_csv(path) -> dict:
+    """A CSV the command wrote as columns (numbers as floats where every cell is one)."""
+    lines = [line for line in open(path).read().splitlines() if not line.startswith("#")]
+    header, rows = lines[0].split(","), [line.split(",") for line in lines[1:]]
+    columns = {}
+    for j, name in enumerate(header):
+        cells = [row[j] for row in rows]
+        try:
+            columns[name] = np.array([float(c) for c in cells])
+        except ValueError:
+            columns[name] = cells
+    return columns
+
+
+@pytest.fixture(scope="module")
+def rig():
+    """Three runs of the virtual rig with a seal drag the published law lacks."""
+    return lmcal.generate_friction(seed=3, runs=3, effects={"seal_drag": 40})
+
+
+@pytest.fixture(scope="module")
+def fit(rig):
+    """The law with the seal drag, the temperature as logged (eval then reproduces predicted_N)."""
+    return lmcal.fit_friction(rig.log, effects=["seal_drag"], law_temperature="logged")
+
+
+def combination_law_fit():
+    """A log of one setup without its load, preload and block length: the law in combinations."""
+    one = lmcal.generate_friction(seed=2, runs=2, guides="SRN 35C", preload_um=4, load_N=2000, temperature_C=26)
+    c = one.log.columns()
+    return lmcal.fit_friction({k: v for k, v in c.items() if k not in ("load_N", "preload_um", "block_length_mm", "guide")})
+
+
+@pytest.fixture(scope="module")
+def thermal_fit():
+    return lmcal.fit_thermal(THERMAL_TOML, run_fits=False)
+
+
+# ---- the virtual rig -------------------------------------------------------------------------
+
+def test_generate_friction_is_the_commands_virtual_rig(tmp_path):
+    cli("generate", "friction", "-o", tmp_path, "--seed", "5", "--runs", "2", "--guide", "SRN 35C,SRG 45C",
+        "--temperature", "24,36", "--effect", "seal_drag=30", "--effect", "direction_asymmetry=0.02")
+    made = lmcal.generate_friction(seed=5, runs=2, guides=["SRN 35C", "SRG 45C"], temperature_C=[24, 36],
+                                   effects={"seal_drag": 30, "direction_asymmetry": 0.02})
+    from_file = lmcal.load_friction_log(tmp_path / "friction.csv").columns()
+    columns = made.log.columns()
+    assert len(made.log) == len(from_file["run"]) > 1000
+    for name, values in from_file.items():
+        if values.dtype == object:
+            assert columns[name].tolist() == values.tolist(), name
+        else:
+            np.testing.assert_array_equal(columns[name], values, err_msg=name)
+    assert made.truth == json.loads((tmp_path / "friction_truth.json").read_text())
+    assert made.truth["effects"]["seal_drag"]["value"] == 30
+    assert "from the virtual rig" in repr(made.log)
+    log, truth = made  # a named pair
+    assert truth is made.truth
+
+
+def test_generate_friction_refuses_what_the_rig_does_not_have():
+    with pytest.raises(lmcal.InvalidParameterError, match="no_such_effect"):
+        lmcal.generate_friction(effects={"no_such_effect": 1.0})
+    with pytest.raises(lmcal.InvalidParameterError, match="noise_ar1"):
+        lmcal.generate_friction(noise_ar1=1.5)
+    with pytest.raises(TypeError, match="load_N: expected a number or a list of numbers"):
+        lmcal.generate_friction(load_N="heavy")
+    truth = lmcal.generate_friction(runs=1, constants={"k1": 0.4}).truth
+    assert truth["friction_constants"]["k1"] == 0.4 and not math.isnan(truth["noise_N"])
