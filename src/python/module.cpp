@@ -6,7 +6,8 @@
 // Threads: every long call releases the GIL; a progress callback takes it back to call into
 // Python (and checks for Ctrl-C, which ends the call with KeyboardInterrupt). Errors: the
 // library's InputError and InvalidParameter arrive as lmcal.InputError and
-// lmcal.InvalidParameterError, both ValueErrors, with their file/line/column or parameter.
+// lmcal.InvalidParameterError, both ValueErrors, with their file/line/column or parameter;
+// about columns from Python, with the row and the column's name (ColumnsError).
 #include <pybind11/eigen.h>
 #include <pybind11/functional.h>
 #include <pybind11/numpy.h>
@@ -21,8 +22,11 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
+#include <optional>
 #include <random>
+#include <regex>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <variant>
 #include <vector>
@@ -195,12 +199,94 @@ FrictionData load_friction_manifest(const std::string& manifest, const std::opti
 // Columns (validated in __init__.py: equal lengths, numbers without NaN, text as str) through
 // the CSV loader, so that they follow every rule of a file: units from the names, ranges,
 // run and guide names. Written to a private temporary file; an InputError about it is told
-// again as "columns, row R (0-based)".
+// again as a ColumnsError: the column's name and the row (0-based) in place of the file's
+// line and character.
 std::string csv_cell_text(const std::string& text) {
   if (text.find_first_of(",\"\n\r") == std::string::npos) return text;
   std::string quoted = "\"";
   for (char c : text) quoted += c == '"' ? std::string("\"\"") : std::string(1, c);
   return quoted + "\"";
+}
+
+// lmcal.InputError with `file` "columns", `row` (0-based; none for the header) and `column`
+// (the column's name; "" when the loader's message names none).
+class ColumnsError : public InputError {
+ public:
+  ColumnsError(std::optional<std::size_t> row, std::string column, const std::string& what)
+      : InputError("columns", 0, 0, where(row, column) + what), row_(row), column_(std::move(column)) {}
+  std::optional<std::size_t> row() const { return row_; }
+  const std::string& column_name() const { return column_; }
+
+ private:
+  static std::string where(std::optional<std::size_t> row, const std::string& column) {
+    std::string at = column.empty() ? "" : fmt::format("column '{}'", column);
+    if (row) at += fmt::format("{}row {}", at.empty() ? "" : ", ", *row);
+    return at.empty() ? at : at + ": ";
+  }
+  std::optional<std::size_t> row_;
+  std::string column_;
+};
+
+// The field (0-based) of a CSV line that character `column` (1-based) falls in.
+std::size_t field_at(std::string_view line, long column) {
+  std::size_t field = 0;
+  bool quoted = false;
+  for (std::size_t i = 0; i + 1 < static_cast<std::size_t>(column) && i < line.size(); ++i) {
+    if (line[i] == '"') quoted = !quoted;
+    else if (line[i] == ',' && !quoted) ++field;
+  }
+  return field;
+}
+
+// The column (of `names`, written as `text`) an error of the loader is about: the field of the
+// character it points to (in the header only one the message names: a missing column is none of
+// those there), else the one the message starts with ("load_N = -5 is negative"); "" if none.
+std::string column_of(const InputError& e, const std::string& message, const std::string& text,
+                      const std::vector<std::string>& names) {
+  if (e.line() > 0 && e.column() > 0) {
+    std::size_t start = 0;
+    for (long l = 1; l < e.line() && start != std::string::npos; ++l) start = text.find('\n', start) + 1;
+    const std::string_view line = std::string_view(text).substr(start, text.find('\n', start) - start);
+    const std::size_t field = field_at(line, e.column());
+    if (field < names.size() && (e.line() > 1 || message.find("'" + names[field] + "'") != std::string::npos))
+      return names[field];
+  }
+  for (const auto& name : names)
+    if (message.starts_with(name + " = ")) return name;
+  return "";
+}
+
+// A message's other lines of the temporary file ("not later than the previous row's (line 5)") as
+// the rows they are ("(row 3)"): line 1 is the header, line L > 1 row L - 2.
+std::string lines_as_rows(const std::string& message) {
+  static const std::regex other_line(R"(\(line (\d+)\))");
+  std::string out;
+  auto at = message.cbegin();
+  for (std::sregex_iterator it(message.begin(), message.end(), other_line), end; it != end; ++it) {
+    out.append(at, (*it)[0].first);
+    const long line = std::stol((*it)[1].str());
+    out += line > 1 ? fmt::format("(row {})", line - 2) : "(the header)";
+    at = (*it)[0].second;
+  }
+  return out.append(at, message.cend());
+}
+
+// An InputError about the temporary file `text` of `names` as a ColumnsError.
+ColumnsError columns_error(const InputError& e, const std::string& text, const std::vector<std::string>& names) {
+  const std::string where = e.line() > 0 ? fmt::format("{}:{}", e.file(), e.line()) : e.file();
+  std::string message = e.what();
+  const std::size_t colon = message.find(": ", where.size());
+  message = colon == std::string::npos ? message : message.substr(colon + 2);
+  std::string column;
+  if (message.starts_with("column '")) {  // the loader named it: said once, in front
+    if (const std::size_t end = message.find("': "); end != std::string::npos) {
+      column = message.substr(8, end - 8);
+      message = message.substr(end + 3);
+    }
+  }
+  if (column.empty()) column = column_of(e, message, text, names);
+  return ColumnsError(e.line() > 1 ? std::optional<std::size_t>(e.line() - 2) : std::nullopt, column,
+                      lines_as_rows(message));
 }
 
 template <class Load>
@@ -227,8 +313,7 @@ auto load_columns(const std::vector<std::string>& names, const std::vector<py::o
       if (const auto* numbers = std::get_if<0>(&cells[c])) text += fmt::format("{}", numbers->at(r));
       else {
         const std::string& cell = std::get<1>(cells[c])[r];
-        if (cell.find_first_of("\n\r") != std::string::npos)
-          throw py::value_error(fmt::format("column '{}', row {}: a line break inside a name", names[c], r));
+        if (cell.find_first_of("\n\r") != std::string::npos) throw ColumnsError(r, names[c], "a line break inside a name");
         text += csv_cell_text(cell);
       }
     }
@@ -254,12 +339,7 @@ auto load_columns(const std::vector<std::string>& names, const std::vector<py::o
     return load(file);
   } catch (const InputError& e) {
     if (e.file() != file.string()) throw;
-    const std::string where = e.line() > 0 ? fmt::format("{}:{}", e.file(), e.line()) : e.file();
-    std::string message = e.what();
-    const std::size_t colon = message.find(": ", where.size());
-    message = colon == std::string::npos ? message : message.substr(colon + 2);
-    // Line 1 is the header; line L > 1 is row L - 2.
-    throw InputError("columns", 0, 0, e.line() > 1 ? fmt::format("row {}: {}", e.line() - 2, message) : message);
+    throw columns_error(e, text, names);
   }
 }
 
@@ -770,18 +850,25 @@ void register_errors(py::module_& m) {
   static py::exception<InputError> input_error(m, "InputError", PyExc_ValueError);
   static py::exception<InvalidParameter> invalid_parameter(m, "InvalidParameterError", PyExc_ValueError);
   py::register_exception_translator([](std::exception_ptr p) {
+    const auto raise = [](py::handle type, const char* what,
+                          std::initializer_list<std::pair<const char*, py::object>> attributes) {
+      py::object error = type(what);
+      for (const auto& [name, value] : attributes) error.attr(name) = value;
+      PyErr_SetObject(type.ptr(), error.ptr());
+    };
+    const auto optional = [](const auto& value) { return value ? py::cast(*value) : py::object(py::none()); };
     try {
       if (p) std::rethrow_exception(p);
+    } catch (const ColumnsError& e) {  // columns: the row and the column's name, no line
+      raise(input_error, e.what(),
+            {{"file", py::str(e.file())}, {"line", py::none()}, {"row", optional(e.row())},
+             {"column", e.column_name().empty() ? py::object(py::none()) : py::str(e.column_name())}});
     } catch (const InputError& e) {
-      py::object error = py::handle(input_error.ptr())(e.what());
-      error.attr("file") = e.file();
-      error.attr("line") = e.line();
-      error.attr("column") = e.column();
-      PyErr_SetObject(input_error.ptr(), error.ptr());
+      raise(input_error, e.what(),
+            {{"file", py::str(e.file())}, {"line", py::int_(e.line())}, {"column", py::int_(e.column())}, {"row", py::none()}});
     } catch (const InvalidParameter& e) {
-      py::object error = py::handle(invalid_parameter.ptr())(e.what());
-      error.attr("parameter") = e.parameter();
-      PyErr_SetObject(invalid_parameter.ptr(), error.ptr());
+      raise(invalid_parameter, e.what(),
+            {{"parameter", py::str(e.parameter())}, {"row", py::none()}});
     }
   });
 }

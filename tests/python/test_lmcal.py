@@ -282,20 +282,22 @@ def test_good_columns_load():
     assert len(log) == 4 and log.run_names == ["r1"]
 
 
-@pytest.mark.parametrize("change, column, words", [
-    (lambda c: c.update(load_N=np.full(3, 1000.0)), "load_N", "rows"),
-    (lambda c: c["friction_N"].__setitem__(2, np.nan), "friction_N", "nan at row 2"),
-    (lambda c: c["temperature_C"].__setitem__(1, np.inf), "temperature_C", "inf at row 1"),
-    (lambda c: c.update(velocity_m_s=np.array(["2020-01-01"] * 4, dtype="datetime64[D]")), "velocity_m_s", "numbers"),
-    (lambda c: c.update(preload_um=np.full(4, True)), "preload_um", "numbers"),
-    (lambda c: c.update(load_N=np.ones((4, 2))), "load_N", "shape"),
+@pytest.mark.parametrize("change, column, words, row", [
+    (lambda c: c.update(load_N=np.full(3, 1000.0)), "load_N", "rows", None),
+    (lambda c: c["friction_N"].__setitem__(2, np.nan), "friction_N", "row 2: friction_n = nan", 2),
+    (lambda c: c["temperature_C"].__setitem__(1, np.inf), "temperature_C", "row 1: temperature_c = inf", 1),
+    (lambda c: c.update(velocity_m_s=np.array(["2020-01-01"] * 4, dtype="datetime64[D]")), "velocity_m_s", "numbers", None),
+    (lambda c: c.update(preload_um=np.full(4, True)), "preload_um", "numbers", None),
+    (lambda c: c.update(load_N=np.ones((4, 2))), "load_N", "shape", None),
 ])
-def test_bad_columns_are_a_value_error_naming_the_column(change, column, words):
+def test_bad_columns_are_a_value_error_naming_the_column(change, column, words, row):
     c = good_columns()
     change(c)
     with pytest.raises(ValueError) as e:
         lmcal.load_friction_log(c)
     assert f"'{column}'" in str(e.value) and words in str(e.value).lower()
+    if row is not None:  # a value: an InputError with the row and the column's name
+        assert isinstance(e.value, lmcal.InputError) and (e.value.row, e.value.column) == (row, column)
 
 
 def test_a_value_out_of_range_in_columns_names_column_and_row():
@@ -303,11 +305,13 @@ def test_a_value_out_of_range_in_columns_names_column_and_row():
     c["load_N"][3] = -5.0
     with pytest.raises(lmcal.InputError) as e:
         lmcal.load_friction_log(c)
-    assert str(e.value).startswith("columns: row 3: load_N = -5") and e.value.file == "columns"
+    assert str(e.value).startswith("columns: column 'load_N', row 3: load_N = -5") and e.value.file == "columns"
+    assert (e.value.row, e.value.column, e.value.line) == (3, "load_N", None)
     c = good_columns()
     c["velocity_m_s"] = np.array(["0.1", "fast", "0.1", "0.1"], dtype=object)
-    with pytest.raises(lmcal.InputError, match="row 1: column 'velocity_m_s': expected a number, found 'fast'"):
+    with pytest.raises(lmcal.InputError, match="column 'velocity_m_s', row 1: expected a number, found 'fast'") as e:
         lmcal.load_friction_log(c)
+    assert (e.value.row, e.value.column) == (1, "velocity_m_s")
     with pytest.raises(lmcal.InputError, match="missing"):
         lmcal.load_friction_log({k: v for k, v in good_columns().items() if k != "friction_N"})
     # Conditions are optional (the law in combinations), and said in the load report.

@@ -68,6 +68,60 @@ def thermal_fit():
     return lmcal.fit_thermal(THERMAL_TOML, run_fits=False)
 
 
+# ---- errors from columns ---------------------------------------------------------------------
+
+def test_an_error_from_a_dataframe_names_column_row_and_index_label(rig):
+    pd = pytest.importorskip("pandas")
+    frame = rig.log.to_dataframe().iloc[:20].copy()
+    frame.index = pd.date_range("2024-03-01 08:00", periods=20, freq="s")
+    frame.iloc[7, frame.columns.get_loc("load_N")] = -5.0          # refused by the loader's rules
+    with pytest.raises(lmcal.InputError) as e:
+        lmcal.load_friction_log(frame)
+    assert (e.value.file, e.value.row, e.value.column, e.value.line) == ("columns", 7, "load_N", None)
+    assert str(e.value).startswith("columns: column 'load_N', row 7 (index 2024-03-01 08:00:07): load_N = -5")
+    frame.iloc[7, frame.columns.get_loc("load_N")] = np.nan         # refused before the loader
+    with pytest.raises(lmcal.InputError, match=r"column 'load_N', row 7 \(index 2024-03-01 08:00:07\): load_N = nan") as e:
+        lmcal.fit_friction(frame)
+    assert (e.value.row, e.value.column) == (7, "load_N")
+    # A problem of the whole column (none missing) has no row.
+    frame.iloc[7, frame.columns.get_loc("load_N")] = 2000.0
+    with pytest.raises(lmcal.InputError, match="missing column 'friction_N'") as e:
+        lmcal.load_friction_log(frame.drop(columns=["friction_N"]))
+    assert e.value.row is None and e.value.column is None
+
+
+def test_an_error_in_a_unit_converted_column_or_a_trace_names_it(rig):
+    c = rig.log.columns()
+    c["temperature_K"] = c.pop("temperature_C") + 273.15
+    c["temperature_K"][11] = -3.0
+    with pytest.raises(lmcal.InputError) as e:
+        lmcal.load_friction_log(c)
+    assert (e.value.row, e.value.column) == (11, "temperature_K") and "temperature_K = -3" in str(e.value)
+    c = rig.log.columns()
+    c["run"][5] = "r\x07n"  # a message without the column's name: the column from where the cell is
+    with pytest.raises(lmcal.InputError, match="column 'run', row 5: run name: control character U\\+0007") as e:
+        lmcal.load_friction_log(c)
+    assert (e.value.row, e.value.column) == (5, "run")
+    data = lmcal.load_thermal_dataset(THERMAL_TOML)
+    run = data.runs[0]
+    trace = {k: np.array(v, dtype=float) for k, v in run["trace"].items()}
+    trace["time_s"][4] = np.nan
+    with pytest.raises(lmcal.InputError) as e:
+        data.with_trace(run["id"], trace)
+    assert (e.value.row, e.value.column) == (4, "time_s")
+    trace["time_s"][4] = trace["time_s"][2]  # time going back: the loader's rule
+    with pytest.raises(lmcal.InputError) as e:
+        data.with_trace(run["id"], trace)
+    assert (e.value.row, e.value.column) == (4, "time_s")
+    assert "not later than the previous row's (row 3)" in str(e.value)  # the row, not the temporary file's line
+
+
+def test_a_file_error_keeps_its_line_and_column():
+    with pytest.raises(lmcal.InputError) as e:
+        lmcal.load_friction_log(os.path.join(SOURCE, "no_such_log.csv"))
+    assert e.value.row is None and isinstance(e.value.line, int)
+
+
 # ---- the virtual rig -------------------------------------------------------------------------
 
 def test_generate_friction_is_the_commands_virtual_rig(tmp_path):

@@ -31,7 +31,7 @@ from typing import Any, Callable, NamedTuple, Optional, Sequence
 
 import numpy as np
 
-from . import _lmcal
+from . import _columns, _lmcal
 from ._lmcal import InputError, InvalidParameterError
 from ._report import fit_report
 
@@ -48,28 +48,7 @@ Progress = Callable[[str, int, int], Any]
 
 # ---- loading ---------------------------------------------------------------------------------
 
-# Columns the loaders keep as text (names); every other column holds numbers.
-_TEXT_COLUMNS = {"run", "guide"}
-
-
-def _column_items(data) -> list:
-    """(name, values) of a mapping of columns or of a pandas DataFrame."""
-    if isinstance(data, Mapping):
-        return [(str(k), v) for k, v in data.items()]
-    if hasattr(data, "columns") and hasattr(data, "__getitem__"):  # a DataFrame, without importing pandas
-        return [(str(k), data[k]) for k in data.columns]
-    raise TypeError(f"expected a dict of columns or a pandas DataFrame, got {type(data).__name__}")
-
-
-def _text(value: str, what: str) -> str:
-    """``value`` if lmcal can take it as text (UTF-8); ValueError naming ``what`` otherwise (a
-    lone surrogate from a mis-decoded file, say)."""
-    try:
-        value.encode("utf-8")
-    except UnicodeEncodeError as e:
-        raise ValueError(f"{what}: {value!r} is not valid text ({e.reason} at character {e.start}); "
-                         "expected text that can be written as UTF-8") from None
-    return value
+_text = _columns.text
 
 
 def _number_map(given, argument: str, pairs: bool = False):
@@ -100,40 +79,14 @@ def _number_map(given, argument: str, pairs: bool = False):
     return out
 
 
-def _prepare_columns(data, missing_allowed=lambda name: False) -> tuple[list, list]:
-    """Names and values for the CSV loader: equal lengths, numbers as float64 without NaN
-    (except in columns where ``missing_allowed(name)``: a missing sample) or infinity, text as
-    str. ValueError naming the column otherwise."""
-    items = _column_items(data)
-    if not items:
-        raise ValueError("no columns given")
-    arrays = [(name, np.asarray(values)) for name, values in items]
-    lengths = {name: a.shape[0] for name, a in arrays if a.ndim == 1}
-    rows = max(lengths.values()) if lengths else 1
-    names, columns = [], []
-    for name, a in arrays:
-        if a.ndim == 0:
-            a = np.full(rows, a.item(), dtype=a.dtype)  # a scalar: the same value on every row
-        elif a.ndim != 1:
-            raise ValueError(f"column '{name}': expected one value per row, got an array of shape {a.shape}")
-        if a.shape[0] != rows:
-            longest = max(lengths, key=lengths.get)
-            raise ValueError(f"column '{name}' has {a.shape[0]} rows, column '{longest}' has {rows}: "
-                             "every column needs one value per row")
-        names.append(_text(name, "a column's name") if isinstance(name, str) else name)
-        if name in _TEXT_COLUMNS or a.dtype.kind in "OUS":
-            columns.append([_text("" if v is None else str(v), f"column '{name}', row {row}")
-                            for row, v in enumerate(a.tolist())])
-            continue
-        if a.dtype.kind not in "iuf":
-            raise ValueError(f"column '{name}': expected numbers, got values of dtype {a.dtype}")
-        a = a.astype(np.float64)
-        bad = np.flatnonzero(np.isinf(a) if missing_allowed(name) else ~np.isfinite(a))
-        if bad.size:
-            raise ValueError(f"column '{name}': {a[bad[0]]} at row {bad[0]} ({bad.size} rows not finite); every "
-                             "value must be a finite number (drop or fill the missing rows first)")
-        columns.append(a)
-    return names, columns
+def _load_columns(load, data, **prepare):
+    """``load(names, columns)`` of columns checked by _columns.prepare; an error about a row
+    also gives a DataFrame's index label of that row."""
+    names, columns = _columns.prepare(data, **prepare)
+    try:
+        return load(names, columns)
+    except InputError as e:
+        raise _columns.with_label(e, _columns.row_labels(data)) from None
 
 
 class FrictionLog:
@@ -147,9 +100,10 @@ class FrictionLog:
     @classmethod
     def from_columns(cls, data, **raw) -> "FrictionLog":
         """A log from a dict of columns or a pandas DataFrame, named as in a CSV log (any
-        accepted unit: ``load_kN``, ``temperature_K``, ...) and checked by the same rules."""
-        names, columns = _prepare_columns(data)
-        return cls(_lmcal.friction_log_from_columns(names, columns, raw))
+        accepted unit: ``load_kN``, ``temperature_K``, ...) and checked by the same rules. A
+        value refused is an InputError with the column's name and the row (0-based; with a
+        DataFrame's own index, its label too)."""
+        return cls(_load_columns(lambda names, columns: _lmcal.friction_log_from_columns(names, columns, raw), data))
 
     def __len__(self) -> int:
         return len(self._h)
@@ -228,8 +182,9 @@ class ThermalDataSet:
         """A copy with run ``run``'s trace taken from columns (a dict or a DataFrame with the
         columns of its file: time_s, the ambient and tc… columns) instead of its file. NaN in a
         temperature column is a missing sample, as an empty cell in the file."""
-        names, values = _prepare_columns(columns, missing_allowed=lambda name: not name.startswith("time"))
-        return ThermalDataSet(_lmcal.thermal_with_trace(self._h, _text(run, "run"), names, values))
+        run = _text(run, "run")
+        return ThermalDataSet(_load_columns(lambda names, values: _lmcal.thermal_with_trace(self._h, run, names, values),
+                                            columns, missing_allowed=lambda name: not name.startswith("time")))
 
     def __repr__(self) -> str:
         return f"<lmcal.ThermalDataSet '{self.name}': {len(self.runs)} runs>"
