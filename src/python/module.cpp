@@ -446,6 +446,30 @@ void set_fit_options(FitOptions& fit, const py::dict& o) {
   require_positive("loss_scale", fit.loss_scale);
 }
 
+// Every constant's start (given by start= or fixed=, or the paper's) inside its bounds, and
+// every bounds given a finite range: InvalidParameter naming the constant, its value and its
+// bounds otherwise (the solver would refuse a free one later, and hold a fixed one silently).
+void check_starts(const FrictionFitOptions& f, const py::dict& o) {
+  const auto given = [&](const char* option, const std::string& name) {
+    return o.contains(option) && o[option].cast<py::dict>().contains(name);
+  };
+  for (std::size_t j = 0; j < kFrictionConstantNames.size(); ++j) {
+    const std::string name = kFrictionConstantNames[j];
+    const auto [low, high] = f.bounds[j];
+    if (given("bounds", name) && !(std::isfinite(low) && std::isfinite(high) && low < high))
+      throw InvalidParameter(name, fmt::format("bounds=({}, {}): expected finite low < high", low, high));
+    const double value = fittable_constant(f.start, j);
+    if (value >= low && value <= high) continue;
+    const char* option = given("fixed", name) ? "fixed" : given("start", name) ? "start" : nullptr;
+    throw InvalidParameter(name, option ? fmt::format("{} = {} is outside its bounds [{}, {}]: give a value inside them, "
+                                                      "or bounds that contain it",
+                                                      option, value, low, high)
+                                        : fmt::format("the paper's start {} is outside the bounds given [{}, {}]: give a "
+                                                      "start inside them (start=)",
+                                                      value, low, high));
+  }
+}
+
 // The options of `lmcal fit friction`, from the keyword arguments of lmcal.fit_friction.
 void set_friction_options(FrictionFitOptions& f, const py::dict& o) {
   set_fit_options(f.fit, o);
@@ -465,6 +489,7 @@ void set_friction_options(FrictionFitOptions& f, const py::dict& o) {
   if (o.contains("bounds"))
     for (const auto& [name, range] : o["bounds"].cast<std::map<std::string, std::pair<double, double>>>())
       f.bounds[friction_constant_index("bounds", name)] = range;
+  check_starts(f, o);
   if (o.contains("effects")) f.effects = o["effects"].cast<std::vector<std::string>>();
   if (o.contains("run_offsets"))
     f.run_offsets = choose<RunOffsets>("run_offsets", o["run_offsets"].cast<std::string>(),

@@ -68,6 +68,41 @@ def thermal_fit():
     return lmcal.fit_thermal(THERMAL_TOML, run_fits=False)
 
 
+# ---- init, start, fixed, bounds --------------------------------------------------------------
+
+def test_init_is_the_start_fixed_or_given_for_friction_and_thermal(rig, thermal_fit):
+    held = lmcal.fit_friction(rig.log, fixed={"k2": 0.05}, start={"mu_st": 1.4}, run_fits=False)
+    assert held.params["k2"].init == held.params["k2"].value == 0.05 and not held.params["k2"].free
+    assert held.params["mu_st"].init == 1.4 and held.params["mu_st"].value != 1.4
+    assert held.params["k1"].init == PAPER["k1"]
+    assert thermal_fit.params["alpha"].init == 0.6 and thermal_fit.params["alpha"].value != 0.6
+    assert lmcal.fit_thermal(THERMAL_TOML, alpha_start=0.45, run_fits=False).params["alpha"].init == 0.45
+
+
+@pytest.mark.parametrize("options, parameter, words", [
+    ({"fixed": {"k2": -2.0}}, "k2", "fixed = -2 is outside its bounds [-1, 1]"),
+    ({"start": {"k1": 9.0}}, "k1", "start = 9 is outside its bounds [0, 5]"),
+    ({"fixed": {"mu_v": 0.5}, "bounds": {"mu_v": (0.0, 0.2)}}, "mu_v", "fixed = 0.5 is outside its bounds [0, 0.2]"),
+    ({"bounds": {"k1": (1.0, 2.0)}}, "k1", "the paper's start 0.315 is outside the bounds given [1, 2]"),
+    ({"bounds": {"f0": (0.5, -0.5)}}, "f0", "bounds=(0.5, -0.5): expected finite low < high"),
+])
+def test_a_start_or_fixed_value_outside_its_bounds_is_refused_naming_it(rig, options, parameter, words):
+    for call in (lambda: lmcal.fit_friction(rig.log, **options), lambda: lmcal.calibrate(SET, diagnose=False, **options)):
+        with pytest.raises(lmcal.InvalidParameterError) as e:
+            call()
+        assert isinstance(e.value, ValueError) and e.value.parameter == parameter
+        assert str(e.value) == f"{parameter}: {words}" + (": give a value inside them, or bounds that contain it"
+                                                          if "fixed" in words or "start =" in words else
+                                                          ": give a start inside them (start=)" if "paper" in words else "")
+
+
+def test_a_value_on_its_bound_is_inside_and_a_thermal_start_outside_is_refused(rig):
+    assert lmcal.fit_friction(rig.log, fixed={"k2": -1.0}, run_fits=False).params["k2"].value == -1.0
+    with pytest.raises(lmcal.InvalidParameterError, match=r"alpha = 1.5 .* inside the bounds \[0, 1\]") as e:
+        lmcal.fit_thermal(THERMAL_TOML, alpha_start=1.5, run_fits=False)
+    assert e.value.parameter == "alpha"
+
+
 # ---- errors from columns ---------------------------------------------------------------------
 
 def test_an_error_from_a_dataframe_names_column_row_and_index_label(rig):
