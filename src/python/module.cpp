@@ -7,7 +7,7 @@
 // Python (and checks for Ctrl-C, which ends the call with KeyboardInterrupt). Errors: the
 // library's InputError and InvalidParameter arrive as lmcal.InputError and
 // lmcal.InvalidParameterError, both ValueErrors, with their file/line/column or parameter;
-// about columns from Python, with the row and the column's name (ColumnsError).
+// about columns from Python, with the row and the column's name (ColumnsError, ConditionError).
 #include <pybind11/eigen.h>
 #include <pybind11/functional.h>
 #include <pybind11/numpy.h>
@@ -402,6 +402,25 @@ ThermalData with_trace(const ThermalData& data, const std::string& run_id, const
   return out;
 }
 
+// ---- the friction law at given conditions ----------------------------------------------------
+
+// A condition handed to the friction law that it refuses: lmcal.InvalidParameterError with
+// `parameter` (the condition's name) and `row` (0-based, of the flattened conditions).
+struct ConditionError : std::invalid_argument {
+  ConditionError(std::string parameter, std::size_t row, const std::string& what)
+      : std::invalid_argument(fmt::format("row {}: {}", row, what)), parameter(std::move(parameter)), row(row) {}
+  std::string parameter;
+  std::size_t row;
+};
+
+// A friction law as the Python module evaluates it: constants, effects and empirical terms
+// (at steady state, as `lmcal simulate friction --model` evaluates them).
+struct FrictionLaw {
+  FrictionConstants<double> constants;
+  FrictionEffects<double> effects;
+  std::vector<FrictionTerm> terms;
+};
+
 // ---- fits -------------------------------------------------------------------------------------
 
 struct FrictionFit {
@@ -421,6 +440,24 @@ struct FrictionFit {
     d["run_names"] = result->runs;
     d["run_offset_N"] = array(result->run_offset_N);
     return d;
+  }
+  // The fitted law: constants (ν's reference temperature the fit's), effects, empirical terms.
+  FrictionLaw law() const {
+    FrictionConstants<double> k = result->constants();
+    k.T_ref_C = options.start.T_ref_C;
+    return {k, result->effects(), result->terms};
+  }
+  // The conditions the log did not give (a combination law's setup, the temperature), each
+  // with the value the fit took for it: condition -> value.
+  std::map<std::string, double> unlogged_conditions() const {
+    const std::map<std::string, const std::vector<double>*> columns{{"load_N", &log->load_N},
+                                                                     {"preload_um", &log->preload_um},
+                                                                     {"block_length_mm", &log->block_length_mm},
+                                                                     {"temperature_C", &log->temperature_C}};
+    std::map<std::string, double> out;
+    for (const auto& name : log->law.not_logged())
+      if (const auto it = columns.find(name); it != columns.end() && !it->second->empty()) out[name] = it->second->front();
+    return out;
   }
 };
 
@@ -703,30 +740,44 @@ FrictionEffects<double> effects_from(const std::map<std::string, double>& given)
   return e;
 }
 
-// The friction law at every row of equally long (broadcast in __init__.py) condition arrays.
-py::array_t<double> friction_law(const std::map<std::string, double>& constants, const std::map<std::string, double>& effects,
-                                 const py::dict& columns) {
-  const FrictionConstants<double> k = constants_from(constants);
-  const FrictionEffects<double> e = effects_from(effects);
+// The law at every row of equally long condition arrays (broadcast in __init__.py): velocity_m_s,
+// load_N, preload_um, block_length_mm, temperature_C, viscosity40_mm2_s, direction, and if given
+// acceleration_m_s2, position_m, distance_since_reversal_m (0 otherwise: what the effects of a
+// trajectory or a raw log use).
+py::array_t<double> friction_law_at(const FrictionLaw& law, const py::dict& columns) {
   using Column = py::array_t<double, py::array::c_style | py::array::forcecast>;
   const auto column = [&](const char* name) { return columns[name].cast<Column>(); };
+  const auto optional = [&](const char* name) { return columns.contains(name) ? std::optional(column(name)) : std::nullopt; };
   const Column v = column("velocity_m_s"), load = column("load_N"), preload = column("preload_um"),
                block = column("block_length_mm"), temperature = column("temperature_C"),
                viscosity = column("viscosity40_mm2_s"), direction = column("direction");
+  const auto acceleration = optional("acceleration_m_s2"), position = optional("position_m"),
+             travel = optional("distance_since_reversal_m");
   const auto n = v.size();
   py::array_t<double> out(n);
   auto f = out.mutable_unchecked<1>();
   for (py::ssize_t i = 0; i < n; ++i) {
+    const auto row = static_cast<std::size_t>(i);
     const FrictionConditions<double> c{.load_N = load.at(i), .preload_um = preload.at(i), .block_length_mm = block.at(i),
-                                       .velocity_m_s = v.at(i), .temperature_C = temperature.at(i), .direction = direction.at(i)};
-    validate(c);
-    FrictionConstants<double> ki = k;
-    ki.nu_ref_mm2_s = viscosity.at(i);
-    f(i) = friction_force_with_effects_N(ki, e, c);
+                                       .velocity_m_s = v.at(i), .temperature_C = temperature.at(i), .direction = direction.at(i),
+                                       .acceleration_m_s2 = acceleration ? acceleration->at(i) : 0.0,
+                                       .position_m = position ? position->at(i) : 0.0,
+                                       .distance_since_reversal_m = travel ? travel->at(i) : 0.0};
+    FrictionConstants<double> k = law.constants;
+    k.nu_ref_mm2_s = viscosity.at(i);
+    try {
+      validate(c);
+      require_positive("viscosity40_mm2_s", k.nu_ref_mm2_s);
+      if (c.direction != 1 && c.direction != -1) throw InvalidParameter("direction", c.direction, "+1 or -1");
+    } catch (const InvalidParameter& e) {
+      throw ConditionError(e.parameter(), row, e.what());
+    }
+    f(i) = friction_force_with_effects_N(k, law.effects, c) + (law.terms.empty() ? 0.0 : steady_terms_N(law.terms, k, law.effects, c));
     // The last check before the array leaves: the constants given may still take the law out of the doubles.
     if (!std::isfinite(f(i)))
-      throw InvalidParameter("velocity_m_s", v.at(i),
-                             fmt::format("a condition where the friction law is finite (row {} gives {} N)", i, f(i)));
+      throw ConditionError("velocity_m_s", row,
+                           fmt::format("the friction law gives {} N at velocity_m_s = {}: expected a condition where it is finite",
+                                       f(i), v.at(i)));
   }
   return out;
 }
@@ -894,6 +945,9 @@ void register_errors(py::module_& m) {
     } catch (const InvalidParameter& e) {
       raise(invalid_parameter, e.what(),
             {{"parameter", py::str(e.parameter())}, {"row", py::none()}});
+    } catch (const ConditionError& e) {
+      raise(invalid_parameter, e.what(),
+            {{"parameter", py::str(e.parameter)}, {"row", py::int_(e.row)}});
     }
   });
 }
@@ -996,7 +1050,9 @@ PYBIND11_MODULE(_lmcal, m) {
         std::map<std::string, double> out;
         for (const auto& name : f.options.effects) out[name] = f.result->fit.parameter(name).value;
         return out;
-      });
+      })
+      .def("eval", [](const FrictionFit& f, const py::dict& columns) { return friction_law_at(f.law(), columns); })
+      .def("unlogged_conditions", &FrictionFit::unlogged_conditions);
   m.def("fit_friction", &fit_friction_py);
 
   py::class_<ThermalFit>(m, "ThermalFitHandle")
@@ -1034,7 +1090,10 @@ PYBIND11_MODULE(_lmcal, m) {
   m.def("calibrate", &calibrate_py);
 
   m.def("predict", &predict_py);
-  m.def("friction_law", &friction_law);
+  m.def("friction_law", [](const std::map<std::string, double>& constants, const std::map<std::string, double>& effects,
+                           const py::dict& columns) {
+    return friction_law_at({constants_from(constants), effects_from(effects), {}}, columns);
+  });
   m.def("simulate_thermal", &simulate_thermal_py);
   m.def("generate_friction", [](const py::dict& o) {
     const FrictionRigOutput made = generate_friction_py(o);

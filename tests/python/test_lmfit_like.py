@@ -157,6 +157,102 @@ def test_a_file_error_keeps_its_line_and_column():
     assert e.value.row is None and isinstance(e.value.line, int)
 
 
+# ---- eval ------------------------------------------------------------------------------------
+
+def test_eval_at_the_logs_conditions_is_the_fits_prediction(fit, rig):
+    c = rig.log.columns()
+    np.testing.assert_allclose(fit.eval(c), fit.predicted_N, rtol=1e-12, atol=1e-12)
+    # Without the runs: the law alone, each run's zero offset taken out.
+    c.pop("run")
+    offsets = np.array([fit.run_offset_N[r] for r in rig.log.columns()["run"]])
+    assert np.ptp(offsets) > 0.05
+    np.testing.assert_allclose(fit.eval(c), fit.predicted_N - offsets, rtol=1e-12, atol=1e-12)
+    # A DataFrame (the log's) passes as conditions too.
+    pytest.importorskip("pandas")
+    np.testing.assert_allclose(fit.eval(rig.log.to_dataframe()), fit.predicted_N, rtol=1e-12, atol=1e-12)
+
+
+def test_eval_is_the_fitted_law_with_its_effects_broadcast(fit):
+    v = np.linspace(0.005, 0.15, 30)[:, None]
+    load = np.array([1000.0, 2000.0, 3000.0])[None, :]
+    got = fit.eval(velocity_m_s=v, load_N=load, preload_um=2.5, block_length_mm=120.2, temperature_C=30)
+    assert got.shape == (30, 3)
+    assert fit.effects["seal_drag"] > 10
+    law = lmcal.simulate_friction(fit.constants, fit.effects, velocity_m_s=v, load_N=load, preload_um=2.5,
+                                  block_length_mm=120.2, temperature_C=30)
+    np.testing.assert_allclose(got, law, rtol=1e-13)
+    without = lmcal.simulate_friction(fit.constants, velocity_m_s=v, load_N=load, preload_um=2.5, block_length_mm=120.2,
+                                      temperature_C=30)
+    assert np.all(got - without > 0.5 * fit.effects["seal_drag"] * v ** 2)  # the seal drag is in it
+    # Keywords win over the mapping; a catalog guide fills preload and block length.
+    by_guide = fit.eval({"velocity_m_s": v, "load_N": 5.0}, load_N=load, guide="SRN 35C", temperature_C=30)
+    np.testing.assert_allclose(by_guide, fit.eval(velocity_m_s=v, load_N=load, preload_um=4.0, block_length_mm=120.2,
+                                                  temperature_C=30), rtol=1e-15)
+
+
+def test_eval_refuses_bad_conditions_naming_them(fit):
+    base = dict(velocity_m_s=[0.01, 0.02, 0.05], load_N=2000, preload_um=2.5, block_length_mm=100, temperature_C=26)
+    with pytest.raises(lmcal.InvalidParameterError) as e:
+        fit.eval(base, velocity_m_s=[0.01, np.nan, 0.05])
+    assert (e.value.parameter, e.value.row) == ("velocity_m_s", 1) and str(e.value).startswith("row 1: velocity_m_s = nan")
+    with pytest.raises(lmcal.InvalidParameterError) as e:
+        fit.eval(base, load_N=[2000, 2000, -1])
+    assert (e.value.parameter, e.value.row) == ("load_N", 2) and str(e.value).startswith("row 2: load_N = -1")
+    with pytest.raises(lmcal.InvalidParameterError) as e:
+        fit.eval(base, velocity_m_s=[[0.01, 0.02], [0.03, -0.04]])
+    assert (e.value.parameter, e.value.row) == ("velocity_m_s", (1, 1)) and str(e.value).startswith("index (1, 1):")
+    with pytest.raises(lmcal.InvalidParameterError, match="direction = 0.5 is invalid: expected \\+1 or -1"):
+        fit.eval(base, direction=0.5)
+    with pytest.raises(lmcal.InvalidParameterError) as e:
+        fit.eval(base, run=["run01", "run09", "run02"])
+    assert (e.value.parameter, e.value.row) == ("run", 1) and "its runs are run01, run02, run03" in str(e.value)
+    with pytest.raises(ValueError, match="unknown condition 'load_kN'"):
+        fit.eval(base, load_kN=2)
+    with pytest.raises(ValueError, match="no temperature_C given"):
+        fit.eval({k: v for k, v in base.items() if k != "temperature_C"})
+    with pytest.raises(ValueError, match="guide 'SRG 25C' has no preload_um in the catalog"):
+        fit.eval({k: v for k, v in base.items() if k != "preload_um"}, guide="SRG 25C")
+    with pytest.raises(TypeError, match="load_N: expected numbers, got str 'heavy'"):
+        fit.eval(base, load_N="heavy")
+
+
+def test_eval_of_a_combination_law_defaults_to_the_setup_it_was_fitted_at():
+    v = np.array([0.01, 0.1])
+    lean = combination_law_fit()
+    np.testing.assert_allclose(lean.eval(velocity_m_s=v, temperature_C=26),
+                               lean.eval(velocity_m_s=v, temperature_C=26, load_N=1000, preload_um=1, block_length_mm=1))
+
+
+# ---- simulate_friction(guide=) ---------------------------------------------------------------
+
+def test_simulate_friction_with_a_guide_is_the_commands(tmp_path):
+    out = tmp_path / "sweep.csv"
+    cli("simulate", "friction", "--guide", "SRN 35C", "--load", "2500", "--temperature", "31", "-o", out)
+    expected = read_csv(out)
+    got = lmcal.simulate_friction(velocity_m_s=expected["velocity_m_s"], load_N=2500, temperature_C=31, guide="SRN 35C")
+    np.testing.assert_allclose(got, expected["friction_N"], rtol=1e-12)
+    spec = lmcal.guide("SRN 35C")
+    assert set(expected["preload_um"]) == {spec["preload_um"]} and set(expected["block_length_mm"]) == {spec["block_length_mm"]}
+    # A value given wins over the catalog's, as --preload does.
+    np.testing.assert_allclose(
+        lmcal.simulate_friction(velocity_m_s=0.1, load_N=2500, temperature_C=31, guide="SRN 35C", preload_um=1.5),
+        lmcal.simulate_friction(velocity_m_s=0.1, load_N=2500, temperature_C=31, preload_um=1.5,
+                                block_length_mm=spec["block_length_mm"]), rtol=1e-15)
+    with pytest.raises(ValueError, match="no preload_um, block_length_mm given"):
+        lmcal.simulate_friction(velocity_m_s=0.1, load_N=2500, temperature_C=31)
+    with pytest.raises(lmcal.InvalidParameterError, match="guide: unknown model 'NO SUCH GUIDE'"):
+        lmcal.simulate_friction(velocity_m_s=0.1, load_N=2500, temperature_C=31, guide="NO SUCH GUIDE")
+
+
+def test_simulate_friction_takes_a_guide_per_condition():
+    guides = np.array(["SRN 35C", "SRG 45C"])
+    got = lmcal.simulate_friction(velocity_m_s=0.05, load_N=2000, temperature_C=30, guide=guides, preload_um=2.5)
+    for one, value in zip(guides, got):
+        assert value == lmcal.simulate_friction(velocity_m_s=0.05, load_N=2000, temperature_C=30, preload_um=2.5,
+                                                block_length_mm=lmcal.guide(one)["block_length_mm"])
+    assert got[0] != got[1]
+
+
 # ---- the virtual rig -------------------------------------------------------------------------
 
 def test_generate_friction_is_the_commands_virtual_rig(tmp_path):

@@ -335,6 +335,31 @@ class FrictionFit(_Fit):
     def effects(self) -> dict:
         return self._h.effects()
 
+    def eval(self, conditions=None, *, guide=None, catalog: Optional[str] = None, **given) -> np.ndarray:
+        """The fitted model's friction force (N) at ``conditions``: a dict of arrays or numbers, or
+        a DataFrame, and/or keywords (which win), broadcast like NumPy arrays. Conditions:
+        velocity_m_s, load_N, preload_um, block_length_mm, temperature_C (the law's);
+        viscosity40_mm2_s (99), direction (+1), acceleration_m_s2, position_m,
+        distance_since_reversal_m (0); ``guide`` (a catalog guide's name, or names) fills
+        preload_um and block_length_mm where not given; with ``run`` (names of the fit's runs)
+        each row carries its run's zero offset as ``predicted_N`` does, without it the law alone
+        (a new setup). A log's columns pass as they are (time_s, friction_N are not conditions).
+        Conditions the fitted log did not give (a combination law's) default to the fit's own."""
+        merged = dict(_columns.items(conditions)) if conditions is not None else {}
+        merged.update(given)
+        columns, shape, runs = _columns.law_conditions(merged, function="FrictionFit.eval", guide=guide, catalog=catalog,
+                                                       defaults=self._h.unlogged_conditions())
+        values = _columns.law_values(self._h.eval, columns, shape)
+        return values if runs is None else values + self._offsets(runs).reshape(shape)
+
+    def _offsets(self, runs) -> np.ndarray:
+        offsets = self.run_offset_N
+        for row, run in enumerate(runs):
+            if run not in offsets:
+                raise _columns.condition_error("run", row, f"run = {run!r}: no such run in the fit; its runs are "
+                                                           f"{', '.join(offsets)}")
+        return np.array([offsets[run] if math.isfinite(offsets[run]) else 0.0 for run in runs])
+
     def __repr__(self) -> str:
         d = self.to_dict()
         return fit_report(f"friction fit '{d['name']}'", d, [("RMSE", f"{d['goodness']['rmse_N']:.6g} N"),
@@ -605,19 +630,21 @@ def _law(constants, effects) -> tuple[dict, dict]:
 
 
 def simulate_friction(constants=None, effects: Optional[Mapping[str, float]] = None, *, velocity_m_s, load_N,
-                      preload_um, block_length_mm, temperature_C, viscosity40_mm2_s=99.0,
-                      direction=1.0) -> np.ndarray:
+                      temperature_C, preload_um=None, block_length_mm=None, guide=None, catalog: Optional[str] = None,
+                      viscosity40_mm2_s=99.0, direction=1.0) -> np.ndarray:
     """Friction force (N) of the law at each operating point; the conditions broadcast like
-    NumPy arrays. ``constants``: a FrictionFit, or name -> value over the paper's Eq. 8
-    (default: the paper's constants); ``effects``: name -> value of named effects."""
+    NumPy arrays. ``constants``: a FrictionFit (its law: constants, effects, empirical terms;
+    as its eval()), or name -> value over the paper's Eq. 8 (default: the paper's constants);
+    ``effects``: name -> value of named effects. ``guide``: a catalog guide's name (built-in,
+    or of ``catalog``), or names, whose preload and block length fill preload_um and
+    block_length_mm where not given, as ``lmcal simulate friction --guide`` does."""
+    given = dict(velocity_m_s=velocity_m_s, load_N=load_N, preload_um=preload_um, block_length_mm=block_length_mm,
+                 temperature_C=temperature_C, viscosity40_mm2_s=viscosity40_mm2_s, direction=direction)
+    columns, shape, _ = _columns.law_conditions(given, function="simulate_friction", guide=guide, catalog=catalog)
+    if isinstance(constants, FrictionFit) and not effects:
+        return _columns.law_values(constants._h.eval, columns, shape)
     k, e = _law(constants, effects)
-    arrays = np.broadcast_arrays(*(np.asarray(a, dtype=np.float64) for a in (
-        velocity_m_s, load_N, preload_um, block_length_mm, temperature_C, viscosity40_mm2_s, direction)))
-    shape = arrays[0].shape
-    names = ("velocity_m_s", "load_N", "preload_um", "block_length_mm", "temperature_C", "viscosity40_mm2_s",
-             "direction")
-    columns = {n: np.ascontiguousarray(a).ravel() for n, a in zip(names, arrays)}
-    return _lmcal.friction_law(k, e, columns).reshape(shape)
+    return _columns.law_values(lambda c: _lmcal.friction_law(k, e, c), columns, shape)
 
 
 @dataclasses.dataclass

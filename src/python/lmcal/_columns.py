@@ -1,12 +1,13 @@
 """Columns from Python (a dict of arrays or a pandas DataFrame) checked before they reach the
 C++ core, and every complaint about them naming the column and the row: numbers for the
-loaders (``prepare``)."""
+loaders (``prepare``), operating conditions for the friction law (``law_conditions``)."""
 
 from collections.abc import Mapping
 
 import numpy as np
 
-from ._lmcal import InputError
+from . import _lmcal
+from ._lmcal import InputError, InvalidParameterError
 
 # Columns the loaders keep as text (names); every other column holds numbers.
 TEXT_COLUMNS = {"run", "guide"}
@@ -103,3 +104,102 @@ def prepare(data, missing_allowed=lambda name: False) -> tuple[list, list]:
         columns.append(a)
     return names, columns
 
+
+# ---- the friction law's conditions ------------------------------------------------------------
+
+# The law's five conditions, needed; then those with a default; then what a log's columns hold
+# that is no condition (a log's or a fit's DataFrame passes as conditions).
+LAW = ("velocity_m_s", "load_N", "preload_um", "block_length_mm", "temperature_C")
+DEFAULTS = {"viscosity40_mm2_s": 99.0, "direction": 1.0}
+MOTION = ("acceleration_m_s2", "position_m", "distance_since_reversal_m")  # 0 unless given
+NOT_CONDITIONS = {"time_s", "line", "friction_N", "measured_N", "predicted_N", "residual_N", "sigma_N"}
+
+
+def condition_error(name: str, row, message: str) -> InvalidParameterError:
+    """lmcal.InvalidParameterError about a condition: ``parameter`` its name, ``row`` where (an
+    index for an N-d condition), in the words of the C++ core's: "row 3: load_N = -5 is ..."."""
+    error = InvalidParameterError(f"{'row' if isinstance(row, int) else 'index'} {row}: {message}")
+    error.parameter, error.row = name, row
+    return error
+
+
+def _position(flat: int, shape: tuple):
+    """A flat position as the caller sees it: the row of a column, the index of an N-d array."""
+    return flat if len(shape) <= 1 else tuple(int(i) for i in np.unravel_index(flat, shape))
+
+
+def _from_guides(guides, catalog, wanted: list) -> dict:
+    """``wanted`` (preload_um, block_length_mm) of each guide name in ``guides``, from the
+    catalog, as arrays of the guides' shape."""
+    names = np.asarray(guides, dtype=object)
+    specs = {}
+    for model in set(names.ravel().tolist()):
+        if not isinstance(model, str) or not model:
+            raise ValueError(f"guide: expected a catalog guide's name, got {model!r}")
+        specs[model] = _lmcal.guide(model, catalog)
+    out = {}
+    for field in wanted:
+        for model, spec in specs.items():
+            if field not in spec:
+                raise ValueError(f"guide '{model}' has no {field} in the catalog ({spec['source']}): give {field}")
+        out[field] = np.vectorize(lambda m: specs[m][field], otypes=[float])(names) if names.ndim else specs[str(names)][field]
+    return out
+
+
+def law_conditions(given: Mapping, *, function: str, defaults=None, guide=None, catalog=None):
+    """The conditions of ``given`` (name -> array or number) for the friction law: broadcast,
+    flattened to float64 columns, checked (numbers, finite), the missing ones from ``defaults``,
+    preload and block length from ``guide`` (catalog names) when not given. Returns (columns,
+    shape, runs: the ``run`` names broadcast, or None)."""
+    given = {k: v for k, v in given.items() if v is not None}
+    unknown = set(given) - set(LAW) - set(DEFAULTS) - set(MOTION) - NOT_CONDITIONS - TEXT_COLUMNS
+    if unknown:
+        raise ValueError(f"{function}: unknown condition {', '.join(sorted(map(repr, unknown)))}; expected "
+                         f"{', '.join(LAW + tuple(DEFAULTS) + MOTION)}, guide or run")
+    guide = given.pop("guide", None) if guide is None else guide
+    runs = given.pop("run", None)
+    wanted = [k for k in ("preload_um", "block_length_mm") if k not in given]
+    if guide is not None and wanted:
+        given.update(_from_guides(guide, catalog, wanted))
+    given = {**DEFAULTS, **(defaults or {}), **given}
+    missing = [name for name in LAW if name not in given]
+    if missing:
+        raise ValueError(f"{function}: no {', '.join(missing)} given (preload_um and block_length_mm may come from "
+                         "guide=, a catalog guide's name)")
+    arrays = {}
+    for name in LAW + tuple(DEFAULTS) + MOTION:
+        if name not in given:
+            continue
+        a = np.asarray(given[name])
+        if a.dtype.kind not in "iuf":
+            what = f"values of dtype {a.dtype}" if a.ndim else f"{type(given[name]).__name__} {given[name]!r}"
+            raise TypeError(f"{function}: {name}: expected numbers, got {what}")
+        a = a.astype(np.float64)
+        if bad := _not_finite(a.ravel(), False):
+            flat, count = bad
+            raise condition_error(name, _position(flat, a.shape), f"{name} = {a.ravel()[flat]}: expected a finite "
+                                                                  f"number ({count} of {a.size} values are not)")
+        arrays[name] = a
+    if runs is not None:
+        arrays["run"] = np.asarray(runs, dtype=object)
+    try:
+        broadcast = dict(zip(arrays, np.broadcast_arrays(*arrays.values())))
+    except ValueError:
+        shapes = ", ".join(f"{k} {np.shape(v)}" for k, v in arrays.items() if np.ndim(v))
+        raise ValueError(f"{function}: the conditions' shapes do not broadcast together: {shapes}") from None
+    shape = next(iter(broadcast.values())).shape
+    runs = broadcast.pop("run").ravel() if "run" in broadcast else None
+    return {k: np.ascontiguousarray(v).ravel() for k, v in broadcast.items()}, shape, runs
+
+
+def law_values(evaluate, columns: dict, shape: tuple) -> np.ndarray:
+    """``evaluate(columns)`` (the C++ law) shaped as the conditions, a refused row named as the
+    caller's position (the index of an N-d condition)."""
+    try:
+        return evaluate(columns).reshape(shape)
+    except InvalidParameterError as e:
+        row = getattr(e, "row", None)
+        if row is not None and len(shape) > 1:
+            e.row = _position(row, shape)
+            e.args = (str(e).replace(f"row {row}:", f"index {e.row}:", 1),)
+        raise
