@@ -14,6 +14,7 @@ packages=(
   openmpi-bin libopenmpi-dev     # lmcal fleet on a cluster: mpirun -np N (optional at build time)
   libgtest-dev libbenchmark-dev  # tests and benchmarks
   python3-pytest python3-pandas python3-jsonschema  # the Python package's tests (a DataFrame goes in; the outputs' schema)
+  python3-matplotlib             # the Python package's plot() (optional for the package; its tests draw)
   chromium chromium-driver       # the report's test in a headless browser
   clang-16 libclang-rt-16-dev libomp-16-dev llvm  # sanitize.sh, fuzz.sh: clang 16 (14 cannot build lmcal), libFuzzer, llvm-symbolizer
 )

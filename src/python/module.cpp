@@ -907,6 +907,7 @@ py::dict predict_py(const std::string& model_file, const std::string& duty_file,
   d["json"] = json;
   d["summary"] = summary;
   d["time_s"] = array(p.time_s);
+  d["segment"] = p.segment;
   d["elongation_um"] = band(p.elongation_um);
   py::list temperatures, scale;
   for (const auto& b : p.temperature_C) temperatures.append(band(b));
@@ -1051,6 +1052,7 @@ PYBIND11_MODULE(_lmcal, m) {
         for (const auto& name : f.options.effects) out[name] = f.result->fit.parameter(name).value;
         return out;
       })
+      .def("log", [](const FrictionFit& f) { return FrictionData{f.log, f.provenance.inputs}; })
       .def("eval", [](const FrictionFit& f, const py::dict& columns) { return friction_law_at(f.law(), columns); })
       .def("unlogged_conditions", &FrictionFit::unlogged_conditions);
   m.def("fit_friction", &fit_friction_py);

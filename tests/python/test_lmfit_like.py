@@ -253,6 +253,146 @@ def test_simulate_friction_takes_a_guide_per_condition():
     assert got[0] != got[1]
 
 
+# ---- to_dataframe ----------------------------------------------------------------------------
+
+def test_a_friction_fits_dataframe_is_its_samples_file(fit, tmp_path):
+    pytest.importorskip("pandas")
+    fit.write(tmp_path)
+    expected = read_csv(tmp_path / "friction_samples.csv")
+    df = fit.to_dataframe()
+    assert len(df) == len(fit.measured_N)
+    shared = [name for name in expected if name in df.columns]
+    assert set(expected) - set(shared) == {"line"}  # a generated log has no lines
+    for name in shared:
+        if isinstance(expected[name], list):
+            assert df[name].tolist() == expected[name], name
+        else:
+            np.testing.assert_allclose(df[name].to_numpy(dtype=float), expected[name], rtol=1e-15, err_msg=name)
+    p = fit.to_dataframe("parameters")
+    assert list(p.index) == list(fit.params) and p.loc["seal_drag", "unit"] == "N s2/m2"
+    assert p.loc["k1", "value"] == fit.params["k1"].value and p.loc["k1", "ci95_high"] == fit.params["k1"].ci[1]
+    assert p.loc["k1", "init"] == PAPER["k1"]
+    with pytest.raises(ValueError, match="table: unknown 'residuals'"):
+        fit.to_dataframe("residuals")
+    # Conditions the log did not give are not data: not columns.
+    lean = combination_law_fit().to_dataframe()
+    assert "load_N" not in lean.columns and "velocity_m_s" in lean.columns
+
+
+def test_a_thermal_fits_dataframe_is_its_samples_file(thermal_fit, tmp_path):
+    pytest.importorskip("pandas")
+    thermal_fit.write(tmp_path)
+    expected = read_csv(tmp_path / "thermal_samples.csv")
+    df = thermal_fit.to_dataframe()
+    assert df.columns.tolist() == ["run", "sensor", "time_s", "measured_C", "simulated_C", "residual_K"]
+    assert df["run"].tolist() == expected["run"] and df["sensor"].tolist() == expected["sensor"]
+    for name in ("time_s", "measured_C", "simulated_C", "residual_K"):
+        np.testing.assert_allclose(df[name].to_numpy(), expected[name], rtol=1e-15, atol=1e-15, err_msg=name)
+    assert thermal_fit.to_dataframe("parameters").loc["alpha", "unit"] == "1"
+
+
+def test_a_diagnosis_dataframe_lists_every_cause_tried(rig):
+    pytest.importorskip("pandas")
+    diagnosis = lmcal.diagnose_friction(rig.log)
+    d = diagnosis.to_dict()
+    df = diagnosis.to_dataframe()
+    assert len(df) == sum(len(r) for r in d["rounds"]) and df["round"].max() == len(d["rounds"])
+    assert df[df["accepted"]]["cause"].tolist() == [c["effect"] for c in diagnosis.causes] == ["seal_drag"]
+    seal = df[df["accepted"]].iloc[0]
+    assert seal["unit"] == "N s2/m2" and seal["ci95_low"] < 40 < seal["ci95_high"]
+    assert {"value", "se", "lrt_p", "cv_rmse_N", "cv_gain_percent", "reason"} <= set(df.columns)
+
+
+def test_a_predictions_dataframe_is_its_time_file(tmp_path):
+    pytest.importorskip("pandas")
+    cli("predict", MODEL, DUTY, "-o", tmp_path, "--samples", "30")
+    p = lmcal.predict(MODEL, DUTY, samples=30)
+    df = p.to_dataframe()
+    long = read_csv(tmp_path / "prediction_time.csv")
+    checked = 0
+    for quantity, positions in (("temperature_C", p.positions_m), ("scale_error_um", p.scale_positions_m)):
+        for x in positions:
+            rows = [i for i, (q, at) in enumerate(zip(long["quantity"], long["position_m"]))
+                    if q == quantity and at and float(at) == x]
+            for band in ("value", "low", "high"):
+                column = f"{quantity}_at_{x:g}m" + ("" if band == "value" else f"_{band}")
+                np.testing.assert_allclose(df[column].to_numpy(), long[band][rows], rtol=1e-12, err_msg=column)
+                checked += 1
+            assert df["segment"].tolist() == [long["segment"][i] for i in rows]
+    assert checked >= 6
+    assert {"elongation_um", "elongation_um_low", "elongation_um_high", "friction_N", "heat_rate_W"} <= set(df.columns)
+    np.testing.assert_array_equal(df["elongation_um_high"].to_numpy(), p.elongation_um["high"])
+
+
+def test_without_pandas_to_dataframe_says_what_to_install(fit, thermal_fit, rig, monkeypatch):
+    monkeypatch.setitem(sys.modules, "pandas", None)  # import pandas now fails
+    prediction = lmcal.predict(MODEL, DUTY, samples=20)
+    for call, name in ((fit.to_dataframe, "FrictionFit"), (thermal_fit.to_dataframe, "ThermalFit"),
+                       (rig.log.to_dataframe, "FrictionLog"), (prediction.to_dataframe, "Prediction")):
+        with pytest.raises(ImportError, match=f"{name}.to_dataframe\\(\\) needs pandas, which is not installed: "
+                                              "`apt-get install python3-pandas`"):
+            call()
+
+
+def test_import_lmcal_imports_neither_pandas_nor_matplotlib():
+    code = ("import sys, lmcal; lmcal.fit_friction(lmcal.generate_friction(runs=2).log, run_fits=False); "
+            "print(sorted(m for m in ('pandas', 'matplotlib') if m in sys.modules))")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=dict(os.environ))
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "[]"
+
+
+# ---- plot ------------------------------------------------------------------------------------
+
+@pytest.fixture()
+def pyplot():
+    matplotlib = pytest.importorskip("matplotlib")
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    yield plt
+    plt.close("all")
+
+
+def test_a_friction_fits_plot_draws_every_sample_both_ways(fit, rig, pyplot):
+    fig = fit.plot()
+    assert isinstance(fig, pyplot.Figure)
+    left, right = fig.axes
+    for ax in (left, right):
+        points = [c.get_offsets() for c in ax.collections]
+        assert sum(len(p) for p in points) == len(fit.measured_N)
+        assert len(points) == 2  # forward and backward
+    residuals = np.concatenate([c.get_offsets()[:, 1] for c in right.collections])
+    np.testing.assert_allclose(np.sort(residuals), np.sort(fit.residual_N), rtol=1e-12)
+    assert right.get_xscale() == "log" and right.get_xlabel() == "velocity (m/s)"
+    assert any("RMSE" in text.get_text() for text in fig.texts)
+    assert fit.plot(x="temperature_C").axes[1].get_xlabel() == "temperature (°C)"
+    with pytest.raises(ValueError, match="x: unknown 'speed'"):
+        fit.plot(x="speed")
+
+
+def test_a_thermal_fits_plot_draws_measured_and_simulated(thermal_fit, pyplot):
+    fig = thermal_fit.plot()
+    top, bottom = fig.axes
+    n = len(thermal_fit.samples["time_s"])
+    assert sum(len(line.get_xdata()) for line in top.lines) == 2 * n
+    assert sum(len(line.get_xdata()) for line in bottom.lines if line.get_linestyle() == "None") == n
+    run = thermal_fit.run_names[1]
+    one = thermal_fit.plot(run=run)
+    assert sum(len(line.get_xdata()) for line in one.axes[0].lines) == \
+        2 * int(np.sum(thermal_fit.samples["run"] == 1))
+    with pytest.raises(ValueError, match="no run 'v999'"):
+        thermal_fit.plot(run="v999")
+
+
+def test_without_matplotlib_plot_says_what_to_install(fit, thermal_fit, monkeypatch):
+    monkeypatch.setitem(sys.modules, "matplotlib", None)
+    monkeypatch.setitem(sys.modules, "matplotlib.pyplot", None)
+    for call, name in ((fit.plot, "FrictionFit"), (thermal_fit.plot, "ThermalFit")):
+        with pytest.raises(ImportError, match=f"{name}.plot\\(\\) needs matplotlib, which is not installed: "
+                                              "`apt-get install python3-matplotlib`"):
+            call()
+
+
 # ---- the virtual rig -------------------------------------------------------------------------
 
 def test_generate_friction_is_the_commands_virtual_rig(tmp_path):

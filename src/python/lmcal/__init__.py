@@ -31,7 +31,7 @@ from typing import Any, Callable, NamedTuple, Optional, Sequence
 
 import numpy as np
 
-from . import _columns, _lmcal
+from . import _columns, _lmcal, _plot, _tables
 from ._lmcal import InputError, InvalidParameterError
 from ._report import fit_report
 
@@ -130,8 +130,8 @@ class FrictionLog:
         return c
 
     def to_dataframe(self):
-        import pandas as pd
-        return pd.DataFrame(self.columns())
+        """columns() as a pandas DataFrame (pandas is needed for this alone)."""
+        return _tables.frame(self.columns(), "FrictionLog.to_dataframe()")
 
     def to_csv(self) -> str:
         return self._h.csv()
@@ -296,6 +296,18 @@ class _Fit(_Result):
         """The files `lmcal fit` writes, into ``folder``, all or none."""
         self._h.write(os.fspath(folder))
 
+    def to_dataframe(self, table: str = "samples"):
+        """A pandas DataFrame (pandas is needed for this alone) of the fit's ``table``:
+        "samples", one row per fitted sample (its conditions, the measured and fitted values, the
+        residual, as the command's NAME_samples.csv), or "parameters", one row per parameter
+        indexed by name (value, stderr, unit, ci95_low, ci95_high, interval, init, bounds, ...)."""
+        what = f"{type(self).__name__}.to_dataframe()"
+        if table == "samples":
+            return _tables.frame(self._samples(), what)
+        if table == "parameters":
+            return _tables.parameters(self.params, what)
+        raise ValueError(f"table: unknown '{table}'; expected samples or parameters")
+
 
 class FrictionFit(_Fit):
     """A friction fit: the seven constants (and effects) with uncertainty, per-sample
@@ -335,6 +347,11 @@ class FrictionFit(_Fit):
     def effects(self) -> dict:
         return self._h.effects()
 
+    @property
+    def log(self) -> FrictionLog:
+        """The log fitted (the fit's samples are its rows, in order)."""
+        return FrictionLog(self._h.log())
+
     def eval(self, conditions=None, *, guide=None, catalog: Optional[str] = None, **given) -> np.ndarray:
         """The fitted model's friction force (N) at ``conditions``: a dict of arrays or numbers, or
         a DataFrame, and/or keywords (which win), broadcast like NumPy arrays. Conditions:
@@ -359,6 +376,20 @@ class FrictionFit(_Fit):
                 raise _columns.condition_error("run", row, f"run = {run!r}: no such run in the fit; its runs are "
                                                            f"{', '.join(offsets)}")
         return np.array([offsets[run] if math.isfinite(offsets[run]) else 0.0 for run in runs])
+
+    def plot(self, x: str = "velocity_m_s"):
+        """A matplotlib figure (matplotlib is needed for this alone): measured against fitted
+        friction, and the residuals against ``x`` (a condition of the log, or "sample"); every
+        sample drawn, both senses of travel told apart."""
+        return _plot.friction_fit(self, x)
+
+    def _samples(self) -> dict:
+        columns = self.log.columns()
+        for name in self._h.unlogged_conditions():  # not data: the value the fit took
+            columns.pop(name, None)
+        columns.pop("friction_N")
+        return {**columns, "measured_N": self.measured_N, "predicted_N": self.predicted_N,
+                "residual_N": self.residual_N, "sigma_N": self.sigma_N}
 
     def __repr__(self) -> str:
         d = self.to_dict()
@@ -392,7 +423,21 @@ class ThermalFit(_Fit):
 
     @property
     def sensor_names(self) -> list:
+        """Per run, its sensors' names (``samples["sensor"]`` indexes the run's list)."""
         return list(self._array("sensor_names"))
+
+    def plot(self, run: Optional[str] = None):
+        """A matplotlib figure (matplotlib is needed for this alone): measured and simulated
+        rail temperatures over time, and their difference, for every sensor of ``run`` (None:
+        every run)."""
+        return _plot.thermal_fit(self, run)
+
+    def _samples(self) -> dict:
+        s = self.samples
+        runs, sensors = self.run_names, self.sensor_names
+        return {"run": [runs[r] for r in s["run"]], "sensor": [sensors[r][k] for r, k in zip(s["run"], s["sensor"])],
+                "time_s": s["time_s"], "measured_C": s["measured_C"], "simulated_C": s["simulated_C"],
+                "residual_K": s["measured_C"] - s["simulated_C"]}
 
     def __repr__(self) -> str:
         d = self.to_dict()
@@ -414,6 +459,12 @@ class _Diagnosis(_Result):
     def causes(self) -> list:
         """The accepted causes: name, value, interval, held-out gain."""
         return [c for c in self.to_dict()["causes"] if c.get("accepted")]
+
+    def to_dataframe(self):
+        """A pandas DataFrame (pandas is needed for this alone) of every cause tried, round by
+        round: round, cause, accepted, value with its unit, se, ci95_low, ci95_high, lrt_p, the
+        held-out RMSE (cv_rmse_N or cv_rmse_K) and cv_gain_percent, and the reason."""
+        return _tables.candidates(self.to_dict(), f"{type(self).__name__}.to_dataframe()")
 
     def __repr__(self) -> str:
         return f"[[{self._what} diagnosis]] {self.verdict}\n{self.summary()}"
@@ -594,6 +645,7 @@ class Prediction:
         self._json = d["json"]
         self._summary = d["summary"]
         self.time_s = d["time_s"]
+        self.segment = d["segment"]                    # the duty's segment at each time
         self.positions_m = d["positions_m"]
         self.temperature_C = d["temperature_C"]        # one band per position
         self.elongation_um = d["elongation_um"]
@@ -608,6 +660,16 @@ class Prediction:
 
     def summary(self) -> str:
         return self._summary
+
+    def to_dataframe(self):
+        """A pandas DataFrame (pandas is needed for this alone), one row per output time:
+        time_s, segment, and each quantity with its band (NAME, NAME_low, NAME_high):
+        elongation_um, friction_N, heat_rate_W, temperature_C_at_Xm per position,
+        scale_error_um_at_Xm per scale position."""
+        named = [("elongation_um", self.elongation_um), ("friction_N", self.friction_N), ("heat_rate_W", self.heat_rate_W)]
+        named += [(_tables.at_position("temperature_C", x), b) for x, b in zip(self.positions_m, self.temperature_C)]
+        named += [(_tables.at_position("scale_error_um", x), b) for x, b in zip(self.scale_positions_m, self.scale_error_um)]
+        return _tables.bands(self.time_s, named, "Prediction.to_dataframe()", segment=self.segment)
 
     def __repr__(self) -> str:
         return "[[prediction]]\n" + self._summary
