@@ -15,6 +15,7 @@ packages=(
   libgtest-dev libbenchmark-dev  # tests and benchmarks
   python3-pytest python3-pandas python3-jsonschema  # the Python package's tests (a DataFrame goes in; the outputs' schema)
   python3-matplotlib             # the Python package's plot() (optional for the package; its tests draw)
+  python3-nbclient python3-nbformat python3-ipykernel  # the notebook example, executed by the tests
   chromium chromium-driver       # the report's test in a headless browser
   clang-16 libclang-rt-16-dev libomp-16-dev llvm  # sanitize.sh, fuzz.sh: clang 16 (14 cannot build lmcal), libFuzzer, llvm-symbolizer
 )
