@@ -1,5 +1,6 @@
 """lmcal from Python: the bundled friction log fitted from a pandas DataFrame, the fit
-plotted (when matplotlib is installed), then the whole calibration of the bundled set.
+plotted (when matplotlib is installed) and evaluated at new conditions, then the whole
+calibration of the bundled set.
 
     PYTHONPATH=build/python python3 examples/python/fit_friction_dataframe.py [OUTPUT_DIR]
 
@@ -36,31 +37,19 @@ print(fit)
 k1 = fit.params["k1"]
 print(f"k1 = {k1.value:.4f} ± {k1.stderr:.4f}, 95 % [{k1.ci[0]:.4f}, {k1.ci[1]:.4f}] ({k1.interval})")
 
-# 3. Measured against fitted, by speed.
+# 3. Measured against fitted, and the residuals by speed (every sample, both directions), and
+#    the fitted law at conditions of your own.
 os.makedirs(output, exist_ok=True)
 try:
     import matplotlib
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    c = log.columns()
-    fig, (ax, bx) = plt.subplots(1, 2, figsize=(10, 4))
-    ax.scatter(fit.predicted_N, fit.measured_N, s=2, alpha=0.3)
-    top = float(max(fit.measured_N.max(), fit.predicted_N.max()))
-    ax.plot([0, top], [0, top], "k--", lw=1, label="measured = fitted")
-    ax.set_xlabel("fitted law (N)")
-    ax.set_ylabel("measured friction (N)")
-    ax.legend()
-    bx.scatter(c["velocity_m_s"], fit.residual_N, s=2, alpha=0.3)
-    bx.axhline(0, color="k", lw=1)
-    bx.set_xscale("log")
-    bx.set_xlabel("velocity (m/s)")
-    bx.set_ylabel("measured - fitted (N)")
-    fig.suptitle(f"the published law fitted: RMSE {fit.rmse_N:.3f} N")
-    fig.tight_layout()
-    fig.savefig(os.path.join(output, "friction_fit.png"), dpi=120)
+    fit.plot(x="velocity_m_s").savefig(os.path.join(output, "friction_fit.png"), dpi=120)
     print("plot:", os.path.join(output, "friction_fit.png"))
-except ImportError:
-    print("matplotlib is not installed: no plot")
+except ImportError as e:  # the message says how to install it
+    print(f"no plot: {e}")
+speeds = np.array([0.01, 0.05, 0.1])
+print("fitted friction at 2.5 kN, 30 C on an SRN 35C (N):",
+      fit.eval(velocity_m_s=speeds, load_N=2500, temperature_C=30, guide="SRN 35C").round(2))
 
 # 4. The whole calibration, as `lmcal calibrate` does it, with progress.
 cal = lmcal.calibrate(measurements, progress=lambda what, done, total: print(f"  {what} ({done + 1}/{total})"))

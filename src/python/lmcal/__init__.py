@@ -9,14 +9,16 @@ the JSON the command writes for the same inputs and options.
     fit                      # the fit report: estimates, standard errors, intervals, correlations
     fit.params["k1"].ci      # (low, high), 95 %
     fit.covariance           # NumPy arrays; fit.residual_N, fit.predicted_N, ...
+    fit.eval(velocity_m_s=[0.01, 0.1], load_N=2500, temperature_C=30, guide="SRN 35C")  # N
+    fit.plot(); fit.to_dataframe()   # with matplotlib and pandas, imported only then
     cal = lmcal.calibrate("measurements/cheng2017", progress=print)
     cal.write("fits/cheng2017")   # every file `lmcal calibrate` writes, report.html included
 
 Units are SI except where a name says otherwise (``preload_um``, ``block_length_mm``). Bad input
 raises ``lmcal.InputError`` (a ValueError naming the file, line and column, or for columns the
-column and row) or ``lmcal.InvalidParameterError`` (a ValueError naming the parameter). The
-long calls release the GIL; ``progress(what, done, total)`` is called as they go, and Ctrl-C
-stops them.
+column and the row: ``row`` and ``column`` attributes) or ``lmcal.InvalidParameterError`` (a
+ValueError naming the parameter, and for a condition its ``row``). The long calls release the
+GIL; ``progress(what, done, total)`` is called as they go, and Ctrl-C stops them.
 """
 
 from __future__ import annotations
