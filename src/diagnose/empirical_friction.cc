@@ -117,8 +117,7 @@ LawColumns law_columns_at(const FrictionLog& log, const std::vector<double>& val
     ki.nu_ref_mm2_s = log.viscosity40_mm2_s[i];
     const FrictionConditions<double> c = log.conditions(i);
     const auto b = friction_breakdown(ki, c);
-    const double seal_N = ki.f0 * c.block_length_mm;
-    for (std::size_t p = 0; p < std::size(kLawParts); ++p) out.part[p][i] = law_part_N(b, seal_N, kLawParts[p]);
+    for (std::size_t p = 0; p < std::size(kLawParts); ++p) out.part[p][i] = law_part_N(ki, b, c.block_length_mm, kLawParts[p]);
     out.dF_dT[i] = law_warmer(i, 0.5) - law_warmer(i, -0.5);
   });
   return out;

@@ -103,6 +103,17 @@ class NameIndex {
   std::optional<std::uint32_t> last_;
 };
 
+// Each of a part's local names (runs or guides) as the joined log's index, in the order they
+// first appear; `Refusal` thrown when the names pass the limit (the reading that joins them
+// refuses the file, as one reader would have).
+template <typename Refusal>
+std::vector<std::uint32_t> map_names(NameIndex& names, const std::vector<std::string>& local) {
+  std::vector<std::uint32_t> map;
+  for (const std::string& name : local) map.push_back(names(name));
+  if (names.size() > io::kMaxRuns) throw Refusal();
+  return map;
+}
+
 // The text of a run or guide cell; an empty name is an error.
 std::string_view name_cell(const csv::Reader& reader, const csv::Column& column, std::string& scratch) {
   const std::string_view name = reader.text(column.cell, scratch);
@@ -312,14 +323,8 @@ class FileLoader {
   // each run's last sample so far, by the log's run index.
   void join(const FileLoader& part, long lines_before, std::vector<LastSample>& last) {
     const FrictionLog& from = part.log_;
-    const auto map_names = [](NameIndex& names, const std::vector<std::string>& local) {
-      std::vector<std::uint32_t> map;
-      for (const std::string& name : local) map.push_back(names(name));
-      if (names.size() > io::kMaxRuns) throw SlicesDisagree();
-      return map;
-    };
-    const std::vector<std::uint32_t> run_map = map_names(runs_, from.run_names);
-    const std::vector<std::uint32_t> guide_map = map_names(guides_, from.guide_names);
+    const std::vector<std::uint32_t> run_map = map_names<SlicesDisagree>(runs_, from.run_names);
+    const std::vector<std::uint32_t> guide_map = map_names<SlicesDisagree>(guides_, from.guide_names);
     join_law(from.law);
     if (last.size() < runs_.size()) last.resize(runs_.size());
     for (std::size_t r = 0; r < part.last_.size(); ++r) {
@@ -990,14 +995,8 @@ struct FilesDisagree : std::exception {
 // would have refused the file (what it gives of the law's conditions differs; the limit on
 // names), FilesDisagree.
 void append_file(FrictionLog& log, NameIndex& runs, NameIndex& guides, const FrictionLog& part) {
-  const auto map_names = [](NameIndex& names, const std::vector<std::string>& local) {
-    std::vector<std::uint32_t> map;
-    for (const std::string& name : local) map.push_back(names(name));
-    if (names.size() > io::kMaxRuns) throw FilesDisagree();
-    return map;
-  };
-  const std::vector<std::uint32_t> run_map = map_names(runs, part.run_names);
-  const std::vector<std::uint32_t> guide_map = map_names(guides, part.guide_names);
+  const std::vector<std::uint32_t> run_map = map_names<FilesDisagree>(runs, part.run_names);
+  const std::vector<std::uint32_t> guide_map = map_names<FilesDisagree>(guides, part.guide_names);
   FrictionLawConditions& law = log.law;
   if (log.reports.empty()) {
     law = part.law;

@@ -12,6 +12,7 @@
 #include "lmcal/error.hpp"
 #include "rig/rig_common.hpp"
 #include "lmcal/io/catalog.hpp"
+#include "lmcal/models/friction_terms.hpp"
 #include "lmcal/models/rail_thermal.hpp"
 #include "lmcal/models/thermal_effects.hpp"
 
@@ -276,7 +277,7 @@ FrictionRigOutput generate_friction_log(const FrictionRigConfig& config, const R
           F *= run_scale[static_cast<std::size_t>(r)];
           if (hidden.viscous_load_curvature != 0) {
             const auto b = friction_breakdown(config.constants, at_lubricant);
-            const double viscous_N = b.viscous_N - config.constants.f0 * c.block_length_mm;
+            const double viscous_N = law_part_N(config.constants, b, c.block_length_mm, TermCovariate::viscous_N);
             F += hidden.viscous_load_curvature * viscous_N * std::pow(setup.P / 1000 - 2, 2);
           }
           F += hidden.temperature_speed * (setup.T - config.constants.T_ref_C) * V;

@@ -195,10 +195,12 @@ std::vector<T> lagged_temperature_change(const FrictionLog& log, const TermSerie
 // The value of a column covariate (not the law or its parts) at row i.
 double term_covariate_value(const FrictionLog& log, const TermSeries& series, std::size_t i, TermCovariate c);
 
-// A part of the published law (coulomb_N, stribeck_N, viscous_N without the seal, seal_N) from
-// its breakdown; the law's total for law_force_N is the caller's (it carries the effects).
-template <typename R>
-R law_part_N(const FrictionBreakdown<R>& b, const R& seal_N, TermCovariate part) {
+// A part of the published law (coulomb_N, stribeck_N, viscous_N without the seal, seal_N: the
+// seal offset Lb·f0 that Eq. 4 puts inside the viscous term) from its breakdown at constants `k`;
+// the law's total for law_force_N is the caller's (it carries the effects).
+template <typename P, typename R>
+R law_part_N(const FrictionConstants<P>& k, const FrictionBreakdown<R>& b, double block_length_mm, TermCovariate part) {
+  const R seal_N = R(k.f0 * block_length_mm);
   switch (part) {
     case TermCovariate::coulomb_N: return b.coulomb_N;
     case TermCovariate::stribeck_N: return b.stribeck_N;
@@ -224,18 +226,18 @@ template <typename T, typename P, typename E, typename Covariate, typename Decay
 LawWithTerms<T> law_with_terms_N(const FrictionConstants<P>& k, const FrictionEffects<E>& e, const FrictionConditions<double>& c,
                    const std::vector<FrictionTerm>& terms, const T* theta, const Covariate& covariate,
                    const Decay& decay, const T& lag_change) {
-  // c times the term's factors, in their order; the law and its parts from `law` and `b`
-  // (unused by an input shift's factors, which never include them).
+  // The term's coefficient (theta_term[0]) times its factors, in their order, its scale at
+  // theta_term[1]; the law and its parts from `law` and `b` (unused by an input shift's factors,
+  // which never include them).
   const T law_unused(0.0);
   FrictionBreakdown<T> b{};
-  T seal_N(0.0);
-  auto term_value = [&](const FrictionTerm& term, const T* c, const T& law) {
-    T value = *c;
+  auto term_value = [&](const FrictionTerm& term, const T* theta_term, const T& law) {
+    T value = *theta_term;
     for (const auto& f : term.factors) {
       if (f.transform == TermTransform::input_shift) continue;
       if (f.covariate == TermCovariate::law_force_N) value = value * law;
-      else if (is_law_covariate(f.covariate)) value = value * law_part_N(b, seal_N, f.covariate);
-      else if (f.transform == TermTransform::decay) value = value * decay(covariate(f.covariate), c[1]);
+      else if (is_law_covariate(f.covariate)) value = value * law_part_N(k, b, c.block_length_mm, f.covariate);
+      else if (f.transform == TermTransform::decay) value = value * decay(covariate(f.covariate), theta_term[1]);
       else {
         const double x = covariate(f.covariate);
         switch (f.transform) {
@@ -267,7 +269,6 @@ LawWithTerms<T> law_with_terms_N(const FrictionConstants<P>& k, const FrictionEf
   T law;
   auto take_parts = [&](const auto& full) {
     b = {T(full.viscosity_mm2_s), T(full.stribeck_decay), T(full.coulomb_N), T(full.stribeck_N), T(full.viscous_N)};
-    seal_N = T(k.f0 * c.block_length_mm);
   };
   if (shifted) {
     FrictionConditions<T> input = c.template cast<T>();
