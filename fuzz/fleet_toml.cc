@@ -10,6 +10,7 @@
 #include "fuzz_support.hpp"
 
 #include "lmcal/fleet/fleet.hpp"
+#include "lmcal/io/date.hpp"
 
 namespace {
 
@@ -43,7 +44,7 @@ void check_loaded(const lmcal::Fleet& fleet, bool allow_outside) {
     printable_names({s.unit, s.axis, s.machine}, fmt::format("set {}'s unit, axis or machine", id));
     if (s.id.empty() || s.id.starts_with("..") || fs::path(s.id).is_absolute())
       finding(fmt::format("set id '{}' would name outputs outside the output folder", id));
-    if (!s.date.empty() && !lmcal::parse_fleet_date(s.date)) finding(fmt::format("set {}'s date '{}' is not a day", id, io::printable(s.date)));
+    if (!s.date.empty() && !lmcal::io::parse_iso_date(s.date)) finding(fmt::format("set {}'s date '{}' is not a day", id, io::printable(s.date)));
     const bool inside = resolves_inside(s.dir, fleet.root);
     if (s.id.starts_with("outside/")) {
       if (!allow_outside) finding(fmt::format("set {} outside ROOT without --allow-outside-root", id));

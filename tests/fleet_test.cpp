@@ -142,14 +142,6 @@ TEST_F(FleetTest, LoopsLongNamesAndLinksToItselfAreRefusedNotThrown) {
   EXPECT_NE(refusal().find("control character"), std::string::npos) << "a folder name with an escape: " << refusal();
 }
 
-TEST(FleetDate, OnlyRealDaysParse) {
-  EXPECT_EQ(parse_fleet_date("1970-01-02"), 1);
-  EXPECT_EQ(parse_fleet_date("2024-02-29"), parse_fleet_date("2024-02-28").value() + 1);
-  EXPECT_FALSE(parse_fleet_date("2023-02-29"));
-  EXPECT_FALSE(parse_fleet_date("2026-9-01"));
-  EXPECT_FALSE(parse_fleet_date("2026-09-01x"));
-}
-
 // Causes across the fleet: units whose diagnosis accepted each, at any date; a failed set
 // counts for nothing. Records made by hand, so no calibration runs.
 TEST(FleetSummary, CountsTheUnitsShowingEachCause) {

@@ -6,7 +6,6 @@
 
 #include <algorithm>
 #include <atomic>
-#include <chrono>
 #include <exception>
 #include <map>
 #include <mutex>
@@ -18,6 +17,7 @@
 #include "lmcal/error.hpp"
 #include "lmcal/fleet/fleet_record.hpp"
 #include "lmcal/io/atomic_file.hpp"
+#include "lmcal/io/date.hpp"
 #include "lmcal/io/hash.hpp"
 
 namespace lmcal {
@@ -65,7 +65,7 @@ std::string set_id(const fs::path& dir, const fs::path& root, std::optional<std:
 }
 
 // A folder name that is a date: "YYYY-MM-DD" and a real day.
-bool is_date(std::string_view text) { return parse_fleet_date(text).has_value(); }
+bool is_date(std::string_view text) { return io::parse_iso_date(text).has_value(); }
 
 // Unit and date from the folder: ".../unit/YYYY-MM-DD" or ".../unit".
 void infer_unit_and_date(FleetSet& s, const fs::path& root) {
@@ -245,23 +245,6 @@ class ThreadTeam {
 };
 
 }  // namespace
-
-std::optional<int> parse_fleet_date(std::string_view text) {
-  if (text.size() != 10 || text[4] != '-' || text[7] != '-') return std::nullopt;
-  int parts[3] = {0, 0, 0};
-  std::size_t at = 0;
-  for (int p = 0; p < 3; ++p, ++at) {
-    const std::size_t width = p == 0 ? 4 : 2;
-    for (std::size_t i = 0; i < width; ++i, ++at) {
-      if (text[at] < '0' || text[at] > '9') return std::nullopt;
-      parts[p] = parts[p] * 10 + (text[at] - '0');
-    }
-  }
-  const std::chrono::year_month_day day{std::chrono::year(parts[0]), std::chrono::month(static_cast<unsigned>(parts[1])),
-                                        std::chrono::day(static_cast<unsigned>(parts[2]))};
-  if (!day.ok()) return std::nullopt;
-  return static_cast<int>(std::chrono::sys_days(day).time_since_epoch().count());
-}
 
 Fleet discover_fleet(const fs::path& root, const fs::path& exclude, bool allow_outside_root) {
   std::error_code ec;

@@ -13,6 +13,7 @@
 #include "fleet/fleet_report.hpp"
 #include "lmcal/error.hpp"
 #include "lmcal/io/csv_writer.hpp"
+#include "lmcal/io/date.hpp"
 #include "lmcal/models/friction.hpp"
 
 namespace lmcal {
@@ -98,7 +99,7 @@ void test_drift(FleetSummary& s, const std::map<std::string, std::vector<const F
       DriftFinding d{.series = unit, .model = pop.model, .parameter = pop.name, .unit = pop.unit};
       for (const FleetRecord* r : list) {
         const FleetParameter* p = usable(*r, pop.model, pop.name);
-        const auto day = parse_fleet_date(r->date);
+        const auto day = io::parse_iso_date(r->date);
         if (!p || !day) continue;
         d.set_ids.push_back(r->id);
         d.dates.push_back(r->date);

@@ -8,7 +8,7 @@
 
 #include "io/toml_text.hpp"
 #include "lmcal/error.hpp"
-#include "lmcal/fleet/fleet.hpp"
+#include "lmcal/io/date.hpp"
 #include "rig/rig_common.hpp"
 
 namespace lmcal {
@@ -31,7 +31,7 @@ void check_change(const FleetRigConfig& c, const FleetRigChange& change, const c
 }
 
 std::string date_after(const std::string& first, int days) {
-  const auto day = parse_fleet_date(first);
+  const auto day = io::parse_iso_date(first);
   if (!day) throw InvalidParameter("first_date", fmt::format("'{}': expected YYYY-MM-DD", first));
   const std::chrono::year_month_day d{std::chrono::sys_days(std::chrono::days(*day + days))};
   return fmt::format("{:04}-{:02}-{:02}", static_cast<int>(d.year()), static_cast<unsigned>(d.month()),

@@ -63,9 +63,6 @@ struct FleetSet {
   std::string series() const;
 };
 
-// Days since 1970-01-01 of a "YYYY-MM-DD" date; nullopt for another text or a day that does not exist.
-std::optional<int> parse_fleet_date(std::string_view text);
-
 struct Fleet {
   std::filesystem::path root;
   bool allow_outside_root = false;  // the sets' folders and files may lie outside root

@@ -45,9 +45,9 @@
 
 #include "lmcal/io/catalog.hpp"
 #include "lmcal/io/drive.hpp"
+#include "lmcal/io/friction_conditions.hpp"
 #include "lmcal/io/input_scope.hpp"
 #include "lmcal/io/load_report.hpp"
-#include "lmcal/models/friction.hpp"
 
 namespace LMCAL_API lmcal {
 

@@ -37,6 +37,8 @@
 #include <string_view>
 #include <utility>
 
+#include "lmcal/io/friction_conditions.hpp"
+
 namespace LMCAL_API lmcal {
 
 // The seven friction constants of Eq. 8 plus the viscosity reference point of Eq. 6.
@@ -98,32 +100,6 @@ inline FrictionConstants<double> paper_friction_constants() {
           .nu_ref_mm2_s = 99.0,
           .T_ref_C = 40.0};
 }
-
-// Operating point of one block.
-template <typename T>
-struct FrictionConditions {
-  T load_N{};           // P, normal load on the block
-  T preload_um{};       // pc, preload amount
-  T block_length_mm{};  // Lb, block length
-  T velocity_m_s{};     // V, sliding speed (>= 0)
-  T temperature_C{};    // T, lubricant / rail temperature
-  T direction{1.0};     // +1 or -1, sense of travel (the published law ignores it)
-  // dV/dt along the travel, m/s² (signed in x): 0 on a plateau; a trajectory's inertia and the
-  // moving_mass effect use it (the law ignores it).
-  T acceleration_m_s2{};
-  // Where along the travel the carriage is, m (the log's own origin), and how far it has moved
-  // since it last reversed or rested, m: a raw log's (derived from its motion); 0 where a log
-  // gives no motion. Position-periodic and pre-sliding effects use them (the law ignores them).
-  T position_m{};
-  T distance_since_reversal_m{};
-
-  template <typename U>
-  FrictionConditions<U> cast() const {
-    return {U(load_N),      U(preload_um), U(block_length_mm),   U(velocity_m_s),
-            U(temperature_C), U(direction), U(acceleration_m_s2), U(position_m),
-            U(distance_since_reversal_m)};
-  }
-};
 
 // The three terms of Eq. 7, kept apart for plots and diagnostics.
 template <typename T>
