@@ -52,7 +52,7 @@ void run_plan_friction(const PlanFrictionOptions& o, const std::vector<std::stri
   grid.catalog = catalog ? &*catalog : nullptr;
   const FrictionPlan plan = with_progress("friction plan", [&](const Progress&) {
     const FrictionFitResult fit = fit_friction(input.log, fit_options);
-    return plan_friction(input.log, fit, friction_candidates(input.log, grid), o.plan);
+    return plan_friction(input.log, fit, friction_candidates(input.log, grid, fit), o.plan);
   });
   std::vector<std::pair<std::string, std::string>> inputs = input.inputs;
   if (!o.model.file.empty()) inputs.emplace_back(o.model.file, sha256_file(o.model.file));

@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -93,7 +94,7 @@ TEST(FrictionPlan, TheExpectedShrinkMatchesARefitOnThePlannedConditions) {
   for (const auto& p : plan.parameters) {
     ASSERT_TRUE(std::isfinite(p.se_after)) << p.name;
     const double ratio = refit.fit.parameter(p.name).se / p.se_after;
-    if (p.determined_before) {
+    if (p.determined_before || !p.held_now.empty()) {
       EXPECT_NEAR(ratio, 1.0, 0.3) << p.name << ": SE " << p.se_before << " -> expected " << p.se_after << ", refit "
                                    << refit.fit.parameter(p.name).se << "\n" << friction_plan_summary(plan);
     } else {
@@ -121,6 +122,79 @@ TEST(FrictionPlan, AConstantTheDataCannotDetermineGetsTheConditionsThatDetermine
   const FrictionPlan stuck = plan_friction(log, fit, friction_candidates(log, {}), {.conditions = 3});
   EXPECT_TRUE(std::isinf(planned(stuck, "k2").se_after)) << friction_plan_summary(stuck);
   EXPECT_NE(friction_plan_summary(stuck).find("k2 is not determined by the data, nor by these candidates"), std::string::npos);
+}
+
+// Issue 41: with one preload class the fit holds k2 and quotes k1 with k2 held (k1 − k2·pc at
+// the logged pc); the plan printed "k1 0.1037 -> 63.92" (k2 still held, k1's SE from the
+// ridge) and, with other preloads, a larger SE for k1 itself beside the held one's. Now both
+// sides of every row are the same quantity.
+TEST(FrictionPlan, ExpectedStandardErrorsCompareTheSameQuantity) {
+  const FrictionLog log = generate_friction_log(rig(kAllSpeeds, {2.5}, 13), {}).log;
+  const FrictionFitResult fit = fit_friction(log, iid_fit());
+  ASSERT_TRUE(fit.fit.parameter("k2").held_unidentifiable);
+  // No other preload among the candidates: k2 stays held, and k1 (with k2 held) can only gain.
+  const FrictionPlan stuck = plan_friction(log, fit, friction_candidates(log, {}), {.conditions = 3});
+  for (const auto& p : stuck.parameters) {
+    EXPECT_TRUE(p.held_now.empty()) << p.name;
+    if (p.determined_before) EXPECT_LE(p.se_after, p.se_before * (1 + 1e-9)) << p.name << "\n" << friction_plan_summary(stuck);
+  }
+  EXPECT_DOUBLE_EQ(planned(stuck, "k1").se_before, fit.fit.parameter("k1").se);
+  // Other preloads determine k2: k1 itself was not determined now (only k1 with k2 held).
+  const FrictionPlan freed = plan_friction(log, fit, friction_candidates(log, {.preload_um = {1.5, 2.5, 4.0}}),
+                                           {.conditions = 3, .samples_per_condition = 200});
+  const PlannedParameter& k1 = planned(freed, "k1");
+  EXPECT_FALSE(k1.determined_before);
+  EXPECT_TRUE(std::isinf(k1.se_before));
+  EXPECT_TRUE(std::isfinite(k1.se_after));
+  EXPECT_EQ(k1.held_now, std::vector<std::string>{"k2"});
+  EXPECT_DOUBLE_EQ(k1.se_held_now, fit.fit.parameter("k1").se);
+  EXPECT_LE(k1.se_held_after, k1.se_held_now * (1 + 1e-9));
+  for (const auto& p : freed.parameters)  // the constants k2 does not enter with keep their row
+    if (p.name == "f0" || p.name == "v_st_m_s") EXPECT_TRUE(p.held_now.empty() && p.determined_before) << p.name;
+  const std::string summary = friction_plan_summary(freed);
+  EXPECT_NE(summary.find("n/a (only with k2 held)"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("k1 (k2 held)"), std::string::npos) << summary;
+  const std::string json = friction_plan_json(freed, {});
+  EXPECT_NE(json.find("\"as_quoted_now\""), std::string::npos);
+  EXPECT_NE(json.find("\"standard_errors\""), std::string::npos);
+}
+
+// Its own note asks for a second preload class (and a second temperature): the candidates
+// made with the fit hold them, the plan picks them first and says why.
+TEST(FrictionPlan, ProposesTheMeasurementsItsNotesAskFor) {
+  FrictionRigConfig one = rig(kAllSpeeds, {2.5}, 16);
+  one.temperature_C = {26};
+  const FrictionLog log = generate_friction_log(one, {}).log;
+  const FrictionFitResult fit = fit_friction(log, iid_fit());
+  ASSERT_TRUE(fit.fit.parameter("k2").held_unidentifiable);
+  ASSERT_TRUE(fit.fit.parameter("beta_per_K").held_unidentifiable);
+  const auto candidates = friction_candidates(log, {}, fit);
+  std::set<double> preloads, temperatures;
+  for (const auto& c : candidates) {
+    preloads.insert(c.conditions.preload_um);
+    temperatures.insert(c.conditions.temperature_C);
+    const bool new_level = c.conditions.preload_um != 2.5 || c.conditions.temperature_C != 26;
+    EXPECT_EQ(!c.proposed_for.empty(), new_level);
+  }
+  EXPECT_EQ(preloads, (std::set<double>{1.5, 2.5, 4.0}));  // THK's normal, C1, C0 of an SRN 35C
+  EXPECT_EQ(temperatures, (std::set<double>{26, 41}));
+  const FrictionPlan plan = plan_friction(log, fit, candidates, {.conditions = 4, .samples_per_condition = 200});
+  const auto& first = plan.picks.front().candidate;
+  EXPECT_FALSE(first.proposed_for.empty()) << friction_plan_summary(plan);
+  EXPECT_TRUE(std::isfinite(planned(plan, "k2").se_after)) << friction_plan_summary(plan);
+  EXPECT_TRUE(std::isfinite(planned(plan, "beta_per_K").se_after)) << friction_plan_summary(plan);
+  const std::string summary = friction_plan_summary(plan);
+  EXPECT_NE(summary.find("a second preload class, which determines k2"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("a second temperature, 15 K above the logs', which determines beta_per_K"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("proposed because the logs lack it"), std::string::npos) << summary;
+  EXPECT_NE(friction_plan_json(plan, {}).find("\"proposed_for\""), std::string::npos);
+  // A list the user gave is the grid: nothing is added to it.
+  for (const auto& c : friction_candidates(log, {.preload_um = {2.5}}, fit)) EXPECT_EQ(c.conditions.preload_um, 2.5);
+  // Too few samples to determine k2: the note says how many would.
+  const FrictionPlan few = plan_friction(log, fit, candidates, {.conditions = 1, .samples_per_condition = 1});
+  if (std::isinf(planned(few, "k2").se_after))
+    EXPECT_NE(friction_plan_summary(few).find("samples per condition would determine it"), std::string::npos)
+        << friction_plan_summary(few);
 }
 
 TEST(FrictionPlan, ATieBetweenSealDragAndItsBlockSizeFormGetsAnotherBlock) {

@@ -4,6 +4,7 @@
 #include "lmcal/predict/plan.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
 
 #include <Eigen/Dense>
@@ -16,6 +17,7 @@
 
 #include "lmcal/error.hpp"
 #include "lmcal/io/csv_writer.hpp"
+#include "lmcal/io/friction_log.hpp"
 #include "lmcal/models/friction_effects.hpp"
 #include "predict/design.hpp"
 
@@ -88,6 +90,133 @@ class Gradient {
   FrictionEffects<double> effects_;
 };
 
+// "k2 held at 0.03 1/um, beta_per_K at 0.067 1/K".
+std::string held_values(const FrictionFitResult& fit, const std::vector<std::string>& names) {
+  std::string out;
+  for (const auto& name : names) {
+    const ParameterEstimate& e = fit.fit.parameter(name);
+    out += fmt::format("{}{} {}at {:.4g}{}", out.empty() ? "" : ", ", name, out.empty() ? "held " : "", e.value,
+                       e.unit.empty() || e.unit == "1" ? "" : " " + e.unit);
+  }
+  return out;
+}
+
+// Notes naming the picks at a level the log lacks, proposed for a held constant
+// (FrictionCandidate::proposed_for), and what for.
+void proposed_picks(FrictionPlan& plan) {
+  std::map<std::string, std::vector<std::size_t>> by_reason;
+  for (std::size_t k = 0; k < plan.picks.size(); ++k)
+    if (!plan.picks[k].candidate.proposed_for.empty()) by_reason[plan.picks[k].candidate.proposed_for].push_back(k + 1);
+  for (const auto& [why, picks] : by_reason)
+    plan.notes.push_back(fmt::format("{} {} {}; proposed because the logs lack it", picks.size() == 1 ? "pick" : "picks",
+                                     fmt::join(picks, ", "), why));
+}
+
+// The position of `j` in `v`, or -1.
+Eigen::Index position(const std::vector<Eigen::Index>& v, Eigen::Index j) {
+  const auto at = std::find(v.begin(), v.end(), j);
+  return at == v.end() ? -1 : at - v.begin();
+}
+
+// Below this share of its information not explained by the others (1 − R²), a constant is a
+// direction the data do not determine at all (collinear), not merely a weak one.
+constexpr double kCollinear = 1e-8;
+// A constant held now moves the quoted estimate of another by B = ∂θ̂_d/∂θ_h (both relative to
+// their sizes); above this, the parameter means another thing once the constant is estimated.
+constexpr double kCoupled = 1e-3;
+
+// The samples per planned condition that shrink an SE `ratio` times its goal to the goal, where
+// the planned conditions alone determine it (its variance falls as 1/samples), rounded up to 10.
+std::size_t samples_needed(std::size_t samples, double ratio) {
+  return static_cast<std::size_t>(10 * std::ceil(static_cast<double>(samples) * ratio * ratio / 10));
+}
+
+// Each parameter's SE now -> after, like with like (plan.hpp): `info` and `info_after` the
+// logs' information and with the planned conditions, relatively scaled; `determined` the
+// parameters the fit quoted an SE of. Notes what stays undetermined and why.
+std::vector<PlannedParameter> expected_standard_errors(const FrictionFitResult& fit, const Parameters& p,
+                                                       const Eigen::MatrixXd& info, const Eigen::MatrixXd& info_after,
+                                                       const std::vector<Eigen::Index>& determined, std::size_t samples,
+                                                       std::vector<std::string>& notes) {
+  const auto m = p.value.size();
+  const auto estimate = [&](Eigen::Index j) -> const ParameterEstimate& { return fit.fit.parameters[p.index[static_cast<std::size_t>(j)]]; };
+  // The constants held now that the planned conditions determine (an SE below the fit's
+  // identifiability threshold of their size, estimated with all determined after).
+  const double threshold = FitOptions{}.identifiability_threshold;
+  std::vector<Eigen::Index> after = determined, freed;
+  std::vector<double> relative_se(static_cast<std::size_t>(m), INFINITY);  // of a held one, after
+  for (Eigen::Index h = 0; h < m; ++h) {
+    if (position(determined, h) >= 0) continue;
+    std::vector<Eigen::Index> with = after;
+    with.push_back(h);
+    const detail::SubsetCovariance c = detail::subset_covariance(info_after, with);
+    const auto last = static_cast<Eigen::Index>(with.size()) - 1;
+    if (c.unexplained(last) > kCollinear) relative_se[static_cast<std::size_t>(h)] = std::sqrt(std::max(c.covariance(last, last), 0.0));
+    if (relative_se[static_cast<std::size_t>(h)] < threshold) {
+      after.push_back(h);
+      freed.push_back(h);
+    }
+  }
+  // What the fit quoted now (the determined with the others held) and the same after.
+  const Eigen::MatrixXd now = detail::subset_covariance(info, determined).covariance;
+  const Eigen::MatrixXd later = detail::subset_covariance(info_after, after).covariance;
+  // The quoted estimate of d is θ_d + Σ_h B(d,h)(θ_h − held value): B = I_DD⁻¹ I_DH of the logs.
+  Eigen::MatrixXd coupling = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(determined.size()), static_cast<Eigen::Index>(freed.size()));
+  for (std::size_t k = 0; k < freed.size(); ++k)
+    for (std::size_t d = 0; d < determined.size(); ++d)
+      for (std::size_t e = 0; e < determined.size(); ++e)
+        coupling(static_cast<Eigen::Index>(d), static_cast<Eigen::Index>(k)) +=
+            now(static_cast<Eigen::Index>(d), static_cast<Eigen::Index>(e)) * info(determined[e], freed[k]);
+
+  std::vector<PlannedParameter> out;
+  for (Eigen::Index j = 0; j < m; ++j) {
+    const ParameterEstimate& e = estimate(j);
+    PlannedParameter r{e.name, e.unit, e.value};
+    const Eigen::Index d = position(determined, j), ja = position(after, j);
+    if (d >= 0) {
+      // The quoted SE changes as the information's variance of the same quantity does (keeping
+      // what the quoted covariance adds for correlated residuals or runs).
+      const auto quoted_se = [&](double variance) { return e.se * std::sqrt(std::max(variance, 0.0) / now(d, d)); };
+      Eigen::VectorXd held = Eigen::VectorXd::Unit(static_cast<Eigen::Index>(after.size()), ja);
+      for (std::size_t k = 0; k < freed.size(); ++k)
+        if (std::abs(coupling(d, static_cast<Eigen::Index>(k))) > kCoupled) {
+          r.held_now.push_back(estimate(freed[k]).name);
+          held(position(after, freed[k])) = coupling(d, static_cast<Eigen::Index>(k));
+        }
+      r.se_after = quoted_se(later(ja, ja));
+      r.se_before = r.held_now.empty() ? e.se : INFINITY;
+      if (!r.held_now.empty()) {
+        r.se_held_now = e.se;
+        r.se_held_after = quoted_se(held.dot(later * held));
+      }
+    } else if (ja >= 0) {
+      r.se_before = INFINITY;
+      r.se_after = p.scale(j) * std::sqrt(std::max(later(ja, ja), 0.0));
+      notes.push_back(fmt::format("{} is not determined by the data yet (held); the planned conditions determine it", e.name));
+    } else {
+      r.se_before = r.se_after = INFINITY;
+      const double se = relative_se[static_cast<std::size_t>(j)] * p.scale(j);
+      notes.push_back(!(relative_se[static_cast<std::size_t>(j)] < 1e3)
+                          ? fmt::format("{} is not determined by the data, nor by these candidates: widen the grid", e.name)
+                          : fmt::format("{} is not determined by the data; the planned conditions would give it an SE of {:.3g} "
+                                        "{}, more than {:g} times its size {:.4g}, where a fit holds it: about {} samples per "
+                                        "condition would determine it (--samples), or more conditions (-n)",
+                                        e.name, se, e.unit, threshold, e.value,
+                                        samples_needed(samples, relative_se[static_cast<std::size_t>(j)] / threshold)));
+    }
+    r.determined_before = std::isfinite(r.se_before);
+    out.push_back(r);
+  }
+  for (const auto& r : out)
+    if (!r.held_now.empty())
+      notes.push_back(fmt::format("{0}'s SE now, {1:.4g}, is that of {0} with {2} (what the logs determine); a refit with the "
+                                  "planned conditions estimates {3} too and quotes {0} itself, another quantity: SE {4:.4g}. "
+                                  "{0} with {2}, as quoted now: {1:.4g} -> {5:.4g}",
+                                  r.name, r.se_held_now, held_values(fit, r.held_now), fmt::join(r.held_now, ", "), r.se_after,
+                                  r.se_held_after));
+  return out;
+}
+
 }  // namespace
 
 std::vector<FrictionCandidate> friction_candidates(const FrictionLog& log, const FrictionCandidateGrid& grid) {
@@ -126,6 +255,62 @@ std::vector<FrictionCandidate> friction_candidates(const FrictionLog& log, const
               out.push_back(c);
             }
   if (out.size() > 1000000) throw InvalidParameter("candidates", static_cast<double>(out.size()), "at most 1e6 combinations");
+  return out;
+}
+
+std::vector<FrictionCandidate> friction_candidates(const FrictionLog& log, const FrictionCandidateGrid& given,
+                                                   const FrictionFitResult& fit) {
+  const auto held = [&](const char* name) {
+    return std::any_of(fit.fit.parameters.begin(), fit.fit.parameters.end(),
+                       [&](const ParameterEstimate& e) { return e.name == name && e.free && e.held_unidentifiable; });
+  };
+  std::set<double> preloads, speeds;
+  std::set<std::string> guides;
+  double coldest = INFINITY, warmest = -INFINITY;
+  for (std::size_t i = 0; i < log.size(); ++i) {
+    preloads.insert(rounded(log.preload_um[i]));
+    speeds.insert(rounded(log.velocity_m_s[i]));
+    coldest = std::min(coldest, log.temperature_C[i]);
+    warmest = std::max(warmest, log.temperature_C[i]);
+    guides.insert(log.guide_names.empty() ? std::string() : log.guide_names[log.guide[i]]);
+  }
+  if (!given.guides.empty()) guides = {given.guides.begin(), given.guides.end()};
+  FrictionCandidateGrid grid = given;
+  // A level the log lacks, by variable, and what it is for.
+  std::map<double, std::string> new_preload, new_temperature, new_speed;
+  if (grid.preload_um.empty() && preloads.size() == 1 && held("k2")) {
+    grid.preload_um = {preloads.begin(), preloads.end()};
+    for (const auto& guide : guides)
+      for (const char* preload_class : {"normal", "C1", "C0"}) {
+        const double pc = preload_class_um(preload_class, guide);
+        if (preloads.count(pc)) continue;
+        grid.preload_um.push_back(pc);
+        new_preload[pc] = fmt::format("at pc = {:g} um (preload class {}): a second preload class, which determines k2 (one "
+                                      "class leaves k1 and k2 tied)",
+                                      pc, preload_class);
+      }
+  }
+  if (grid.temperature_C.empty() && warmest - coldest < 3 && held("beta_per_K")) {
+    const double T = std::round(0.5 * (coldest + warmest));
+    grid.temperature_C = {T, T + 15};
+    new_temperature[T + 15] = fmt::format("at T = {:g} C: a second temperature, 15 K above the logs', which determines beta_per_K", T + 15);
+  }
+  if (grid.velocity_m_s.empty() && !speeds.empty() && *speeds.begin() >= 0.03 && held("v_st_m_s")) {
+    grid.velocity_m_s = {speeds.begin(), speeds.end()};
+    for (double v : {0.002, 0.005, 0.01, 0.02}) {
+      grid.velocity_m_s.push_back(v);
+      new_speed[v] = fmt::format("at V = {:g} m/s: below 0.03 m/s, where the Stribeck term shows, which determines v_st_m_s", v);
+    }
+  }
+  std::vector<FrictionCandidate> out = friction_candidates(log, grid);
+  for (auto& c : out) {
+    std::vector<std::string> why;
+    const std::pair<const std::map<double, std::string>*, double> levels[] = {
+        {&new_preload, c.conditions.preload_um}, {&new_temperature, c.conditions.temperature_C}, {&new_speed, c.conditions.velocity_m_s}};
+    for (const auto& [level, value] : levels)
+      if (const auto at = level->find(value); at != level->end()) why.push_back(at->second);
+    c.proposed_for = fmt::format("{}", fmt::join(why, "; "));
+  }
   return out;
 }
 
@@ -174,14 +359,11 @@ FrictionPlan plan_friction(const FrictionLog& log, const FrictionFitResult& fit,
   const double ridge = 1e-10 * info.trace() / static_cast<double>(m);
   Eigen::MatrixXd cov = detail::ridge_inverse(info, ridge);
   const Eigen::VectorXd before = cov.diagonal();
-  // The quoted SEs of the determined parameters are conditional on the undetermined ones held
-  // at their start: their variance before, the same (the information of the determined alone).
-  std::vector<Eigen::Index> determined;
+  std::vector<Eigen::Index> determined;  // the parameters the fit quoted an SE of
   for (Eigen::Index j = 0; j < m; ++j) {
     const ParameterEstimate& e = fit.fit.parameters[p.index[static_cast<std::size_t>(j)]];
     if (!e.held_unidentifiable && std::isfinite(e.se) && e.se > 0) determined.push_back(j);
   }
-  const Eigen::VectorXd before_held = detail::variances_holding_others(info, determined, ridge);
 
   std::vector<Eigen::VectorXd> grads(candidates.size());
   for (std::size_t c = 0; c < candidates.size(); ++c) grads[c] = gradient.at(candidates[c].conditions, candidates[c].viscosity40_mm2_s);
@@ -191,6 +373,7 @@ FrictionPlan plan_friction(const FrictionLog& log, const FrictionFitResult& fit,
   };
   plan.correlation_before = pair_correlation();
   std::vector<bool> taken(candidates.size(), false);
+  Eigen::MatrixXd info_after = info;
   for (std::size_t k = 0; k < std::min(o.conditions, candidates.size()); ++k) {
     double best = -1;
     std::size_t best_c = 0;
@@ -216,27 +399,13 @@ FrictionPlan plan_friction(const FrictionLog& log, const FrictionFitResult& fit,
     }
     const Eigen::VectorXd v = cov * grads[best_c];
     cov -= (a / (1 + a * grads[best_c].dot(v))) * v * v.transpose();
+    info_after += a * grads[best_c] * grads[best_c].transpose();
     taken[best_c] = true;
     plan.picks.push_back({candidates[best_c], best});
   }
 
-  for (Eigen::Index j = 0; j < m; ++j) {
-    const ParameterEstimate& e = fit.fit.parameters[p.index[static_cast<std::size_t>(j)]];
-    PlannedParameter r{e.name, e.unit, e.value};
-    r.determined_before = !e.held_unidentifiable && std::isfinite(e.se) && e.se > 0;
-    // The quoted SE changes as the information's variance does (keeping what the quoted
-    // covariance adds for correlated residuals or runs): it grows where a parameter determined
-    // only with another held becomes a joint estimate. An undetermined one from the information.
-    const double shrink = std::sqrt(std::max(cov(j, j), 0.0) / before_held(j));
-    r.se_before = r.determined_before ? e.se : INFINITY;
-    r.se_after = r.determined_before ? e.se * shrink : p.scale(j) * std::sqrt(std::max(cov(j, j), 0.0));
-    if (!r.determined_before && cov(j, j) > 1e-2 / ridge) r.se_after = INFINITY;  // still undetermined
-    if (!r.determined_before)
-      plan.notes.push_back(std::isfinite(r.se_after)
-                               ? fmt::format("{} is not determined by the data yet (held); the planned conditions determine it", e.name)
-                               : fmt::format("{} is not determined by the data, nor by these candidates: widen the grid", e.name));
-    plan.parameters.push_back(r);
-  }
+  plan.parameters = expected_standard_errors(fit, p, info, info_after, determined, plan.samples_per_condition, plan.notes);
+  proposed_picks(plan);
   plan.correlation_after = pair_correlation();
   if (!pair.empty())
     plan.notes.push_back(fmt::format("{} and {}: correlation of their estimates {:.3f} with the logs, {:.3f} with the planned "
@@ -265,6 +434,10 @@ std::vector<std::string> run_names(const FrictionPlan& plan) {
   return out;
 }
 
+// What the SEs compare, in the summary and plan.json.
+constexpr const char* kSameQuantity =
+    "the same quantity on both sides: each parameter as a refit with the planned conditions would quote it";
+
 }  // namespace
 
 std::string friction_plan_json(const FrictionPlan& plan, const std::vector<std::string>& command) {
@@ -276,12 +449,16 @@ std::string friction_plan_json(const FrictionPlan& plan, const std::vector<std::
                      {"load_N", c.load_N}, {"preload_um", c.preload_um}, {"block_length_mm", c.block_length_mm},
                      {"temperature_C", c.temperature_C}, {"direction", c.direction},
                      {"viscosity40_mm2_s", plan.picks[k].candidate.viscosity40_mm2_s}, {"gain", plan.picks[k].gain}});
+    if (!plan.picks[k].candidate.proposed_for.empty()) picks.back()["proposed_for"] = plan.picks[k].candidate.proposed_for;
   }
   nlohmann::json parameters = nlohmann::json::array();
   for (const auto& p : plan.parameters) {
     const auto number = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
-    parameters.push_back({{"name", p.name}, {"unit", p.unit}, {"value", p.value}, {"se_before", number(p.se_before)},
-                          {"se_after", number(p.se_after)}, {"determined_before", p.determined_before}});
+    nlohmann::json row = {{"name", p.name}, {"unit", p.unit}, {"value", p.value}, {"se_before", number(p.se_before)},
+                          {"se_after", number(p.se_after)}, {"determined_before", p.determined_before}};
+    if (!p.held_now.empty())
+      row["as_quoted_now"] = {{"held", p.held_now}, {"se_before", number(p.se_held_now)}, {"se_after", number(p.se_held_after)}};
+    parameters.push_back(row);
   }
   const nlohmann::json j = {{"kind", "friction plan"},
                             {"lmcal_version", LMCAL_VERSION}, {"schema_version", kOutputSchemaVersion},
@@ -291,6 +468,7 @@ std::string friction_plan_json(const FrictionPlan& plan, const std::vector<std::
                             {"noise_N", plan.sigma_N},
                             {"conditions", picks},
                             {"parameters", parameters},
+                            {"standard_errors", kSameQuantity},
                             {"correlation_before", std::isfinite(plan.correlation_before) ? nlohmann::json(plan.correlation_before) : nlohmann::json(nullptr)},
                             {"correlation_after", std::isfinite(plan.correlation_after) ? nlohmann::json(plan.correlation_after) : nlohmann::json(nullptr)},
                             {"notes", plan.notes}};
@@ -321,11 +499,24 @@ std::string friction_plan_summary(const FrictionPlan& plan) {
   for (std::size_t k = 0; k < plan.picks.size(); ++k) {
     const auto& p = plan.picks[k].candidate;
     const auto& c = p.conditions;
-    out += fmt::format("  {:>2}. {} {}  V = {:g} m/s  P = {:g} N  pc = {:g} um  T = {:g} C  dir {:+g}\n", k + 1, runs[k], p.guide,
-                       c.velocity_m_s, c.load_N, c.preload_um, c.temperature_C, c.direction);
+    out += fmt::format("  {:>2}. {} {}  V = {:g} m/s  P = {:g} N  pc = {:g} um  T = {:g} C  dir {:+g}{}\n", k + 1, runs[k], p.guide,
+                       c.velocity_m_s, c.load_N, c.preload_um, c.temperature_C, c.direction,
+                       p.proposed_for.empty() ? "" : "  (new: see the notes)");
   }
-  out += "expected standard errors, now -> after:\n";
+  out += fmt::format("expected standard errors, now -> after ({}):\n", kSameQuantity);
   for (const auto& p : plan.parameters) out += detail::expected_se_line(p);
+  bool held = false;
+  for (const auto& p : plan.parameters)
+    if (!p.held_now.empty()) {
+      if (!held) out += "as quoted now, with the constants the fit holds at their values (what the logs determine), now -> after:\n";
+      held = true;
+      PlannedParameter quoted = p;
+      quoted.name = fmt::format("{} ({} held)", p.name, fmt::join(p.held_now, ", "));
+      quoted.held_now.clear();
+      quoted.se_before = p.se_held_now;
+      quoted.se_after = p.se_held_after;
+      out += detail::expected_se_line(quoted);
+    }
   for (const auto& n : plan.notes) out += "  note: " + n + "\n";
   return out;
 }

@@ -192,9 +192,10 @@ void plan_next_friction(Calibration& c) {
           both.per_run_fits = false;
           both.fit.bootstrap = 0;
           const FrictionFitResult fit = fit_friction(*c.friction_log, both);
-          c.plan = plan_friction(*c.friction_log, fit, friction_candidates(*c.friction_log, {}), {.separate = {cause.effect, tie}});
+          c.plan = plan_friction(*c.friction_log, fit, friction_candidates(*c.friction_log, {}, fit), {.separate = {cause.effect, tie}});
         }
-    if (!c.plan) c.plan = plan_friction(*c.friction_log, *c.calibrated.friction, friction_candidates(*c.friction_log, {}), {});
+    if (!c.plan)
+      c.plan = plan_friction(*c.friction_log, *c.calibrated.friction, friction_candidates(*c.friction_log, {}, *c.calibrated.friction), {});
   } catch (const std::exception& e) {  // too many combinations, no noise, …
     c.notes.push_back(std::string("plan of the next friction conditions skipped: ") + e.what());
   }

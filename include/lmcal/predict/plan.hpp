@@ -7,16 +7,33 @@
 // candidate that most increases the information's determinant (D-optimal: all parameters, in
 // units of themselves) or most decreases the sum of the named parameters' variances, each
 // relative to its own (A-optimal), is taken, its information added, and again, until N
-// distinct conditions are chosen. The expected SE after: the quoted SE times
-// √(variance after / variance before), so a covariance that accounts for correlated residuals
-// keeps its inflation; "before" with the undetermined parameters held, as the fit quoted it, so
-// a parameter that was determined only with another held can grow once both are estimated. A direction the data do not
-// determine (a constant held because one preload class leaves k1 and k2 tied) has a variance
-// of 1/ε in the scaled information: the first pick is the condition that determines it.
+// distinct conditions are chosen. A direction the data do not determine (a constant held
+// because one preload class leaves k1 and k2 tied) has a variance of 1/ε in the scaled
+// information: the first pick is the condition that determines it.
+//
+// The expected SEs compare like with like. A fit holds what its data cannot determine (k2 with
+// one preload class), and then quotes the others' SEs with it held: k1 "with k2 held" is the
+// Coulomb coefficient at the logged preload, k1 − k2·pc, not k1. Once the planned conditions
+// determine k2, a refit quotes k1 itself, another quantity with another (larger) SE. So each
+// parameter's SE, now -> after, is the SE of the parameter as the refit of the logs and the
+// planned conditions would quote it (the constants still undetermined held, as now): "now" is
+// not determined (infinite) where the logs determine it only with a constant held that the plan
+// frees (`held_now`); the SE of what the fit quoted, the parameter with those constants held at
+// their values, is beside it, now -> after (`se_held_now`, `se_held_after`: it only shrinks).
+// After = the quoted SE times √(variance after / variance now) of the same quantity, so a
+// covariance that accounts for correlated residuals keeps its inflation; a constant determined
+// for the first time, from the information alone. A constant counts as determined after when
+// its SE is below half its size (the fit's identifiability threshold).
+//
+// The candidates a plan needs: friction_candidates(log, grid, fit) adds the levels the fit's held
+// constants need where the grid leaves a variable to the log (one preload class: the guides'
+// preload classes; one temperature: 15 K warmer; no speed below 0.03 m/s: four there), and each
+// such candidate says what it is for (`proposed_for`); the plan's notes name the picks that use them.
 #pragma once
 
 #include "lmcal/export.hpp"
 
+#include <cmath>
 #include <cstddef>
 #include <string>
 #include <vector>
@@ -31,6 +48,8 @@ struct FrictionCandidate {
   std::string guide;
   FrictionConditions<double> conditions;  // direction included
   double viscosity40_mm2_s = 99;
+  // Empty, or why a level the log lacks is in it: "a second preload class, for k2".
+  std::string proposed_for;
 };
 
 // Every combination of the values given (an empty list: the log's own values; guides with
@@ -42,6 +61,13 @@ struct FrictionCandidateGrid {
   const GuideCatalog* catalog = nullptr;  // a user catalog searched before the built-in one
 };
 std::vector<FrictionCandidate> friction_candidates(const FrictionLog& log, const FrictionCandidateGrid& grid);
+// The same, with the levels `fit` needs to determine the constants it held, where the grid gives
+// no list of that variable: one preload class with k2 held, THK's classes of the log's guides
+// (preload_class_um: normal, C1, C0); one temperature with beta_per_K held, one 15 K warmer; no
+// speed below 0.03 m/s with v_st_m_s held, 0.002, 0.005, 0.01 and 0.02 m/s. Those candidates'
+// `proposed_for` says which constant they are for.
+std::vector<FrictionCandidate> friction_candidates(const FrictionLog& log, const FrictionCandidateGrid& grid,
+                                                   const FrictionFitResult& fit);
 
 struct PlanOptions {
   std::size_t conditions = 5;           // N
@@ -60,8 +86,15 @@ struct PlannedCondition {
 struct PlannedParameter {
   std::string name, unit;
   double value = 0;
-  double se_before = 0, se_after = 0;  // se_before infinite: not determined by the data yet
-  bool determined_before = true;
+  // The parameter as the refit would quote it, now and after; infinite: not determined (now:
+  // not yet, or only with `held_now` held; after: still not).
+  double se_before = 0, se_after = 0;
+  bool determined_before = true;  // se_before finite
+  // The constants the fit holds now, which the plan determines, that this parameter's quoted
+  // SE assumed held (its meaning changes once they are estimated); with the SE of that quoted
+  // quantity (the parameter with them held at their values), now and after.
+  std::vector<std::string> held_now;
+  double se_held_now = NAN, se_held_after = NAN;
 };
 
 struct FrictionPlan {
