@@ -514,7 +514,7 @@ void ThermalModelOptions::add_to(CLI::App& app, ThermalFitOptions& fit) {
 void ThermalModelOptions::add_offsets(CLI::App& app, ThermalFitOptions& fit) {
   add_choice(app, "--offsets", fit.offsets,
              "Thermocouple offsets: auto (fitted for a run that starts isothermal, at the ambient), fit or hold", "MODE",
-             {{"auto", ThermalOffsets::automatic}, {"fit", ThermalOffsets::fitted}, {"hold", ThermalOffsets::held}});
+             kThermalOffsets);
 }
 
 void ThermalModelOptions::add_friction_file(CLI::App& app) {
@@ -529,10 +529,7 @@ void ThermalModelOptions::copy_given(const ThermalFitOptions& from, ThermalFitOp
 void ThermalModelOptions::apply(ThermalFitOptions& fit, std::vector<std::pair<std::string, std::string>>& inputs) const {
   fit.source = parse_source_model(source);
   fit.scheme = parse_time_scheme(scheme);
-  if (heat == "auto") fit.heat = HeatInput::automatic;
-  else if (heat == "friction") fit.heat = HeatInput::friction_law;
-  else if (heat == "measured") fit.heat = HeatInput::measured_friction;
-  else throw InvalidParameter("--heat", "unknown heat input '" + heat + "'; expected auto, friction or measured");
+  fit.heat = parse_heat_input(heat, "--heat");
   if (!friction_fit.empty()) {
     read_friction_fit(friction_fit, fit);
     inputs.emplace_back(friction_fit, sha256_file(friction_fit));
@@ -549,12 +546,12 @@ void add_friction_constant_options(CLI::App& app, FrictionConstantOptions& o) {
                  "The load cell's zero per run: auto (random with two runs or more and no robust loss; the default), none, "
                  "fixed (free, profiled) or random (a run intercept whose variance is estimated; keeps what changes only "
                  "between runs informative)"),
-            {"auto", "none", "fixed", "random"});
+            enum_names(kRunOffsets));
   completes(app.add_option("--law-temperature", o.temperature,
                  "The temperature the law sees: block-mean (the default: each run's mean logged temperature at one setting, "
                  "which averages the thermometer's noise out instead of flattening the law's temperature dependence) or "
                  "logged (each sample's own)"),
-            {"block-mean", "logged"});
+            enum_names(kFrictionTemperatures));
 }
 
 void apply_friction_constant_options(const FrictionConstantOptions& o, FrictionFitOptions& f) {
@@ -575,16 +572,8 @@ void apply_friction_constant_options(const FrictionConstantOptions& o, FrictionF
     const auto range = parse_list("--bound", item.substr(eq + 1, colon - eq - 1) + "," + item.substr(colon + 1));
     f.bounds[friction_constant_index("--bound", item.substr(0, eq))] = {range[0], range[1]};
   }
-  if (o.run_offsets == "auto") f.run_offsets = RunOffsets::automatic;
-  else if (o.run_offsets == "none") f.run_offsets = RunOffsets::none;
-  else if (o.run_offsets == "fixed") f.run_offsets = RunOffsets::fixed;
-  else if (o.run_offsets == "random") f.run_offsets = RunOffsets::random;
-  else if (!o.run_offsets.empty())
-    throw InvalidParameter("--run-offsets", "unknown model '" + o.run_offsets + "'; expected auto, none, fixed or random");
-  if (o.temperature == "block-mean") f.temperature = FrictionTemperature::block_mean;
-  else if (o.temperature == "logged") f.temperature = FrictionTemperature::logged;
-  else if (!o.temperature.empty())
-    throw InvalidParameter("--law-temperature", "unknown choice '" + o.temperature + "'; expected block-mean or logged");
+  if (!o.run_offsets.empty()) f.run_offsets = parse_run_offsets(o.run_offsets, "--run-offsets");
+  if (!o.temperature.empty()) f.temperature = parse_friction_temperature(o.temperature, "--law-temperature");
 }
 
 }  // namespace lmcal::cli

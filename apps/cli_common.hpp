@@ -239,6 +239,15 @@ CLI::Option* add_choice(CLI::App& app, const std::string& name, Enum& target, co
       ->type_name(type_name)
       ->default_str(current);
 }
+// The same with the library's names for the enum (its list of values and their to_string):
+// add_choice(app, "--offsets", fit.offsets, "…", "MODE", kThermalOffsets).
+template <typename Enum, std::size_t N>
+CLI::Option* add_choice(CLI::App& app, const std::string& name, Enum& target, const std::string& help,
+                        const std::string& type_name, const Enum (&values)[N]) {
+  std::map<std::string, Enum> named;
+  for (const Enum value : values) named.emplace(to_string(value), value);
+  return add_choice(app, name, target, help, type_name, std::move(named));
+}
 
 // The friction constants a command fits, holds and starts from: --free, --fix, --start,
 // --bound, --run-offsets (how the load cell's zero moves between runs) and --law-temperature (the

@@ -51,10 +51,7 @@ FrictionFitOptions to_fit_options(const FitFrictionOptions& o) {
   else throw InvalidParameter("--loss", "unknown loss '" + o.loss + "'; expected none, huber or cauchy");
   require_positive("--loss-scale", o.loss_scale);
   f.fit.loss_scale = o.loss_scale;
-  if (o.weights == "none") f.weighting = FrictionWeighting::none;
-  else if (o.weights == "per-run") f.weighting = FrictionWeighting::per_run;
-  else if (o.weights == "per-condition") f.weighting = FrictionWeighting::per_condition;
-  else throw InvalidParameter("--weights", "unknown weighting '" + o.weights + "'; expected none, per-run or per-condition");
+  f.weighting = parse_friction_weighting(o.weights, "--weights");
   if (o.starts < 1 || o.starts > io::kMaxStarts)
     throw InvalidParameter("--starts", o.starts, fmt::format("from 1 to {} (docs/formats.md#limits)", io::kMaxStarts));
   f.fit.covariance = o.uncertainty.covariance;
@@ -98,7 +95,7 @@ void setup_fit(CLI::App& app, const std::vector<std::string>& argv) {
       ->capture_default_str();
   friction->add_option("--loss-scale", o->loss_scale, "Robust loss scale, in residual sigmas")->capture_default_str();
   completes(friction->add_option("--weights", o->weights, "Weights: none, per-run or per-condition (from the spread of repeats)"),
-            {"none", "per-run", "per-condition"})
+            enum_names(kFrictionWeightings))
       ->capture_default_str();
   friction->add_option("--starts", o->starts, "Multi-start local searches")->capture_default_str();
   friction->add_option("--seed", o->seed, "Seed of the multi-start sequence")->capture_default_str();

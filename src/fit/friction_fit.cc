@@ -388,6 +388,15 @@ const char* to_string(FrictionTemperature temperature) {
   return temperature == FrictionTemperature::block_mean ? "block-mean" : "logged";
 }
 
+const char* to_string(FrictionWeighting w) {
+  switch (w) {
+    case FrictionWeighting::none: return "none";
+    case FrictionWeighting::per_run: return "per-run";
+    case FrictionWeighting::per_condition: return "per-condition";
+  }
+  return "?";
+}
+
 // Blocks: the samples of one run at one setting. Within a run, guide, preload and load, the
 // logged temperatures sorted fall into set points wherever they are more than
 // max(kSetPointGap_K, 5σ) apart, σ the thermometer's noise (from the median difference of
@@ -868,15 +877,6 @@ FrictionFitResult fit_friction(const FrictionLog& logged, const FrictionFitOptio
 // ---- output ---------------------------------------------------------------------------------
 
 namespace {
-
-const char* to_string(FrictionWeighting w) {
-  switch (w) {
-    case FrictionWeighting::none: return "none";
-    case FrictionWeighting::per_run: return "per-run";
-    case FrictionWeighting::per_condition: return "per-condition";
-  }
-  return "?";
-}
 
 const char* to_string(RobustLoss l) {
   switch (l) {

@@ -529,20 +529,11 @@ void set_friction_options(FrictionFitOptions& f, const py::dict& o) {
   check_starts(f, o);
   if (o.contains("effects")) f.effects = o["effects"].cast<std::vector<std::string>>();
   if (o.contains("run_offsets"))
-    f.run_offsets = choose<RunOffsets>("run_offsets", o["run_offsets"].cast<std::string>(),
-                                       {{"auto", RunOffsets::automatic},
-                                        {"none", RunOffsets::none},
-                                        {"fixed", RunOffsets::fixed},
-                                        {"random", RunOffsets::random}});
+    f.run_offsets = parse_run_offsets(o["run_offsets"].cast<std::string>(), "run_offsets");
   if (o.contains("law_temperature"))
-    f.temperature = choose<FrictionTemperature>(
-        "law_temperature", o["law_temperature"].cast<std::string>(),
-        {{"block-mean", FrictionTemperature::block_mean}, {"logged", FrictionTemperature::logged}});
+    f.temperature = parse_friction_temperature(o["law_temperature"].cast<std::string>(), "law_temperature");
   if (o.contains("weights"))
-    f.weighting = choose<FrictionWeighting>("weights", o["weights"].cast<std::string>(),
-                                            {{"none", FrictionWeighting::none},
-                                             {"per-run", FrictionWeighting::per_run},
-                                             {"per-condition", FrictionWeighting::per_condition}});
+    f.weighting = parse_friction_weighting(o["weights"].cast<std::string>(), "weights");
   if (o.contains("run_fits")) f.per_run_fits = o["run_fits"].cast<bool>();
   if (o.contains("cross_validate")) f.cross_validate = o["cross_validate"].cast<bool>();
 }
@@ -598,9 +589,7 @@ struct ThermalFit {
 void set_thermal_options(ThermalFitOptions& t, const py::dict& o, Inputs& inputs) {
   set_fit_options(t.fit, o);
   if (o.contains("heat"))
-    t.heat = choose<HeatInput>("heat", o["heat"].cast<std::string>(),
-                               {{"auto", HeatInput::automatic}, {"friction", HeatInput::friction_law},
-                                {"measured", HeatInput::measured_friction}});
+    t.heat = parse_heat_input(o["heat"].cast<std::string>(), "heat");
   if (o.contains("source")) t.source = parse_source_model(o["source"].cast<std::string>());
   if (o.contains("scheme")) t.scheme = parse_time_scheme(o["scheme"].cast<std::string>());
   if (o.contains("half_rail_segments")) t.half_rail_segments = o["half_rail_segments"].cast<int>();
@@ -611,9 +600,7 @@ void set_thermal_options(ThermalFitOptions& t, const py::dict& o, Inputs& inputs
   if (o.contains("fit_h")) t.fit_h = o["fit_h"].cast<bool>();
   if (o.contains("h_W_m2K")) t.h_W_m2K = o["h_W_m2K"].cast<double>();
   if (o.contains("offsets"))
-    t.offsets = choose<ThermalOffsets>("offsets", o["offsets"].cast<std::string>(),
-                                       {{"auto", ThermalOffsets::automatic}, {"fit", ThermalOffsets::fitted},
-                                        {"hold", ThermalOffsets::held}});
+    t.offsets = parse_thermal_offsets(o["offsets"].cast<std::string>(), "offsets");
   if (o.contains("fit_initial")) t.fit_initial_temperature = o["fit_initial"].cast<bool>();
   if (o.contains("extensions")) t.extensions = o["extensions"].cast<std::vector<std::string>>();
   if (o.contains("run_fits")) t.per_run_fits = o["run_fits"].cast<bool>();

@@ -24,9 +24,11 @@
 #include <array>
 #include <limits>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
+#include "lmcal/enum_names.hpp"
 #include "lmcal/fit/fit_result.hpp"
 #include "lmcal/fit/statistics.hpp"
 #include "lmcal/io/friction_log.hpp"
@@ -40,6 +42,13 @@ enum class FrictionWeighting {
   per_run,        // σ of each run's deviations from the condition means across runs
   per_condition,  // σ of the repeats of each condition (>= 3 repeats; floored)
 };
+inline constexpr FrictionWeighting kFrictionWeightings[] = {FrictionWeighting::none, FrictionWeighting::per_run,
+                                                            FrictionWeighting::per_condition};
+const char* to_string(FrictionWeighting weighting);  // "none", "per-run", "per-condition"
+// The weighting named `name`; InvalidParameter naming `parameter` and the names otherwise.
+inline FrictionWeighting parse_friction_weighting(std::string_view name, const std::string& parameter = "weights") {
+  return parse_enum(kFrictionWeightings, name, parameter, "weighting");
+}
 
 // The named friction effects a fit may add, with their parameter names and units.
 const std::vector<std::string>& friction_effect_names();
@@ -52,7 +61,11 @@ std::vector<std::string> drive_effects(const FrictionLog& log);
 
 // automatic: random with two runs or more and no robust loss, none otherwise.
 enum class RunOffsets { automatic, none, fixed, random };
+inline constexpr RunOffsets kRunOffsets[] = {RunOffsets::automatic, RunOffsets::none, RunOffsets::fixed, RunOffsets::random};
 const char* to_string(RunOffsets offsets);  // "auto", "none", "fixed", "random"
+inline RunOffsets parse_run_offsets(std::string_view name, const std::string& parameter = "run_offsets") {
+  return parse_enum(kRunOffsets, name, parameter, "model");
+}
 
 // The temperature the law is evaluated at, per sample:
 //   logged:     as logged;

@@ -32,9 +32,11 @@
 #include <limits>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
+#include "lmcal/enum_names.hpp"
 #include "lmcal/fit/fit_result.hpp"
 #include "lmcal/fit/population.hpp"
 #include "lmcal/fit/statistics.hpp"
@@ -52,6 +54,11 @@ enum class ThermalOffsets {
   fitted,     // fitted for every run
   held        // never fitted (the thermocouples' readings are taken as true)
 };
+inline constexpr ThermalOffsets kThermalOffsets[] = {ThermalOffsets::automatic, ThermalOffsets::fitted, ThermalOffsets::held};
+const char* to_string(ThermalOffsets offsets);  // "auto", "fit", "hold"
+inline ThermalOffsets parse_thermal_offsets(std::string_view name, const std::string& parameter = "offsets") {
+  return parse_enum(kThermalOffsets, name, parameter, "offsets mode");
+}
 
 enum class HeatInput {
   automatic,        // friction law when constants are given, else the measured mean friction
@@ -59,6 +66,18 @@ enum class HeatInput {
   measured_friction // Q = start_friction_N · V from the manifest (Q_f at the start temperature), else
                     // mean_friction_N · V (the run's mean: a coupled heat keeps that mean)
 };
+inline constexpr HeatInput kHeatInputs[] = {HeatInput::automatic, HeatInput::friction_law, HeatInput::measured_friction};
+constexpr const char* to_string(HeatInput heat) {
+  switch (heat) {
+    case HeatInput::automatic: return "auto";
+    case HeatInput::friction_law: return "friction";
+    case HeatInput::measured_friction: return "measured";
+  }
+  return "?";
+}
+inline HeatInput parse_heat_input(std::string_view name, const std::string& parameter = "heat") {
+  return parse_enum(kHeatInputs, name, parameter, "heat input");
+}
 
 // An empirical sensor-side term (what the thermal diagnosis learns when no named mechanism
 // explains the residuals; src/fit/thermal_terms.hpp has the regressors φ): c · φ(run, s, t)
@@ -239,7 +258,6 @@ struct ThermalFitResult {
 };
 
 ThermalFitResult fit_thermal(const ThermalDataSet& data, const ThermalFitOptions& options);
-const char* to_string(ThermalOffsets offsets);  // "auto", "fit", "hold"
 
 // The ambient each run's model is driven with (the mean of its ambient sensors, or the one
 // named), from its first record (t = 0), as `fit_thermal` prepares it.
