@@ -29,9 +29,9 @@ class LawAt {
   LawAt(const FrictionLog& log, const std::vector<ParameterEstimate>& params, const std::vector<double>& values,
         double reference_C)
       : log_(log) {
-    for (std::size_t j = 0; j < 7; ++j) fittable_constant(k_, j) = values[j];
+    for (std::size_t j = 0; j < FrictionConstants<double>::kFittable; ++j) fittable_constant(k_, j) = values[j];
     k_.T_ref_C = reference_C;
-    for (std::size_t j = 7; j < params.size(); ++j)
+    for (std::size_t j = FrictionConstants<double>::kFittable; j < params.size(); ++j)
       if (const auto slot = find_friction_effect(params[j].name)) e_[*slot] = values[j];
   }
   double operator()(std::size_t i, double warmer_K = 0) const {
@@ -107,7 +107,7 @@ LawColumns law_columns_at(const FrictionLog& log, const std::vector<double>& val
   LawColumns out;
   out.law = std::move(law);
   FrictionConstants<double> k;
-  for (std::size_t j = 0; j < 7; ++j) fittable_constant(k, j) = values[j];
+  for (std::size_t j = 0; j < FrictionConstants<double>::kFittable; ++j) fittable_constant(k, j) = values[j];
   k.T_ref_C = reference_C;
   out.part.assign(std::size(kLawParts), std::vector<double>(log.size()));
   out.dF_dT.resize(log.size());

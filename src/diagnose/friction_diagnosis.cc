@@ -142,7 +142,7 @@ FrictionFitResult fit_with(const FrictionLog& log, const FrictionDiagnosisOption
   f.effects = effects;
   f.effect_start = effect_start;
   f.start = start;
-  for (std::size_t j = 0; j < 7; ++j)
+  for (std::size_t j = 0; j < FrictionConstants<double>::kFittable; ++j)
     fittable_constant(f.start, j) = std::clamp(fittable_constant(f.start, j), f.bounds[j].first, f.bounds[j].second);
   f.per_run_fits = false;
   f.cross_validate = true;
@@ -613,7 +613,7 @@ FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagno
       if (std::find(effects.begin(), effects.end(), name) == effects.end()) effects.push_back(name);
     std::vector<double> effect_start;
     for (const std::string& name : effects) {
-      const auto at = std::find_if(current.fit.parameters.begin() + 7, current.fit.parameters.end(),
+      const auto at = std::find_if(current.fit.parameters.begin() + FrictionConstants<double>::kFittable, current.fit.parameters.end(),
                                    [&](const ParameterEstimate& p) { return p.name == name; });
       effect_start.push_back(at != current.fit.parameters.end() ? at->value
                                                                 : FrictionEffectLibrary::infos[friction_effect_slot(name)].neutral);
@@ -630,7 +630,7 @@ FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagno
     // From the current estimate where it is inside its bounds (fewer iterations), else from
     // the given start (a misspecified fit may sit on a bound).
     FrictionConstants<double> start = o.fit.start;
-    for (std::size_t j = 0; j < 7; ++j) {
+    for (std::size_t j = 0; j < FrictionConstants<double>::kFittable; ++j) {
       const ParameterEstimate& p = current.fit.parameters[j];
       if (p.free && !p.held_unidentifiable && p.value > o.fit.bounds[j].first && p.value < o.fit.bounds[j].second &&
           !p.at_bound)
@@ -756,7 +756,7 @@ FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagno
   for (auto& round : d.rounds)
     for (CandidateScore& c : round) read_precondition(c, log);
   for (CandidateScore& c : d.accepted) read_precondition(c, log);
-  for (std::size_t j = 0; j < 7; ++j)
+  for (std::size_t j = 0; j < FrictionConstants<double>::kFittable; ++j)
     d.shifts.push_back(parameter_shift(baseline.fit.parameters[j], current.fit.parameters[j]));
 
   detail::conclude(d, "The published law", "N", d.cv_rmse_before_N, current.cv_rmse_N, d.baseline.rmse_N);

@@ -168,7 +168,7 @@ std::vector<double> sample_sigmas(const FrictionLog& log, FrictionWeighting weig
 
 std::vector<detail::ParameterSpec> parameter_specs(const FrictionFitOptions& o, const std::vector<std::size_t>& slots) {
   std::vector<detail::ParameterSpec> specs;
-  for (std::size_t j = 0; j < 7; ++j)
+  for (std::size_t j = 0; j < FrictionConstants<double>::kFittable; ++j)
     specs.push_back({kFrictionConstantNames[j], kConstantUnits[j], fittable_constant(o.start, j), o.bounds[j].first, o.bounds[j].second, o.free[j]});
   for (std::size_t m = 0; m < slots.size(); ++m) {
     const FrictionEffectInfo& e = FrictionEffectLibrary::infos[slots[m]];
@@ -361,15 +361,15 @@ const LawCombination* combination_of(const FrictionFitResult& r, std::size_t j) 
 
 FrictionConstants<double> FrictionFitResult::constants() const {
   const auto& p = fit.parameters;
-  LMCAL_ASSERT(p.size() >= 7, "a friction fit has seven constants");
+  LMCAL_ASSERT(p.size() >= FrictionConstants<double>::kFittable, "a friction fit has seven constants");
   FrictionConstants<double> k = paper_friction_constants();
-  for (std::size_t j = 0; j < 7; ++j) fittable_constant(k, j) = p[j].value;
+  for (std::size_t j = 0; j < FrictionConstants<double>::kFittable; ++j) fittable_constant(k, j) = p[j].value;
   return k;
 }
 
 FrictionEffects<double> FrictionFitResult::effects() const {
   FrictionEffects<double> e;
-  for (std::size_t j = 7; j < fit.parameters.size(); ++j)
+  for (std::size_t j = FrictionConstants<double>::kFittable; j < fit.parameters.size(); ++j)
     if (const auto slot = find_friction_effect(fit.parameters[j].name)) e[*slot] = fit.parameters[j].value;  // not the terms
   return e;
 }
@@ -694,7 +694,7 @@ FrictionFitResult fit_friction(const FrictionLog& logged, const FrictionFitOptio
   out.terms = options.terms;
   std::vector<double> term_values;
   {
-    std::size_t j = 7 + slots.size();
+    std::size_t j = FrictionConstants<double>::kFittable + slots.size();
     for (auto& term : out.terms) {
       term_values.push_back(term.coefficient = out.fit.parameters[j++].value);
       if (term.has_scale()) term_values.push_back(term.scale = out.fit.parameters[j++].value);

@@ -49,7 +49,7 @@ std::unique_ptr<ceres::CostFunction> FrictionModel::cost_function(const std::vec
   if (!data_.run_shrink.empty())
     for (std::size_t j = 0; j < n; ++j) groups.push_back(data_.log->run[data_.samples[rows.empty() ? j : rows[j]]]);
   const std::size_t terms = data_.terms ? term_parameter_count(*data_.terms) : 0;
-  const int parameters = static_cast<int>(7 + effect_slots_.size() + terms);
+  const int parameters = static_cast<int>(FrictionConstants<double>::kFittable + effect_slots_.size() + terms);
   if (terms > 0) return term_cost_function(data_, rows, effect_slots_, parameters, n, loss, std::move(groups));
   return std::make_unique<BatchedAutoDiffCostFunction<FrictionResidual<false>>>(
       FrictionResidual<false>{&data_, rows, effect_slots_}, parameters, n, loss, std::move(groups), data_.run_shrink,

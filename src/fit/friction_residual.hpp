@@ -56,9 +56,9 @@ struct FrictionResidual {
   template <typename T>
   Prepared<T> prepare(const T* th) const {
     Prepared<T> p{{th[0], th[1], th[2], th[3], th[4], th[5], th[6], T(99.0), T(data->T_ref_C)}, {}};
-    for (std::size_t m = 0; m < effect_slots.size(); ++m) p.e[effect_slots[m]] = th[7 + m];
+    for (std::size_t m = 0; m < effect_slots.size(); ++m) p.e[effect_slots[m]] = th[FrictionConstants<double>::kFittable + m];
     if constexpr (kTerms) {
-      p.terms = th + 7 + effect_slots.size();
+      p.terms = th + FrictionConstants<double>::kFittable + effect_slots.size();
       std::size_t at = 0;
       for (const auto& term : *data->terms) {
         if (term.lagged_temperature()) p.lag_change = lagged_temperature_change(*data->log, *data->series, p.terms[at + 1]);
@@ -114,7 +114,7 @@ struct FrictionResidual {
       else if (slot == L::slot_of<PositionRipplePhase>()) d = e.of<PositionRipple>() * cosine;
       else if (slot == L::slot_of<Presliding>()) d = -decay;
       else d = -e.of<Presliding>() * decay * c.distance_since_reversal_m / (distance * distance);  // PreslidingDistance
-      g[7 + m] = w * d;
+      g[FrictionConstants<double>::kFittable + m] = w * d;
     }
   }
 

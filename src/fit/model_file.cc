@@ -610,7 +610,7 @@ ModelFile model_file_of(const FrictionFitResult* friction, const FrictionFitOpti
     // trajectory's moving mass, an incline's weight), which fit_friction adds.
     // The drive's dynamics are recorded, not applied: the model's friction is the guide's, and a
     // simulated or predicted speed has no acceleration or incline of the calibration's axis.
-    for (std::size_t j = 7; j < friction->fit.parameters.size(); ++j)
+    for (std::size_t j = FrictionConstants<double>::kFittable; j < friction->fit.parameters.size(); ++j)
       if (const auto slot = find_friction_effect(friction->fit.parameters[j].name)) {
         m.friction_causes.push_back(friction->fit.parameters[j].name);
         if (FrictionEffectLibrary::infos[*slot].dynamics) m.effects[*slot] = FrictionEffectLibrary::infos[*slot].neutral;

@@ -24,9 +24,11 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <tuple>
 #include <vector>
 
 #include "lmcal/models/friction_effects.hpp"
+#include "models/autodiff_scalars.hpp"
 #include "lmcal/models/rail_thermal.hpp"
 
 namespace lmcal::detail {
@@ -67,21 +69,16 @@ class ThermalExtension {
     if constexpr (requires { Mechanism::heat_follows_rail; }) e.heat_follows_rail = Mechanism::heat_follows_rail;
     e.parameters = Mechanism::parameters();
     e.source = Mechanism::source();
-    e.apply_d_ = &Mechanism::template apply<double>;
-    e.apply_1_ = &Mechanism::template apply<ceres::Jet<double, 1>>;
-    e.apply_2_ = &Mechanism::template apply<ceres::Jet<double, 2>>;
-    e.apply_4_ = &Mechanism::template apply<ceres::Jet<double, 4>>;
-    e.apply_8_ = &Mechanism::template apply<ceres::Jet<double, 8>>;
+    [&e]<typename... T>(std::tuple<T...>*) {
+      ((std::get<Apply<T>>(e.apply_) = &Mechanism::template apply<T>), ...);
+    }(static_cast<AutodiffScalars*>(nullptr));
     return e;
   }
 
+  // T one of AutodiffScalars.
   template <typename T>
   void apply(ThermalRunSetup<T>& run, const T* values) const {
-    if constexpr (std::is_same_v<T, double>) apply_d_(run, values);
-    else if constexpr (std::is_same_v<T, ceres::Jet<double, 1>>) apply_1_(run, values);
-    else if constexpr (std::is_same_v<T, ceres::Jet<double, 2>>) apply_2_(run, values);
-    else if constexpr (std::is_same_v<T, ceres::Jet<double, 4>>) apply_4_(run, values);
-    else apply_8_(run, values);
+    std::get<Apply<T>>(apply_)(run, values);
   }
 
   std::string name, description, measure;
@@ -93,11 +90,13 @@ class ThermalExtension {
  private:
   template <typename T>
   using Apply = void (*)(ThermalRunSetup<T>&, const T*);
-  Apply<double> apply_d_ = nullptr;
-  Apply<ceres::Jet<double, 1>> apply_1_ = nullptr;
-  Apply<ceres::Jet<double, 2>> apply_2_ = nullptr;
-  Apply<ceres::Jet<double, 4>> apply_4_ = nullptr;
-  Apply<ceres::Jet<double, 8>> apply_8_ = nullptr;
+  template <typename Scalars>
+  struct ApplyTable;
+  template <typename... T>
+  struct ApplyTable<std::tuple<T...>> {
+    using type = std::tuple<Apply<T>...>;
+  };
+  typename ApplyTable<AutodiffScalars>::type apply_{};  // the mechanism's apply<T>, one per scalar
 };
 
 // The library, in a fixed order.

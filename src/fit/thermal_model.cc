@@ -206,11 +206,13 @@ class ThermalCost final : public ceres::CostFunction {
       // not thrown through Ceres.
       try {
         bool good = true;
+        // The smallest Jet of AutodiffScalars that holds the run's parameters (at most 8: checked by the fit).
         if (!J) good = evaluate_run<double>(run, theta, local, r, nullptr, first);
-        else if (local.size() <= 1) good = evaluate_run<ceres::Jet<double, 1>>(run, theta, local, r, J, first);
-        else if (local.size() <= 2) good = evaluate_run<ceres::Jet<double, 2>>(run, theta, local, r, J, first);
-        else if (local.size() <= 4) good = evaluate_run<ceres::Jet<double, 4>>(run, theta, local, r, J, first);
-        else good = evaluate_run<ceres::Jet<double, 8>>(run, theta, local, r, J, first);  // at most 8: checked by the fit
+#define LMCAL_EVALUATE_WITH_JET(N) \
+        else if (local.size() <= N) good = evaluate_run<ceres::Jet<double, N>>(run, theta, local, r, J, first);
+        LMCAL_FOR_EACH_JET_SIZE(LMCAL_EVALUATE_WITH_JET)
+#undef LMCAL_EVALUATE_WITH_JET
+        else LMCAL_ASSERT(false, "a thermal run depends on more parameters than the largest Jet holds");
         ok[run] = good;
       } catch (const InvalidParameter&) {
         ok[run] = 0;

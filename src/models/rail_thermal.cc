@@ -1,6 +1,7 @@
 // Rail FDM solver (Eqs. 11-15). The header explains the model and the scheme;
 // this file holds the definitions and the explicit instantiations.
 #include "lmcal/models/rail_thermal.hpp"
+#include "models/autodiff_scalars.hpp"
 
 #include <ceres/jet.h>
 
@@ -879,25 +880,13 @@ RailSolution<T> steady_rail(const RailGeometry& geometry, const RailNumerics& nu
 }
 
 #define LMCAL_INSTANTIATE_RAIL(T)                                                                        \
+  template struct HeatRateSchedule<T>;                                                                    \
   template RailSolution<T> simulate_rail<T>(const RailGeometry&, const RailNumerics&, const RailOutputs&, \
                                             const RailParams<T>&, const AmbientTrace&,                   \
                                             const HeatRateModel<T>&);                                    \
   template RailSolution<T> steady_rail<T>(const RailGeometry&, const RailNumerics&,                      \
                                           const std::vector<double>&, const RailParams<T>&, double);
 
-LMCAL_INSTANTIATE_RAIL(double)
-template struct HeatRateSchedule<double>;
-template struct HeatRateSchedule<ceres::Jet<double, 1>>;
-template struct HeatRateSchedule<ceres::Jet<double, 2>>;
-template struct HeatRateSchedule<ceres::Jet<double, 4>>;
-template struct HeatRateSchedule<ceres::Jet<double, 8>>;
-using Jet1 = ceres::Jet<double, 1>;
-using Jet2 = ceres::Jet<double, 2>;
-using Jet4 = ceres::Jet<double, 4>;
-using Jet8 = ceres::Jet<double, 8>;
-LMCAL_INSTANTIATE_RAIL(Jet1)
-LMCAL_INSTANTIATE_RAIL(Jet2)
-LMCAL_INSTANTIATE_RAIL(Jet4)
-LMCAL_INSTANTIATE_RAIL(Jet8)
+LMCAL_FOR_EACH_AUTODIFF_SCALAR(LMCAL_INSTANTIATE_RAIL)
 
 }  // namespace lmcal

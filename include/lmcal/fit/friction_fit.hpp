@@ -78,17 +78,21 @@ inline RunOffsets parse_run_offsets(std::string_view name, const std::string& pa
 //               is not biased by (a Berkson error: a drift within the block stays unbiased),
 //               and at its mean the noise is averaged down.
 enum class FrictionTemperature { logged, block_mean };
-const char* to_string(FrictionTemperature temperature);  // "logged", "block-mean"
+inline constexpr FrictionTemperature kFrictionTemperatures[] = {FrictionTemperature::block_mean, FrictionTemperature::logged};
+const char* to_string(FrictionTemperature temperature);  // "block-mean", "logged"
+inline FrictionTemperature parse_friction_temperature(std::string_view name, const std::string& parameter = "temperature") {
+  return parse_enum(kFrictionTemperatures, name, parameter, "choice");
+}
 // The log as a block_mean fit sees it: each temperature replaced by its block's mean.
 FrictionLog with_block_mean_temperature(const FrictionLog& logged);
 
 struct FrictionFitOptions {
   FitOptions fit;
   FrictionConstants<double> start = paper_friction_constants();  // start values; held constants keep them
-  std::array<bool, 7> free{true, true, true, true, true, true, true};
+  std::array<bool, FrictionConstants<double>::kFittable> free{true, true, true, true, true, true, true};
   // Wide enough that a misspecified law finds its optimum inside (a bound hit makes the
   // projected solve slow and the estimate hard to read).
-  std::array<std::pair<double, double>, 7> bounds{{{0, 5}, {-1, 1}, {0, 50}, {1e-4, 0.5}, {0, 0.1}, {0, 0.2}, {-1, 1}}};
+  std::array<std::pair<double, double>, FrictionConstants<double>::kFittable> bounds{{{0, 5}, {-1, 1}, {0, 50}, {1e-4, 0.5}, {0, 0.1}, {0, 0.2}, {-1, 1}}};
   std::vector<std::string> effects;  // effects to fit on top of the law (names from friction_effect_names())
   std::vector<double> effect_start;  // their start values (default: neutral), in the order of `effects`
   // Empirical terms on top of the law and the effects (friction_terms.hpp): their coefficients

@@ -65,7 +65,7 @@ struct FrictionConstants {
 };
 
 // Names of the seven fittable constants, in the order of FrictionConstants.
-inline constexpr std::array<const char*, 7> kFrictionConstantNames = {
+inline constexpr std::array<const char*, FrictionConstants<double>::kFittable> kFrictionConstantNames = {
     "k1", "k2", "mu_st", "v_st_m_s", "mu_v", "beta_per_K", "f0"};
 
 // The index of a fittable constant by name (into kFrictionConstantNames), or none.
@@ -77,7 +77,7 @@ constexpr std::optional<std::size_t> find_friction_constant(std::string_view nam
 // The same, or InvalidParameter naming `parameter` (the option or key it came from) and the constants.
 std::size_t friction_constant_index(const std::string& parameter, std::string_view name);
 
-// The j-th fittable constant, in the order of kFrictionConstantNames (j < 7).
+// The j-th fittable constant, in the order of kFrictionConstantNames (j < kFittable).
 template <typename T>
 T& fittable_constant(FrictionConstants<T>& k, std::size_t j) {
   T* members[] = {&k.k1, &k.k2, &k.mu_st, &k.v_st_m_s, &k.mu_v, &k.beta_per_K, &k.f0};

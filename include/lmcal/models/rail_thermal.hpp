@@ -21,7 +21,7 @@
 // Templated on the scalar: double for simulation, ceres::Jet for derivatives with
 // respect to α, Q_f (hence the friction constants), h, k, ρ, c and T_initial.
 // Instantiated in src/models/rail_thermal.cc for double and ceres::Jet<double, N>,
-// N = 1, 2, 4, 8; add an instantiation there for another N.
+// N = 1, 2, 4, 8: the list of src/models/autodiff_scalars.hpp, the one place to add another N.
 //
 // Example: SRN 35C at 0.11 m/s, 6 h, the paper's numerics:
 //   lmcal::RailGeometry g{.rail_length_m = 0.6, .area_m2 = 8.88e-4, .perimeter_m = 0.14,
