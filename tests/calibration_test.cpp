@@ -17,6 +17,7 @@
 #include "lmcal/report/html_report.hpp"
 #include "lmcal/report/svg_plot.hpp"
 #include "lmcal/rig/virtual_rig.hpp"
+#include "report/findings.hpp"
 #include "report/sections.hpp"
 #include "support/temp_folder.hpp"
 #include "support/source_paths.hpp"
@@ -134,14 +135,20 @@ std::string between(const std::string& html, const std::string& from, const std:
 // A number as the report writes it (`digits` significant digits).
 std::string shown(double v, int digits) { return fmt::format("{:.{}g}", v, digits); }
 
-// The page opens with the calibrated model: its heading is the first of the page (before any
-// published model's); its table names each accepted cause with its value.
-void expect_calibrated_model_first(const Calibration& c, const std::string& html) {
+// The page opens with what was found, in sentences (each cause named with its calibrated value,
+// how sure in words, the interval methods one click away in a <details>), then the calibrated
+// model: its heading comes before any published model's; its table names each accepted cause
+// with its value. The sentences are computed once: the report, calibration.json's "findings"
+// and the terminal's summary carry the same strings.
+void expect_found_then_calibrated_model(const Calibration& c, const std::string& html, const nlohmann::json& summary) {
+  const std::string found_heading = "<h2 id=\"found\">What we found</h2>";
   const std::string heading = "<h2 id=\"calibrated\">The calibrated model</h2>";
-  EXPECT_EQ(html.find("<h2"), html.find(heading)) << "the calibrated model is not the first section";
+  EXPECT_EQ(html.find("<h2"), html.find(found_heading)) << "what was found is not the first section";
+  EXPECT_EQ(html.find("<h2", html.find(found_heading) + 1), html.find(heading)) << "the calibrated model is not the second section";
   std::smatch published;
   ASSERT_TRUE(std::regex_search(html, published, std::regex("<h2[^>]*>[^<]*published model"))) << "no published-model heading";
   EXPECT_LT(html.find(heading), static_cast<std::size_t>(published.position(0)));
+  const std::string found = between(html, found_heading, "</section>");
   const std::string section = between(html, heading, "</section>");
   ASSERT_TRUE(c.calibrated.friction);
   ASSERT_FALSE(c.calibrated.friction_causes.empty());
@@ -150,11 +157,31 @@ void expect_calibrated_model_first(const Calibration& c, const std::string& html
     const std::string row = between(section, "<tr><td>" + cause + "</td>", "</tr>");
     ASSERT_FALSE(row.empty()) << cause << " has no row in the calibrated table";
     EXPECT_NE(row.find("<td>" + shown(c.calibrated.friction->fit.parameter(cause).value, 5) + "</td>"), std::string::npos) << row;
+    EXPECT_NE(found.find(cause + " " + shown(c.calibrated.friction->fit.parameter(cause).value, 4)), std::string::npos)
+        << cause << " is not said with its value under What we found";
   }
   EXPECT_NE(section.find("model.toml"), std::string::npos);
-  EXPECT_NE(section.find("95 % intervals: " + c.calibrated.friction->fit.uncertainty.method), std::string::npos);
+  // The methods' statements in the details, not in the tables: no covariance column.
+  const std::string details = between(found, "<details>", "</details>");
+  EXPECT_NE(details.find("95 % intervals: " + c.calibrated.friction->fit.uncertainty.method), std::string::npos);
   ASSERT_TRUE(c.calibrated.thermal);
-  EXPECT_NE(section.find("95 % intervals: " + c.calibrated.thermal->joint.uncertainty.method), std::string::npos);
+  EXPECT_NE(details.find("95 % intervals: " + c.calibrated.thermal->joint.uncertainty.method), std::string::npos);
+  EXPECT_NE(details.find("<dt>Cochran&#39;s Q</dt>"), std::string::npos) << "the terms are not defined";
+  EXPECT_EQ(section.find("<th>covariance</th>"), std::string::npos);
+  EXPECT_EQ(section.find("sqrt(sum"), std::string::npos) << "a formula on the first screen";
+  // One place: the same sentences in the report, calibration.json and the summary.
+  const report::Findings words = report::findings(c);
+  ASSERT_EQ(words.found.size(), 2u);
+  ASSERT_EQ(words.how_sure.size(), 2u);
+  const std::string terminal = calibration_summary(c);
+  for (const auto* list : {&words.found, &words.how_sure, &words.contradictions})
+    for (const auto& sentence : *list) {
+      EXPECT_NE(found.find(report::escape_xml(sentence)), std::string::npos) << sentence;
+      EXPECT_NE(terminal.find(sentence), std::string::npos) << sentence;
+    }
+  EXPECT_EQ(summary["findings"]["found"].get<std::vector<std::string>>(), words.found);
+  EXPECT_EQ(summary["findings"]["how_sure"].get<std::vector<std::string>>(), words.how_sure);
+  EXPECT_EQ(summary["findings"]["contradictions"].get<std::vector<std::string>>(), words.contradictions);
 }
 
 // The how-sure panel of one fit lists the SE of every covariance method for `parameter`.
@@ -216,8 +243,9 @@ TEST_F(CalibrationTest, AFullFolderGoesThroughEveryStepIntoACompleteReport) {
   EXPECT_NE(html.find(c.friction_diagnosis->verdict), std::string::npos);
   EXPECT_NE(html.find(c.thermal_diagnosis->verdict), std::string::npos);
 
-  // The calibrated model first; how sure it is, method by method; the published models labelled.
-  expect_calibrated_model_first(c, html);
+  // What was found, then the calibrated model; how sure it is, method by method; the published
+  // models labelled.
+  expect_found_then_calibrated_model(c, html, summary);
   const std::string panel = between(html, "<h2 id=\"how-sure\"", "<h2 id=\"friction\"");
   expect_every_method(between(panel, "Friction law: how sure", "Rail model: how sure"), c.calibrated.friction->fit, "k1");
   expect_every_method(between(panel, "Rail model: how sure", "</svg>"), c.calibrated.thermal->joint, "alpha");
@@ -292,7 +320,7 @@ TEST_F(CalibrationTest, RunsWhoseAlphaDisagreeAreSaidBesideTheVerdict) {
   config.seed = 3;
   write_thermal("thermal.toml", config);
   const std::string html = calibration_report_html(calibrate(find_calibration_set(dir_), {}));
-  EXPECT_NE(html.find("But the runs' own α differ beyond their intervals"), std::string::npos);
+  EXPECT_NE(html.find("But this model's runs' own α differ beyond their intervals"), std::string::npos);
   EXPECT_NE(html.find("or the per-run intervals are too narrow"), std::string::npos);
 }
 
@@ -541,6 +569,20 @@ TEST(BundledCalibration, AFreshRunReproducesTheCommittedResults) {
   // Its effects are all in the library: no empirical term, and the report says so in one sentence.
   ASSERT_TRUE(c.friction_diagnosis && c.thermal_diagnosis);
   const std::string html = calibration_report_html(c);
+  // The published rail model's runs disagree on α (the heat of a run with the wrong model) where
+  // the calibrated model's do not: named at the top as the two readings of one question, with
+  // both tests, before the published model's warning further down.
+  ASSERT_TRUE(c.thermal && c.calibrated.thermal);
+  ASSERT_LT(c.thermal->alpha_runs.q_p, 0.05);
+  ASSERT_GT(c.calibrated.thermal->alpha_runs.q_p, 0.05);
+  const report::Findings words = report::findings(c);
+  ASSERT_EQ(words.contradictions.size(), 1u);
+  const std::string& both = words.contradictions.front();
+  EXPECT_TRUE(both.starts_with("The published rail model's runs disagree on α")) << both;
+  EXPECT_NE(both.find(report::p_is(c.thermal->alpha_runs.q_p)), std::string::npos) << both;
+  EXPECT_NE(both.find("the calibrated rail model's runs do not (Cochran's Q = " + shown(c.calibrated.thermal->alpha_runs.q, 3)),
+            std::string::npos) << both;
+  EXPECT_LT(html.find(report::escape_xml(both)), html.find("But this model's runs' own α differ"));
   EXPECT_EQ(html.find("Beyond the library: an empirical term"), std::string::npos);
   EXPECT_EQ(html.find("class=\"empirical\""), std::string::npos);
   EXPECT_EQ(html.find("not a named cause"), std::string::npos);

@@ -205,7 +205,7 @@ check "calibrate wraps its lines to the terminal's width" fits_width wrapped70.t
 check "wrapping loses no word" same_words calibrate.txt wrapped60.txt
 check "a pipe without COLUMNS is not wrapped" bash -c "awk 'length > 100 { n++ } END { exit !n }' calibrate.txt"
 check "a wrapped line hangs under its label's text" \
-  bash -c "grep -A1 '^    95 % intervals: ' wrapped60.txt | tail -1 | grep -qE '^ {20}[^ ]'"
+  bash -c "grep -A1 '^  Friction: each of' wrapped60.txt | tail -1 | grep -qE '^ {12}[^ ]'"
 check "the parameter tables carry a unit column" bash -c "grep -qE '^    parameter +value +unit +95 % interval' calibrate.txt"
 check "the man page and the completion script are not wrapped" \
   bash -c "cmp -s <('$LMCAL' man) <(COLUMNS=30 '$LMCAL' man) && cmp -s <('$LMCAL' completion bash) <(COLUMNS=30 '$LMCAL' completion bash)"

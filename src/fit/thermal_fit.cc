@@ -675,6 +675,7 @@ void widen_to_the_runs(ThermalFitResult& result, double confidence) {
       if (std::isfinite(p.profile_high)) p.profile_high = std::min(p.upper, p.value + d * (p.profile_high - p.value));
     }
     widened.push_back(fmt::format("{} {:.3g} (tau {:.3g}, t with {:.1f} dof)", p.name, p.se, re.tau, p.dof));
+    u.from_replicates.push_back(p.name);
   }
   if (widened.empty()) return;  // (scaling a row and column keeps the correlations)
   u.reason += fmt::format("; the SE of {} from the runs as replicates (notes)", widened.size() == 1 ? "one parameter" : "some parameters");

@@ -1,6 +1,6 @@
-// The first screen of the report: the calibrated model — the published friction law and rail
-// model with the causes the diagnoses accepted, refitted — every parameter with its standard
-// error, its quoted 95 % interval and the covariance that interval comes from.
+// The report's second section, after "What we found": the calibrated model — the published
+// friction law and rail model with the causes the diagnoses accepted, refitted — every
+// parameter with its standard error and its quoted 95 % interval.
 #include <fmt/ranges.h>
 
 #include <set>
@@ -17,22 +17,14 @@ std::string with_causes(const std::string& model, const std::vector<std::string>
   return model + (diagnosed ? " (the diagnosis accepted no cause)" : " (no diagnosis ran)");
 }
 
-// The model's parameters (per-run nuisance left out): value, SE, quoted interval, covariance.
+// The model's parameters (per-run nuisance left out): value, SE, quoted interval. Where the
+// intervals come from is said once, in words, under "What we found" (findings.hpp), with the
+// method's statement and notes in its details.
 void parameter_table(Page& page, const FitResult& fit) {
   std::vector<std::vector<std::string>> rows;
-  for (const auto& p : fit.parameters) {
-    if (nuisance(p)) continue;
-    const bool estimated = p.free && !p.held_unidentifiable;
-    rows.push_back({p.name, p.unit, num(p.value, 5), num(p.se, 3), interval(p), estimated ? fit.uncertainty.method : "–", flags(p)});
-  }
-  page.table({"parameter", "unit", "estimate", "standard error", "95 % interval", "covariance", ""}, rows);
-  page.paragraph(intervals_statement(fit.uncertainty));
-}
-
-// The uncertainty's caveats (fallbacks, few runs), what the data cannot determine, the warnings.
-void caveats(Page& page, const FitResult& fit) {
-  for (const auto& note : fit.uncertainty.notes) page.paragraph("Caveat: " + note, "warning");
-  fit_caveats(page, fit);
+  for (const auto& p : fit.parameters)
+    if (!nuisance(p)) rows.push_back({p.name, p.unit, num(p.value, 5), num(p.se, 3), interval(p), flags(p)});
+  page.table({"parameter", "unit", "estimate", "standard error", "95 % interval", ""}, rows);
 }
 
 // The empirical terms of a calibrated friction model, labelled as such, and where they were learned.
@@ -68,17 +60,7 @@ void friction_model(Page& page, const Calibration& c) {
   if (const std::string caveat = held_out_caveat(f); !caveat.empty()) page.paragraph("Held out: " + caveat + ".");
   empirical_terms(page, f.terms);
   parameter_table(page, friction_fit_as_shown(f));
-  caveats(page, f.fit);
-}
-
-// "The heat's uncertainty is 12 % of α's variance: …", where the fit carried it into α.
-std::string heat_share(const ThermalFitResult& t) {
-  const Uncertainty& u = t.joint.uncertainty;
-  for (std::size_t j = 0; j < t.joint.parameters.size() && j < u.input_variance_share.size(); ++j)
-    if (t.joint.parameters[j].name == "alpha" && std::isfinite(u.input_variance_share[j]))
-      return fmt::format("The heat's uncertainty is {} % of α's variance: {}", num(100 * u.input_variance_share[j], 2),
-                         t.heat_uncertainty);
-  return t.heat_uncertainty.empty() ? "" : "Heat: " + t.heat_uncertainty;
+  fit_caveats(page, f.fit);
 }
 
 void thermal_model(Page& page, const Calibration& c) {
@@ -95,7 +77,6 @@ void thermal_model(Page& page, const Calibration& c) {
                                          "are fitted and not shown."
                                        : ""));
   parameter_table(page, t.joint);
-  if (const std::string heat = heat_share(t); !heat.empty()) page.paragraph(heat);
   if (c.thermal_diagnosis)
     if (const auto [low, high] = candidate_alpha_range(c.thermal_diagnosis->rounds); std::isfinite(low))
       page.paragraph(fmt::format(
@@ -103,7 +84,7 @@ void thermal_model(Page& page, const Calibration& c) {
           "the diagnosis tried put α between {} and {} (each candidate's α is in the diagnosis's tables): a mechanism left "
           "out moves α by more than any interval shows.",
           num(low), num(high)));
-  caveats(page, t.joint);
+  fit_caveats(page, t.joint);
 }
 
 // Hours, for the plots' time axes.

@@ -15,6 +15,7 @@
 #include "lmcal/io/output_record.hpp"
 #include "lmcal/report/html_report.hpp"
 #include "report/data_checks.hpp"
+#include "report/findings.hpp"
 #include "report/sections.hpp"
 
 namespace lmcal {
@@ -597,6 +598,11 @@ std::string calibration_json(const Calibration& c) {
   if (c.friction) published["friction"] = friction_json(*c.friction);
   if (c.thermal) published["thermal"] = thermal_json(*c.thermal, c.thermal_options);
   j["published_model"] = published;
+  const report::Findings words = report::findings(c);
+  j["findings"] = {{"what", "what the calibration found and how sure it is, in words: the summary's and the report's first sentences"},
+                   {"found", words.found},
+                   {"how_sure", words.how_sure},
+                   {"contradictions", words.contradictions}};
   if (c.friction_diagnosis)
     j["friction_diagnosis"] = brief_verdict(detail::verdict_json(*c.friction_diagnosis, c.friction_diagnosis->cv_rmse_before_N,
                                                                  c.friction_diagnosis->cv_rmse_after_N, "N"));
@@ -643,11 +649,6 @@ std::string held_out_text(double rmse, std::string_view unit, int decimals, std:
                   : "no held-out RMSE (not cross-validated: a robust loss, or a fit that is not usable)";
 }
 
-std::string how_sure_line(const FitResult& fit) {
-  const Uncertainty& u = fit.uncertainty;
-  return fmt::format("    95 % intervals: {} — {}\n", u.method, u.reason);
-}
-
 }  // namespace
 
 std::optional<std::string> unusable_headline(const Calibration& c) {
@@ -669,22 +670,27 @@ std::optional<std::string> unusable_headline(const Calibration& c) {
 std::string calibration_summary(const Calibration& c) {
   std::string s;
   const CalibratedModel& m = c.calibrated;
+  const report::Findings words = report::findings(c);
+  if (!words.found.empty()) {
+    s += "WHAT WE FOUND\n";
+    for (const auto& sentence : words.found) s += "  " + sentence + "\n";
+    for (const auto& sentence : words.contradictions) s += "  Note: " + sentence + "\n";
+    s += "HOW SURE (report.html: the methods and the terms they use)\n";
+    for (const auto& sentence : words.how_sure) s += "  " + sentence + "\n";
+  }
   s += "THE CALIBRATED MODEL (model.toml): the published models with the causes the diagnoses accepted\n";
   if (m.friction) {
     s += fmt::format("  friction law{}: RMSE {:.3f} N, {}\n",
                      m.friction_causes.empty() ? "" : fmt::format(" + {}", fmt::join(m.friction_causes, " + ")), m.friction->rmse_N,
                      held_out_text(m.friction->cv_rmse_N, "N", 3, m.friction->runs.size()));
     if (const std::string caveat = held_out_caveat(*m.friction); !caveat.empty()) s += "    held-out: " + caveat + "\n";
-    s += parameter_lines(friction_fit_as_shown(*m.friction)) + how_sure_line(m.friction->fit);
+    s += parameter_lines(friction_fit_as_shown(*m.friction));
   }
   if (m.thermal) {
     s += fmt::format("  rail model{} ({} source): {}\n",
                      m.thermal_causes.empty() ? "" : fmt::format(" + {}", fmt::join(m.thermal_causes, " + ")),
                      to_string(m.thermal_options.source), held_out_text(m.thermal->cv_rmse_K, "K", 4, m.thermal->runs.size()));
-    s += parameter_lines(m.thermal->joint) + how_sure_line(m.thermal->joint);
-    const auto& share = m.thermal->joint.uncertainty.input_variance_share;
-    if (!share.empty() && std::isfinite(share[0]))
-      s += fmt::format("    the heat's uncertainty is {:.0f} % of alpha's variance ({})\n", 100 * share[0], m.thermal->heat_uncertainty);
+    s += parameter_lines(m.thermal->joint);
     if (c.thermal_diagnosis)
       if (const auto [low, high] = candidate_alpha_range(c.thermal_diagnosis->rounds); std::isfinite(low))
         s += fmt::format("    alpha is conditional on this model: the models the diagnosis tried put it between {:.3f} and {:.3f}\n",

@@ -5,6 +5,7 @@
 
 #include "lmcal/fit/population.hpp"
 #include "lmcal/version.hpp"
+#include "findings.hpp"
 #include "sections.hpp"
 
 namespace lmcal {
@@ -19,7 +20,7 @@ constexpr const char* kStyle = R"(
 body{font:14px/1.45 system-ui,-apple-system,"Segoe UI",Roboto,sans-serif;margin:0 auto;max-width:1280px;padding:0 24px 48px;color:#222}
 h1{font-size:24px;margin:24px 0 4px}h2{font-size:20px;border-bottom:2px solid #0072B2;margin-top:40px}h3{font-size:16px;margin-top:28px}
 nav a{margin-right:16px}.calibrated{background:#f3faf6;border:1px solid #bfe3cf;border-radius:6px;padding:0 16px 8px;margin-top:16px}
-.calibrated h2{margin-top:12px}.brief{background:#f4f7fb;border:1px solid #d0dbe8;border-radius:6px;padding:8px 16px}
+.calibrated h2{margin-top:12px}.found{font-size:15px}.found details{font-size:14px;margin-top:8px}dt{font-weight:600;margin-top:4px}.brief{background:#f4f7fb;border:1px solid #d0dbe8;border-radius:6px;padding:8px 16px}
 .figures{display:flex;flex-wrap:wrap;gap:12px}figure{margin:0}
 table{border-collapse:collapse;margin:8px 0;font-size:13px}th,td{border:1px solid #ddd;padding:3px 8px;text-align:left}
 th{background:#f2f2f2}td.num{text-align:right;font-variant-numeric:tabular-nums}
@@ -113,6 +114,28 @@ document.querySelectorAll('svg.plot').forEach(function(s){s.addEventListener('mo
 s.addEventListener('mouseleave',hide)})})();
 )";
 
+// The first words: what the calibration found and how sure it is, in sentences (findings.hpp:
+// the terminal prints the same); the methods' statements and the terms they use one click away.
+void found_section(Page& page, const report::Findings& f) {
+  if (f.found.empty()) return;
+  page << "<section class=\"found\">\n";
+  page.heading(2, "What we found", "found");
+  for (const auto& sentence : f.found) page.paragraph(sentence);
+  for (const auto& sentence : f.contradictions) page.paragraph(sentence, "warning");
+  page.heading(3, "How sure", "how-sure-words");
+  for (const auto& sentence : f.how_sure) page.paragraph(sentence);
+  page << "<details><summary>The interval methods, what they assume, and the terms used</summary>\n";
+  for (const auto& [model, lines] : f.method_details) {
+    page << "<h4>" << escape_xml(model) << "</h4>\n";
+    for (const auto& line : lines) page.paragraph(line);
+  }
+  page << "<dl>\n";
+  for (const auto& [term, definition] : report::glossary())
+    page << "<dt>" << escape_xml(term) << "</dt><dd>" << escape_xml(definition) << "</dd>\n";
+  page << "</dl>\n<p>Every method's standard errors side by side, the between-run tests and the per-run estimates: "
+          "<a href=\"#how-sure\">How sure: the calibrated model's uncertainty</a>.</p>\n</details>\n</section>\n";
+}
+
 // The verdicts, and the published models' headline numbers under their label.
 void brief(Page& page, const Calibration& c) {
   page.heading(2, "Verdicts", "verdicts");
@@ -140,7 +163,7 @@ void brief(Page& page, const Calibration& c) {
     const RandomEffects& runs = c.thermal->alpha_runs;
     if (runs.k >= 3 && runs.q_p < 0.05)
       page << fmt::format(
-          " <span class=\"warning\">But the runs' own α differ beyond their intervals (Cochran's Q = {} on {} runs, "
+          " <span class=\"warning\">But this model's runs' own α differ beyond their intervals (Cochran's Q = {} on {} runs, "
           "{}): either something changes from run to run that {}, or the per-run intervals are too narrow — each takes "
           "its run's heat as exact, and an error in the logged friction moves α in proportion. Read α as an average over "
           "runs that differ, and see the per-run α below.</span>",
@@ -216,13 +239,16 @@ Page build(const Calibration& c) {
   Page body;
   body.heading(1, "lmcal calibration: " + c.set.name);
   const bool calibrated = c.calibrated.friction || c.calibrated.thermal;
+  const report::Findings found = report::findings(c);
   body << "<nav>";
+  if (!found.found.empty()) body << "<a href=\"#found\">What we found</a>";
   if (calibrated) body << "<a href=\"#calibrated\">The calibrated model</a>";
   body << "<a href=\"#verdicts\">Verdicts</a>";
   if (calibrated) body << "<a href=\"#how-sure\">How sure</a>";
   if (c.friction) body << "<a href=\"#friction\">Friction (published model)</a>";
   if (c.thermal) body << "<a href=\"#thermal\">Thermal (published model)</a>";
   body << "<a href=\"#next-steps\">Next steps</a><a href=\"#data\">Data loaded</a><a href=\"#inputs\">Inputs and versions</a></nav>\n";
+  found_section(body, found);
   report::calibrated_section(body, c);
   brief(body, c);
   next_steps(body, c);

@@ -127,6 +127,9 @@ struct Uncertainty {
   double effective_sample_size = 0;     // n (1 − ρ)/(1 + ρ)
   double hac_lags = 0;                  // NaN without hac
   std::vector<std::string> notes;       // fallbacks and caveats, in words
+  // The parameters whose SE comes from the runs as replicates (the spread of the runs' own
+  // estimates, which the joint fit's covariance understated): thermal fits with 3 runs or more.
+  std::vector<std::string> from_replicates;
   // Two-stage: the input the fit took as given ("heat") and, per parameter, the share of its
   // variance that comes from that input's uncertainty (NaN where none was added).
   std::string input;
