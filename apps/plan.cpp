@@ -2,8 +2,9 @@
 // the logs (with the calibrated model's causes with --model), over a candidate grid (the
 // logs' own values, or the lists given).
 //
-// Writes DIR/plan.json and DIR/plan_friction_template.csv (to fill on the rig), all or none,
-// and the table on stdout.
+// Writes DIR/plan.json, DIR/plan_friction_template.csv (to fill on the rig) or
+// DIR/plan_thermal_manifest.toml, and DIR/plan.html (the picks, the SE table and its plot), all
+// or none, and the table on stdout.
 #include <algorithm>
 #include <iostream>
 
@@ -14,6 +15,7 @@
 #include "lmcal/error.hpp"
 #include "lmcal/fit/model_file.hpp"
 #include "lmcal/predict/plan.hpp"
+#include "lmcal/report/predict_pages.hpp"
 #include "progress.hpp"
 
 namespace lmcal::cli {
@@ -57,7 +59,8 @@ void run_plan_friction(const PlanFrictionOptions& o, const std::vector<std::stri
   std::vector<std::pair<std::string, std::string>> inputs = input.inputs;
   if (!o.model.file.empty()) inputs.emplace_back(o.model.file, sha256_file(o.model.file));
   const std::string written = write_outputs(o.output_dir, {{"plan.json", with_output_record(friction_plan_json(plan, argv), argv, &inputs, &output_mode().options)},
-                                                           {"plan_friction_template.csv", friction_plan_template_csv(plan)}});
+                                                           {"plan_friction_template.csv", friction_plan_template_csv(plan)},
+                                                           {"plan.html", friction_plan_html(plan, argv)}});
   std::cout << friction_plan_summary(plan) << "wrote " << written << "\n";
 }
 
@@ -83,7 +86,8 @@ void run_plan_thermal(const PlanThermalOptions& o, const std::vector<std::string
   std::vector<std::pair<std::string, std::string>> inputs = {{o.manifest, sha256_file(o.manifest)}, {model->file, model->sha256}};
   for (const auto& run : data.runs) inputs.emplace_back(run.file.string(), sha256_file(run.file));
   const std::string written = write_outputs(o.output_dir, {{"plan.json", with_output_record(thermal_plan_json(plan, argv), argv, &inputs, &output_mode().options)},
-                                                           {"plan_thermal_manifest.toml", thermal_plan_manifest_toml(plan, data)}});
+                                                           {"plan_thermal_manifest.toml", thermal_plan_manifest_toml(plan, data)},
+                                                           {"plan.html", thermal_plan_html(plan, argv)}});
   std::cout << thermal_plan_summary(plan) << "wrote " << written << "\n";
 }
 

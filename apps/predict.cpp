@@ -2,7 +2,8 @@
 // cycle (prediction.hpp): the rail's temperature, its elongation and a linear scale's
 // positioning error over time, the block's friction and heat, each with its band.
 //
-// Writes DIR/prediction.json and DIR/prediction_time.csv, all or none, and a summary.
+// Writes DIR/prediction.json (the summary's moments, the method, the flags), DIR/prediction_time.csv
+// (every output time) and DIR/prediction.html (the plots and the moments), all or none, and a summary.
 #include <iostream>
 
 #include "cli_common.hpp"
@@ -11,6 +12,7 @@
 #include "lmcal/io/output_record.hpp"
 #include "lmcal/fit/model_file.hpp"
 #include "lmcal/predict/prediction.hpp"
+#include "lmcal/report/predict_pages.hpp"
 #include "progress.hpp"
 
 namespace lmcal::cli {
@@ -29,7 +31,8 @@ void run_predict(const PredictOptions& o, const std::vector<std::string>& argv) 
   const Prediction p = with_progress("prediction", [&](const Progress&) { return predict(model, duty, o.prediction); });
   const std::vector<std::pair<std::string, std::string>> inputs = {{o.model, sha256_file(o.model)}, {o.duty, sha256_file(o.duty)}};
   const std::string written = write_outputs(o.output_dir, {{"prediction.json", with_output_record(prediction_json(p, duty, model, argv), argv, &inputs, &output_mode().options)},
-                                                           {"prediction_time.csv", prediction_time_csv(p)}});
+                                                           {"prediction_time.csv", prediction_time_csv(p)},
+                                                           {"prediction.html", prediction_html(p, duty, argv)}});
   std::cout << prediction_summary(p) << "wrote " << written << "\n";
 }
 

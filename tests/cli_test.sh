@@ -573,9 +573,13 @@ check "plan thermal reports how far the planned runs separate a tie" grep -q 'co
 check "plan thermal needs the calibrated model" \
   refused "a thermal plan needs the calibrated model" plan thermal "$SOURCE/measurements/cheng2017/thermal.toml" -o out
 "$LMCAL" plan friction onepc/friction.csv -o planone >planone.txt
-check "plan says why an SE it cannot give is missing (one preload class), in units, no inf or nan" \
-  bash -c "grep -qE '^  k2 +n/a \(not determined yet\) -> n/a \(still not determined\) 1/um$' planone.txt &&
-           grep -qE '^  k1 +[0-9.e+-]+ -> [0-9.e+-]+ +-$' planone.txt && ! grep -qiwE 'nan|inf' planone.txt"
+check "plan proposes the second preload class its note asks for; SEs of the same quantity, in units, no inf or nan" \
+  bash -c "grep -qE '^  k2 +n/a \(not determined yet\) -> [0-9.e+-]+ +1/um$' planone.txt &&
+           grep -qE '^  k1 +n/a \(only with k2 held\) -> [0-9.e+-]+ +-$' planone.txt &&
+           grep -qE '^  k1 \(k2 held\) +[0-9.e+-]+ -> [0-9.e+-]+ +-$' planone.txt &&
+           grep -q 'a second preload class, which determines k2' planone.txt && ! grep -qiwE 'nan|inf' planone.txt"
+check "plan and predict write their pages with the plots" \
+  bash -c "grep -q 'data-plot=\"plan-se-ratio\"' planone/plan.html && grep -q 'data-plot=\"prediction-elongation\"' predout/prediction.html"
 check "plan refuses a parameter the fit does not have" \
   refused "'k9' is not a free parameter of the fit" plan friction "$SOURCE/measurements/cheng2017/friction.csv" --parameters k9 -o out
 

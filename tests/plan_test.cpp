@@ -6,6 +6,7 @@
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -14,6 +15,8 @@
 #include <vector>
 
 #include "lmcal/error.hpp"
+#include "lmcal/report/predict_pages.hpp"
+#include "report/page.hpp"
 #include "lmcal/rig/virtual_rig.hpp"
 
 namespace lmcal {
@@ -228,6 +231,27 @@ TEST(FrictionPlan, TheTemplateIsAFrictionLogToFill) {
   EXPECT_THROW(plan_friction(log, fit, friction_candidates(log, {}), {.parameters = {"k9"}}), InvalidParameter);
 }
 
+// plan.html: the picks, the SE table with plan.json's numbers, and the plot of after over now.
+TEST(FrictionPlan, ThePageHoldsThePicksTheStandardErrorsAndTheirPlot) {
+  const FrictionLog log = generate_friction_log(rig(kAllSpeeds, {2.5}, 13), {}).log;
+  const FrictionFitResult fit = fit_friction(log, iid_fit());
+  const FrictionPlan plan = plan_friction(log, fit, friction_candidates(log, {}, fit), {.conditions = 3, .samples_per_condition = 200});
+  const std::string html = friction_plan_html(plan, {"lmcal", "plan", "friction", "log.csv"});
+  EXPECT_EQ(html.rfind("<!DOCTYPE html>", 0), 0u);
+  EXPECT_NE(html.find("class=\"plot\" data-plot=\"plan-se-ratio\""), std::string::npos);
+  EXPECT_NE(html.find("data-plots=\"plan-se-ratio\""), std::string::npos);
+  const nlohmann::json j = nlohmann::json::parse(friction_plan_json(plan, {}));
+  for (const auto& p : j["parameters"]) {
+    for (const char* side : {"se_before", "se_after"})
+      if (!p[side].is_null()) EXPECT_NE(html.find(">" + report::num(p[side].get<double>()) + "<"), std::string::npos) << p["name"] << side;
+    if (p.contains("as_quoted_now"))
+      EXPECT_NE(html.find(">" + report::num(p["as_quoted_now"]["se_after"].get<double>()) + "<"), std::string::npos) << p["name"];
+  }
+  for (const auto& c : j["conditions"]) EXPECT_NE(html.find(">" + report::num(c["velocity_m_s"].get<double>()) + "<"), std::string::npos);
+  EXPECT_NE(html.find("n/a (only with k2 held)"), std::string::npos);
+  EXPECT_NE(html.find("new: at pc = "), std::string::npos);  // the proposed preload class, and why
+}
+
 }  // namespace
 }  // namespace lmcal
 
@@ -274,6 +298,9 @@ TEST(ThermalPlan, ATieBetweenBaseLossAndForcedConvectionGetsOtherSpeeds) {
   EXPECT_NE(thermal_plan_summary(stuck).find("no candidate run separates them"), std::string::npos) << thermal_plan_summary(stuck);
   EXPECT_THROW(plan_thermal(model, data, candidates, {.separate = {"base_loss"}}), InvalidParameter);
   EXPECT_NE(thermal_plan_manifest_toml(plan, data).find("[[run]]\nid = \"plan1\""), std::string::npos);
+  const std::string html = thermal_plan_html(d, {});
+  EXPECT_NE(html.find("data-plot=\"plan-se-ratio\""), std::string::npos);
+  EXPECT_NE(html.find(">" + report::num(alpha.se_after) + "<"), std::string::npos);
 }
 
 }  // namespace

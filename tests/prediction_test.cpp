@@ -6,6 +6,7 @@
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 #include <unistd.h>
 
 #include <algorithm>
@@ -19,6 +20,8 @@
 #include "lmcal/io/limits.hpp"
 #include "lmcal/fit/friction_fit.hpp"
 #include "lmcal/fit/thermal_fit.hpp"
+#include "lmcal/report/predict_pages.hpp"
+#include "report/page.hpp"
 #include "lmcal/rig/virtual_rig.hpp"
 #include "support/temp_folder.hpp"
 #include "support/source_paths.hpp"
@@ -328,6 +331,84 @@ TEST_F(PredictTest, AModelWithoutCovarianceIsRefused) {
   m.friction_covariance_matrix = {};
   m.thermal_covariance_matrix = {};
   EXPECT_THROW(predict(m, duty("[[segment]]\nduration_h = 1\nvelocity_m_s = 0.1\n"), quick()), InvalidParameter);
+}
+
+// --- what the outputs hold (issue 41 #4) --------------------------------------------------------
+
+class PredictionOutputs : public PredictTest {
+ protected:
+  // Run 3 h, rest 1 h: the largest elongation at the end of the run.
+  Prediction run_and_rest(DutyCycle* d = nullptr) {
+    const DutyCycle cycle = duty("[[segment]]\nduration_h = 3\nvelocity_m_s = 0.11\n[[segment]]\nduration_h = 1\nvelocity_m_s = 0\n");
+    if (d) *d = cycle;
+    return predict(bundled(), cycle, quick());
+  }
+  static std::string band(const nlohmann::json& b) {
+    return fmt::format("{} [{}, {}]", report::num(b["value"]), report::num(b["low"]), report::num(b["high"]));
+  }
+};
+
+TEST_F(PredictionOutputs, TheSummaryIsTheBandsAtTheMomentsAMachineIsMeasured) {
+  const Prediction p = run_and_rest();
+  const PredictionSummary s = summarize(p);
+  ASSERT_EQ(s.segment_ends.size(), 2u);
+  EXPECT_EQ(s.segment_ends[0].time_s, 3 * 3600.0);
+  EXPECT_EQ(s.segment_ends[1].time_s, 4 * 3600.0);
+  EXPECT_EQ(s.end.index, p.time_s.size() - 1);
+  const auto peak = std::max_element(p.elongation_um.value.begin(), p.elongation_um.value.end());
+  EXPECT_EQ(s.largest.index, static_cast<std::size_t>(peak - p.elongation_um.value.begin()));
+  EXPECT_EQ(s.largest.time_s, 3 * 3600.0);  // the rail shrinks at rest
+  EXPECT_EQ(s.largest.elongation_um.value, *peak);
+  EXPECT_EQ(s.largest.elongation_um.low, p.elongation_um.low[s.largest.index]);
+  ASSERT_EQ(s.end.temperature_C.size(), 2u);
+  EXPECT_EQ(s.end.temperature_C[1].high, p.temperature_C[1].high.back());
+  EXPECT_EQ(s.segment_ends[0].scale_error_um.size(), p.scale_positions_m.size());
+}
+
+// prediction.json was 430 KB for the runs' cycle (953 KB for two shifts): the series again,
+// which prediction_time.csv holds. Now the summary's moments, which it shares with stdout.
+TEST_F(PredictionOutputs, TheJsonHoldsTheSummaryAndNamesTheSeriesFile) {
+  DutyCycle d;
+  const Prediction p = run_and_rest(&d);
+  const std::string text = prediction_json(p, d, bundled(), {"lmcal", "predict"});
+  const nlohmann::json j = nlohmann::json::parse(text);
+  EXPECT_FALSE(j.contains("time_s"));
+  EXPECT_FALSE(j.contains("elongation_um"));
+  EXPECT_EQ(j["series"]["file"], "prediction_time.csv");
+  EXPECT_EQ(j["series"]["outputs"], p.time_s.size());
+  EXPECT_LT(text.size(), 20000u);
+  const PredictionSummary s = summarize(p);
+  EXPECT_EQ(j["largest_elongation"]["elongation_um"]["value"].get<double>(), s.largest.elongation_um.value);
+  EXPECT_EQ(j["largest_elongation"]["time_s"].get<double>(), s.largest.time_s);
+  ASSERT_EQ(j["segment_ends"].size(), 2u);
+  EXPECT_EQ(j["segment_ends"][1]["temperature_C"][0]["band"]["low"].get<double>(), s.end.temperature_C[0].low);
+  // stdout gives the same numbers.
+  const std::string summary = prediction_summary(p);
+  EXPECT_NE(summary.find(fmt::format("largest {:.4g} [{:.4g}, {:.4g}] µm at 3 h", s.largest.elongation_um.value,
+                                     s.largest.elongation_um.low, s.largest.elongation_um.high)),
+            std::string::npos)
+      << summary;
+  // Two shifts, a minute apart: the JSON stays small.
+  const DutyCycle shifts = load_duty_cycle(test::source_dir() / "examples/duty/two_shifts.toml");
+  const Prediction q = predict(bundled(), shifts, {.samples = 20, .time_step_s = 120});
+  EXPECT_LT(prediction_json(q, shifts, bundled(), {}).size(), 40000u);
+}
+
+TEST_F(PredictionOutputs, TheHtmlHoldsThePlotsAndTheJsonsNumbers) {
+  DutyCycle d;
+  const Prediction p = run_and_rest(&d);
+  const std::string html = prediction_html(p, d, {"lmcal", "predict", "model.toml", "duty.toml"});
+  EXPECT_EQ(html.rfind("<!DOCTYPE html>", 0), 0u);
+  for (const char* id : {"prediction-elongation", "prediction-temperature", "prediction-scale-error", "prediction-heat"})
+    EXPECT_NE(html.find(fmt::format("class=\"plot\" data-plot=\"{}\"", id)), std::string::npos) << id;
+  EXPECT_NE(html.find("data-plots=\"prediction-elongation prediction-temperature"), std::string::npos);
+  const nlohmann::json j = nlohmann::json::parse(prediction_json(p, d, bundled(), {}));
+  EXPECT_NE(html.find(band(j["largest_elongation"]["elongation_um"])), std::string::npos) << band(j["largest_elongation"]["elongation_um"]);
+  for (const auto& end : j["segment_ends"]) {
+    EXPECT_NE(html.find(band(end["elongation_um"])), std::string::npos) << band(end["elongation_um"]);
+    for (const auto& t : end["temperature_C"]) EXPECT_NE(html.find(band(t["band"])), std::string::npos) << band(t["band"]);
+    for (const auto& e : end["scale_error_um"]) EXPECT_NE(html.find(band(e["band"])), std::string::npos) << band(e["band"]);
+  }
 }
 
 // --- coverage ----------------------------------------------------------------------------------

@@ -149,14 +149,40 @@ struct Prediction {
 
 Prediction predict(const ModelFile& model, const DutyCycle& duty, const PredictionOptions& options = {});
 
+// A band at one output time.
+struct BandAt {
+  double value = 0, low = 0, high = 0;
+};
+
+// The predicted quantities at one output time.
+struct PredictionMoment {
+  std::string segment;
+  std::size_t index = 0;  // into Prediction::time_s
+  double time_s = 0;
+  BandAt elongation_um;
+  std::vector<BandAt> temperature_C;   // per Prediction::positions_m
+  std::vector<BandAt> scale_error_um;  // per Prediction::scale_positions_m
+};
+
+// The moments a machine is measured at, computed once for the summary, prediction.json and
+// prediction.html: the end of the duty, the largest elongation (by magnitude; the first if
+// several), and each segment's last output time (a shift's end, the night's), in time order.
+struct PredictionSummary {
+  PredictionMoment end, largest;
+  std::vector<PredictionMoment> segment_ends;
+};
+PredictionSummary summarize(const Prediction& p);
+
 // Why a simulated rail predicts nothing real, or empty: a temperature or heat rate that is not
 // finite, or a temperature beyond a rig's (units.hpp physical_range, to 1000 °C), where the
 // friction law's heat runs away (its Stribeck term grows as the oil thins, and a coupled heat
 // follows the rail). `inputs` names what drove it ("segment 1 (velocity_m_s = 3, …)").
 std::string runaway_of(const RailSolution<double>& solution, const std::string& inputs);
 
-// prediction.json (everything, with the duty and the model's provenance) and
-// prediction_time.csv (time, segment, quantity, position, value, low, high).
+// prediction.json (the summary's moments with their bands, the duty, the band's method and
+// notes, the flags, the rail's profile at the end, the model's provenance; the series over time
+// are prediction_time.csv's, which it names) and prediction_time.csv (time, segment, quantity,
+// position, value, low, high: every output time).
 std::string prediction_json(const Prediction& p, const DutyCycle& duty, const ModelFile& model,
                             const std::vector<std::string>& command);
 std::string prediction_time_csv(const Prediction& p);
