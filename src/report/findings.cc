@@ -36,18 +36,25 @@ bool belongs_to(const std::string& parameter, const std::vector<std::string>& ca
                      [&](const std::string& c) { return parameter == c || parameter.starts_with(c + "_"); });
 }
 
+// A drive's own dynamics fitted with a trajectory log (moving_mass, axis_gravity): not friction.
+bool drive_dynamics(const std::string& parameter) {
+  const auto slot = find_friction_effect(parameter);
+  return slot && FrictionEffectLibrary::infos[*slot].dynamics;
+}
+
 // The calibrated values with their intervals: the causes' first, then the model's own (`own`,
-// "the law's constants"); per-run nuisance and held parameters left out.
+// "the law's constants"), then a drive's dynamics; per-run nuisance and held parameters left out.
 std::string values_sentence(const FitResult& fit, const std::vector<std::string>& causes, std::string_view own) {
-  std::vector<std::string> added, rest;
+  std::vector<std::string> added, rest, drive;
   for (const auto& p : fit.parameters) {
     if (nuisance(p) || !p.free || p.held_unidentifiable) continue;
-    (belongs_to(p.name, causes) ? added : rest).push_back(value_with_interval(p));
+    (belongs_to(p.name, causes) ? added : drive_dynamics(p.name) ? drive : rest).push_back(value_with_interval(p));
   }
-  std::string s = "Calibrated values, with their 95 % intervals: ";
-  if (!added.empty()) s += fmt::format("{}", fmt::join(added, ", ")) + (rest.empty() ? "" : "; ");
-  if (!rest.empty()) s += fmt::format("{}: {}", own, fmt::join(rest, ", "));
-  return s + ".";
+  std::vector<std::string> groups;
+  if (!added.empty()) groups.push_back(fmt::format("{}", fmt::join(added, ", ")));
+  if (!rest.empty()) groups.push_back(fmt::format("{}: {}", own, fmt::join(rest, ", ")));
+  if (!drive.empty()) groups.push_back(fmt::format("the drive's dynamics: {}", fmt::join(drive, ", ")));
+  return fmt::format("Calibrated values, with their 95 % intervals: {}.", fmt::join(groups, "; "));
 }
 
 // "seal_drag (quadratic seal drag c V²)".
