@@ -558,6 +558,7 @@ TEST(BundledCalibration, AFreshRunReproducesTheCommittedResults) {
   const Calibration c = calibrate(find_calibration_set("measurements/cheng2017"), {});
   fs::current_path(previous);
   for (const auto& [name, text] : calibration_outputs(c)) {
+    if (name.ends_with("_samples.csv")) continue;  // per sample, 7 MB: not committed (fits/README.md)
     const fs::path committed = root / "fits" / "cheng2017" / name;
     ASSERT_TRUE(fs::exists(committed)) << committed << ": run scripts/run.sh and commit fits/cheng2017";
     const std::string stored = read(committed);
