@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <numeric>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -553,8 +554,10 @@ SmoothChoice smooth_term(const FrictionLog& log, const TermSeries& series, const
   p.group = linear.group;
   p.level = linear.level;
   p.fixed = linear.fixed;
-  std::vector<std::vector<std::size_t>> blocks;
+  // Each block is scored as it is built (F and the block alone: blocks never enter together),
+  // so that only one block's columns exist at a time.
   std::vector<std::vector<FrictionTerm>> block_terms;
+  std::vector<SupportScore> scores;
   // The blocks of splines in covariate c (times the factor `times`, when given): 1 to 4
   // interior knots at quantiles of its values (fewer for a covariate of few values), or one
   // cubic over the whole range (`cubic_only`).
@@ -583,19 +586,20 @@ SmoothChoice smooth_term(const FrictionLog& log, const TermSeries& series, const
       }
       knots.insert(knots.end(), 4, sorted.back());
       const int bases = static_cast<int>(knots.size()) - 4;
-      std::vector<std::size_t> block;
       std::vector<FrictionTerm> terms;
+      p.candidates.clear();
       for (int b = 1; b < bases; ++b) {
         FrictionTerm t{.factors = {TermFactor{.covariate = c, .transform = TermTransform::spline, .basis = b, .knots = knots}}};
         if (times) t.factors.insert(t.factors.begin(), *times);
         std::vector<double> column(log.size());
         for (std::size_t i = 0; i < log.size(); ++i) column[i] = times ? multiplier[i] * bspline(knots, b, x[i]) : bspline(knots, b, x[i]);
-        block.push_back(p.candidates.size());
         p.candidates.push_back(std::move(column));
         terms.push_back(std::move(t));
       }
+      std::vector<std::size_t> block(p.candidates.size());
+      std::iota(block.begin(), block.end(), std::size_t{0});
+      scores.push_back(score_supports(p, {block}).front());
       out.tried += terms.size();
-      blocks.push_back(std::move(block));
       block_terms.push_back(std::move(terms));
     }
   };
@@ -624,22 +628,19 @@ SmoothChoice smooth_term(const FrictionLog& log, const TermSeries& series, const
   const TermFactor shift_T{TermCovariate::temperature_C, TermTransform::input_shift};
   if (series.timed) add_blocks(TermCovariate::campaign_time_s, shift_T, false);
   else if (campaign) add_blocks(TermCovariate::run_index, shift_T, false);
-  if (blocks.empty()) {
+  if (block_terms.empty()) {
     out.why_not = "no covariate varies enough for a smooth term";
     return out;
   }
-  // The blocks and, last, the model alone (no candidate): one set of Gram sums for all.
-  std::vector<std::vector<std::size_t>> supports = blocks;
-  supports.emplace_back();
-  std::vector<SupportScore> scores = score_supports(p, supports);
-  const double fixed = scores.back().cv_rmse;
-  scores.pop_back();
+  p.candidates.clear();
+  const double fixed = score_supports(p, {{}}).front().cv_rmse;  // the model alone
   // The best, and among those within the tolerance of it the one with the fewest basis functions.
   std::size_t best = 0;
   for (std::size_t b = 1; b < scores.size(); ++b)
     if (scores[b].cv_rmse < scores[best].cv_rmse) best = b;
   for (std::size_t b = 0; b < scores.size(); ++b)
-    if (scores[b].cv_rmse <= scores[best].cv_rmse * (1 + min_gain_percent / 100) && blocks[b].size() < blocks[best].size())
+    if (scores[b].cv_rmse <= scores[best].cv_rmse * (1 + min_gain_percent / 100) &&
+        block_terms[b].size() < block_terms[best].size())
       best = b;
   if (100 * (1 - scores[best].cv_rmse / fixed) < min_gain_percent) {
     out.why_not = fmt::format("nor does a smooth term (cubic B-splines in speed, load or temperature, alone, times a part "

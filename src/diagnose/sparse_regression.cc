@@ -27,23 +27,26 @@ struct GroupGrams {
   double n = 0;
 };
 
-GroupGrams group_grams(const SparseProblem& p) {
-  const std::size_t n = p.y.size(), k = p.fixed.size() + p.candidates.size();
+// The Gram sums of `columns` (pointers to n-row columns) and y, per group and in total.
+GroupGrams group_grams(const SparseProblem& p, const std::vector<const std::vector<double>*>& columns) {
+  const std::size_t n = p.y.size(), k = columns.size();
   const std::size_t groups = n == 0 ? 0 : *std::max_element(p.group.begin(), p.group.end()) + 1;
-  auto column = [&](std::size_t j) -> const std::vector<double>& {
-    return j < p.fixed.size() ? p.fixed[j] : p.candidates[j - p.fixed.size()];
-  };
-  // Level means of every column and of y.
-  std::vector<std::size_t> level = p.level;
-  if (level.empty()) level.assign(n, std::numeric_limits<std::size_t>::max());
-  std::map<std::size_t, std::size_t> level_index;
-  for (std::size_t i = 0; i < n; ++i) level_index.try_emplace(level[i], level_index.size());
+  auto column = [&](std::size_t j) -> const std::vector<double>& { return *columns[j]; };
+  // Each row's level as an index 0..L-1 (in order of first appearance), and the level means of
+  // every column and of y.
   const bool centre = !p.level.empty();
-  Eigen::MatrixXd mean = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(level_index.size()), static_cast<Eigen::Index>(k + 1));
-  Eigen::VectorXd count = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(level_index.size()));
+  std::vector<std::size_t> level(n, 0);
+  std::size_t levels = 1;
+  if (centre) {
+    std::map<std::size_t, std::size_t> level_index;
+    for (std::size_t i = 0; i < n; ++i) level[i] = level_index.try_emplace(p.level[i], level_index.size()).first->second;
+    levels = level_index.size();
+  }
+  Eigen::MatrixXd mean = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(levels), static_cast<Eigen::Index>(k + 1));
+  Eigen::VectorXd count = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(levels));
   if (centre) {
     for (std::size_t i = 0; i < n; ++i) {
-      const auto l = static_cast<Eigen::Index>(level_index[level[i]]);
+      const auto l = static_cast<Eigen::Index>(level[i]);
       for (std::size_t j = 0; j < k; ++j) mean(l, static_cast<Eigen::Index>(j)) += column(j)[i];
       mean(l, static_cast<Eigen::Index>(k)) += p.y[i];
       count(l) += 1;
@@ -67,7 +70,7 @@ GroupGrams group_grams(const SparseProblem& p) {
       const std::size_t m = std::min(kBlock, rows[gr].size() - start);
       for (std::size_t r = 0; r < m; ++r) {
         const std::size_t i = rows[gr][start + r];
-        const auto l = static_cast<Eigen::Index>(centre ? level_index.at(level[i]) : 0);
+        const auto l = static_cast<Eigen::Index>(level[i]);
         for (std::size_t j = 0; j < k; ++j)
           X(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(j)) =
               column(j)[i] - (centre ? mean(l, static_cast<Eigen::Index>(j)) : 0.0);
@@ -89,6 +92,19 @@ GroupGrams group_grams(const SparseProblem& p) {
   g.n = static_cast<double>(n);
   return g;
 }
+
+// The fixed columns and then the candidates `of` (all of them when not given).
+std::vector<const std::vector<double>*> problem_columns(const SparseProblem& p, const std::vector<std::size_t>* of = nullptr) {
+  std::vector<const std::vector<double>*> columns;
+  for (const auto& c : p.fixed) columns.push_back(&c);
+  if (!of)
+    for (const auto& c : p.candidates) columns.push_back(&c);
+  else
+    for (std::size_t j : *of) columns.push_back(&p.candidates[j]);
+  return columns;
+}
+
+GroupGrams group_grams(const SparseProblem& p) { return group_grams(p, problem_columns(p)); }
 
 // Least squares on the columns `cols` from Gram blocks; a tiny ridge keeps a collinear (held,
 // unidentifiable) fixed column from breaking the solve.
@@ -267,12 +283,16 @@ SparseSelection select_sparse(const SparseProblem& p, const SparseOptions& o) {
 }
 
 std::vector<SupportScore> score_supports(const SparseProblem& p, const std::vector<std::vector<std::size_t>>& supports) {
-  const GroupGrams grams = group_grams(p);
-  const Scorer scorer(grams, p.fixed.size());
+  // Each support with F alone: its own Gram sums, never the cross products between supports
+  // (a smooth search's blocks: hundreds of columns, of which each score needs a handful).
   std::vector<SupportScore> out;
   for (auto support : supports) {
     std::sort(support.begin(), support.end());
-    out.push_back({scorer.cv_rmse(support), scorer.coefficients(support)});
+    const GroupGrams grams = group_grams(p, problem_columns(p, &support));
+    const Scorer scorer(grams, p.fixed.size());
+    std::vector<std::size_t> own(support.size());
+    std::iota(own.begin(), own.end(), std::size_t{0});
+    out.push_back({scorer.cv_rmse(own), scorer.coefficients(own)});
   }
   return out;
 }

@@ -210,9 +210,10 @@ double bspline(const std::vector<double>& knots, int k, double x) {
   const std::size_t m = knots.size();
   if (m < 2 * (degree + 1) || k < 0 || static_cast<std::size_t>(k) + degree + 1 >= m) return 0;
   x = std::clamp(x, knots.front(), knots.back());
+  const auto K = static_cast<std::size_t>(k);
+  if (x < knots[K] || x > knots[K + degree + 1]) return 0;  // outside its support (exactly 0 below)
   // Degree 0 on [t_j, t_j+1), the last non-empty interval closed at the right end.
   std::array<double, degree + 1> b{};  // no allocation: it runs per row and basis function
-  const auto K = static_cast<std::size_t>(k);
   std::size_t last = m - 1;
   while (last > 0 && knots[last - 1] == knots.back()) --last;  // the last interval with t_j < t_end
   for (int j = 0; j <= degree; ++j) {
