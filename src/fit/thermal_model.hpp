@@ -8,34 +8,11 @@
 
 #include "least_squares.hpp"
 #include "thermal_extension.hpp"
+#include "thermal_prepared.hpp"
 #include "lmcal/fit/thermal_fit.hpp"
 #include "lmcal/models/rail_thermal.hpp"
 
 namespace lmcal::detail {
-
-// One run, ready to simulate: geometry, fixed physical parameters, ambient, and the
-// measured temperatures at the fitted records.
-struct PreparedRun {
-  std::string id;
-  RailGeometry geometry;
-  RailParams<double> params;  // α, h and T0 are starting values; Q, k, ρ, c fixed
-  AmbientTrace ambient;
-  std::vector<double> times_s;                // fitted records
-  std::vector<std::uint32_t> lines;           // their lines in the run's file (empty: not from a file)
-  std::vector<std::string> sensor_names;
-  std::vector<double> sensor_positions_m;
-  std::vector<std::vector<double>> measured;  // [time][sensor], NaN = missing
-  bool fit_offsets = false;                   // one offset per sensor (ThermalOffsets)
-  // Behind the heat rate (the coupling extension evaluates the law at the rail temperature).
-  FrictionConstants<double> friction = paper_friction_constants();
-  FrictionEffects<double> friction_effects;
-  FrictionConditions<double> conditions;  // at the temperature Q_f was evaluated at
-  bool heat_is_run_mean = false;          // params.heat_rate_W is the run's mean (ThermalRunSetup)
-  // With a fitted heat scale: the weight σ_T/σ_Q of its prior row (σ_T the thermocouple
-  // noise, σ_Q the relative uncertainty of Q_f), r = weight · (scale - 1).
-  double heat_prior_weight = 0;
-  double heat_prior_sigma_K = 0;  // σ_T: the prior row's standard deviation, by construction
-};
 
 // Where each kind of parameter sits in the global parameter vector (-1: not fitted).
 struct ThermalLayout {
