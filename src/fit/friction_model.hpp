@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "friction_condition.hpp"
+#include "friction_steps.hpp"
 #include "least_squares.hpp"
 #include "run_offsets.hpp"
 #include "lmcal/io/friction_log.hpp"
@@ -15,13 +16,6 @@
 #include "lmcal/models/friction_terms.hpp"
 
 namespace lmcal::detail {
-
-inline constexpr const char* kConstantUnits[] = {"1", "1/um", "N mm2/s / (um mm)", "m/s", "N/(mm um m/s mm2/s)", "1/K", "N/mm"};
-// A combination law's (FrictionLawConditions::combination) name for constant j, as its outputs
-// show it (friction_fit.cc, law_combinations); nullptr for the constants it holds or hides (k2,
-// β, f0).
-inline constexpr const char* kLawCombinationNames[] = {"coulomb_N", nullptr, "stribeck_N", "stribeck_speed_m_s",
-                                                       "viscous_N_s_m", nullptr, nullptr};
 
 // What the residuals need, one entry per sample.
 struct FrictionData {
