@@ -11,7 +11,8 @@ Comments, strings and character literals are blanked first. A heuristic, not a p
 macro with a body (PYBIND11_MODULE, TEST) counts as a function, which is what it reads like.
 
 Exits 1 naming file:line for every file or function over its limit that is not a known
-exception below, and for every exception that no longer applies (then delete its line).
+exception below, and for every known exception that no longer applies (then delete its line;
+an IN_PROGRESS one gets a note instead).
 
     python3 scripts/check-sizes.py [--root DIR] [--list]
 """
@@ -62,6 +63,12 @@ KNOWN_FUNCTIONS = [
     ("src/predict/plan_thermal.cc", "plan_thermal", "the candidates and their expected SEs in one"),
     ("src/predict/plan.cc", "plan_friction", "the candidates and their expected SEs in one"),
     ("src/io/friction_manifest.cc", "load_friction_dataset", "the manifest's fields and checks in one"),
+]
+# Exceptions a change under way removes: allowed while over, and no error once they are not (a
+# note instead), so that the change need not touch this file. Delete each line once it is in.
+IN_PROGRESS = [
+    ("src/report/calibration.cc", None, "the pipeline, moving to src/calibrate/ (issue 42 item 1)"),
+    ("src/report/calibration.cc", "calibrate", "the pipeline's steps, moving to src/calibrate/ (issue 42 item 1)"),
 ]
 
 CONTROL = re.compile(r"^(if|for|while|switch|catch|do|else|return|case)\b")
@@ -207,16 +214,23 @@ def main():
     errors = []
     known_files = {path for path, _ in KNOWN_FILES}
     known_functions = {(path, name) for path, name, _ in KNOWN_FUNCTIONS}
+    moving_files = {path for path, name, _ in IN_PROGRESS if name is None}
+    moving_functions = {(path, name) for path, name, _ in IN_PROGRESS if name is not None}
+    notes = [f"note: {path}{'' if name is None else ': ' + name} is no longer over its limit: delete its line in IN_PROGRESS"
+             for path, name, _ in IN_PROGRESS
+             if (path not in over_files if name is None else (path, name) not in over_functions)]
     for rel, lines in sorted(over_files.items()):
-        if rel not in known_files:
+        if rel not in known_files | moving_files:
             errors.append(f"{rel}: {lines} lines (at most {MAX_FILE_LINES}: split it by job)")
     for (rel, fn), (length, first) in sorted(over_functions.items()):
-        if (rel, fn) not in known_functions:
+        if (rel, fn) not in known_functions | moving_functions:
             errors.append(f"{rel}:{first}: {fn} is {length} lines (at most {MAX_FUNCTION_LINES}: name its steps)")
     for path in sorted(known_files - set(over_files)):
         errors.append(f"{path}: a known exception no longer over {MAX_FILE_LINES} lines: delete its line in KNOWN_FILES")
     for path, fn in sorted(known_functions - set(over_functions)):
         errors.append(f"{path}: {fn}: a known exception no longer over {MAX_FUNCTION_LINES} lines: delete its line in KNOWN_FUNCTIONS")
+    for note in notes:
+        print(note)
     for e in errors:
         print(e, file=sys.stderr)
     if errors:
