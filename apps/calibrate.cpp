@@ -14,6 +14,7 @@
 
 #include "calibration_options.hpp"
 #include "output_mode.hpp"
+#include "lmcal/calibrate/calibration.hpp"
 #include "lmcal/report/calibration.hpp"
 #include "progress.hpp"
 

@@ -6,7 +6,7 @@
 #include <CLI/CLI.hpp>
 
 #include "cli_common.hpp"
-#include "lmcal/report/calibration.hpp"
+#include "lmcal/calibrate/calibration.hpp"
 
 namespace lmcal::cli {
 

@@ -1,6 +1,7 @@
 // lmcal calibrate end to end: a measurement folder made by the virtual rig goes through
 // every step; the report holds every plot of the story; the bundled set's committed results
 // (fits/cheng2017/) are what a fresh run gives.
+#include "lmcal/calibrate/calibration.hpp"
 #include "lmcal/report/calibration.hpp"
 
 #include <fmt/format.h>

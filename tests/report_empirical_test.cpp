@@ -6,7 +6,7 @@
 #include <regex>
 #include <string>
 
-#include "lmcal/report/calibration.hpp"
+#include "lmcal/calibrate/calibration.hpp"
 #include "lmcal/report/html_report.hpp"
 #include "lmcal/rig/virtual_rig.hpp"
 #include "report/sections.hpp"

@@ -19,6 +19,7 @@
 #include "lmcal/io/atomic_file.hpp"
 #include "lmcal/io/date.hpp"
 #include "lmcal/io/hash.hpp"
+#include "lmcal/report/calibration.hpp"
 
 namespace lmcal {
 

@@ -31,6 +31,7 @@
 #include <variant>
 #include <vector>
 
+#include "lmcal/calibrate/calibration.hpp"
 #include "lmcal/diagnose/friction_diagnosis.hpp"
 #include "lmcal/diagnose/thermal_diagnosis.hpp"
 #include "lmcal/error.hpp"

@@ -1,5 +1,5 @@
 // The report's "Data loaded" section: what the loaders read, converted, skipped and
-// ignored, per file; the warnings of the data checks (data_checks.hpp); how the thermal runs
+// ignored, per file; the warnings of the data checks (calibrate/data_checks.hpp); how the thermal runs
 // were driven.
 #include <fmt/format.h>
 #include <fmt/ranges.h>

@@ -18,7 +18,7 @@
 #include <utility>
 #include <vector>
 
-#include "lmcal/report/calibration.hpp"
+#include "lmcal/calibrate/calibration.hpp"
 
 namespace lmcal::report {
 

@@ -6,7 +6,7 @@
 #include <string_view>
 #include <vector>
 
-#include "lmcal/report/calibration.hpp"
+#include "lmcal/calibrate/calibration.hpp"
 #include "page.hpp"
 
 namespace lmcal::report {

@@ -50,7 +50,7 @@
 #include <string_view>
 #include <vector>
 
-#include "lmcal/report/calibration.hpp"
+#include "lmcal/calibrate/calibration.hpp"
 
 namespace LMCAL_API lmcal {
 

@@ -22,7 +22,7 @@
 #include <utility>
 #include <vector>
 
-#include "lmcal/report/calibration.hpp"
+#include "lmcal/calibrate/calibration.hpp"
 
 namespace LMCAL_API lmcal {
 

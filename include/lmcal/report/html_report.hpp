@@ -32,7 +32,7 @@
 #include <string>
 #include <vector>
 
-#include "lmcal/report/calibration.hpp"
+#include "lmcal/calibrate/calibration.hpp"
 
 namespace LMCAL_API lmcal {
 

@@ -1,4 +1,4 @@
-#include "report/data_checks.hpp"
+#include "calibrate/data_checks.hpp"
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>

@@ -1,5 +1,5 @@
 // Checks of the loaded data and of the fits' per-run results that catch a user's mistakes
-// (private to the report layer): what `lmcal calibrate` prints as warnings, writes to
+// (private to the calibrate layer): what `lmcal calibrate` prints as warnings, writes to
 // calibration.json ("warnings") and lists in the report's "data loaded" section.
 //
 //   - every loader warning (LoadReport::warnings: a column that resembles a known one but is
@@ -16,7 +16,7 @@
 #include <string>
 #include <vector>
 
-#include "lmcal/report/calibration.hpp"
+#include "lmcal/calibrate/calibration.hpp"
 
 namespace lmcal::detail {
 
