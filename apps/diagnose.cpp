@@ -14,6 +14,7 @@
 #include "lmcal/io/output_record.hpp"
 #include "lmcal/diagnose/friction_diagnosis.hpp"
 #include "lmcal/diagnose/thermal_diagnosis.hpp"
+#include "lmcal/fit/statistics.hpp"
 #include "lmcal/io/atomic_file.hpp"
 #include "progress.hpp"
 
@@ -48,8 +49,8 @@ std::size_t widest(const Items& items, const Name& name, std::size_t least) {
 void print_covariates(const std::vector<CovariateTest>& covariates, const char* unit) {
   const std::size_t width = widest(covariates, [](const CovariateTest& c) -> const std::string& { return c.covariate; }, 24);
   for (const auto& c : covariates)
-    std::cout << fmt::format("  {:<{}} strength {:.3f}  size {:.4g} {}  p {:.2g}{}\n", c.covariate, width, c.correlation, c.size, unit,
-                             c.p_value, c.structured ? "  <- structured" : "");
+    std::cout << fmt::format("  {:<{}} strength {:.3f}  size {:.4g} {}  p {}{}\n", c.covariate, width, c.correlation, c.size, unit,
+                             p_value_text(c.p_value), c.structured ? "  <- structured" : "");
 }
 
 // A candidate's estimate with its unit ("149.9 ± 0.401 N s2/m2"), or why it has none: a fit that
@@ -78,7 +79,7 @@ void print_rounds(const std::vector<std::vector<CandidateScore>>& rounds, const 
     const std::size_t estimate_width = widest(rounds[r], estimate_text, 20);
     for (const auto& c : rounds[r])
       std::cout << fmt::format("  {:<{}} {:<{}} LRT p {:<8} held-out {}{}  {}{}\n", shown_name(c), width, estimate_text(c), estimate_width,
-                               std::isfinite(c.lrt_p) ? fmt::format("{:.2g}", c.lrt_p) : "n/a", held_out_text(c.cv_rmse, c.cv_gain_percent, unit),
+                               std::isfinite(c.lrt_p) ? p_value_text(c.lrt_p) : "n/a", held_out_text(c.cv_rmse, c.cv_gain_percent, unit),
                                std::isfinite(c.cv_shape_gain_percent)
                                    ? ", shape " + held_out_text(c.cv_shape_rmse, c.cv_shape_gain_percent, unit)
                                    : "",
@@ -89,8 +90,8 @@ void print_rounds(const std::vector<std::vector<CandidateScore>>& rounds, const 
 void print_lack_of_fit(const LackOfFit& l, const char* unit) {
   if (!l.tested) std::cout << "lack of fit: not tested (" << l.basis << ")\n";
   else
-    std::cout << fmt::format("lack of fit against {}: F {:.3g} on ({:.0f}, {:.0f}) dof, p {:.2g}, {:.3g} {} beyond a noise of {:.3g} {}{}\n",
-                             l.basis, l.statistic, l.df1, l.df2, l.p_value, l.lack_rms, unit, l.pure_error_rms, unit,
+    std::cout << fmt::format("lack of fit against {}: F {:.3g} on ({:.0f}, {:.0f}) dof, p {}, {:.3g} {} beyond a noise of {:.3g} {}{}\n",
+                             l.basis, l.statistic, l.df1, l.df2, p_value_text(l.p_value), l.lack_rms, unit, l.pure_error_rms, unit,
                              l.fits ? "" : "  <- structure remains: the model misses");
 }
 

@@ -74,8 +74,10 @@ check "bad log refused by check" refused "friction_semicolon.csv:" check frictio
 "$LMCAL" fit friction fitdata/friction.csv -o fitout --name f > fit.txt
 check "fit writes json, samples and conditions" test -s fitout/f.json -a -s fitout/f_samples.csv -a -s fitout/f_conditions.csv
 check "fit json records the input hash" grep -q '"sha256": "[0-9a-f]\{64\}"' fitout/f.json
-check "fit summary shows all seven constants" test "$(grep -cE '^  (k1|k2|mu_st|v_st_m_s|mu_v|beta_per_K|f0) +[-0-9]' fit.txt)" -eq 7
+check "fit summary shows all seven constants" test "$(grep -cE '^  (k1|k2|mu_st|v_st_m_s|mu_v|beta_per_K|f0) +-?[0-9][0-9.e+-]* +[0-9]' fit.txt)" -eq 7
 check "fit summary reports the spread across runs" grep -q 'spread across 3 runs' fit.txt
+check "the spread table carries each constant's unit, and p never 0" \
+  bash -c "grep -qE '^  k2 +1/um +mean' fit.txt && ! grep -qE ' p 0( |$)' fit.txt"
 check "fit summary's table has a unit column: f0 in N/mm" grep -qE '^  f0 +[-0-9.e]+ +[0-9.e-]+  N/mm ' fit.txt
 check "a clean log's fit does not say the law misses structure" bash -c "! grep -q 'misses structure' fit.txt"
 "$LMCAL" generate friction -o drag_fit --runs 3 --guides "SRN 35C" --effect seal_drag=100 >/dev/null

@@ -569,7 +569,7 @@ std::vector<std::string> design_notes(const FrictionLog& log, const FrictionFitR
   std::vector<std::string> small;
   for (const CovariateTest& t : final.covariates)
     if (t.p_adjusted < o.structure_p && !t.structured)
-      small.push_back(fmt::format("{} (p = {:.2g}, Holm {:.2g}; size {:.3g} N)", t.covariate, t.p_value, t.p_adjusted, t.size));
+      small.push_back(fmt::format("{} ({}, Holm {}; size {:.3g} N)", t.covariate, p_is(t.p_value), p_value_text(t.p_adjusted), t.size));
   if (!small.empty()) {
     const bool floor_binds = final.resolution_floor_N > o.min_structure_fraction * final.rmse_N;
     notes.push_back(fmt::format(
@@ -797,12 +797,12 @@ std::string friction_structure_remains(const ResidualDiagnostics& r) {
   std::vector<std::string> found;
   if (r.structured) {
     const CovariateTest& t = r.covariates.front();
-    found.push_back(fmt::format("the residuals follow {} (p = {:.2g}, size {:.3g} N of an RMSE of {:.3g} N)", t.covariate,
-                                t.p_value, t.size, r.rmse_N));
+    found.push_back(fmt::format("the residuals follow {} ({}, size {:.3g} N of an RMSE of {:.3g} N)", t.covariate,
+                                p_is(t.p_value), t.size, r.rmse_N));
   }
   if (r.lack_of_fit.tested && !r.lack_of_fit.fits)
-    found.push_back(fmt::format("{} exceed the {} (lack of fit F = {:.3g}, p = {:.2g})", found.empty() ? "the residuals" : "they",
-                                r.lack_of_fit.against, r.lack_of_fit.statistic, r.lack_of_fit.p_value));
+    found.push_back(fmt::format("{} exceed the {} (lack of fit F = {:.3g}, {})", found.empty() ? "the residuals" : "they",
+                                r.lack_of_fit.against, r.lack_of_fit.statistic, p_is(r.lack_of_fit.p_value)));
   return found.empty() ? std::string() : fmt::format("{}", fmt::join(found, "; "));
 }
 

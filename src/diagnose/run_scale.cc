@@ -96,10 +96,10 @@ RunScaleTest test_run_scale(const FrictionLog& log, const std::vector<double>& r
   const double zero_sd_N = std::sqrt(zero_ss / static_cast<double>(factors.size() - 1));
   t.floor_percent = mean_F > 0 ? 100 * zero_sd_N / mean_F : 0.0;
   t.differ = t.p < lrt_p && t.tau_percent > t.floor_percent;
-  t.reason = fmt::format("Cochran's Q = {:.3g} on {:.0f} dof, p = {:.2g}; spread of the runs' factors beyond their SEs "
+  t.reason = fmt::format("Cochran's Q = {:.3g} on {:.0f} dof, {}; spread of the runs' factors beyond their SEs "
                          "tau = {:.3g} % of the friction (DerSimonian-Laird), against {:.3g} % that the runs' zeros "
                          "spread (their SD {:.3g} N at a force of 0, over a mean force of {:.3g} N)",
-                         q, t.dof, t.p, t.tau_percent, t.floor_percent, zero_sd_N, mean_F);
+                         q, t.dof, p_is(t.p), t.tau_percent, t.floor_percent, zero_sd_N, mean_F);
   return t;
 }
 

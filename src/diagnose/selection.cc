@@ -207,7 +207,7 @@ bool score_candidate(const ModelFit& current, const ModelFit& candidate, const S
     c.lrt_statistic = n_eff * std::log(current.ss / candidate.ss);
     c.lrt_p = chi_squared_upper_p(std::max(c.lrt_statistic, 0.0), static_cast<double>(c.added_parameters));
     significant = c.lrt_p < rules.lrt_p && c.bic < bic0;
-    why_not = fmt::format("not significant (LRT p = {:.2g}, BIC {:+.1f})", c.lrt_p, c.bic - bic0);
+    why_not = fmt::format("not significant (LRT {}, BIC {:+.1f})", p_is(c.lrt_p), c.bic - bic0);
   } else {
     c.lrt_statistic = c.lrt_p = std::numeric_limits<double>::quiet_NaN();
     significant = c.bic < bic0 - rules.switch_bic;
@@ -287,8 +287,8 @@ std::string one_of(const std::vector<std::string>& names) {
 }
 
 std::string lack_of_fit_words(const LackOfFit& l, const std::string& unit) {
-  return fmt::format("lack of fit against {}: F = {:.3g} on ({:.0f}, {:.0f}) dof, p = {:.2g}, {:.3g} {} beyond a noise of {:.3g} {}",
-                     l.basis, l.statistic, l.df1, l.df2, l.p_value, l.lack_rms, unit, l.pure_error_rms, unit);
+  return fmt::format("lack of fit against {}: F = {:.3g} on ({:.0f}, {:.0f}) dof, {}, {:.3g} {} beyond a noise of {:.3g} {}",
+                     l.basis, l.statistic, l.df1, l.df2, p_is(l.p_value), l.lack_rms, unit, l.pure_error_rms, unit);
 }
 
 // "The published law" in the middle of a sentence.
@@ -328,11 +328,10 @@ std::string empirical_words(const EmpiricalFinding& e, const std::string& unit) 
   }
   return fmt::format(
       " Beyond the library, an empirical term (learned from the residuals, not a named cause; {} candidate terms "
-      "searched) is added to {}: {}. It uses {}. {} {:.4g} {} -> {:.4g} {} ({}; LRT p = "
-      "{:.2g}). {}",
+      "searched) is added to {}: {}. It uses {}. {} {:.4g} {} -> {:.4g} {} ({}; LRT {}). {}",
       e.dictionary_size, e.where, e.components.size() > 1 ? e.formula + ", where " + parts : parts, covariates,
       upper_first(held_out_criterion_words(e.criterion)), e.cv_rmse_before, unit, e.cv_rmse_after, unit,
-      gain_words(e.cv_gain_percent), e.lrt_p,
+      gain_words(e.cv_gain_percent), p_is(e.lrt_p),
       e.resembles.empty() ? "It resembles no mechanism we know of." : "It resembles " + e.resembles + ".");
 }
 
@@ -348,7 +347,7 @@ Verdict make_verdict(const VerdictInput& in) {
   const LackOfFit& lof = in.final_lack_of_fit;
   std::string remains;
   if (in.final_structured)
-    remains = fmt::format("the residuals still follow {} (p = {:.2g})", final_top.covariate, final_top.p_value);
+    remains = fmt::format("the residuals still follow {} ({})", final_top.covariate, p_is(final_top.p_value));
   if (lof.tested && !lof.fits)
     remains += (remains.empty() ? "structure remains, the residuals exceed the noise: "
                                 : "; and structure remains, they exceed the noise: ") +
@@ -394,9 +393,9 @@ Verdict make_verdict(const VerdictInput& in) {
     if (in.baseline_structured) {
       v.unexplained_covariate = baseline_top.covariate;
       v.summary = fmt::format(
-          "Unexplained: the residuals of {} follow {} (p = {:.2g}), but no mechanism of the library explains them on "
+          "Unexplained: the residuals of {} follow {} ({}), but no mechanism of the library explains them on "
           "held-out runs. Held-out RMSE {:.4g} {}.",
-          lower_first(in.model), v.unexplained_covariate, baseline_top.p_value, in.cv_before, in.unit);
+          lower_first(in.model), v.unexplained_covariate, p_is(baseline_top.p_value), in.cv_before, in.unit);
       if (in.baseline_lack_of_fit.tested && !in.baseline_lack_of_fit.fits)
         v.summary += " Structure remains, the residuals also exceed the noise: " +
                      lack_of_fit_words(in.baseline_lack_of_fit, in.unit) + ".";

@@ -11,6 +11,7 @@
 
 #include "fit_json.hpp"
 #include "friction_steps.hpp"
+#include "lmcal/fit/statistics.hpp"
 #include "lmcal/io/csv_writer.hpp"
 
 namespace lmcal {
@@ -312,15 +313,23 @@ std::string friction_fit_summary(const FrictionFitResult& r) {
     s += fmt::format("spread across {} runs (Eq. 1 sigma; ratio = sigma / (pooled SE * sqrt(runs)), ~1 if only noise; "
                      "p: the pooled fit's test of heterogeneity between runs, Holm across the constants):\n",
                      r.runs.size());
+    // Each constant's unit beside its name, as in every other table ("-": dimensionless).
+    const auto unit = [&](const std::string& name) {
+      for (const auto& p : f.parameters)
+        if (p.name == name) return p.unit.empty() || p.unit == "1" ? std::string("-") : p.unit;
+      return std::string("-");
+    };
+    std::size_t unit_width = 4;
+    for (const auto& sp : r.spread) unit_width = std::max(unit_width, unit(sp.parameter).size());
     for (const auto& sp : r.spread) {
       if (sp.spread.n < 2) {  // fewer than two runs' own values (the report's rule too)
-        s += fmt::format("  {:<20} no spread: not determined run by run ({})\n", sp.parameter,
-                         sp.undetermined.empty() ? "fewer than two runs' own fits gave it" : sp.undetermined);
+        s += fmt::format("  {:<20} {:<{}}  no spread: not determined run by run ({})\n", sp.parameter, unit(sp.parameter),
+                         unit_width, sp.undetermined.empty() ? "fewer than two runs' own fits gave it" : sp.undetermined);
         continue;
       }
-      s += fmt::format("  {:<20} mean {:>11.5g}  sigma {:>9.3g}  [{:.5g}, {:.5g}]  min {:.5g} max {:.5g}  ratio {:.2f}  p {:.2g}{}{}\n",
-                       sp.parameter, sp.spread.mean, sp.spread.sd, sp.spread.low, sp.spread.high, sp.spread.min,
-                       sp.spread.max, sp.ratio, sp.p_holm,
+      s += fmt::format("  {:<20} {:<{}}  mean {:>11.5g}  sigma {:>9.3g}  [{:.5g}, {:.5g}]  min {:.5g} max {:.5g}  ratio {:.2f}  p {}{}{}\n",
+                       sp.parameter, unit(sp.parameter), unit_width, sp.spread.mean, sp.spread.sd, sp.spread.low, sp.spread.high,
+                       sp.spread.min, sp.spread.max, sp.ratio, p_value_text(sp.p_holm),
                        sp.wider_than_pooled ? "  WIDER: the runs differ beyond what the model explains" : "",
                        sp.undetermined.empty() ? "" : "  (without " + sp.undetermined + ")");
     }

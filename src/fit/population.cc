@@ -461,8 +461,8 @@ PopulationFit fit_population(std::span<const Estimate> estimates, std::size_t fa
     }
     const double p = worst_deviation.p() * static_cast<double>(members.size()) * family;
     if (!(p < alpha)) {
-      fit.note = fmt::format("stopped: the most extreme unit left ({}) has Bonferroni p = {:.2g} >= {}", worst,
-                             std::min(1.0, p), alpha);
+      fit.note = fmt::format("stopped: the most extreme unit left ({}) has Bonferroni {} >= {}", worst,
+                             p_is(std::min(1.0, p)), alpha);
       break;
     }
     fit.outliers.push_back(worst);

@@ -79,6 +79,16 @@ double chi_squared_upper_p(double x, double dof) {
   return boost::math::cdf(boost::math::complement(boost::math::chi_squared_distribution<double>(dof), x));
 }
 
+std::string p_value_text(double p) {
+  if (!std::isfinite(p)) return "n/a";
+  return p < 1e-16 ? "< 1e-16" : fmt::format("{:.2g}", p);
+}
+
+std::string p_is(double p) {
+  if (!std::isfinite(p)) return "p n/a";
+  return p < 1e-16 ? "p < 1e-16" : fmt::format("p = {:.2g}", p);
+}
+
 std::string across_runs(const Spread& s, int digits) {
   if (s.n < 2) return s.n == 1 ? "one run: no spread across runs" : "no run estimate: no spread across runs";
   return fmt::format("across runs {:.{}g} ± {:.{}g}", s.mean, digits, s.half_width, digits);

@@ -110,8 +110,8 @@ std::string strongest_disagreement(const std::vector<RunHeterogeneity>& tests) {
   std::string out;
   for (const auto& h : tests)
     if (h.significant)
-      out += fmt::format("{}{} (Q = {:.3g} on {} runs, Holm p = {:.2g}, I² = {:.0f} %)", out.empty() ? "" : ", ", h.parameter,
-                         h.q, h.runs, h.p_holm, 100 * h.i_squared);
+      out += fmt::format("{}{} (Q = {:.3g} on {} runs, Holm {}, I² = {:.0f} %)", out.empty() ? "" : ", ", h.parameter,
+                         h.q, h.runs, p_is(h.p_holm), 100 * h.i_squared);
   return out;
 }
 

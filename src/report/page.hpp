@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "lmcal/fit/fit_result.hpp"
+#include "lmcal/fit/statistics.hpp"
 #include "lmcal/report/svg_plot.hpp"
 
 namespace lmcal::report {
@@ -96,9 +97,9 @@ inline std::string percent(double v, int decimals, bool sign = false) {
 }
 
 // A p-value to 2 significant digits; below what a double resolves, "< 1e-16" (not "0").
-inline std::string p_value(double p) { return std::isfinite(p) && p < 1e-16 ? "< 1e-16" : num(p, 2); }
+inline std::string p_value(double p) { return std::isfinite(p) ? p_value_text(p) : "–"; }
 // "p = 0.032", or "p < 1e-16".
-inline std::string p_is(double p) { return std::isfinite(p) && p < 1e-16 ? "p < 1e-16" : "p = " + num(p, 2); }
+using lmcal::p_is;
 
 // "[low, high]".
 inline std::string bracket(double low, double high) { return fmt::format("[{}, {}]", num(low), num(high)); }

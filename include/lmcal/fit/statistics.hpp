@@ -47,6 +47,12 @@ Spread spread(std::span<const double> values, double confidence = 0.95);
 // two runs, what is missing: "one run: no spread across runs" (never "0.000 ± 0.000").
 std::string across_runs(const Spread& s, int digits = 3);
 
+// A p-value as the outputs print it: 2 significant digits ("0.032"), or "< 1e-16" below what a
+// double's tail resolves (never "0": a test that rejects beyond any doubt still has p > 0);
+// p_is gives "p = 0.032" or "p < 1e-16". No p (NaN: a test that could not run) is "n/a".
+std::string p_value_text(double p);
+std::string p_is(double p);
+
 // Holm's step-down adjustment of a family of p-values (each in [0, 1], InvalidParameter
 // otherwise): the k-th smallest becomes max over j <= k of min(1, (m − j + 1) p_(j)). NaN entries
 // stay NaN and do not count in the family m. Same order as the input.
