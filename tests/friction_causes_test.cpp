@@ -255,7 +255,7 @@ TEST_F(FrictionCauses, ARepeatingMovesEncoderQuantizationIsNoCauseAndNoDiscrepan
       ++locked;
       EXPECT_LT(t.size, d.final.resolution_floor_N) << t.covariate;
       EXPECT_TRUE(std::any_of(d.design_notes.begin(), d.design_notes.end(), [&](const std::string& n) {
-        return n.find(t.covariate + " (p = ") != std::string::npos && n.find("resolution") != std::string::npos;
+        return n.find(t.covariate + " (p ") != std::string::npos && n.find("resolution") != std::string::npos;
       })) << t.covariate << ": " << d.summary;
     }
   }
