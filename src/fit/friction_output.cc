@@ -273,7 +273,9 @@ std::string friction_fit_summary(const FrictionFitResult& r) {
     std::string interval = "";
     if (p.interval == "profile") interval = fmt::format("[{:.5g}, {:.5g}] profile", p.profile_low, p.profile_high);
     else if (p.interval == "linear") interval = fmt::format("[{:.5g}, {:.5g}]", p.ci_low, p.ci_high);
-    s += fmt::format("  {:<20} {:>12.6g} {:>11.3g}  {:<19} {:<27} {}\n", p.name, p.value, p.se, shown_unit(p.unit), interval, note);
+    // No SE (a held or undetermined constant) is "n/a", its reason in the note: never "nan".
+    const std::string se = std::isfinite(p.se) ? fmt::format("{:.3g}", p.se) : "n/a";
+    s += fmt::format("  {:<20} {:>12.6g} {:>11}  {:<19} {:<27} {}\n", p.name, p.value, se, shown_unit(p.unit), interval, note);
   }
   s += detail::uncertainty_summary(f);
   if (f.identifiability.identifiable) {
