@@ -48,6 +48,7 @@ class FrictionModel : public LeastSquaresModel {
  public:
   FrictionModel(const FrictionData& data, std::vector<std::size_t> effect_slots);
   std::size_t num_residuals() const override { return data_.samples.size(); }
+  bool costs_evaluate_concurrently() const override { return true; }
   std::unique_ptr<ceres::CostFunction> cost_function(const std::vector<std::size_t>& rows,
                                                      const RowLoss& loss) const override;
   void explain(IdentifiabilityIssue& issue) const override;

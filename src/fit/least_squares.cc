@@ -17,6 +17,7 @@
 #include "lmcal/error.hpp"
 #include "lmcal/io/limits.hpp"
 #include "lmcal/fit/statistics.hpp"
+#include "parallel_slices.hpp"
 
 namespace lmcal {
 
@@ -479,22 +480,22 @@ MultiStart multi_start(const LeastSquaresModel& model, const std::vector<Paramet
   for (std::size_t k = 0; k < m; ++k) rows.push_back(k * n / m);  // evenly spread
   const auto cost = model.cost_function(rows, RowLoss{options.loss, options.loss_scale});
 
-  LocalSearch search{cost.get(), start, free, {}, Eigen::VectorXd(rows.size()), {}};
-  search.J.resize(static_cast<Eigen::Index>(rows.size()), static_cast<Eigen::Index>(specs.size()));
-  std::vector<double> lower, upper;
+  std::vector<double> scale, lower, upper;
   for (int j : free) {
-    search.scale.push_back(relative_scale(specs[j], start[j]));
-    lower.push_back(specs[j].lower / search.scale.back());
-    upper.push_back(specs[j].upper / search.scale.back());
+    scale.push_back(relative_scale(specs[j], start[j]));
+    lower.push_back(specs[j].lower / scale.back());
+    upper.push_back(specs[j].upper / scale.back());
   }
 
-  std::vector<std::pair<double, std::vector<double>>> ends;
-  for (int k = 0; k < options.starts; ++k) {
+  // Each start's search on its own (its own buffers, its own NLopt object): side by side where
+  // the model allows, and the same ends in the same order either way.
+  std::vector<std::pair<double, std::vector<double>>> ends(static_cast<std::size_t>(options.starts));
+  auto search_from = [&](std::size_t k) {
     std::vector<double> theta = k == 0 ? start : halton_start(specs, held, start, options.seed * 7919 + k);
+    LocalSearch search{cost.get(), theta, free, scale, Eigen::VectorXd(rows.size()), {}};
+    search.J.resize(static_cast<Eigen::Index>(rows.size()), static_cast<Eigen::Index>(specs.size()));
     std::vector<double> u;
-    for (std::size_t i = 0; i < free.size(); ++i)
-      u.push_back(std::clamp(theta[free[i]] / search.scale[i], lower[i], upper[i]));
-    search.full = theta;
+    for (std::size_t i = 0; i < free.size(); ++i) u.push_back(std::clamp(theta[free[i]] / scale[i], lower[i], upper[i]));
     nlopt::opt opt(nlopt::LD_LBFGS, static_cast<unsigned>(free.size()));
     opt.set_lower_bounds(lower);
     opt.set_upper_bounds(upper);
@@ -509,8 +510,13 @@ MultiStart multi_start(const LeastSquaresModel& model, const std::vector<Paramet
       // NLopt gives up on roundoff-limited or failed searches; keep the point it reached.
       f = LocalSearch::objective(static_cast<unsigned>(u.size()), u.data(), nullptr, &search);
     }
-    for (std::size_t i = 0; i < free.size(); ++i) theta[free[i]] = u[i] * search.scale[i];
-    ends.emplace_back(f, theta);
+    for (std::size_t i = 0; i < free.size(); ++i) theta[free[i]] = u[i] * scale[i];
+    ends[k] = {f, std::move(theta)};
+  };
+  if (model.costs_evaluate_concurrently()) {
+    for_each_index(ends.size(), search_from);
+  } else {
+    for (std::size_t k = 0; k < ends.size(); ++k) search_from(k);
   }
   const auto best = std::min_element(ends.begin(), ends.end(), [](auto& a, auto& b) { return a.first < b.first; });
   out.best = best->second;

@@ -64,6 +64,11 @@ class LeastSquaresModel {
   // subset of rows saves nothing, and the engine's first pass over a tenth of the rows is
   // skipped (it would only move the start away from the optimum of all rows).
   virtual bool rows_evaluate_separately() const { return true; }
+  // True when one cost function may be evaluated on several threads at once (it keeps no
+  // state between evaluations): the engine then runs the multi-start's searches side by side.
+  // False (the default) where the model remembers its last evaluation (the thermal model's
+  // end profiles).
+  virtual bool costs_evaluate_concurrently() const { return false; }
   // What the design of the data rules out before any fit (e.g. one temperature: no β); each
   // issue names in `held` the parameters to hold. `free` are the parameters asked free.
   virtual std::vector<IdentifiabilityIssue> design_issues(const std::vector<std::string>& free) const {
