@@ -33,7 +33,6 @@ MAX_FUNCTION_LINES = 100
 KNOWN_FILES = [
     ("src/io/friction_log.cc", "the friction-log loader: columns, units, runs and the checks of each"),
     ("src/python/module.cpp", "every binding of the Python module in one file"),
-    ("src/fit/least_squares.cc", "the engine: normal equations, multi-start, polish and identifiability"),
     ("src/diagnose/empirical_friction.cc", "the dictionary, the smoothing and the learning of a friction term"),
     ("src/models/rail_thermal.cc", "the rail's FDM solver with its schemes and the geometry helpers"),
     ("src/diagnose/friction_diagnosis.cc", "the covariate tests, the causes tried and the verdict"),

@@ -14,6 +14,10 @@
 //      allows (covariance/: iid, hac, cluster, bootstrap), the one that fits the data chosen,
 //      t intervals and the correlation from it;
 //   5. profile-likelihood intervals where the linear interval is unreliable.
+//
+// solve_least_squares (least_squares.cc) reads as these steps; each lives in its own
+// least_squares_*.cc (least_squares_steps.hpp), the state at the end in the Ceres-free
+// least_squares_state.hpp.
 #pragma once
 
 #include <ceres/ceres.h>
@@ -26,6 +30,7 @@
 
 #include "batched_autodiff.hpp"
 #include "covariance/covariance.hpp"
+#include "least_squares_state.hpp"
 #include "lmcal/fit/fit_result.hpp"
 
 namespace lmcal::detail {
@@ -85,17 +90,6 @@ class LeastSquaresModel {
   virtual void estimate_settled() const {}
 };
 
-// The state at the final estimate, for callers that derive more from it.
-struct FinalState {
-  std::vector<double> theta;
-  std::vector<bool> held;      // held parameters (given, or not identifiable)
-  Eigen::VectorXd residuals;
-  Eigen::MatrixXd jacobian;    // all parameters (a held one's column may be 0: evaluate_residuals)
-  Eigen::MatrixXd bread;       // (JᵀJ)⁻¹ over the free parameters, rows/columns of held ones zero
-  bool covariance_ok = false;
-  std::string covariance_message;
-};
-
 // Step 4: fills result.uncertainty, result.covariance, result.correlation and every free
 // parameter's se, ci and bootstrap interval, from the covariance chosen for the rows'
 // structure (see fit_result.hpp).
@@ -112,36 +106,6 @@ void add_input_uncertainty(const RowStructure& rows, const FitOptions& options, 
 
 FitResult solve_least_squares(const LeastSquaresModel& model, const std::vector<ParameterSpec>& parameters,
                               const FitOptions& options, FinalState* final_state = nullptr);
-
-// Leave-one-group-out residuals without refitting: with group g removed, one Gauss-Newton
-// step from the full-data optimum, Δθ = (JᵀJ - J_gᵀJ_g)⁻¹ J_gᵀ r_g (the gradient of the rest
-// is -J_gᵀ r_g there), and group g's residuals become r_g - J_g Δθ... with r = data - model,
-// ∂r/∂θ = J: r_g + J_g Δθ. Returns every row's held-out residual. `held` parameters stay.
-// Exact for models linear in θ; otherwise the usual one-step approximation of refitting.
-// Where the other groups leave a direction of θ undetermined (only group g varies a condition
-// the model needs), that direction keeps the full fit's estimate and g goes into `undetermined`
-// (its held-out residuals are then optimistic there: say so).
-Eigen::VectorXd leave_group_out_residuals(const FinalState& state, const std::vector<std::size_t>& group_of_row,
-                                          const std::vector<bool>& held, std::vector<std::size_t>* undetermined = nullptr);
-
-// The same in parts, for callers that hold out each group with its own parameters held:
-// J_gᵀJ_g and J_gᵀr_g per group over all parameters (computed once, by blocks of consecutive
-// rows), and the held-out step of one group.
-struct GroupNormalEquations {
-  std::vector<Eigen::MatrixXd> H;  // per group, all parameters
-  std::vector<Eigen::VectorXd> b;
-  Eigen::MatrixXd total;           // Σ_g H_g
-};
-GroupNormalEquations group_normal_equations(const FinalState& state, const std::vector<std::size_t>& group_of_row);
-// Δθ with group g left out and `held` parameters kept (zero in the result); the directions the
-// other groups leave undetermined kept too, and `*undetermined` set when there are any.
-Eigen::VectorXd leave_group_out_step(const GroupNormalEquations& sums, std::size_t g, const std::vector<bool>& held,
-                                     bool* undetermined = nullptr);
-
-// (JᵀJ)⁻¹ over the parameters not held (rows/columns of held ones zero); false with a message
-// when J is rank deficient.
-bool covariance_from_jacobian(const Eigen::MatrixXd& J, const std::vector<bool>& held, Eigen::MatrixXd& covariance,
-                              std::string& message);
 
 // Thrown by evaluate_residuals when the model cannot be evaluated at θ or a residual is not
 // finite there; solve_least_squares reports it as an unusable fit (never an abort).
