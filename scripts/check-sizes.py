@@ -35,7 +35,6 @@ KNOWN_FILES = [
     ("src/python/module.cpp", "every binding of the Python module in one file"),
     ("src/diagnose/empirical_friction.cc", "the dictionary, the smoothing and the learning of a friction term"),
     ("src/models/rail_thermal.cc", "the rail's FDM solver with its schemes and the geometry helpers"),
-    ("src/diagnose/friction_diagnosis.cc", "the covariate tests, the causes tried and the verdict"),
     ("src/fit/model_file.cc", "model.toml written and read, both models"),
     ("src/io/thermal_run.cc", "the thermal-run loader and its manifest"),
     ("src/report/svg_plot.cc", "the axes, ticks and marks of the SVG plots"),
@@ -46,7 +45,6 @@ KNOWN_FILES = [
 KNOWN_FUNCTIONS = [
     ("src/report/svg_plot.cc", "render_svg", "limits, axes, series and legend in one"),
     ("src/rig/thermal_rig.cc", "generate_thermal_dataset", "every run's schedule, simulation and sensors in one"),
-    ("src/diagnose/friction_diagnosis.cc", "diagnose_friction", "tests, causes and verdict in one"),
     ("src/diagnose/empirical_friction.cc", "learn_friction_term", "candidates, regression and refit in one"),
     ("src/diagnose/empirical_friction.cc", "smooth_term", "the smoother and its cross-validation in one"),
     ("src/diagnose/empirical_friction.cc", "dictionary", "every candidate term listed in one"),
