@@ -33,7 +33,6 @@ MAX_FUNCTION_LINES = 100
 KNOWN_FILES = [
     ("src/io/friction_log.cc", "the friction-log loader: columns, units, runs and the checks of each"),
     ("src/python/module.cpp", "every binding of the Python module in one file"),
-    ("src/diagnose/empirical_friction.cc", "the dictionary, the smoothing and the learning of a friction term"),
     ("src/models/rail_thermal.cc", "the rail's FDM solver with its schemes and the geometry helpers"),
     ("src/fit/model_file.cc", "model.toml written and read, both models"),
     ("src/io/thermal_run.cc", "the thermal-run loader and its manifest"),
@@ -45,9 +44,6 @@ KNOWN_FILES = [
 KNOWN_FUNCTIONS = [
     ("src/report/svg_plot.cc", "render_svg", "limits, axes, series and legend in one"),
     ("src/rig/thermal_rig.cc", "generate_thermal_dataset", "every run's schedule, simulation and sensors in one"),
-    ("src/diagnose/empirical_friction.cc", "learn_friction_term", "candidates, regression and refit in one"),
-    ("src/diagnose/empirical_friction.cc", "smooth_term", "the smoother and its cross-validation in one"),
-    ("src/diagnose/empirical_friction.cc", "dictionary", "every candidate term listed in one"),
     ("apps/generate.cpp", "setup_generate", "every option of lmcal generate declared in one"),
     ("apps/simulate_thermal.cpp", "run_simulate_thermal", "the simulation and its outputs in one"),
     ("src/python/module.cpp", "PYBIND11_MODULE", "the module's bindings in one body"),
