@@ -39,7 +39,6 @@ KNOWN_FILES = [
     ("src/report/svg_plot.cc", "the axes, ticks and marks of the SVG plots"),
     ("src/io/csv_reader.cc", "the CSV tokenizer, its number parsing and its errors"),
     ("src/predict/prediction.cc", "the duty-cycle prediction with its bands and its outputs"),
-    ("src/diagnose/selection.cc", "the selection criteria and the candidates' comparison"),
 ]
 KNOWN_FUNCTIONS = [
     ("src/report/svg_plot.cc", "render_svg", "limits, axes, series and legend in one"),
