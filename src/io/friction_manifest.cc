@@ -253,6 +253,36 @@ RunEntry read_run(const Manifest& m, const toml::table& table, const GuideCatalo
   return run;
 }
 
+// The manifest's catalog, loaded into `own` (a catalog the caller gives wins; its file must
+// exist all the same), or the caller's, or none.
+const GuideCatalog* catalog_of(const Manifest& m, const toml::table& root, const GuideCatalog* user_catalog,
+                               GuideCatalog& own) {
+  const GuideCatalog* catalog = user_catalog;
+  if (const toml::node* node = root.get("catalog")) {
+    const toml::key& key = root.find("catalog")->first;
+    const fs::path path = m.existing_file(*node, manifest::string_of(m, key, *node));
+    if (!user_catalog) {
+      own = load_catalog(path);
+      catalog = &own;
+    }
+  }
+  return catalog;
+}
+
+// The raw settings given on the command line (`raw_given` names them, `raw` holds them) over the
+// manifest's [raw] and [drive].
+void override_raw(RawFrictionOptions& set_raw, const RawFrictionOptions& raw, const std::vector<std::string>& raw_given) {
+  for (const std::string& name : raw_given) {
+    if (Drive::is_key(name)) {  // a flag for the drive wins over the [drive] key
+      set_raw.drive.copy_key(name, raw.drive);
+      continue;
+    }
+    const auto it = std::find_if(raw_keys().begin(), raw_keys().end(), [&](const RawKey& r) { return r.name == name; });
+    if (it == raw_keys().end()) throw InvalidParameter("raw_given", fmt::format("unknown setting '{}'", name));
+    it->copy(set_raw, raw);
+  }
+}
+
 }  // namespace
 
 FrictionDataSet load_friction_dataset(const fs::path& manifest_file, const GuideCatalog* user_catalog,
@@ -266,15 +296,7 @@ FrictionDataSet load_friction_dataset(const fs::path& manifest_file, const Guide
 
   // The catalog first: the runs' guides are looked up in it.
   GuideCatalog own_catalog;
-  const GuideCatalog* catalog = user_catalog;
-  if (const toml::node* node = root.get("catalog")) {
-    const toml::key& key = root.find("catalog")->first;
-    const fs::path path = m.existing_file(*node, manifest::string_of(m, key, *node));
-    if (!user_catalog) {
-      own_catalog = load_catalog(path);
-      catalog = &own_catalog;
-    }
-  }
+  const GuideCatalog* catalog = catalog_of(m, root, user_catalog, own_catalog);
   if (catalog) set.catalog_file = catalog->source;
 
   std::optional<std::pair<fs::path, const toml::node*>> common_file;
@@ -303,15 +325,7 @@ FrictionDataSet load_friction_dataset(const fs::path& manifest_file, const Guide
     }
   }
   set.raw.drive = drive;
-  for (const std::string& name : raw_given) {
-    if (Drive::is_key(name)) {  // a flag for the drive wins over the [drive] key
-      set.raw.drive.copy_key(name, raw.drive);
-      continue;
-    }
-    const auto it = std::find_if(raw_keys().begin(), raw_keys().end(), [&](const RawKey& r) { return r.name == name; });
-    if (it == raw_keys().end()) throw InvalidParameter("raw_given", fmt::format("unknown setting '{}'", name));
-    it->copy(set.raw, raw);
-  }
+  override_raw(set.raw, raw, raw_given);
 
   std::map<std::string, FrictionRunConditions, std::less<>> conditions;  // of the runs in the common file
   std::set<std::string> ids;
