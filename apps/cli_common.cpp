@@ -425,16 +425,12 @@ void add_assignments(CLI::App& app, const char* name, std::map<std::string, doub
 void add_uncertainty_options(CLI::App& app, FitOptions& fit) {
   add_choice(app, "--covariance", fit.covariance,
              "Covariance the intervals quote: auto (by the data's structure), iid, hac, cluster or bootstrap", "METHOD",
-             {{"auto", CovarianceMethod::automatic},
-              {"iid", CovarianceMethod::iid},
-              {"hac", CovarianceMethod::hac},
-              {"cluster", CovarianceMethod::cluster},
-              {"bootstrap", CovarianceMethod::bootstrap}});
+             kCovarianceMethods);
   app.add_option("--bootstrap", fit.bootstrap, "Cluster-bootstrap replicates (runs resampled; 0: none)")
       ->check(up_to_limit(0, static_cast<double>(io::kMaxBootstrapReplicates)))
       ->capture_default_str();
   add_choice(app, "--profile", fit.profile, "Profile-likelihood intervals: auto (where the linear one is unreliable), all or none",
-             "MODE", {{"auto", ProfileMode::automatic}, {"all", ProfileMode::all}, {"none", ProfileMode::none}});
+             "MODE", kProfileModes);
 }
 
 CLI::Validator at_least(double low) {

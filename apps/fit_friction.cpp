@@ -45,10 +45,7 @@ FrictionFitOptions to_fit_options(const FitFrictionOptions& o) {
   FrictionFitOptions f;
   apply_friction_constant_options(o.constants, f);
   f.effects = o.effects;
-  if (o.loss == "none") f.fit.loss = RobustLoss::none;
-  else if (o.loss == "huber") f.fit.loss = RobustLoss::huber;
-  else if (o.loss == "cauchy") f.fit.loss = RobustLoss::cauchy;
-  else throw InvalidParameter("--loss", "unknown loss '" + o.loss + "'; expected none, huber or cauchy");
+  f.fit.loss = parse_robust_loss(o.loss, "--loss");
   require_positive("--loss-scale", o.loss_scale);
   f.fit.loss_scale = o.loss_scale;
   f.weighting = parse_friction_weighting(o.weights, "--weights");
@@ -91,7 +88,7 @@ void setup_fit(CLI::App& app, const std::vector<std::string>& argv) {
   friction->add_option("-o,--output-dir", o->output_dir, "Output folder")->capture_default_str();
   add_friction_constant_options(*friction, o->constants);
   friction->add_option("--effect", o->effects, "Fit a named effect on top of the law (e.g. seal_drag)")->delimiter(',');
-  completes(friction->add_option("--loss", o->loss, "Robust loss: none, huber or cauchy"), {"none", "huber", "cauchy"})
+  completes(friction->add_option("--loss", o->loss, "Robust loss: none, huber or cauchy"), enum_names(kRobustLosses))
       ->capture_default_str();
   friction->add_option("--loss-scale", o->loss_scale, "Robust loss scale, in residual sigmas")->capture_default_str();
   completes(friction->add_option("--weights", o->weights, "Weights: none, per-run or per-condition (from the spread of repeats)"),

@@ -28,7 +28,7 @@ void calibrate_friction_model(Calibration& c) {
     // A term's coefficient has no natural bounds for a multi-start to sample within: start
     // from the diagnosis's joint fit instead.
     const FrictionConstants<double> k = learned.constants();
-    for (std::size_t j = 0; j < 7; ++j)
+    for (std::size_t j = 0; j < FrictionConstants<double>::kFittable; ++j)
       fittable_constant(m.friction_options.start, j) =
           std::clamp(fittable_constant(k, j), m.friction_options.bounds[j].first, m.friction_options.bounds[j].second);
     m.friction_options.fit.starts = 0;

@@ -54,15 +54,6 @@ std::string held_out_caveat(const FrictionFitResult& fit) {
 
 namespace {
 
-const char* to_string(RobustLoss l) {
-  switch (l) {
-    case RobustLoss::none: return "none";
-    case RobustLoss::huber: return "huber";
-    case RobustLoss::cauchy: return "cauchy";
-  }
-  return "?";
-}
-
 nlohmann::json run_offsets_json(const FrictionFitResult& r, const FrictionFitOptions& o) {
   const std::string model = fmt::format("{}{}",
                                         r.run_offsets == RunOffsets::random  ? "random (a run intercept of variance tau^2, ML, GLS)"

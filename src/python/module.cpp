@@ -68,17 +68,6 @@ py::array_t<T> array(const std::vector<T>& v) {
   return py::array_t<T>(static_cast<py::ssize_t>(v.size()), v.data());
 }
 
-// `name` of the choices, or InvalidParameter listing them.
-template <class E>
-E choose(const char* parameter, const std::string& name, std::initializer_list<std::pair<const char*, E>> choices) {
-  std::string accepted;
-  for (const auto& [text, value] : choices) {
-    if (name == text) return value;
-    accepted += (accepted.empty() ? "" : ", ") + std::string(text);
-  }
-  throw InvalidParameter(parameter, fmt::format("unknown value '{}'; expected one of {}", name, accepted));
-}
-
 // The covariance and the parameters of a fit, for NumPy.
 py::dict fit_arrays(const FitResult& fit) {
   std::vector<std::string> names;
@@ -464,21 +453,14 @@ struct FrictionFit {
 
 void set_fit_options(FitOptions& fit, const py::dict& o) {
   if (o.contains("loss"))
-    fit.loss = choose<RobustLoss>("loss", o["loss"].cast<std::string>(),
-                                  {{"none", RobustLoss::none}, {"huber", RobustLoss::huber}, {"cauchy", RobustLoss::cauchy}});
+    fit.loss = parse_robust_loss(o["loss"].cast<std::string>(), "loss");
   if (o.contains("loss_scale")) fit.loss_scale = o["loss_scale"].cast<double>();
   if (o.contains("starts")) fit.starts = o["starts"].cast<int>();
   if (o.contains("seed")) fit.seed = o["seed"].cast<std::uint64_t>();
   if (o.contains("profile"))
-    fit.profile = choose<ProfileMode>("profile", o["profile"].cast<std::string>(),
-                                      {{"auto", ProfileMode::automatic}, {"all", ProfileMode::all}, {"none", ProfileMode::none}});
+    fit.profile = parse_profile_mode(o["profile"].cast<std::string>(), "profile");
   if (o.contains("covariance"))
-    fit.covariance = choose<CovarianceMethod>("covariance", o["covariance"].cast<std::string>(),
-                                              {{"auto", CovarianceMethod::automatic},
-                                               {"iid", CovarianceMethod::iid},
-                                               {"hac", CovarianceMethod::hac},
-                                               {"cluster", CovarianceMethod::cluster},
-                                               {"bootstrap", CovarianceMethod::bootstrap}});
+    fit.covariance = parse_covariance_method(o["covariance"].cast<std::string>(), "covariance");
   if (o.contains("bootstrap")) fit.bootstrap = o["bootstrap"].cast<std::size_t>();
   if (fit.starts < 0) throw InvalidParameter("starts", fit.starts, "at least 0");
   require_positive("loss_scale", fit.loss_scale);

@@ -126,20 +126,8 @@ nlohmann::json thermal_json(const ThermalFitResult& t, const ThermalFitOptions& 
           {"converged", t.joint.solver.converged}};
 }
 
-const char* covariance_name(CovarianceMethod m) {
-  switch (m) {
-    case CovarianceMethod::automatic: return "auto";
-    case CovarianceMethod::iid: return "iid";
-    case CovarianceMethod::hac: return "hac";
-    case CovarianceMethod::cluster: return "cluster";
-    case CovarianceMethod::bootstrap: return "bootstrap";
-  }
-  return "?";
-}
-
 nlohmann::json uncertainty_options_json(const FitOptions& f) {
-  const char* profile = f.profile == ProfileMode::all ? "all" : f.profile == ProfileMode::none ? "none" : "auto";
-  return {{"covariance", covariance_name(f.covariance)}, {"bootstrap", f.bootstrap}, {"profile", profile}, {"starts", f.starts}, {"seed", f.seed}};
+  return {{"covariance", to_string(f.covariance)}, {"bootstrap", f.bootstrap}, {"profile", to_string(f.profile)}, {"starts", f.starts}, {"seed", f.seed}};
 }
 
 nlohmann::json friction_options_json(const FrictionFitOptions& f) {
@@ -154,8 +142,7 @@ nlohmann::json friction_options_json(const FrictionFitOptions& f) {
 }
 
 nlohmann::json thermal_options_json(const ThermalFitOptions& t) {
-  const char* heat = t.heat == HeatInput::friction_law ? "friction" : t.heat == HeatInput::measured_friction ? "measured" : "auto";
-  return {{"heat", heat},
+  return {{"heat", to_string(t.heat)},
           {"source", to_string(t.source)},
           {"scheme", to_string(t.scheme)},
           {"half_rail_segments", t.half_rail_segments},

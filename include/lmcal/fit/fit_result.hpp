@@ -29,14 +29,67 @@
 #include <cstddef>
 #include <cstdint>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
+#include "lmcal/enum_names.hpp"
+
 namespace LMCAL_API lmcal {
 
+// The loss a fit's residuals go through: none (least squares), Huber's or Cauchy's, each at
+// FitOptions::loss_scale (in units of the whitened residual).
 enum class RobustLoss { none, huber, cauchy };
+inline constexpr RobustLoss kRobustLosses[] = {RobustLoss::none, RobustLoss::huber, RobustLoss::cauchy};
+constexpr const char* to_string(RobustLoss loss) {
+  switch (loss) {
+    case RobustLoss::none: return "none";
+    case RobustLoss::huber: return "huber";
+    case RobustLoss::cauchy: return "cauchy";
+  }
+  return "?";
+}
+// The loss named `name`; InvalidParameter naming `parameter` and the names otherwise.
+inline RobustLoss parse_robust_loss(std::string_view name, const std::string& parameter = "loss") {
+  return parse_enum(kRobustLosses, name, parameter, "loss");
+}
+
+// Profile-likelihood intervals: for no parameter, where the linear interval is unreliable
+// (automatic, see above) or for every free one.
 enum class ProfileMode { none, automatic, all };
+inline constexpr ProfileMode kProfileModes[] = {ProfileMode::automatic, ProfileMode::all, ProfileMode::none};
+constexpr const char* to_string(ProfileMode mode) {
+  switch (mode) {
+    case ProfileMode::none: return "none";
+    case ProfileMode::automatic: return "auto";
+    case ProfileMode::all: return "all";
+  }
+  return "?";
+}
+// The mode named `name`; InvalidParameter naming `parameter` and the names otherwise.
+inline ProfileMode parse_profile_mode(std::string_view name, const std::string& parameter = "profile") {
+  return parse_enum(kProfileModes, name, parameter, "profile mode");
+}
+
+// The covariance the intervals quote (see Uncertainty above; automatic: by the data's structure).
 enum class CovarianceMethod { automatic, iid, hac, cluster, bootstrap };
+inline constexpr CovarianceMethod kCovarianceMethods[] = {CovarianceMethod::automatic, CovarianceMethod::iid,
+                                                          CovarianceMethod::hac, CovarianceMethod::cluster,
+                                                          CovarianceMethod::bootstrap};
+constexpr const char* to_string(CovarianceMethod method) {
+  switch (method) {
+    case CovarianceMethod::automatic: return "auto";
+    case CovarianceMethod::iid: return "iid";
+    case CovarianceMethod::hac: return "hac";
+    case CovarianceMethod::cluster: return "cluster";
+    case CovarianceMethod::bootstrap: return "bootstrap";
+  }
+  return "?";
+}
+// The method named `name`; InvalidParameter naming `parameter` and the names otherwise.
+inline CovarianceMethod parse_covariance_method(std::string_view name, const std::string& parameter = "covariance") {
+  return parse_enum(kCovarianceMethods, name, parameter, "covariance method");
+}
 
 struct FitOptions {
   RobustLoss loss = RobustLoss::none;
