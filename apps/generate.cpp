@@ -222,14 +222,9 @@ void add_common(CLI::App& app, GenerateOptions& o) {
   app.add_option("-o,--output-dir,--output", o.output, "Output folder")->required();
 }
 
-}  // namespace
-
-void setup_generate(CLI::App& app, const std::vector<std::string>& argv) {
-  auto o = std::make_shared<GenerateOptions>();
-  CLI::App* generate = app.add_subcommand("generate", "Virtual rig: synthetic data with a known truth");
-  generate->require_subcommand(1);
-
-  CLI::App* friction = generate->add_subcommand("friction", "A friction log (load-cell CSV) and its truth");
+// lmcal generate friction: the sweep, the load cell's imperfections and the raw time series (--raw).
+void setup_generate_friction(CLI::App& generate, const std::shared_ptr<GenerateOptions>& o, const std::vector<std::string>& argv) {
+  CLI::App* friction = generate.add_subcommand("friction", "A friction log (load-cell CSV) and its truth");
   add_common(*friction, *o);
   FrictionRigConfig& f = o->friction;
   friction->add_option("--guide,--guides", f.guides, "Guide models (of the built-in catalog or --catalog), a list sweeps them")
@@ -268,8 +263,11 @@ void setup_generate(CLI::App& app, const std::vector<std::string>& argv) {
   raw->add_option("--force-sign", o->raw_force_sign, "How the logged force is signed: follows-motion, opposes-motion, magnitude")
       ->capture_default_str();
   friction->callback([o, &argv] { run_generate_friction(*o, argv); });
+}
 
-  CLI::App* axis = generate->add_subcommand(
+// lmcal generate axis: the setups, the axis's mechanics and controller, its reference and its log.
+void setup_generate_axis(CLI::App& generate, const std::shared_ptr<GenerateOptions>& o, const std::vector<std::string>& argv) {
+  CLI::App* axis = generate.add_subcommand(
       "axis", "A closed-loop positioning axis's own log (time, encoder position, drive force), a manifest and its truth");
   add_common(*axis, *o);
   FrictionRigConfig& as = o->axis_setup;
@@ -316,8 +314,11 @@ void setup_generate(CLI::App& app, const std::vector<std::string>& argv) {
   axis->add_flag("--no-trajectory-keys", o->axis_no_trajectory_keys,
                  "Leave segmentation and axis_incline_deg out of the manifest's [raw] table (for a plateau-only reader)");
   axis->callback([o, &argv] { run_generate_axis(*o, argv); });
+}
 
-  CLI::App* thermal = generate->add_subcommand("thermal", "A thermal data set (manifest + runs) and its truth");
+// lmcal generate thermal: the rail, the runs' schedule, the sensors and their imperfections.
+void setup_generate_thermal(CLI::App& generate, const std::shared_ptr<GenerateOptions>& o, const std::vector<std::string>& argv) {
+  CLI::App* thermal = generate.add_subcommand("thermal", "A thermal data set (manifest + runs) and its truth");
   add_common(*thermal, *o);
   ThermalRigConfig& t = o->thermal;
   thermal->add_option("--name", o->name, "Data set name")->capture_default_str();
@@ -362,8 +363,11 @@ void setup_generate(CLI::App& app, const std::vector<std::string>& argv) {
                              "No ambient columns: the manifest's ambient_C (--ambient) instead");
   thermal->add_option("--ambient-wave", t.ambient_wave_K, "Amplitude of the ambient's 2 h wave, K")->capture_default_str();
   thermal->callback([o, &argv] { run_generate_thermal(*o, argv); });
+}
 
-  CLI::App* fleet = generate->add_subcommand(
+// lmcal generate fleet: the units, their dates and their spread, outliers and drifts.
+void setup_generate_fleet(CLI::App& generate, const std::shared_ptr<GenerateOptions>& o) {
+  CLI::App* fleet = generate.add_subcommand(
       "fleet", "A fleet of units (a folder per unit, or per unit and date) with a known unit-to-unit spread, for lmcal fleet");
   fleet->add_option("--seed", o->seed, "Random seed (same seed, same data)")->capture_default_str();
   fleet->add_option("-o,--output-dir,--output", o->output, "Output folder (the fleet's root)")->required();
@@ -381,7 +385,18 @@ void setup_generate(CLI::App& app, const std::vector<std::string>& argv) {
   fleet->add_option("--corrupt", fl.corrupt, "Units whose first set has a corrupt friction log")->delimiter(',');
   fleet->add_flag_callback("--no-thermal", [o] { o->fleet.thermal = false; }, "Friction logs only");
   fleet->callback([o] { run_generate_fleet(*o); });
+}
 
+}  // namespace
+
+void setup_generate(CLI::App& app, const std::vector<std::string>& argv) {
+  auto o = std::make_shared<GenerateOptions>();
+  CLI::App* generate = app.add_subcommand("generate", "Virtual rig: synthetic data with a known truth");
+  generate->require_subcommand(1);
+  setup_generate_friction(*generate, o, argv);
+  setup_generate_axis(*generate, o, argv);
+  setup_generate_thermal(*generate, o, argv);
+  setup_generate_fleet(*generate, o);
   CLI::App* list = generate->add_subcommand("effects", "List the named effects");
   list->callback([] {
     std::cout << fmt::format("{:<22} {:<18} {:>8}  {}\n", "effect", "unit", "neutral", "what it does");

@@ -253,8 +253,8 @@ void describe_model(const LoadedModel& model, const RailModel& rail, const Frict
   }
 }
 
-void run_simulate_thermal(const ThermalSweepOptions& o, const std::vector<std::string>& argv) {
-  // The options by the names the user typed; the library re-checks everything it is given.
+// The options by the names the user typed; the library re-checks everything it is given.
+void check_sweep_options(const ThermalSweepOptions& o) {
   require_in_range("--alpha", o.alpha, 0.0, 1.0);
   require_positive("--h", o.h_W_m2K);
   require_positive("--rail-length", o.rail_length_m);
@@ -266,24 +266,15 @@ void run_simulate_thermal(const ThermalSweepOptions& o, const std::vector<std::s
   for (double V : o.velocity_m_s) require_in_range("--velocity", V, 0.0, physical_range(Quantity::velocity).high);
   if (!std::isnan(o.stop_s) && !(o.stop_s > 0 && o.stop_s < o.duration_s))
     throw InvalidParameter("--stop", o.stop_s, "a time within the run (0 < stop < --duration)");
-  const std::optional<LoadedModel> model = LoadedModel::read(o.model, "thermal");
-  const RailModel rail = rail_model(o, model ? &*model : nullptr);
-  const FrictionLaw law = o.friction.law(model ? &*model : nullptr);
-  validate(law.constants);
-  // simulate_rail_with_mechanisms takes a heat rate <= 0 as "from the law".
-  if (!rail.mechanisms.empty() && !std::isnan(o.heat_rate_W) && !(o.heat_rate_W > 0))
-    throw InvalidParameter("--heat-rate", o.heat_rate_W, "a value > 0 with a model's mechanisms");
-  const AmbientTrace ambient = make_ambient(o);
-  const double initial_C = std::isnan(o.initial_C) ? ambient.temperature_C.front() : o.initial_C;
-  const RailNumerics numerics{.source = rail.source,
-                              .scheme = parse_time_scheme(o.scheme),
-                              .half_rail_segments = o.segments,
-                              .time_step_s = o.time_step_s};
-  RailOutputs outputs{.duration_s = o.duration_s, .sensor_positions_m = o.sensors_m};
-  for (double t = 0; t < o.duration_s; t += o.output_every_s) outputs.output_times_s.push_back(t);
-  outputs.output_times_s.push_back(o.duration_s);
-  outputs.profile_times_s = {o.duration_s};
+}
 
+// The sweep's two tables: every case's temperatures over time at the sensors (and the
+// reference's), and its profiles along the rail; each row starts with the case's cells.
+struct SweepTables {
+  CsvText time_csv, profile_csv;
+};
+
+SweepTables sweep_tables(bool reference) {
   const std::vector<std::string> case_columns = {"case", "guide", "velocity_m_s", "load_N", "preload_um",
                                                  "block_length_mm", "contact_length_mm", "stroke_m", "heat_rate_W"};
   auto columns = [&](std::vector<std::string> extra) {
@@ -291,98 +282,95 @@ void run_simulate_thermal(const ThermalSweepOptions& o, const std::vector<std::s
     all.insert(all.end(), extra.begin(), extra.end());
     return all;
   };
-  CsvText time_csv(columns(o.reference ? std::vector<std::string>{"time_s", "sensor_x_m", "temperature_C",
-                                                                   "reference_temperature_C"}
-                                       : std::vector<std::string>{"time_s", "sensor_x_m", "temperature_C"}));
-  CsvText profile_csv(columns({"profile", "x_m", "temperature_C"}));
+  return {CsvText(columns(reference ? std::vector<std::string>{"time_s", "sensor_x_m", "temperature_C", "reference_temperature_C"}
+                                    : std::vector<std::string>{"time_s", "sensor_x_m", "temperature_C"})),
+          CsvText(columns({"profile", "x_m", "temperature_C"}))};
+}
 
-  nlohmann::json record = run_record(argv);
-  if (model) {
-    model->record_into(record);
-    describe_model(*model, rail, law, record);
+// The case's cells of a row; heat_rate_W: Q_f at that time (it follows the rail with a coupled
+// heat rate).
+void case_cells(CsvText& csv, std::size_t k, const Case& c, double heat_rate_W) {
+  // A given heat rate needs no preload or block length: their cells are empty (not NaN).
+  const auto used = [&](double v) -> CsvText& { return std::isnan(v) ? csv.cell("") : csv.cell(v); };
+  csv.cell(double(k)).cell(c.guide).cell(c.velocity_m_s).cell(c.load_N);
+  used(c.preload_um);
+  used(c.block_length_mm);
+  csv.cell(c.contact_length_mm).cell(c.stroke_m).cell(heat_rate_W);
+}
+
+// The last check before case k's numbers leave: the run, its steady state and the reference.
+void require_physical(std::size_t k, const Case& c, const RailSolution<double>& sol, const SteadyState& steady,
+                      const RailSolution<double>& ref) {
+  RailSolution<double> steady_as_run;
+  steady_as_run.profiles_C = {steady.temperature_C};
+  steady_as_run.heat_rate_W = {steady.heat_rate_W};
+  for (const RailSolution<double>* run : std::array<const RailSolution<double>*, 3>{&sol, &steady_as_run, &ref}) {
+    const std::string runaway =
+        runaway_of(*run, fmt::format("velocity_m_s = {}, load_N = {}, stroke_m = {}, heat_rate_W = {}", c.velocity_m_s,
+                                     c.load_N, c.stroke_m, c.heat_rate_W));
+    if (!runaway.empty()) throw InvalidParameter(fmt::format("case {}", k), runaway);
   }
-  std::cout << fmt::format("{:>4}  {:<8} {:>7} {:>6} {:>7} {:>6} {:>7}  {:>8}  {}\n", "case", "guide", "V_m/s", "P_N",
-                           "Lb_mm", "L1_m", "Q_W", "peak_dT", "T at end per sensor (C)");
-  const std::vector<Case> cases = enumerate_cases(o, initial_C, rail, law);
-  nlohmann::json errors = nlohmann::json::array(), steady_changes = nlohmann::json::array();
-  TerminalProgress progress;
-  progress.step(0, 2, "simulating " + std::to_string(cases.size()) + " cases");
-  const std::vector<RailSolution<double>> solutions = simulate_cases(cases, numerics, outputs, ambient, rail, law);
-  const std::vector<RailSolution<double>> references =
-      o.reference ? simulate_cases(cases, converged(numerics), outputs, ambient, rail, law) : std::vector<RailSolution<double>>{};
-  progress.step(1, 2, "steady states and outputs");
-  for (std::size_t k = 0; k < cases.size(); ++k) {
-    const Case& c = cases[k];
-    const RailSolution<double>& sol = solutions[k];
-    const SteadyState steady = steady_state(c, numerics, ambient.at(o.duration_s), rail, law);
-    const RailSolution<double> ref = o.reference ? references[k] : RailSolution<double>{};
-    // The last check before the case's numbers leave: the run, its steady state and the reference.
-    RailSolution<double> steady_as_run;
-    steady_as_run.profiles_C = {steady.temperature_C};
-    steady_as_run.heat_rate_W = {steady.heat_rate_W};
-    for (const RailSolution<double>* run : std::array<const RailSolution<double>*, 3>{&sol, &steady_as_run, &ref}) {
-      const std::string runaway =
-          runaway_of(*run, fmt::format("velocity_m_s = {}, load_N = {}, stroke_m = {}, heat_rate_W = {}", c.velocity_m_s,
-                                       c.load_N, c.stroke_m, c.heat_rate_W));
-      if (!runaway.empty()) throw InvalidParameter(fmt::format("case {}", k), runaway);
+}
+
+// Case k's rows of both tables; the largest difference from the reference at each sensor.
+std::vector<double> write_case_rows(const ThermalSweepOptions& o, std::size_t k, const Case& c, const RailOutputs& outputs,
+                                    const RailSolution<double>& sol, const SteadyState& steady, const RailSolution<double>& ref,
+                                    SweepTables& tables) {
+  std::vector<double> max_error(o.sensors_m.size(), 0.0);
+  for (std::size_t t = 0; t < outputs.output_times_s.size(); ++t)
+    for (std::size_t s = 0; s < o.sensors_m.size(); ++s) {
+      case_cells(tables.time_csv, k, c, sol.heat_rate_W[t]);
+      tables.time_csv.cell(outputs.output_times_s[t]).cell(o.sensors_m[s]).cell(sol.temperature_C(t, s));
+      if (o.reference) {
+        tables.time_csv.cell(ref.temperature_C(t, s));
+        max_error[s] = std::max(max_error[s], std::abs(sol.temperature_C(t, s) - ref.temperature_C(t, s)));
+      }
+      tables.time_csv.end_row();
     }
+  auto write_profile = [&](const char* name, double heat_rate_W, const std::vector<double>& x, const std::vector<double>& T) {
+    for (std::size_t i = 0; i < x.size(); ++i) {
+      case_cells(tables.profile_csv, k, c, heat_rate_W);
+      tables.profile_csv.cell(name).cell(x[i]).cell(T[i]);
+      tables.profile_csv.end_row();
+    }
+  };
+  write_profile("end_of_run", sol.heat_rate_W.back(), sol.node_positions_m, sol.profiles_C.front());
+  write_profile("steady_state", steady.heat_rate_W, steady.x_m, steady.temperature_C);
+  return max_error;
+}
 
-    // heat_rate_W: Q_f at that time (it follows the rail with a coupled heat rate).
-    auto case_cells = [&](CsvText& csv, double heat_rate_W) {
-      // A given heat rate needs no preload or block length: their cells are empty (not NaN).
-      const auto used = [&](double v) -> CsvText& { return std::isnan(v) ? csv.cell("") : csv.cell(v); };
-      csv.cell(double(k)).cell(c.guide).cell(c.velocity_m_s).cell(c.load_N);
-      used(c.preload_um);
-      used(c.block_length_mm);
-      csv.cell(c.contact_length_mm).cell(c.stroke_m).cell(heat_rate_W);
-    };
-    std::vector<double> max_error(o.sensors_m.size(), 0.0);
-    for (std::size_t t = 0; t < outputs.output_times_s.size(); ++t)
-      for (std::size_t s = 0; s < o.sensors_m.size(); ++s) {
-        case_cells(time_csv, sol.heat_rate_W[t]);
-        time_csv.cell(outputs.output_times_s[t]).cell(o.sensors_m[s]).cell(sol.temperature_C(t, s));
-        if (o.reference) {
-          time_csv.cell(ref.temperature_C(t, s));
-          max_error[s] = std::max(max_error[s], std::abs(sol.temperature_C(t, s) - ref.temperature_C(t, s)));
-        }
-        time_csv.end_row();
-      }
-    auto write_profile = [&](const char* name, double heat_rate_W, const std::vector<double>& x, const std::vector<double>& T) {
-      for (std::size_t i = 0; i < x.size(); ++i) {
-        case_cells(profile_csv, heat_rate_W);
-        profile_csv.cell(name).cell(x[i]).cell(T[i]);
-        profile_csv.end_row();
-      }
-    };
-    write_profile("end_of_run", sol.heat_rate_W.back(), sol.node_positions_m, sol.profiles_C.front());
-    write_profile("steady_state", steady.heat_rate_W, steady.x_m, steady.temperature_C);
-
-    const double peak = *std::max_element(steady.temperature_C.begin(), steady.temperature_C.end());
-    std::string at_end;
+// Case k's line (and its notes) under the header run_simulate_thermal prints.
+void print_case(const ThermalSweepOptions& o, std::size_t k, const Case& c, const RailOutputs& outputs,
+                const RailSolution<double>& sol, const SteadyState& steady, double ambient_at_end_C,
+                const std::vector<double>& max_error) {
+  const double peak = *std::max_element(steady.temperature_C.begin(), steady.temperature_C.end());
+  std::string at_end;
+  for (std::size_t s = 0; s < o.sensors_m.size(); ++s)
+    at_end += fmt::format("{}{:.2f}", s ? " " : "", sol.temperature_C(outputs.output_times_s.size() - 1, s));
+  std::cout << fmt::format("{:>4}  {:<8} {:>7.3f} {:>6.0f} {:>7} {:>6.3f} {:>7.3f}  {:>8.2f}  {}\n", k, c.guide,
+                           c.velocity_m_s, c.load_N,
+                           std::isnan(c.block_length_mm) ? std::string("-") : fmt::format("{:.1f}", c.block_length_mm),
+                           c.stroke_m, c.heat_rate_W,
+                           peak - ambient_at_end_C, at_end);
+  if (!std::isnan(o.stop_s))
+    std::cout << fmt::format("      the block stops at {:g} s: no heat from then on; the steady state is the running block's\n",
+                             o.stop_s);
+  else if (sol.heat_rate_W.back() != sol.heat_rate_W.front())
+    std::cout << fmt::format("      Q_f follows the rail: {:.3f} W at the end of the run, {:.3f} W at steady state\n",
+                             sol.heat_rate_W.back(), steady.heat_rate_W);
+  if (o.reference) {
+    std::string e;
     for (std::size_t s = 0; s < o.sensors_m.size(); ++s)
-      at_end += fmt::format("{}{:.2f}", s ? " " : "", sol.temperature_C(outputs.output_times_s.size() - 1, s));
-    progress.clear();
-    std::cout << fmt::format("{:>4}  {:<8} {:>7.3f} {:>6.0f} {:>7} {:>6.3f} {:>7.3f}  {:>8.2f}  {}\n", k, c.guide,
-                             c.velocity_m_s, c.load_N,
-                             std::isnan(c.block_length_mm) ? std::string("-") : fmt::format("{:.1f}", c.block_length_mm),
-                             c.stroke_m, c.heat_rate_W,
-                             peak - ambient.at(o.duration_s), at_end);
-    if (!std::isnan(o.stop_s))
-      std::cout << fmt::format("      the block stops at {:g} s: no heat from then on; the steady state is the running block's\n",
-                               o.stop_s);
-    else if (sol.heat_rate_W.back() != sol.heat_rate_W.front())
-      std::cout << fmt::format("      Q_f follows the rail: {:.3f} W at the end of the run, {:.3f} W at steady state\n",
-                               sol.heat_rate_W.back(), steady.heat_rate_W);
-    if (!rail.mechanisms.empty()) steady_changes.push_back({{"case", k}, {"last_change_K", steady.last_change_K}});
-    if (o.reference) {
-      std::string e;
-      for (std::size_t s = 0; s < o.sensors_m.size(); ++s)
-        e += fmt::format("{}x={} m: {:.4f} K", s ? ", " : "", o.sensors_m[s], max_error[s]);
-      std::cout << "      numerical error (max over time) vs converged reference: " << e << "\n";
-      errors.push_back({{"case", k}, {"max_abs_error_K", max_error}});
-    }
+      e += fmt::format("{}x={} m: {:.4f} K", s ? ", " : "", o.sensors_m[s], max_error[s]);
+    std::cout << "      numerical error (max over time) vs converged reference: " << e << "\n";
   }
+}
 
+// The sweep's inputs and numerics into its record (the cases' steady-state changes and numerical
+// errors: `steady_changes`, `errors`).
+void record_sweep(const ThermalSweepOptions& o, const RailModel& rail, const FrictionLaw& law, const AmbientTrace& ambient,
+                  double initial_C, const RailNumerics& numerics, const nlohmann::json& steady_changes,
+                  const nlohmann::json& errors, nlohmann::json& record) {
   record["guide"] = o.guide.record();
   law.record_into(record);
   record["heat_rate_W"] = std::isnan(o.heat_rate_W) ? nlohmann::json("from the friction law") : nlohmann::json(o.heat_rate_W);
@@ -409,9 +397,59 @@ void run_simulate_thermal(const ThermalSweepOptions& o, const std::vector<std::s
                                     {"time_step_s", r.time_step_s}};
     record["numerical_error"] = errors;
   }
+}
+
+void run_simulate_thermal(const ThermalSweepOptions& o, const std::vector<std::string>& argv) {
+  check_sweep_options(o);
+  const std::optional<LoadedModel> model = LoadedModel::read(o.model, "thermal");
+  const RailModel rail = rail_model(o, model ? &*model : nullptr);
+  const FrictionLaw law = o.friction.law(model ? &*model : nullptr);
+  validate(law.constants);
+  // simulate_rail_with_mechanisms takes a heat rate <= 0 as "from the law".
+  if (!rail.mechanisms.empty() && !std::isnan(o.heat_rate_W) && !(o.heat_rate_W > 0))
+    throw InvalidParameter("--heat-rate", o.heat_rate_W, "a value > 0 with a model's mechanisms");
+  const AmbientTrace ambient = make_ambient(o);
+  const double initial_C = std::isnan(o.initial_C) ? ambient.temperature_C.front() : o.initial_C;
+  const RailNumerics numerics{.source = rail.source,
+                              .scheme = parse_time_scheme(o.scheme),
+                              .half_rail_segments = o.segments,
+                              .time_step_s = o.time_step_s};
+  RailOutputs outputs{.duration_s = o.duration_s, .sensor_positions_m = o.sensors_m};
+  for (double t = 0; t < o.duration_s; t += o.output_every_s) outputs.output_times_s.push_back(t);
+  outputs.output_times_s.push_back(o.duration_s);
+  outputs.profile_times_s = {o.duration_s};
+  SweepTables tables = sweep_tables(o.reference);
+
+  nlohmann::json record = run_record(argv);
+  if (model) {
+    model->record_into(record);
+    describe_model(*model, rail, law, record);
+  }
+  std::cout << fmt::format("{:>4}  {:<8} {:>7} {:>6} {:>7} {:>6} {:>7}  {:>8}  {}\n", "case", "guide", "V_m/s", "P_N",
+                           "Lb_mm", "L1_m", "Q_W", "peak_dT", "T at end per sensor (C)");
+  const std::vector<Case> cases = enumerate_cases(o, initial_C, rail, law);
+  nlohmann::json errors = nlohmann::json::array(), steady_changes = nlohmann::json::array();
+  TerminalProgress progress;
+  progress.step(0, 2, "simulating " + std::to_string(cases.size()) + " cases");
+  const std::vector<RailSolution<double>> solutions = simulate_cases(cases, numerics, outputs, ambient, rail, law);
+  const std::vector<RailSolution<double>> references =
+      o.reference ? simulate_cases(cases, converged(numerics), outputs, ambient, rail, law) : std::vector<RailSolution<double>>{};
+  progress.step(1, 2, "steady states and outputs");
+  for (std::size_t k = 0; k < cases.size(); ++k) {
+    const SteadyState steady = steady_state(cases[k], numerics, ambient.at(o.duration_s), rail, law);
+    const RailSolution<double> ref = o.reference ? references[k] : RailSolution<double>{};
+    require_physical(k, cases[k], solutions[k], steady, ref);
+    const std::vector<double> max_error = write_case_rows(o, k, cases[k], outputs, solutions[k], steady, ref, tables);
+    progress.clear();
+    print_case(o, k, cases[k], outputs, solutions[k], steady, ambient.at(o.duration_s), max_error);
+    if (!rail.mechanisms.empty()) steady_changes.push_back({{"case", k}, {"last_change_K", steady.last_change_K}});
+    if (o.reference) errors.push_back({{"case", k}, {"max_abs_error_K", max_error}});
+  }
+
+  record_sweep(o, rail, law, ambient, initial_C, numerics, steady_changes, errors, record);
   OutputSet out;
-  out.add(o.output + "_time.csv", time_csv.str());
-  out.add(o.output + "_profile.csv", profile_csv.str());
+  out.add(o.output + "_time.csv", tables.time_csv.str());
+  out.add(o.output + "_profile.csv", tables.profile_csv.str());
   out.add(o.output + ".json", record.dump(2) + "\n");
   offer_machine_output(o.output + ".json", true);
   out.commit();

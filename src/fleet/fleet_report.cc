@@ -6,7 +6,7 @@
 #include <cmath>
 #include <set>
 
-#include "report/sections.hpp"
+#include "lmcal/report/page.hpp"
 
 namespace lmcal {
 

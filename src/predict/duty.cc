@@ -171,6 +171,116 @@ DutyCycle duty_of_runs(const ThermalDataSet& data, double ambient_C) {
   return d;
 }
 
+namespace {
+
+// The guide `node` names, from the user's catalog, the file's own (`catalog = …`) or the
+// built-in one; it must give what the rail's simulation needs.
+GuideSpec read_guide(const Manifest& m, const toml::node& node, const GuideCatalog* catalog) {
+  try {
+    GuideSpec guide = find_guide(manifest::string_of(m, toml::key("guide"), node), catalog);
+    // The rail the prediction simulates: the catalog must give its section, material and contact.
+    rail_geometry_of(guide, 1, 1, 0, 0);
+    rail_material_of(guide);
+    require(guide, &GuideSpec::contact_length_mm, "contact_length_mm");
+    return guide;
+  } catch (const InvalidParameter& e) {
+    m.fail(node.source(), e.what());
+  }
+}
+
+// ambient_trace = [[t_s, T_C], ...]: times increasing, temperatures those of a rig.
+AmbientTrace read_ambient_trace(const Manifest& m, const toml::node& node) {
+  const auto* a = node.as_array();
+  if (!a || a->empty()) m.fail(node.source(), "ambient_trace: expected [[t_s, T_C], ...]");
+  if (a->size() > io::kMaxAmbientTracePoints)
+    m.fail(node.source(), fmt::format("ambient_trace: {} points: at most {} (docs/formats.md#limits)", a->size(),
+                                      io::kMaxAmbientTracePoints));
+  AmbientTrace trace;
+  for (const auto& item : *a) {
+    const auto* pair = item.as_array();
+    if (!pair || pair->size() != 2) m.fail(item.source(), "ambient_trace: expected [t_s, T_C] pairs");
+    const toml::key key("ambient_trace");
+    const double t = manifest::number_of(m, key, (*pair)[0]), T = manifest::number_of(m, key, (*pair)[1]);
+    if (!trace.time_s.empty() && !(t > trace.time_s.back()))
+      m.fail(item.source(), fmt::format("ambient_trace: time {} s is not after {} s", t, trace.time_s.back()));
+    if (!(T >= -50 && T <= 200)) m.fail(item.source(), fmt::format("ambient_trace: {} °C: expected a temperature in [-50, 200] °C", T));
+    trace.time_s.push_back(t);
+    trace.temperature_C.push_back(T);
+  }
+  return trace;
+}
+
+// One [[segment]] table, what it leaves out taken from the top's defaults, then the guide's.
+DutySegment read_segment(const Manifest& m, const toml::table& t, const SegmentDefaults& defaults, const DutyCycle& d) {
+  DutySegment s;
+  s.line = static_cast<long>(t.source().begin.line);
+  s.column = static_cast<long>(t.source().begin.column);
+  s.duration_s = NAN;
+  SegmentDefaults own = defaults;
+  GivenKeys given_here;
+  for (const auto& [key, node] : t) {
+    std::optional<double> v;
+    if ((v = read_number(m, key, node, kDuration, given_here))) s.duration_s = *v;
+    else if ((v = read_number(m, key, node, kVelocity, given_here))) s.velocity_m_s = *v;
+    else if (key.str() == "name") s.name = manifest::string_of(m, key, node);
+    else if (!read_default(m, key, node, own, given_here))
+      m.fail(key.source(), fmt::format("unknown key '{}' in [[segment]]; expected {}", key.str(), kSegmentKeys));
+  }
+  if (std::isnan(s.duration_s)) m.fail(t.source(), "[[segment]]: expected duration_s (any time unit: duration_min, duration_h)");
+  const auto needed = [&](const std::optional<double>& v, std::optional<double> GuideSpec::*field, const char* what) {
+    if (v) return *v;
+    if (field && d.guide.*field) return *(d.guide.*field);
+    m.fail(t.source(), fmt::format("[[segment]]: expected {} (here or at the top)", what));
+  };
+  s.load_N = needed(own.load_N, nullptr, "load_N");
+  s.preload_um = needed(own.preload_um, &GuideSpec::preload_um, "preload_um");
+  s.block_length_mm = needed(own.block_length_mm, &GuideSpec::block_length_mm, "block_length_mm");
+  s.viscosity40_mm2_s = own.viscosity40_mm2_s.value_or(99.0);
+  if (s.velocity_m_s > 0) {
+    s.stroke_m = needed(own.stroke_m, nullptr, "stroke_m");
+    const double contact_m = *d.guide.contact_length_mm * 1e-3;
+    if (s.stroke_m + contact_m > d.rail_length_m)
+      m.fail(t.source(), fmt::format("[[segment]]: stroke {} m plus the block's contact length {} m is longer than the rail "
+                                     "({} m)",
+                                     s.stroke_m, contact_m, d.rail_length_m));
+  } else {
+    s.stroke_m = own.stroke_m.value_or(0.5 * d.rail_length_m);
+  }
+  return s;
+}
+
+// The [[segment]] tables read into `d.segments`, `repeat` times over (unnamed ones numbered on),
+// within the limits of a duty's segments, duration and outputs.
+void read_segments(const Manifest& m, const toml::table& root, const SegmentDefaults& defaults, long repeat, DutyCycle& d) {
+  const toml::node* list_node = root.get("segment");
+  const auto* list = list_node ? list_node->as_array() : nullptr;
+  if (!list || list->empty()) m.fail(list_node ? list_node->source() : root.source(), "expected [[segment]] tables");
+  // Sizes before the segments are read or laid out: each repeat is simulated for every draw.
+  if (list->size() * static_cast<std::size_t>(repeat) > io::kMaxDutySegments)
+    m.fail(root.get("repeat") ? root.get("repeat")->source() : list_node->source(),
+           fmt::format("{} segments × repeat {} = {} segments: at most {} (docs/formats.md#limits)", list->size(), repeat,
+                       list->size() * static_cast<std::size_t>(repeat), io::kMaxDutySegments));
+  std::vector<DutySegment> one_cycle;
+  for (const auto& item : *list) one_cycle.push_back(read_segment(m, manifest::table_of(m, item, "[[segment]]"), defaults, d));
+  // The duration and the outputs from one cycle, before the repeats are laid out.
+  const double cycle = std::accumulate(one_cycle.begin(), one_cycle.end(), 0.0,
+                                       [](double t, const DutySegment& s) { return t + s.duration_s; });
+  const double duration = cycle * static_cast<double>(repeat);
+  if (duration > 1e7) m.fail(root.source(), fmt::format("the duty lasts {} s: at most 1e7 s (116 days)", duration));
+  if (duration / d.output_every_s > static_cast<double>(io::kMaxDutyOutputs))
+    m.fail(root.get("output_every_s") ? root.get("output_every_s")->source() : root.source(),
+           fmt::format("output_every_s = {} gives {} outputs: at most {} (docs/formats.md#limits)", d.output_every_s,
+                       duration / d.output_every_s, io::kMaxDutyOutputs));
+  d.segments.reserve(one_cycle.size() * static_cast<std::size_t>(repeat));
+  for (long r = 0; r < repeat; ++r)
+    for (const DutySegment& s : one_cycle) {
+      d.segments.push_back(s);
+      if (d.segments.back().name.empty()) d.segments.back().name = fmt::format("segment {}", d.segments.size());
+    }
+}
+
+}  // namespace
+
 DutyCycle load_duty_cycle(const std::filesystem::path& path, const GuideCatalog* user_catalog, const InputScope& scope) {
   const Manifest m{path.string(), path.parent_path(), scope, "duty-cycle file"};
   const toml::table root = m.parse();
@@ -205,36 +315,12 @@ DutyCycle load_duty_cycle(const std::filesystem::path& path, const GuideCatalog*
       m.fail(key.source(), fmt::format("unknown key '{}'; expected {}", k, kTopKeys));
   }
   if (!guide_node) m.fail(root.source(), "expected guide = \"...\" (a model of the catalog, e.g. \"SRN 35C\")");
-  try {
-    d.guide = find_guide(manifest::string_of(m, toml::key("guide"), *guide_node),
-                         user_catalog ? user_catalog : own_catalog ? &*own_catalog : nullptr);
-    // The rail the prediction simulates: the catalog must give its section, material and contact.
-    rail_geometry_of(d.guide, 1, 1, 0, 0);
-    rail_material_of(d.guide);
-    require(d.guide, &GuideSpec::contact_length_mm, "contact_length_mm");
-  } catch (const InvalidParameter& e) {
-    m.fail(guide_node->source(), e.what());
-  }
+  d.guide = read_guide(m, *guide_node, user_catalog ? user_catalog : own_catalog ? &*own_catalog : nullptr);
   if (!rail_length) m.fail(root.source(), "expected rail_length_m (any length unit: rail_length_mm, …)");
   d.rail_length_m = *rail_length;
   if (trace_node) {
     if (ambient) m.fail(trace_node->source(), "ambient_trace and ambient_C both given: one or the other");
-    const auto* a = trace_node->as_array();
-    if (!a || a->empty()) m.fail(trace_node->source(), "ambient_trace: expected [[t_s, T_C], ...]");
-    if (a->size() > io::kMaxAmbientTracePoints)
-      m.fail(trace_node->source(), fmt::format("ambient_trace: {} points: at most {} (docs/formats.md#limits)", a->size(),
-                                               io::kMaxAmbientTracePoints));
-    for (const auto& item : *a) {
-      const auto* pair = item.as_array();
-      if (!pair || pair->size() != 2) m.fail(item.source(), "ambient_trace: expected [t_s, T_C] pairs");
-      const toml::key key("ambient_trace");
-      const double t = manifest::number_of(m, key, (*pair)[0]), T = manifest::number_of(m, key, (*pair)[1]);
-      if (!d.ambient.time_s.empty() && !(t > d.ambient.time_s.back()))
-        m.fail(item.source(), fmt::format("ambient_trace: time {} s is not after {} s", t, d.ambient.time_s.back()));
-      if (!(T >= -50 && T <= 200)) m.fail(item.source(), fmt::format("ambient_trace: {} °C: expected a temperature in [-50, 200] °C", T));
-      d.ambient.time_s.push_back(t);
-      d.ambient.temperature_C.push_back(T);
-    }
+    d.ambient = read_ambient_trace(m, *trace_node);
   } else {
     if (!ambient) m.fail(root.source(), "expected ambient_C (or ambient_trace = [[t_s, T_C], ...])");
     d.ambient = AmbientTrace::constant(*ambient);
@@ -246,69 +332,7 @@ DutyCycle load_duty_cycle(const std::filesystem::path& path, const GuideCatalog*
     for (double x : d.positions_m) check_on_rail(m, *positions_node, "positions_m", x, d.rail_length_m);
   if (const toml::node* n = root.get("scale")) d.scale = read_scale(m, manifest::table_of(m, *n, "[scale]"), d.rail_length_m);
   else d.scale = read_scale(m, toml::table{}, d.rail_length_m);
-
-  const toml::node* list_node = root.get("segment");
-  const auto* list = list_node ? list_node->as_array() : nullptr;
-  if (!list || list->empty()) m.fail(list_node ? list_node->source() : root.source(), "expected [[segment]] tables");
-  // Sizes before the segments are read or laid out: each repeat is simulated for every draw.
-  if (list->size() * static_cast<std::size_t>(repeat) > io::kMaxDutySegments)
-    m.fail(root.get("repeat") ? root.get("repeat")->source() : list_node->source(),
-           fmt::format("{} segments × repeat {} = {} segments: at most {} (docs/formats.md#limits)", list->size(), repeat,
-                       list->size() * static_cast<std::size_t>(repeat), io::kMaxDutySegments));
-  std::vector<DutySegment> one_cycle;
-  for (const auto& item : *list) {
-    const toml::table& t = manifest::table_of(m, item, "[[segment]]");
-    DutySegment s;
-    s.line = static_cast<long>(t.source().begin.line);
-    s.column = static_cast<long>(t.source().begin.column);
-    s.duration_s = NAN;
-    SegmentDefaults own = defaults;
-    GivenKeys given_here;
-    for (const auto& [key, node] : t) {
-      std::optional<double> v;
-      if ((v = read_number(m, key, node, kDuration, given_here))) s.duration_s = *v;
-      else if ((v = read_number(m, key, node, kVelocity, given_here))) s.velocity_m_s = *v;
-      else if (key.str() == "name") s.name = manifest::string_of(m, key, node);
-      else if (!read_default(m, key, node, own, given_here))
-        m.fail(key.source(), fmt::format("unknown key '{}' in [[segment]]; expected {}", key.str(), kSegmentKeys));
-    }
-    if (std::isnan(s.duration_s)) m.fail(t.source(), "[[segment]]: expected duration_s (any time unit: duration_min, duration_h)");
-    const auto needed = [&](const std::optional<double>& v, std::optional<double> GuideSpec::*field, const char* what) {
-      if (v) return *v;
-      if (field && d.guide.*field) return *(d.guide.*field);
-      m.fail(t.source(), fmt::format("[[segment]]: expected {} (here or at the top)", what));
-    };
-    s.load_N = needed(own.load_N, nullptr, "load_N");
-    s.preload_um = needed(own.preload_um, &GuideSpec::preload_um, "preload_um");
-    s.block_length_mm = needed(own.block_length_mm, &GuideSpec::block_length_mm, "block_length_mm");
-    s.viscosity40_mm2_s = own.viscosity40_mm2_s.value_or(99.0);
-    if (s.velocity_m_s > 0) {
-      s.stroke_m = needed(own.stroke_m, nullptr, "stroke_m");
-      const double contact_m = *d.guide.contact_length_mm * 1e-3;
-      if (s.stroke_m + contact_m > d.rail_length_m)
-        m.fail(t.source(), fmt::format("[[segment]]: stroke {} m plus the block's contact length {} m is longer than the rail "
-                                       "({} m)",
-                                       s.stroke_m, contact_m, d.rail_length_m));
-    } else {
-      s.stroke_m = own.stroke_m.value_or(0.5 * d.rail_length_m);
-    }
-    one_cycle.push_back(s);
-  }
-  // The duration and the outputs from one cycle, before the repeats are laid out.
-  const double cycle = std::accumulate(one_cycle.begin(), one_cycle.end(), 0.0,
-                                       [](double t, const DutySegment& s) { return t + s.duration_s; });
-  const double duration = cycle * static_cast<double>(repeat);
-  if (duration > 1e7) m.fail(root.source(), fmt::format("the duty lasts {} s: at most 1e7 s (116 days)", duration));
-  if (duration / d.output_every_s > static_cast<double>(io::kMaxDutyOutputs))
-    m.fail(root.get("output_every_s") ? root.get("output_every_s")->source() : root.source(),
-           fmt::format("output_every_s = {} gives {} outputs: at most {} (docs/formats.md#limits)", d.output_every_s,
-                       duration / d.output_every_s, io::kMaxDutyOutputs));
-  d.segments.reserve(one_cycle.size() * static_cast<std::size_t>(repeat));
-  for (long r = 0; r < repeat; ++r)
-    for (const DutySegment& s : one_cycle) {
-      d.segments.push_back(s);
-      if (d.segments.back().name.empty()) d.segments.back().name = fmt::format("segment {}", d.segments.size());
-    }
+  read_segments(m, root, defaults, repeat, d);
   const double laid_out = d.duration_s();
   if (d.ambient.time_s.size() > 1 && (d.ambient.time_s.front() > 0 || d.ambient.time_s.back() < laid_out))
     m.fail(trace_node->source(), fmt::format("ambient_trace covers [{}, {}] s; the duty runs [0, {}] s", d.ambient.time_s.front(),

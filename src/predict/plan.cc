@@ -314,6 +314,63 @@ std::vector<FrictionCandidate> friction_candidates(const FrictionLog& log, const
   return out;
 }
 
+namespace {
+
+// The positions in `p` of the parameters called `names` (option `option`); InvalidParameter
+// for a name that is not `what` of the fit.
+std::vector<Eigen::Index> indices_of(const FrictionFitResult& fit, const Parameters& p, const std::vector<std::string>& names,
+                                     const char* option, const char* what) {
+  std::vector<Eigen::Index> out;
+  for (const auto& name : names) {
+    const auto at = std::find_if(p.index.begin(), p.index.end(), [&](std::size_t j) { return fit.fit.parameters[j].name == name; });
+    if (at == p.index.end()) throw InvalidParameter(option, fmt::format("'{}' is not {} of the fit", name, what));
+    out.push_back(at - p.index.begin());
+  }
+  return out;
+}
+
+// The greedy design: `count` times, the candidate (gradient `grads[c]`, each logged with weight
+// `a` = samples / σ²) whose condition gains most — the pair's separation (Ds), the `named`
+// parameters' variances relative to `before` (A) or the log determinant (D) — taken into the
+// plan, `cov` and `info_after`.
+void pick_conditions(const std::vector<FrictionCandidate>& candidates, const std::vector<Eigen::VectorXd>& grads, double a,
+                     const std::vector<Eigen::Index>& named, const std::vector<Eigen::Index>& pair,
+                     const Eigen::VectorXd& before, std::size_t count, Eigen::MatrixXd& cov, Eigen::MatrixXd& info_after,
+                     FrictionPlan& plan) {
+  std::vector<bool> taken(candidates.size(), false);
+  for (std::size_t k = 0; k < count; ++k) {
+    double best = -1;
+    std::size_t best_c = 0;
+    for (std::size_t c = 0; c < candidates.size(); ++c) {
+      if (taken[c]) continue;  // N distinct conditions
+      const Eigen::VectorXd v = cov * grads[c];
+      const double q = grads[c].dot(v);
+      double gain = 0;
+      if (!pair.empty()) {  // log det of the pair's covariance: −log(1 − c v_Pᵀ Σ_PP⁻¹ v_P)
+        Eigen::Matrix2d spp;
+        spp << cov(pair[0], pair[0]), cov(pair[0], pair[1]), cov(pair[1], pair[0]), cov(pair[1], pair[1]);
+        const Eigen::Vector2d vp(v(pair[0]), v(pair[1]));
+        gain = -std::log1p(-(a / (1 + a * q)) * vp.dot(spp.ldlt().solve(vp)));
+      } else if (named.empty()) {
+        gain = std::log1p(a * q);
+      } else {
+        for (Eigen::Index j : named) gain += a * v(j) * v(j) / (1 + a * q) / before(j);
+      }
+      if (gain > best) {
+        best = gain;
+        best_c = c;
+      }
+    }
+    const Eigen::VectorXd v = cov * grads[best_c];
+    cov -= (a / (1 + a * grads[best_c].dot(v))) * v * v.transpose();
+    info_after += a * grads[best_c] * grads[best_c].transpose();
+    taken[best_c] = true;
+    plan.picks.push_back({candidates[best_c], best});
+  }
+}
+
+}  // namespace
+
 FrictionPlan plan_friction(const FrictionLog& log, const FrictionFitResult& fit, const std::vector<FrictionCandidate>& candidates,
                            const PlanOptions& o) {
   if (candidates.empty()) throw InvalidParameter("candidates", "no candidate conditions to choose from");
@@ -321,18 +378,8 @@ FrictionPlan plan_friction(const FrictionLog& log, const FrictionFitResult& fit,
   const Parameters p = parameters_of(fit);
   const auto m = p.value.size();
   if (m == 0) throw InvalidParameter("parameters", "the fit has no free parameter of the law to plan for");
-  std::vector<Eigen::Index> named;
-  for (const auto& name : o.parameters) {
-    const auto at = std::find_if(p.index.begin(), p.index.end(), [&](std::size_t j) { return fit.fit.parameters[j].name == name; });
-    if (at == p.index.end()) throw InvalidParameter("parameters", fmt::format("'{}' is not a free parameter of the fit", name));
-    named.push_back(at - p.index.begin());
-  }
-  std::vector<Eigen::Index> pair;
-  for (const auto& name : o.separate) {
-    const auto at = std::find_if(p.index.begin(), p.index.end(), [&](std::size_t j) { return fit.fit.parameters[j].name == name; });
-    if (at == p.index.end()) throw InvalidParameter("separate", fmt::format("'{}' is not an effect of the fit", name));
-    pair.push_back(at - p.index.begin());
-  }
+  const std::vector<Eigen::Index> named = indices_of(fit, p, o.parameters, "parameters", "a free parameter");
+  const std::vector<Eigen::Index> pair = indices_of(fit, p, o.separate, "separate", "an effect");
   if (!pair.empty() && pair.size() != 2) throw InvalidParameter("separate", "two effects to tell apart, e.g. seal_drag,seal_drag_block");
   FrictionPlan plan;
   plan.criterion = !pair.empty()   ? fmt::format("Ds-optimal: separate {} from {}", o.separate[0], o.separate[1])
@@ -372,37 +419,8 @@ FrictionPlan plan_friction(const FrictionLog& log, const FrictionFitResult& fit,
     return pair.empty() ? NAN : cov(pair[0], pair[1]) / std::sqrt(cov(pair[0], pair[0]) * cov(pair[1], pair[1]));
   };
   plan.correlation_before = pair_correlation();
-  std::vector<bool> taken(candidates.size(), false);
   Eigen::MatrixXd info_after = info;
-  for (std::size_t k = 0; k < std::min(o.conditions, candidates.size()); ++k) {
-    double best = -1;
-    std::size_t best_c = 0;
-    for (std::size_t c = 0; c < candidates.size(); ++c) {
-      if (taken[c]) continue;  // N distinct conditions
-      const Eigen::VectorXd v = cov * grads[c];
-      const double q = grads[c].dot(v);
-      double gain = 0;
-      if (!pair.empty()) {  // log det of the pair's covariance: −log(1 − c v_Pᵀ Σ_PP⁻¹ v_P)
-        Eigen::Matrix2d spp;
-        spp << cov(pair[0], pair[0]), cov(pair[0], pair[1]), cov(pair[1], pair[0]), cov(pair[1], pair[1]);
-        const Eigen::Vector2d vp(v(pair[0]), v(pair[1]));
-        gain = -std::log1p(-(a / (1 + a * q)) * vp.dot(spp.ldlt().solve(vp)));
-      } else if (named.empty()) {
-        gain = std::log1p(a * q);
-      } else {
-        for (Eigen::Index j : named) gain += a * v(j) * v(j) / (1 + a * q) / before(j);
-      }
-      if (gain > best) {
-        best = gain;
-        best_c = c;
-      }
-    }
-    const Eigen::VectorXd v = cov * grads[best_c];
-    cov -= (a / (1 + a * grads[best_c].dot(v))) * v * v.transpose();
-    info_after += a * grads[best_c] * grads[best_c].transpose();
-    taken[best_c] = true;
-    plan.picks.push_back({candidates[best_c], best});
-  }
+  pick_conditions(candidates, grads, a, named, pair, before, std::min(o.conditions, candidates.size()), cov, info_after, plan);
 
   plan.parameters = expected_standard_errors(fit, p, info, info_after, determined, plan.samples_per_condition, plan.notes);
   proposed_picks(plan);

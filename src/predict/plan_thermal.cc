@@ -196,6 +196,63 @@ std::vector<ThermalCandidate> thermal_candidates(const ThermalDataSet& data, con
   return out;
 }
 
+namespace {
+
+// The greedy design: `count` times, the candidate run whose information (`candidate_info`)
+// raises `criterion` of the covariance most, added to `info` and the plan; the covariance after
+// (`cov`: the one before, `info`'s).
+template <class Criterion>
+Eigen::MatrixXd pick_runs(const std::vector<ThermalCandidate>& candidates, const std::vector<Eigen::MatrixXd>& candidate_info,
+                          std::size_t count, double ridge, const Criterion& criterion, Eigen::MatrixXd& info, Eigen::MatrixXd cov,
+                          ThermalPlan& plan) {
+  std::vector<bool> taken(candidates.size(), false);
+  for (std::size_t r = 0; r < count; ++r) {
+    const double now = criterion(cov);
+    double best = -std::numeric_limits<double>::infinity();
+    std::size_t best_c = 0;
+    for (std::size_t c = 0; c < candidates.size(); ++c) {
+      if (taken[c]) continue;
+      const double gain = criterion(detail::ridge_inverse(info + candidate_info[c], ridge)) - now;
+      if (gain > best) {
+        best = gain;
+        best_c = c;
+      }
+    }
+    taken[best_c] = true;
+    info += candidate_info[best_c];
+    cov = detail::ridge_inverse(info, ridge);
+    plan.picks.push_back({candidates[best_c], best});
+  }
+  return cov;
+}
+
+// Each parameter's SE before (the model's quoted one, else from the runs' information, variances
+// `before`; `before_own` those of the model's own parameters alone) and after the planned runs
+// (`cov`, with their information `info`); a note for one the rail's temperature does not show.
+void expected_parameters(const ModelFile& m, const ThermalParameters& p, const Eigen::MatrixXd& info, const Eigen::VectorXd& before,
+                         const Eigen::VectorXd& before_own, const Eigen::MatrixXd& cov, ThermalPlan& plan) {
+  const auto k = static_cast<Eigen::Index>(p.names.size());
+  for (Eigen::Index j = 0; j < k; ++j) {
+    const auto js = static_cast<std::size_t>(j);
+    if (!(info(j, j) > 1e-12 * info.diagonal().maxCoeff())) {  // nothing in the rail's temperature depends on it
+      plan.notes.push_back(fmt::format("{}: the rail's temperature does not depend on it (a sensor's property): not planned for",
+                                       p.names[js]));
+      continue;
+    }
+    const ModelParameter* quoted = m.find(p.names[js]);
+    PlannedParameter r{p.names[js], quoted ? quoted->unit : "", p.values[js]};
+    r.determined_before = quoted && !quoted->held && std::isfinite(quoted->se) && quoted->se > 0;
+    const double s = p.scales[js];
+    r.se_before = r.determined_before ? quoted->se : s * std::sqrt(before(j));
+    // Scaled as the information's variance changes; it may grow where a separated mechanism
+    // now shares what the model's parameter explained alone.
+    r.se_after = r.determined_before ? quoted->se * std::sqrt(cov(j, j) / before_own(j)) : s * std::sqrt(cov(j, j));
+    plan.parameters.push_back(r);
+  }
+}
+
+}  // namespace
+
 ThermalPlan plan_thermal(const ModelFile& m, const ThermalDataSet& data, const std::vector<ThermalCandidate>& candidates,
                          const ThermalPlanOptions& o) {
   if (!m.has_thermal || !m.has_friction)
@@ -257,44 +314,11 @@ ThermalPlan plan_thermal(const ModelFile& m, const ThermalDataSet& data, const s
     }
     return -std::log(cov.determinant());
   };
-  Eigen::MatrixXd cov = before_cov;
-  std::vector<bool> taken(candidates.size(), false);
-  for (std::size_t r = 0; r < std::min(o.runs, candidates.size()); ++r) {
-    const double now = criterion(cov);
-    double best = -std::numeric_limits<double>::infinity();
-    std::size_t best_c = 0;
-    for (std::size_t c = 0; c < candidates.size(); ++c) {
-      if (taken[c]) continue;
-      const double gain = criterion(detail::ridge_inverse(info + candidate_info[c], ridge)) - now;
-      if (gain > best) {
-        best = gain;
-        best_c = c;
-      }
-    }
-    taken[best_c] = true;
-    info += candidate_info[best_c];
-    cov = detail::ridge_inverse(info, ridge);
-    plan.picks.push_back({candidates[best_c], best});
-  }
+  const Eigen::MatrixXd cov = pick_runs(candidates, candidate_info, std::min(o.runs, candidates.size()), ridge, criterion, info,
+                                        before_cov, plan);
   plan.correlation_before = p.separated.empty() ? NAN : correlation(before_cov, p.separated[0], p.separated[1]);
   plan.correlation_after = p.separated.empty() ? NAN : correlation(cov, p.separated[0], p.separated[1]);
-  for (Eigen::Index j = 0; j < k; ++j) {
-    const auto js = static_cast<std::size_t>(j);
-    if (!(info(j, j) > 1e-12 * info.diagonal().maxCoeff())) {  // nothing in the rail's temperature depends on it
-      plan.notes.push_back(fmt::format("{}: the rail's temperature does not depend on it (a sensor's property): not planned for",
-                                       p.names[js]));
-      continue;
-    }
-    const ModelParameter* quoted = m.find(p.names[js]);
-    PlannedParameter r{p.names[js], quoted ? quoted->unit : "", p.values[js]};
-    r.determined_before = quoted && !quoted->held && std::isfinite(quoted->se) && quoted->se > 0;
-    const double s = p.scales[js];
-    r.se_before = r.determined_before ? quoted->se : s * std::sqrt(before(j));
-    // Scaled as the information's variance changes; it may grow where a separated mechanism
-    // now shares what the model's parameter explained alone.
-    r.se_after = r.determined_before ? quoted->se * std::sqrt(cov(j, j) / before_own(j)) : s * std::sqrt(cov(j, j));
-    plan.parameters.push_back(r);
-  }
+  expected_parameters(m, p, info, before, before_own, cov, plan);
   if (!p.separated.empty())
     plan.notes.push_back(fmt::format("{} and {} (at its neutral value where the model lacks it): correlation of their estimates "
                                      "{:.3f} with the runs logged, {:.3f} with the planned ones too",

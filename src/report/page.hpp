@@ -1,5 +1,5 @@
-// Building blocks of the HTML report (private to the report layer): a page that collects
-// its plots' IDs, tables, numbers and the colours series share across plots.
+// Building blocks of the HTML report (private to the report layer) beside the public page
+// (lmcal/report/page.hpp): numbers, intervals and the colours series share across plots.
 #pragma once
 
 #include <fmt/format.h>
@@ -14,79 +14,14 @@
 
 #include "lmcal/fit/fit_result.hpp"
 #include "lmcal/fit/statistics.hpp"
+#include "lmcal/report/page.hpp"
 #include "lmcal/report/svg_plot.hpp"
 
 namespace lmcal::report {
 
-// A table cell: text, escaped when the page is built, and how lmcal draws it (a number's
-// alignment, a shade it computed). There is no way for text to become HTML.
-struct Cell {
-  std::string text;
-  bool number = false;
-  std::string background;  // a CSS colour lmcal made ("rgba(0,114,178,0.40)"), or empty
-  Cell(std::string t) : text(std::move(t)) {}
-  Cell(const char* t) : text(t) {}
-  Cell(std::string t, bool is_number, std::string shade) : text(std::move(t)), number(is_number), background(std::move(shade)) {}
-};
-
-class Page {
- public:
-  Page& operator<<(std::string_view html) {
-    html_ += html;
-    return *this;
-  }
-  // A row of figures (they wrap on a narrow window).
-  void figures(const std::vector<Plot>& plots) {
-    html_ += "<div class=\"figures\">";
-    for (const auto& p : plots) {
-      ids_.push_back(p.id);
-      html_ += "<figure>" + render_svg(p) + "</figure>";
-    }
-    html_ += "</div>\n";
-  }
-  void heading(int level, std::string_view text, std::string_view id = {}) {
-    html_ += fmt::format("<h{0}{1}>{2}</h{0}>\n", level, id.empty() ? "" : fmt::format(" id=\"{}\"", id),
-                         escape_xml(text));
-  }
-  void paragraph(std::string_view text, std::string_view css_class = {}) {
-    html_ += fmt::format("<p{}>{}</p>\n", css_class.empty() ? "" : fmt::format(" class=\"{}\"", css_class),
-                         escape_xml(text));
-  }
-  // A table of text cells (escaped), or of Cells (escaped, with lmcal's shading).
-  template <typename C>
-  void table(const std::vector<std::string>& header, const std::vector<std::vector<C>>& rows) {
-    html_ += "<table><thead><tr>";
-    for (const auto& h : header) html_ += "<th>" + escape_xml(h) + "</th>";
-    html_ += "</tr></thead><tbody>\n";
-    for (const auto& row : rows) {
-      html_ += "<tr>";
-      for (const auto& cell : row) html_ += td(Cell(cell));
-      html_ += "</tr>\n";
-    }
-    html_ += "</tbody></table>\n";
-  }
-  const std::string& html() const { return html_; }
-  const std::vector<std::string>& plot_ids() const { return ids_; }
-
- private:
-  static std::string td(const Cell& cell) {
-    return fmt::format("<td{}{}>{}</td>", cell.number ? " class=\"num\"" : "",
-                       cell.background.empty() ? "" : fmt::format(" style=\"background:{}\"", escape_xml(cell.background)),
-                       escape_xml(cell.text));
-  }
-
-  std::string html_;
-  std::vector<std::string> ids_;
-};
-
 // "1 run", "3 runs".
 inline std::string plural(std::size_t n, std::string_view noun) {
   return fmt::format("{} {}{}", n, noun, n == 1 ? "" : "s");
-}
-
-// A number to 4 significant digits, "–" when it is not finite.
-inline std::string num(double v, int digits = 4) {
-  return std::isfinite(v) ? fmt::format("{:.{}g}", v, digits) : "–";
 }
 
 // A percentage with `decimals` decimals ("+0.12 %" with `sign`), "–" when it is not finite (a fit
@@ -100,9 +35,6 @@ inline std::string percent(double v, int decimals, bool sign = false) {
 inline std::string p_value(double p) { return std::isfinite(p) ? p_value_text(p) : "–"; }
 // "p = 0.032", or "p < 1e-16".
 using lmcal::p_is;
-
-// "[low, high]".
-inline std::string bracket(double low, double high) { return fmt::format("[{}, {}]", num(low), num(high)); }
 
 // The bounds of the 95 % interval a fit says to quote (profile or linear); NaN where none.
 inline std::pair<double, double> quoted_bounds(const ParameterEstimate& p) {
@@ -146,16 +78,6 @@ inline const std::string& colour(std::size_t i) {
                                                    "#E69F00", "#56B4E9", "#000000", "#F0E442"};
   return palette[i % palette.size()];
 }
-
-// A plot ID from free text: letters, digits and '-' only.
-inline std::string plot_id(std::string_view text) {
-  std::string id;
-  for (char ch : text) id += std::isalnum(static_cast<unsigned char>(ch)) ? static_cast<char>(std::tolower(ch)) : '-';
-  return id;
-}
-
-// Every n-th index so that at most `most` of `count` remain.
-inline std::size_t stride(std::size_t count, std::size_t most) { return std::max<std::size_t>(1, (count + most - 1) / most); }
 
 // The most points of one cloud a plot draws; a thinned cloud says how many it shows (shown_of).
 inline constexpr std::size_t kMostPoints = 600;

@@ -11,11 +11,6 @@
 
 namespace lmcal::report {
 
-// A whole page: the report's style, `body`, and its one script: the checks the browser test
-// reads (data-plots, data-rendered, …) and the plots' hover tooltips (values at the nearest
-// point or line vertex). Opens offline; without script the points' own <title>s still show.
-std::string html_document(std::string_view title, const Page& body);
-
 // The first screen: the calibrated model, every parameter with its interval and where it comes from.
 void calibrated_section(Page& page, const Calibration& c);
 // How sure the calibrated model is: the standard errors of every covariance method, the
