@@ -36,9 +36,6 @@ KNOWN_FILES = [
     ("src/io/thermal_run.cc", "the thermal-run loader and its manifest"),
 ]
 KNOWN_FUNCTIONS = [
-    ("src/rig/thermal_rig.cc", "generate_thermal_dataset", "every run's schedule, simulation and sensors in one"),
-    ("src/rig/virtual_rig.cc", "generate_friction_log", "the log's conditions, law and noise in one"),
-    ("src/diagnose/thermal_diagnosis.cc", "diagnose_thermal", "tests, mechanisms and verdict in one"),
     ("src/models/rail_thermal.cc", "simulate_on", "the time loop with its schemes in one"),
     ("src/diagnose/empirical_thermal.cc", "learn_thermal_term", "candidates, regression and refit in one"),
 ]

@@ -11,6 +11,8 @@
 #include "support/temp_folder.hpp"
 #include "lmcal/io/catalog.hpp"
 #include "lmcal/rig/virtual_rig.hpp"
+#include "lmcal/fit/model_file.hpp"
+#include "lmcal/models/thermal_mechanisms.hpp"
 
 namespace lmcal {
 namespace {
@@ -569,6 +571,65 @@ TEST(ThermalFit, EndProfilesAgreeWithTheFittedReadings) {
         const double profile = j + 1 < x.size() ? T[j] + w * (T[j + 1] - T[j]) : T[j];
         EXPECT_NEAR(profile, last - offset, 1e-7) << (fit_h ? "with h, " : "alpha alone, ") << result.runs[r].id << " " << s;
       }
+    }
+  }
+}
+
+
+// The library of thermal mechanisms end to end, as a newly registered one must go (header +
+// registration line, thermal_mechanism.hpp): the rig makes it (`--effect`, recorded as on in
+// the truth, changing the readings), `fit thermal --extension` fits it (its parameters in
+// the joint fit, finite), and the model file writes and reads it back bit for bit. (The
+// diagnosis's cases hide each one: thermal_diagnosis_test.cpp.) A source switch the rig does
+// not make (the averaged source is its truth, the paper's rectangle an approximation) is
+// fitted on the plain data.
+class ThermalMechanisms : public test::TempFolderTest {};
+
+TEST_F(ThermalMechanisms, EveryRegisteredMechanismIsMadeByTheRigFittedAndKeptInTheModelFile) {
+  ThermalRigConfig rig = clean_rig(2 * 3600.0);
+  rig.velocity_m_s = {0.066, 0.11};
+  rig.record_every_s = 60;
+  const ThermalDataSet plain = generate_thermal_dataset(rig, {}, "plain").set;
+  const std::vector<ThermalExtensionInfo> library = thermal_extension_library();
+  ASSERT_EQ(library.size(), kThermalMechanismCount);
+  for (std::size_t slot = 0; slot < kThermalMechanismCount; ++slot) {
+    const ThermalMechanismInfo& info = ThermalMechanismLibrary::infos[slot];
+    SCOPED_TRACE(info.name);
+    EXPECT_EQ(library[slot].name, info.name);
+    ThermalDataSet data = plain;
+    if (info.rig) {
+      // A typical size of its parameter (a switch: on).
+      const double value = library[slot].parameter_scale.empty() ? 1.0 : library[slot].parameter_scale.front();
+      RigEffects effects;
+      set_rig_effect(effects, info.rig->name, value);
+      EXPECT_EQ(rig_effect(effects, info.rig->name), value);
+      const ThermalRigOutput made = generate_thermal_dataset(rig, effects, "with");
+      EXPECT_TRUE(nlohmann::json::parse(made.truth_json)["effects"][info.rig->name]["active"].get<bool>());
+      bool readings_differ = false;
+      for (std::size_t r = 0; r < plain.runs.size(); ++r)
+        for (std::size_t s = 0; s < plain.runs[r].trace.rail.size(); ++s)
+          readings_differ |= made.set.runs[r].trace.rail[s].values != plain.runs[r].trace.rail[s].values;
+      EXPECT_TRUE(readings_differ);
+      data = made.set;
+    } else {
+      EXPECT_TRUE(library[slot].source.has_value()) << "a mechanism with parameters has a rig effect";
+    }
+    ThermalFitOptions o = options_for_rig();
+    o.per_run_fits = false;
+    o.extensions = {info.name};
+    const ThermalFitResult fit = fit_thermal(data, o);
+    ASSERT_FALSE(fit.samples.empty());
+    for (const auto& name : library[slot].parameters) EXPECT_TRUE(std::isfinite(fit.joint.parameter(name).value)) << name;
+
+    const ModelFile written = model_file_of(nullptr, {}, &fit, o);
+    EXPECT_EQ(written.mechanisms, std::vector<std::string>{info.name});
+    const ModelFile read = read_model_file(write("model.toml", model_file_toml(written)));
+    EXPECT_EQ(read.mechanisms, written.mechanisms);
+    EXPECT_EQ(read.source, written.source);
+    ASSERT_EQ(read.mechanism_parameters.size(), library[slot].parameters.size());
+    for (std::size_t i = 0; i < read.mechanism_parameters.size(); ++i) {
+      EXPECT_EQ(read.mechanism_parameters[i].first, library[slot].parameters[i]);
+      EXPECT_EQ(read.mechanism_parameters[i].second, written.mechanism_parameters[i].second);
     }
   }
 }

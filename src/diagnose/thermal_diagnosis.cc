@@ -12,6 +12,7 @@
 
 #include "lmcal/error.hpp"
 #include "lmcal/fit/statistics.hpp"
+#include "lmcal/models/thermal_mechanisms.hpp"
 #include "empirical_thermal.hpp"
 #include "fit/fit_json.hpp"
 #include "selection.hpp"
@@ -201,6 +202,147 @@ ThermalFitResult fit_model(const ThermalDataSet& data, const ThermalDiagnosisOpt
 
 }  // namespace
 
+namespace {
+
+// The preconditions this diagnosis knows how to check (thermal_mechanism.hpp): a mechanism
+// registered with another fails to compile here, not silently tried.
+constexpr bool preconditions_known() {
+  for (const auto& m : ThermalMechanismLibrary::infos) {
+    const std::string_view varies = m.precondition.varies, fitted = m.precondition.not_with_fitted;
+    if (!(varies.empty() || varies == "velocity_m_s") || !(fitted.empty() || fitted == "h_W_m2K")) return false;
+  }
+  return true;
+}
+static_assert(preconditions_known(), "a thermal mechanism's precondition this diagnosis does not check");
+
+// Why these data cannot tell the named mechanism (its precondition), or "" when they can.
+std::string untellable_because(const ThermalDataSet& data, const ThermalFitOptions& fit, const std::string& name) {
+  const ThermalMechanismPrecondition& needs = ThermalMechanismLibrary::infos[*find_thermal_mechanism(name)].precondition;
+  if (std::string_view(needs.varies) == "velocity_m_s") {
+    std::set<double> speeds;
+    for (const auto& run : data.runs) speeds.insert(run.velocity_m_s);
+    if (speeds.size() < 2) return "all runs at one speed";
+  }
+  if (std::string_view(needs.not_with_fitted) == "h_W_m2K" && fit.fit_h) return "h is fitted in every model";
+  return "";
+}
+
+// The library's mechanisms a diagnosis tries on these data; those whose precondition the data
+// lack go to `skipped`, with why.
+std::vector<std::string> candidates(const ThermalDataSet& data, const ThermalFitOptions& fit,
+                                    std::vector<std::string>& skipped) {
+  std::vector<std::string> library;
+  for (const auto& e : thermal_extension_library()) {
+    if (e.source && (*e.source == fit.source || *e.source == SourceModel::paper)) continue;  // no step back to the paper's
+    if (const std::string why = untellable_because(data, fit, e.name); !why.empty()) {
+      skipped.push_back(e.name + ": " + why);
+      continue;
+    }
+    library.push_back(e.name);
+  }
+  return library;
+}
+
+// The named mechanism's entry of the library.
+ThermalExtensionInfo mechanism_info(const std::string& name) {
+  for (auto& e : thermal_extension_library())
+    if (e.name == name) return e;
+  throw InvalidParameter("extension", "unknown thermal mechanism '" + name + "'");
+}
+
+// A fitted model as the selection compares it, with the estimate of `effect` (none: "").
+std::pair<detail::ModelFit, CandidateScore> summarise(const ThermalFitResult& fit, const std::string& effect) {
+  detail::ModelFit m;
+  CandidateScore c;
+  c.value = c.se = c.ci_low = c.ci_high = std::numeric_limits<double>::quiet_NaN();
+  if (fit.samples.empty()) {
+    m.problem = "the fit failed: " + (fit.joint.warnings.empty() ? std::string("no result") : fit.joint.warnings.front());
+    m.ss = m.n = m.n_eff = m.cv_rmse = std::numeric_limits<double>::infinity();
+    return std::make_pair(m, c);
+  }
+  m.ss = fit.sum_of_squares_K2;
+  m.n = static_cast<double>(fit.samples.size());
+  m.n_eff = effective_sample_size(m.n, lag1_autocorrelation(fit));
+  m.k = fit.joint.free_parameters;
+  m.cv_rmse = fit.cv_rmse_K;
+  for (const auto& s : fit.samples) m.fitted.push_back(s.simulated_C);
+  if (const ParameterEstimate a = detail::within_bounds(fit.joint.parameter("alpha")); fit.joint.solver.usable)
+    c.alpha = a.value, c.alpha_low = a.interval == "profile" ? a.profile_low : a.ci_low,
+    c.alpha_high = a.interval == "profile" ? a.profile_high : a.ci_high;
+  if (!fit.joint.solver.usable) m.problem = "the fit did not converge: " + fit.joint.solver.termination;
+  for (const auto& issue : fit.joint.identifiability.issues) m.problem = "not identifiable: " + issue.why;
+  if (!effect.empty()) {
+    const ThermalExtensionInfo e = mechanism_info(effect);
+    c.measure = e.measure;
+    if (!e.parameters.empty()) detail::set_estimate(c, fit.joint.parameter(e.parameters.front()));
+  }
+  return std::make_pair(m, c);
+}
+
+detail::ModelFit model_fit(const ThermalFitResult& fit) { return summarise(fit, std::string()).first; }
+
+// The diagnosis's final model: `fit`, with the causes `accepted`; what it leaves and how α
+// (and h) moved from the baseline.
+void settle(ThermalDiagnosis& d, const std::vector<std::string>& accepted, ThermalFitResult fit,
+            const ThermalDiagnosisOptions& o, const detail::NoiseFloor& noise) {
+  d.final_fit = std::move(fit);
+  d.final = diagnose_residuals(d.final_fit, o, noise);
+  d.cv_rmse_before_K = d.baseline_fit.cv_rmse_K;
+  d.cv_rmse_after_K = d.final_fit.cv_rmse_K;
+  d.accepted = detail::accepted_scores(d.rounds, accepted, [&](const std::string& name) {
+    const ThermalExtensionInfo e = mechanism_info(name);
+    return e.parameters.empty() ? nullptr : &d.final_fit.joint.parameter(e.parameters.front());
+  });
+  d.shifts.clear();
+  for (const auto& p : d.baseline_fit.joint.parameters)
+    if (p.name == "alpha" || p.name == "h_W_m2K") d.shifts.push_back(parameter_shift(p, d.final_fit.joint.parameter(p.name)));
+}
+
+// Beyond the library: an empirical sensor term, fitted jointly with the accepted causes. A
+// cause accepted before the term may only have stood in for what the term models: each must
+// still pass, as a candidate, on top of the others and the term (learned anew without it), or
+// it is dropped.
+void search_beyond_the_library(const ThermalDataSet& data, const ThermalDiagnosisOptions& o,
+                               const detail::NoiseFloor& noise, const detail::SelectionRules& rules,
+                               const detail::Selection<ThermalFitResult>& selection,
+                               std::vector<std::string>& accepted, ThermalDiagnosis& d) {
+  auto search_with = [&](const std::vector<std::string>& causes, const ThermalFitResult& named) {
+    ThermalFitOptions current = model_options(o);
+    current.extensions = causes;
+    auto refit = [&](const std::vector<ThermalSensorTerm>& terms) { return fit_model(data, o, causes, &named, terms); };
+    return detail::learn_thermal_term(data, current, named, refit, model_fit, rules);
+  };
+  detail::ThermalTermSearch search = search_with(accepted, d.final_fit);
+  for (std::size_t i = accepted.size(); search.fit && i-- > 0;) {
+    std::vector<std::string> others = accepted;
+    others.erase(others.begin() + static_cast<std::ptrdiff_t>(i));
+    // The model without it: the forward selection's own where it passed through it (the same
+    // model, the same held-out RMSE), else refitted.
+    const bool on_path = others.size() < selection.path.size() &&
+                         std::equal(others.begin(), others.end(), selection.accepted.begin());
+    ThermalFitResult named = on_path ? selection.path[others.size()] : fit_model(data, o, others, &d.final_fit);
+    if (named.samples.empty()) continue;
+    detail::ThermalTermSearch without = search_with(others, named);
+    if (!without.fit) continue;
+    CandidateScore c;
+    if (detail::score_candidate(model_fit(*without.fit), model_fit(*search.fit), rules, c)) continue;
+    d.dropped.push_back(fmt::format("{} (accepted in round {}, it adds nothing once the empirical term is in: {})",
+                                    accepted[i], i + 1, c.reason));
+    // Its own step: from the model with it to the model refitted without it.
+    d.steps.push_back(detail::make_step("drop cause", accepted[i], model_fit(d.final_fit), model_fit(named)));
+    accepted = others;
+    settle(d, accepted, std::move(named), o, noise);
+    search = std::move(without);
+  }
+  d.empirical = std::move(search.finding);
+  d.empirical_terms = std::move(search.terms);
+  if (search.fit) d.empirical_fit = std::move(*search.fit);
+  if (d.empirical.found)
+    d.steps.push_back(detail::make_step("add empirical term", d.empirical.formula, model_fit(d.final_fit), model_fit(d.empirical_fit)));
+}
+
+}  // namespace
+
 ThermalFitOptions diagnosis_fit_options(const ThermalDataSet& data, const ThermalDiagnosisOptions& options) {
   ThermalFitOptions f = model_options(options);
   const std::vector<double> none;
@@ -227,55 +369,10 @@ ThermalDiagnosis diagnose_thermal(const ThermalDataSet& data, const ThermalDiagn
   d.baseline_fit = fit_thermal(data, model_options(o));
   d.baseline = diagnose_residuals(d.baseline_fit, o, noise);
 
-  // 2-3. The library, less what these data cannot show.
-  std::set<double> speeds;
-  for (const auto& run : data.runs) speeds.insert(run.velocity_m_s);
-  const std::vector<ThermalExtensionInfo> known = thermal_extension_library();
-  auto info = [&](const std::string& name) -> const ThermalExtensionInfo& {
-    return *std::find_if(known.begin(), known.end(), [&](auto& e) { return e.name == name; });
-  };
-  std::vector<std::string> library;
-  for (const auto& e : known) {
-    if (e.source && (*e.source == o.fit.source || *e.source == SourceModel::paper)) continue;  // no step back to the paper's
-    if ((e.name == "convection_velocity" || e.name == "alpha_velocity") && speeds.size() < 2) {
-      d.skipped.push_back(e.name + ": all runs at one speed");
-      continue;
-    }
-    if (e.name == "convection_scale" && o.fit.fit_h) {
-      d.skipped.push_back(e.name + ": h is fitted in every model");
-      continue;
-    }
-    library.push_back(e.name);
-  }
+  // 2-3. The library, less what these data cannot show, added one cause at a time.
+  const std::vector<std::string> library = candidates(data, o.fit, d.skipped);
   auto fit_candidate = [&](const std::vector<std::string>& extensions, const ThermalFitResult& current) {
     return fit_model(data, o, extensions, &current);
-  };
-  auto summarise = [&](const ThermalFitResult& fit, const std::string& effect) {
-    detail::ModelFit m;
-    CandidateScore c;
-    c.value = c.se = c.ci_low = c.ci_high = std::numeric_limits<double>::quiet_NaN();
-    if (fit.samples.empty()) {
-      m.problem = "the fit failed: " + (fit.joint.warnings.empty() ? std::string("no result") : fit.joint.warnings.front());
-      m.ss = m.n = m.n_eff = m.cv_rmse = std::numeric_limits<double>::infinity();
-      return std::make_pair(m, c);
-    }
-    m.ss = fit.sum_of_squares_K2;
-    m.n = static_cast<double>(fit.samples.size());
-    m.n_eff = effective_sample_size(m.n, lag1_autocorrelation(fit));
-    m.k = fit.joint.free_parameters;
-    m.cv_rmse = fit.cv_rmse_K;
-    for (const auto& s : fit.samples) m.fitted.push_back(s.simulated_C);
-    if (const ParameterEstimate a = detail::within_bounds(fit.joint.parameter("alpha")); fit.joint.solver.usable)
-      c.alpha = a.value, c.alpha_low = a.interval == "profile" ? a.profile_low : a.ci_low,
-      c.alpha_high = a.interval == "profile" ? a.profile_high : a.ci_high;
-    if (!fit.joint.solver.usable) m.problem = "the fit did not converge: " + fit.joint.solver.termination;
-    for (const auto& issue : fit.joint.identifiability.issues) m.problem = "not identifiable: " + issue.why;
-    if (!effect.empty()) {
-      const auto& e = info(effect);
-      c.measure = e.measure;
-      if (!e.parameters.empty()) detail::set_estimate(c, fit.joint.parameter(e.parameters.front()));
-    }
-    return std::make_pair(m, c);
   };
   const detail::SelectionRules rules{.lrt_p = o.lrt_p,
                                      .min_cv_gain_percent = o.min_cv_gain_percent,
@@ -288,63 +385,12 @@ ThermalDiagnosis diagnose_thermal(const ThermalDataSet& data, const ThermalDiagn
   d.rounds = std::move(selection.rounds);
 
   // 4. What the accepted causes leave, and how α (and h) move.
-  auto settle = [&](const std::vector<std::string>& accepted, ThermalFitResult fit) {
-    d.final_fit = std::move(fit);
-    d.final = diagnose_residuals(d.final_fit, o, noise);
-    d.cv_rmse_before_K = d.baseline_fit.cv_rmse_K;
-    d.cv_rmse_after_K = d.final_fit.cv_rmse_K;
-    d.accepted = detail::accepted_scores(d.rounds, accepted, [&](const std::string& name) {
-      const auto& e = info(name);
-      return e.parameters.empty() ? nullptr : &d.final_fit.joint.parameter(e.parameters.front());
-    });
-    d.shifts.clear();
-    for (const auto& p : d.baseline_fit.joint.parameters)
-      if (p.name == "alpha" || p.name == "h_W_m2K") d.shifts.push_back(parameter_shift(p, d.final_fit.joint.parameter(p.name)));
-  };
   std::vector<std::string> accepted = selection.accepted;
   d.steps = selection.steps;
-  settle(accepted, selection.current);
+  settle(d, accepted, selection.current, o, noise);
 
   // 5. Beyond the library: when structure remains, an empirical sensor term, fitted jointly.
-  if (d.final.structured || !d.final.lack_of_fit.fits) {
-    auto model_fit = [&](const ThermalFitResult& fit) { return summarise(fit, std::string()).first; };
-    auto search_with = [&](const std::vector<std::string>& causes, const ThermalFitResult& named) {
-      ThermalFitOptions current = model_options(o);
-      current.extensions = causes;
-      auto refit = [&](const std::vector<ThermalSensorTerm>& terms) { return fit_model(data, o, causes, &named, terms); };
-      return detail::learn_thermal_term(data, current, named, refit, model_fit, rules);
-    };
-    detail::ThermalTermSearch search = search_with(accepted, d.final_fit);
-    // A cause accepted before the term may only have stood in for what the term models: each
-    // must still pass, as a candidate, on top of the others and the term (learned anew without
-    // it), or it is dropped.
-    for (std::size_t i = accepted.size(); search.fit && i-- > 0;) {
-      std::vector<std::string> others = accepted;
-      others.erase(others.begin() + static_cast<std::ptrdiff_t>(i));
-      // The model without it: the forward selection's own where it passed through it (the same
-      // model, the same held-out RMSE), else refitted.
-      const bool on_path = others.size() < selection.path.size() &&
-                           std::equal(others.begin(), others.end(), selection.accepted.begin());
-      ThermalFitResult named = on_path ? selection.path[others.size()] : fit_model(data, o, others, &d.final_fit);
-      if (named.samples.empty()) continue;
-      detail::ThermalTermSearch without = search_with(others, named);
-      if (!without.fit) continue;
-      CandidateScore c;
-      if (detail::score_candidate(model_fit(*without.fit), model_fit(*search.fit), rules, c)) continue;
-      d.dropped.push_back(fmt::format("{} (accepted in round {}, it adds nothing once the empirical term is in: {})",
-                                    accepted[i], i + 1, c.reason));
-      // Its own step: from the model with it to the model refitted without it.
-      d.steps.push_back(detail::make_step("drop cause", accepted[i], model_fit(d.final_fit), model_fit(named)));
-      accepted = others;
-      settle(accepted, std::move(named));
-      search = std::move(without);
-    }
-    d.empirical = std::move(search.finding);
-    d.empirical_terms = std::move(search.terms);
-    if (search.fit) d.empirical_fit = std::move(*search.fit);
-    if (d.empirical.found)
-      d.steps.push_back(detail::make_step("add empirical term", d.empirical.formula, model_fit(d.final_fit), model_fit(d.empirical_fit)));
-  }
+  if (d.final.structured || !d.final.lack_of_fit.fits) search_beyond_the_library(data, o, noise, rules, selection, accepted, d);
   d.cv_rmse_after_K = detail::final_cv_rmse(d.steps, d.cv_rmse_before_K);
 
   detail::conclude(d, "The published rail model", "K", d.cv_rmse_before_K, d.final_fit.cv_rmse_K, d.baseline.rmse_K);

@@ -527,7 +527,7 @@ RailSolution<double> simulate_rail_with_mechanisms(const RailGeometry& geometry,
                                                    const FrictionConditions<double>& conditions,
                                                    const std::vector<std::string>& mechanisms,
                                                    const std::vector<std::pair<std::string, double>>& values) {
-  detail::ThermalRunSetup<double> setup{.velocity_m_s = geometry.velocity_m_s,
+  ThermalRunSetup<double> setup{.velocity_m_s = geometry.velocity_m_s,
                                         .friction = &friction,
                                         .friction_effects = &effects,
                                         .conditions = conditions,

@@ -2,7 +2,9 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <numbers>
@@ -26,7 +28,9 @@ using rig::Rng;
 using rig::round_to;
 
 // A named effect of the rig: a friction effect (a slot of FrictionEffects, from the
-// library in friction_effects.hpp) or a thermal one (a member of ThermalRigEffects).
+// library in friction_effects.hpp), a hidden one (a member of HiddenFrictionEffects) or a
+// thermal one: a mechanism of the library in thermal_mechanisms.hpp (a slot of
+// ThermalRigEffects::mechanisms, or its named member) or one the library lacks (a member).
 struct EffectEntry {
   RigEffectInfo info;
   std::optional<std::size_t> friction_slot;
@@ -35,10 +39,15 @@ struct EffectEntry {
   // false: the truth file lists it only when one of these later effects is on (they came after
   // data sets were committed, and data made without them keeps its bytes).
   bool listed_when_neutral = true;
+  std::optional<std::size_t> mechanism_slot;  // held in ThermalRigEffects::mechanisms
 
   double& ref(RigEffects& e) const {
-    return friction_slot ? e.friction[*friction_slot] : hidden ? e.hidden.*hidden : e.thermal.*thermal;
+    return friction_slot    ? e.friction[*friction_slot]
+           : hidden         ? e.hidden.*hidden
+           : mechanism_slot ? e.thermal.mechanisms[*mechanism_slot]
+                            : e.thermal.*thermal;
   }
+  bool is_thermal() const { return thermal || mechanism_slot; }
   double value(const RigEffects& e) const { return const_cast<EffectEntry*>(this)->ref(const_cast<RigEffects&>(e)); }
 };
 
@@ -86,15 +95,19 @@ const std::vector<EffectEntry>& effect_table() {
       t.push_back({{h.name, h.unit, h.neutral, h.description}, std::nullopt, nullptr, h.member, h.listed_when_neutral});
     auto thermal = [&](const char* name, const char* unit, const char* description, double ThermalRigEffects::*member,
                        double neutral = 0.0) { t.push_back({{name, unit, neutral, description}, std::nullopt, member}); };
-    thermal("convection_velocity", "W/m2K/sqrt(m/s)", "forced convection h = h0 + c sqrt(V)",
-            &ThermalRigEffects::convection_velocity);
-    thermal("base_loss", "W/mK", "heat loss through the rail base to the bed (at ambient)", &ThermalRigEffects::base_loss);
-    thermal("coupling", "0/1", "Q from the friction law at the rail temperature (two-way coupling)",
-            &ThermalRigEffects::coupling);
-    thermal("tc_lag", "s", "thermocouple first-order time constant", &ThermalRigEffects::tc_lag);
-    thermal("alpha_velocity", "1/(m/s)", "α = α0 + s (V - 0.1 m/s)", &ThermalRigEffects::alpha_velocity);
-    thermal("moving_source", "0/1", "the block moves (truth simulated with the moving source)",
-            &ThermalRigEffects::moving_source);
+    // The library's mechanisms with a rig effect, in its order; those made before the rig read
+    // the library keep their named members.
+    using R = ThermalRigEffects;
+    const std::pair<std::string_view, double R::*> named[] = {
+        {"convection_velocity", &R::convection_velocity}, {"base_loss", &R::base_loss}, {"coupling", &R::coupling},
+        {"tc_lag", &R::tc_lag}, {"alpha_velocity", &R::alpha_velocity}, {"moving_source", &R::moving_source}};
+    for (std::size_t slot = 0; slot < kThermalMechanismCount; ++slot) {
+      const auto& rig = ThermalMechanismLibrary::infos[slot].rig;
+      if (!rig) continue;
+      const auto member = std::find_if(std::begin(named), std::end(named), [&](auto& n) { return n.first == rig->name; });
+      if (member != std::end(named)) thermal(rig->name, rig->unit, rig->description, member->second);
+      else t.push_back({{rig->name, rig->unit, 0.0, rig->description}, std::nullopt, nullptr, nullptr, true, slot});
+    }
     thermal("ambient_daily_K", "K",
             "not in the library: the air swings daily, A sin(2 pi t/86400 s + phase of the run); the rail sees all of it",
             &ThermalRigEffects::ambient_daily_K);
@@ -133,6 +146,9 @@ nlohmann::json effects_json(const RigEffects& effects) {
   for (const auto& e : effect_table()) {
     const double value = e.value(effects);
     if (!e.listed_when_neutral && !later_on) continue;
+    // A mechanism registered since the rig read the library is listed when on, so that data
+    // made without it keeps its bytes.
+    if (e.mechanism_slot && value == e.info.neutral) continue;
     j[e.info.name] = {{"value", value}, {"unit", e.info.unit}, {"active", value != e.info.neutral}};
   }
   return j;
@@ -174,7 +190,7 @@ namespace rig {
 void require_no_thermal_effects(const RigEffects& effects) {
   std::vector<std::string> given;
   for (const auto& e : effect_table())
-    if (e.thermal && e.value(effects) != e.info.neutral) given.push_back(e.info.name);
+    if (e.is_thermal() && e.value(effects) != e.info.neutral) given.push_back(e.info.name);
   if (!given.empty())
     throw InvalidParameter("--effect", fmt::format("{} {} thermal: a friction log does not see {}; give {} to generate thermal",
                                                    fmt::join(given, ", "), given.size() == 1 ? "is" : "are",
@@ -182,6 +198,110 @@ void require_no_thermal_effects(const RigEffects& effects) {
 }
 
 }  // namespace rig
+
+namespace {
+
+// A setup of the sweep: the guide, preload, load and temperature a run holds.
+struct Setup {
+  std::string model;
+  double pc, P, T;
+};
+
+// The setups, in sweep order (temperature innermost, or outermost when asked).
+std::vector<Setup> sweep_setups(const FrictionRigConfig& config) {
+  std::vector<Setup> setups;
+  for (const auto& model : config.guides)
+    for (double pc : config.preload_um)
+      for (double P : config.load_N)
+        for (double T : config.temperature_C) setups.push_back({model, pc, P, T});
+  if (config.temperature_outermost)
+    std::stable_sort(setups.begin(), setups.end(), [&](const Setup& a, const Setup& b) {
+      auto rank = [&](double T) { return std::find(config.temperature_C.begin(), config.temperature_C.end(), T); };
+      return rank(a.T) < rank(b.T);
+    });
+  return setups;
+}
+
+// The first setup of each run, in the order the runs are made.
+std::vector<std::size_t> run_firsts(const FrictionRigConfig& config, std::size_t setups, int run_count) {
+  std::vector<std::size_t> run_first(static_cast<std::size_t>(run_count));
+  for (std::size_t r = 0; r < run_first.size(); ++r) run_first[r] = config.one_setup_per_run ? r % setups : 0;
+  if (config.shuffle_runs) {  // Fisher-Yates from a stream of its own
+    Rng order(derive_seed(config.seed ^ rig::kLaterStreamKey, 1));
+    for (std::size_t r = run_first.size(); r > 1; --r)
+      std::swap(run_first[r - 1], run_first[static_cast<std::size_t>(order.uniform() * static_cast<double>(r))]);
+  }
+  return run_first;
+}
+
+// Each run's hidden scale, from a stream of its own (the runs' streams stay as they were).
+std::vector<double> run_scales(const FrictionRigConfig& config, const HiddenFrictionEffects& hidden, std::size_t runs) {
+  std::vector<double> run_scale(runs, 1.0);
+  if (hidden.run_scale_sigma != 0) {
+    Rng scales(derive_seed(config.seed ^ rig::kLaterStreamKey, 2));
+    for (double& scale : run_scale)
+      scale = rig::positive_factor("run_scale_sigma", hidden.run_scale_sigma, scales.normal(), "a run's friction");
+  }
+  return run_scale;
+}
+
+// Where a sample of run r stands when it is logged: the lubricant's temperature, the distance
+// slid and the rig's clock since the log's start (the hidden effects' inputs).
+struct SampleState {
+  double lubricant_C, distance_m, clock_s;
+  int run;
+  double run_scale;
+};
+
+// The true friction of a sample: the law with the library's effects at the lubricant's
+// temperature, and the hidden effects (not in the library): running-in over the sliding
+// distance, the run's decay and scale, the viscous part's load curvature, a temperature × speed
+// term.
+double true_friction_N(const FrictionRigConfig& config, const RigEffects& effects, const FrictionConditions<double>& c,
+                       const SampleState& at) {
+  const HiddenFrictionEffects& hidden = effects.hidden;
+  FrictionConditions<double> at_lubricant = c;
+  if (hidden.lubricant_lag_s > 0) at_lubricant.temperature_C = at.lubricant_C;
+  if (c.temperature_C > hidden.hot_above_C) at_lubricant.temperature_C += hidden.hot_offset_K;
+  at_lubricant.temperature_C += hidden.temperature_drift_K_per_h * at.clock_s / 3600;
+  double F = friction_force_with_effects_N(config.constants, effects.friction, at_lubricant);
+  if (hidden.running_in != 0) F *= 1 + hidden.running_in * std::exp(-at.distance_m / hidden.running_in_scale_m);
+  if (hidden.run_decay != 0) F *= 1 + hidden.run_decay * std::exp(-at.run / hidden.run_decay_scale);
+  F *= at.run_scale;
+  if (hidden.viscous_load_curvature != 0) {
+    const auto b = friction_breakdown(config.constants, at_lubricant);
+    const double viscous_N = law_part_N(config.constants, b, c.block_length_mm, TermCovariate::viscous_N);
+    F += hidden.viscous_load_curvature * viscous_N * std::pow(c.load_N / 1000 - 2, 2);
+  }
+  F += hidden.temperature_speed * (c.temperature_C - config.constants.T_ref_C) * c.velocity_m_s;
+  return F;
+}
+
+// The friction log's truth file.
+std::string friction_truth(const FrictionRigConfig& config, const RigEffects& effects, nlohmann::json runs,
+                           std::size_t out_of_range) {
+  nlohmann::json truth = {
+      {"kind", "friction"},
+      {"generator", fmt::format("lmcal {} virtual rig", LMCAL_VERSION)},
+      {"seed", config.seed},
+      {"friction_constants", rig::constants_json(config.constants)},
+      {"effects", rig::effects_json(effects)},
+      {"noise_N", config.noise_N},
+      {"run_offset_sigma_N", config.run_offset_N},
+      {"one_setup_per_run", config.one_setup_per_run},
+      {"temperature_noise_K", config.temperature_noise_K},
+      {"load_cell_range_N", config.load_cell_range_N},
+      {"conditions_beyond_load_cell_skipped", out_of_range},
+      {"runs", std::move(runs)},
+      {"note", "friction_N = law with effects at the true temperature + zero_offset_N (per run) + noise; "
+               "temperature_C is the true temperature plus noise"}};
+  if (config.noise_ar1 != 0) truth["noise_ar1"] = config.noise_ar1;
+  if (config.temperature_outermost) truth["temperature_outermost"] = true;
+  if (config.shuffle_runs) truth["shuffle_runs"] = true;
+  return truth.dump(2) + "\n";
+}
+
+}  // namespace
 
 FrictionRigOutput generate_friction_log(const FrictionRigConfig& config, const RigEffects& effects) {
   rig::require_no_thermal_effects(effects);
@@ -202,38 +322,12 @@ FrictionRigOutput generate_friction_log(const FrictionRigConfig& config, const R
   log.incline_stated = true;
   nlohmann::json runs = nlohmann::json::array();
   std::size_t out_of_range = 0;
-  // The setups, in sweep order; a run covers all of them or one.
-  struct Setup {
-    std::string model;
-    double pc, P, T;
-  };
-  std::vector<Setup> setups;
-  for (const auto& model : config.guides)
-    for (double pc : config.preload_um)
-      for (double P : config.load_N)
-        for (double T : config.temperature_C) setups.push_back({model, pc, P, T});
-  if (config.temperature_outermost)
-    std::stable_sort(setups.begin(), setups.end(), [&](const Setup& a, const Setup& b) {
-      auto rank = [&](double T) { return std::find(config.temperature_C.begin(), config.temperature_C.end(), T); };
-      return rank(a.T) < rank(b.T);
-    });
+  // A run covers all the setups or one.
+  const std::vector<Setup> setups = sweep_setups(config);
   const std::size_t per_run = config.one_setup_per_run ? 1 : setups.size();
   const int run_count = config.runs * static_cast<int>(setups.size() / per_run);
-  // The first setup of each run, in the order the runs are made.
-  std::vector<std::size_t> run_first(static_cast<std::size_t>(run_count));
-  for (std::size_t r = 0; r < run_first.size(); ++r) run_first[r] = config.one_setup_per_run ? r % setups.size() : 0;
-  if (config.shuffle_runs) {  // Fisher-Yates from a stream of its own
-    Rng order(derive_seed(config.seed ^ rig::kLaterStreamKey, 1));
-    for (std::size_t r = run_first.size(); r > 1; --r)
-      std::swap(run_first[r - 1], run_first[static_cast<std::size_t>(order.uniform() * static_cast<double>(r))]);
-  }
-  // Each run's hidden scale, from a stream of its own (the runs' streams stay as they were).
-  std::vector<double> run_scale(run_first.size(), 1.0);
-  if (effects.hidden.run_scale_sigma != 0) {
-    Rng scales(derive_seed(config.seed ^ rig::kLaterStreamKey, 2));
-    for (double& scale : run_scale)
-      scale = rig::positive_factor("run_scale_sigma", effects.hidden.run_scale_sigma, scales.normal(), "a run's friction");
-  }
+  const std::vector<std::size_t> run_first = run_firsts(config, setups.size(), run_count);
+  const std::vector<double> run_scale = run_scales(config, effects.hidden, run_first.size());
   double distance_m = 0;  // slid since the log's start (the hidden running-in)
   double clock_s = 0;     // the rig's clock since the log's start (the hidden temperature drift)
   for (int r = 0; r < run_count; ++r) {
@@ -260,27 +354,13 @@ FrictionRigOutput generate_friction_log(const FrictionRigConfig& config, const R
                                              .velocity_m_s = V, .temperature_C = setup.T,
                                              .direction = double(direction)};
           validate(c);
-          // The hidden effects (not in the library): the law at the lubricant's temperature,
-          // running-in over the sliding distance, a temperature × speed term.
-          const HiddenFrictionEffects& hidden = effects.hidden;
-          FrictionConditions<double> at_lubricant = c;
+          const double lag_s = effects.hidden.lubricant_lag_s;
           double lubricant_now_C = setup.T;
-          if (hidden.lubricant_lag_s > 0 && !std::isnan(lubricant_C))
+          if (lag_s > 0 && !std::isnan(lubricant_C))
             lubricant_now_C = lubricant_target_C + (lubricant_C - lubricant_target_C) *
-                                                       std::exp(-(time_s - lubricant_time_s) / hidden.lubricant_lag_s);
-          if (hidden.lubricant_lag_s > 0) at_lubricant.temperature_C = lubricant_now_C;
-          if (setup.T > hidden.hot_above_C) at_lubricant.temperature_C += hidden.hot_offset_K;
-          at_lubricant.temperature_C += hidden.temperature_drift_K_per_h * clock_s / 3600;
-          double F = friction_force_with_effects_N(config.constants, effects.friction, at_lubricant);
-          if (hidden.running_in != 0) F *= 1 + hidden.running_in * std::exp(-distance_m / hidden.running_in_scale_m);
-          if (hidden.run_decay != 0) F *= 1 + hidden.run_decay * std::exp(-r / hidden.run_decay_scale);
-          F *= run_scale[static_cast<std::size_t>(r)];
-          if (hidden.viscous_load_curvature != 0) {
-            const auto b = friction_breakdown(config.constants, at_lubricant);
-            const double viscous_N = law_part_N(config.constants, b, c.block_length_mm, TermCovariate::viscous_N);
-            F += hidden.viscous_load_curvature * viscous_N * std::pow(setup.P / 1000 - 2, 2);
-          }
-          F += hidden.temperature_speed * (setup.T - config.constants.T_ref_C) * V;
+                                                       std::exp(-(time_s - lubricant_time_s) / lag_s);
+          const double F = true_friction_N(config, effects, c,
+                                           {lubricant_now_C, distance_m, clock_s, r, run_scale[static_cast<std::size_t>(r)]});
           // Draw the noise even for skipped conditions, so the sequence does not depend on them;
           // the load cell's noise series runs over the logged samples only.
           const double z = rng.normal();
@@ -302,25 +382,7 @@ FrictionRigOutput generate_friction_log(const FrictionRigConfig& config, const R
         }
     }
   }
-  nlohmann::json truth = {
-      {"kind", "friction"},
-      {"generator", fmt::format("lmcal {} virtual rig", LMCAL_VERSION)},
-      {"seed", config.seed},
-      {"friction_constants", rig::constants_json(config.constants)},
-      {"effects", rig::effects_json(effects)},
-      {"noise_N", config.noise_N},
-      {"run_offset_sigma_N", config.run_offset_N},
-      {"one_setup_per_run", config.one_setup_per_run},
-      {"temperature_noise_K", config.temperature_noise_K},
-      {"load_cell_range_N", config.load_cell_range_N},
-      {"conditions_beyond_load_cell_skipped", out_of_range},
-      {"runs", runs},
-      {"note", "friction_N = law with effects at the true temperature + zero_offset_N (per run) + noise; "
-               "temperature_C is the true temperature plus noise"}};
-  if (config.noise_ar1 != 0) truth["noise_ar1"] = config.noise_ar1;
-  if (config.temperature_outermost) truth["temperature_outermost"] = true;
-  if (config.shuffle_runs) truth["shuffle_runs"] = true;
-  out.truth_json = truth.dump(2) + "\n";
+  out.truth_json = friction_truth(config, effects, std::move(runs), out_of_range);
   return out;
 }
 

@@ -33,8 +33,10 @@
 //   friction: the library in friction_effects.hpp (stribeck_exponent, viscous_load,
 //             direction_asymmetry, seal_drag, coulomb_temperature); a newly registered
 //             effect is a rig effect too
-//   thermal:  convection_velocity, base_loss, coupling, tc_lag, alpha_velocity,
-//             moving_source                                  (thermal_effects.hpp, solver);
+//   thermal:  the library in thermal_mechanisms.hpp, each mechanism with a rig effect
+//             (convection_velocity, base_loss, coupling, tc_lag, alpha_velocity,
+//             moving_source), made by the mechanism's own physics; a newly registered
+//             mechanism with one is a rig effect too
 //             not in the library: ambient_daily_K (with ambient_daily_seen), tc_drift_K_per_h
 //
 // Determinism: the same config and seed give bit-identical output on any machine
@@ -45,6 +47,7 @@
 
 #include "lmcal/export.hpp"
 
+#include <array>
 #include <cstdint>
 #include <map>
 #include <string>
@@ -54,10 +57,16 @@
 #include "lmcal/io/friction_log.hpp"
 #include "lmcal/io/thermal_run.hpp"
 #include "lmcal/models/friction_effects.hpp"
+#include "lmcal/models/thermal_mechanisms.hpp"
 
 namespace LMCAL_API lmcal {
 
 struct ThermalRigEffects {
+  // The value of each mechanism of the library (thermal_mechanisms.hpp) with a rig effect, by
+  // slot: its parameter, or 1 for a switch; 0 leaves it out. set_rig_effect sets them by name.
+  // The six made before the rig read the library keep their members below instead (code sets
+  // them directly); `mechanisms` holds every one registered since.
+  std::array<double, kThermalMechanismCount> mechanisms{};
   double convection_velocity = 0;  // c_V in h = h0 + c_V sqrt(V), W/m²K per sqrt(m/s)
   double base_loss = 0;            // b, W/mK
   double coupling = 0;             // 1: Q_f from the friction law at the rail temperature

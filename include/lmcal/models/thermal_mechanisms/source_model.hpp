@@ -3,9 +3,11 @@
 // the block at its actual position. A switch, without parameters: α is refitted with it.
 #pragma once
 
-#include "../thermal_extension.hpp"
+#include "lmcal/export.hpp"
 
-namespace lmcal::detail {
+#include "lmcal/models/thermal_mechanism.hpp"
+
+namespace LMCAL_API lmcal {
 
 template <SourceModel Model>
 struct SourceSwitch {
@@ -18,10 +20,16 @@ struct SourceSwitch {
                                      : "heat entering as the paper's rectangle over the stroke";
   static constexpr const char* measure = "thermocouples close to the stroke ends and a fast logger";
   static constexpr bool linear = true;
-  static std::vector<ExtensionParameter> parameters() { return {}; }
+  static std::vector<ThermalMechanismParameter> parameters() { return {}; }
   static std::optional<SourceModel> source() { return Model; }
+  // The rig's truth is the averaged source unless the block moves.
+  static constexpr std::optional<ThermalRigEffect> rig =
+      Model == SourceModel::moving
+          ? std::optional<ThermalRigEffect>(
+                ThermalRigEffect{"moving_source", "0/1", "the block moves (truth simulated with the moving source)"})
+          : std::nullopt;
   template <typename T>
   static void apply(ThermalRunSetup<T>&, const T*) {}
 };
 
-}  // namespace lmcal::detail
+}  // namespace lmcal

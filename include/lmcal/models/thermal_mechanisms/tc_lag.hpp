@@ -3,9 +3,11 @@
 // rail warms (residuals following the heating rate, not the level).
 #pragma once
 
-#include "../thermal_extension.hpp"
+#include "lmcal/export.hpp"
 
-namespace lmcal::detail {
+#include "lmcal/models/thermal_mechanism.hpp"
+
+namespace LMCAL_API lmcal {
 
 struct ThermocoupleLag {
   static constexpr const char* name = "tc_lag";
@@ -13,8 +15,9 @@ struct ThermocoupleLag {
   static constexpr const char* measure = "a step test of the thermocouples (plunge into a bath) and a faster logger";
   static constexpr bool linear = false;
   // Bounded away from 0: the lag's derivative with respect to τ is singular at τ = 0.
-  static std::vector<ExtensionParameter> parameters() { return {{"tc_lag", "s", 10.0, 0.1, 1800.0, 10.0}}; }
+  static std::vector<ThermalMechanismParameter> parameters() { return {{"tc_lag", "s", 10.0, 0.1, 1800.0, 10.0}}; }
   static std::optional<SourceModel> source() { return std::nullopt; }
+  static constexpr ThermalRigEffect rig{"tc_lag", "s", "thermocouple first-order time constant", true};
   template <typename T>
   static void apply(ThermalRunSetup<T>& run, const T* tau) {
     run.sensor_lag_s = tau[0];
@@ -22,4 +25,4 @@ struct ThermocoupleLag {
   }
 };
 
-}  // namespace lmcal::detail
+}  // namespace lmcal

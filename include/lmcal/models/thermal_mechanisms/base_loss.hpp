@@ -3,21 +3,24 @@
 // at every speed alike.
 #pragma once
 
-#include "../thermal_extension.hpp"
+#include "lmcal/export.hpp"
 
-namespace lmcal::detail {
+#include "lmcal/models/thermal_mechanism.hpp"
+
+namespace LMCAL_API lmcal {
 
 struct BaseLoss {
   static constexpr const char* name = "base_loss";
   static constexpr const char* description = "heat loss through the rail base to the bed, b (T - T_ambient) per metre";
   static constexpr const char* measure = "a thermocouple on the bed under the rail";
   static constexpr bool linear = false;
-  static std::vector<ExtensionParameter> parameters() { return {{"base_loss", "W/mK", 0.05, 0.0, 20.0, 0.1}}; }
+  static std::vector<ThermalMechanismParameter> parameters() { return {{"base_loss", "W/mK", 0.05, 0.0, 20.0, 0.1}}; }
   static std::optional<SourceModel> source() { return std::nullopt; }
+  static constexpr ThermalRigEffect rig{"base_loss", "W/mK", "heat loss through the rail base to the bed (at ambient)"};
   template <typename T>
   static void apply(ThermalRunSetup<T>& run, const T* b) {
     run.params.base_loss_W_mK = run.params.base_loss_W_mK + b[0];
   }
 };
 
-}  // namespace lmcal::detail
+}  // namespace lmcal

@@ -12,9 +12,11 @@
 // Shows as a warm-up that levels off sooner than a constant heat rate gives.
 #pragma once
 
-#include "../thermal_extension.hpp"
+#include "lmcal/export.hpp"
 
-namespace lmcal::detail {
+#include "lmcal/models/thermal_mechanism.hpp"
+
+namespace LMCAL_API lmcal {
 
 struct Coupling {
   static constexpr const char* name = "coupling";
@@ -23,8 +25,9 @@ struct Coupling {
   static constexpr const char* measure = "the friction force logged during the thermal run";
   static constexpr bool linear = false;
   static constexpr bool heat_follows_rail = true;  // held or not: T(α) is not affine
-  static std::vector<ExtensionParameter> parameters() { return {{"coupling", "1", 0.5, -1.0, 3.0, 1.0}}; }
+  static std::vector<ThermalMechanismParameter> parameters() { return {{"coupling", "1", 0.5, -1.0, 3.0, 1.0}}; }
   static std::optional<SourceModel> source() { return std::nullopt; }
+  static constexpr ThermalRigEffect rig{"coupling", "0/1", "Q from the friction law at the rail temperature (two-way coupling)"};
   template <typename T>
   static void apply(ThermalRunSetup<T>& run, const T* kappa) {
     const double q_start = heat_rate_with_effects_W(*run.friction, *run.friction_effects, run.conditions);
@@ -37,6 +40,18 @@ struct Coupling {
       return q0 * (1.0 + kappa * (heat_rate_with_effects_W(*k, *e, at) / q_start - 1.0));
     };
   }
+  // The rig's coupling is a switch, κ = 1: the heat is the friction law's at the rail
+  // temperature under the block, times the run's heat factor, taken directly rather than as
+  // apply's ratio to the start (equal in exact arithmetic), so that data sets made before the
+  // library keep their bits.
+  static void make(ThermalRunSetup<double>& run, double) {
+    run.heat_rate = [k = run.friction, e = run.friction_effects, c = run.conditions,
+                     factor = run.heat_factor](const double& source_C) {
+      FrictionConditions<double> at = c;
+      at.temperature_C = source_C;
+      return factor * heat_rate_with_effects_W(*k, *e, at);
+    };
+  }
 };
 
-}  // namespace lmcal::detail
+}  // namespace lmcal
