@@ -263,6 +263,96 @@ double dominant_ambient_period_s(const std::vector<AmbientTrace>& ambients, doub
   return dominant_ambient_periods_s(ambients, 1, shortest_s).front();
 }
 
+namespace {
+
+// The residuals and the model's global parameters linearised, each run's nuisance (offsets,
+// heat scale) taken out of every column on its own rows; the candidates' columns beside them.
+SparseProblem linearised_problem(const ThermalDataSet& data, const ThermalFitOptions& options,
+                                 const ThermalFitResult& current, const std::vector<Candidate>& candidates) {
+  SparseProblem problem;
+  for (const auto& s : current.samples) {
+    problem.y.push_back(s.measured_C - s.simulated_C);
+    problem.group.push_back(s.run);
+  }
+  for (const auto& [name, column] : current.sensitivities) {
+    const ParameterEstimate& p = current.joint.parameter(name);
+    if (name.rfind("heat_scale ", 0) != 0 && p.free && !p.held_unidentifiable && !p.at_bound) problem.fixed.push_back(column);
+  }
+  std::vector<ThermalSensorTerm> terms;
+  for (const auto& c : candidates) terms.push_back(c.term);
+  problem.candidates = thermal_sensor_term_values(data, options, current, terms);
+  for (const auto& c : candidates) problem.family.push_back(c.family);
+  const RunNuisance nuisance(current);
+  nuisance.remove(problem.y);
+  for (auto& column : problem.fixed) nuisance.remove(column);
+  for (auto& column : problem.candidates) nuisance.remove(column);
+  return problem;
+}
+
+// The sparsity tolerance: a tenth of what a perfect term could gain over the noise floor,
+// within [the selection's minimum gain, 2 %] (the held-out RMSE is mostly noise when the
+// excess is small).
+double sparsity_tolerance_percent(const ThermalFitResult& current, const SelectionRules& rules) {
+  const double achievable = rules.noise_floor > 0 && current.cv_rmse_K > rules.noise_floor
+                                ? 100 * (1 - rules.noise_floor / current.cv_rmse_K)
+                                : 100.0;
+  return std::clamp(0.1 * achievable, rules.min_cv_gain_percent, 2.0);
+}
+
+// The finding's components, formula, look-alikes and the covariate ranges the chosen terms
+// were learned on, from their joint fit.
+void describe_terms(const std::vector<ThermalSensorTerm>& chosen_terms, const ThermalFitResult& joint,
+                    const std::vector<double>& periods_s, const std::vector<AmbientTrace>& ambients, double longest_s,
+                    EmpiricalFinding& f) {
+  std::string formula;
+  std::vector<std::string> resembles;
+  std::set<std::string> used;
+  for (std::size_t j = 0; j < chosen_terms.size(); ++j) {
+    const ThermalSensorTerm& term = chosen_terms[j];
+    const auto& indices = joint.sensor_term_parameters[j];
+    EmpiricalComponent c;
+    const auto which = std::find(periods_s.begin(), periods_s.end(), term.scale_s) - periods_s.begin();
+    c.symbol = symbol(term, j + 1, which == 0 ? "P" : fmt::format("P{}", which + 1));
+    c.words = words(term);
+    c.covariates = covariates(term);
+    c.coefficient = within_bounds(joint.joint.parameters[indices.front()]);
+    double scale_s = term.scale_s;
+    if (indices.size() > 1) {
+      c.has_scale = true;
+      c.scale = within_bounds(joint.joint.parameters[indices[1]]);
+      scale_s = c.scale.value;
+    }
+    if (periodic(term.kind)) c.words += fmt::format(" (P = {:.3g} h)", scale_s / kSecondsPerHour);
+    formula += (formula.empty() ? "" : " + ") + c.symbol;
+    const std::string r = resemblance(term, c.coefficient.value, scale_s);
+    if (std::find(resembles.begin(), resembles.end(), r) == resembles.end()) resembles.push_back(r);
+    used.insert(c.covariates.begin(), c.covariates.end());
+    f.components.push_back(std::move(c));
+  }
+  f.formula = formula;
+  for (const auto& r : resembles) f.resembles += (f.resembles.empty() ? "" : "; or ") + r;
+  if (used.count("time_since_start_h")) f.ranges.push_back({"time_since_start_h", 0.0, longest_s / kSecondsPerHour});
+  if (used.count("ambient_C")) {
+    CovariateRange r{"ambient_C", std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity()};
+    for (const auto& a : ambients)
+      for (double T : a.temperature_C) r.min = std::min(r.min, T), r.max = std::max(r.max, T);
+    f.ranges.push_back(r);
+  }
+}
+
+// The chosen terms with their parts at the joint fit's values: a coefficient, then the scale
+// where the term has one.
+std::vector<ThermalSensorTerm> at_fitted_values(std::vector<ThermalSensorTerm> terms, const ThermalFitResult& joint) {
+  for (std::size_t j = 0; j < terms.size() && j < joint.sensor_term_parameters.size(); ++j) {
+    const auto& at = joint.sensor_term_parameters[j];
+    if (!at.empty()) terms[j].coefficient = joint.joint.parameters[at[0]].value;
+    if (at.size() > 1) terms[j].scale_s = joint.joint.parameters[at[1]].value;
+  }
+  return terms;
+}
+
+}  // namespace
+
 ThermalTermSearch learn_thermal_term(const ThermalDataSet& data, const ThermalFitOptions& options,
                                      const ThermalFitResult& current,
                                      const std::function<ThermalFitResult(const std::vector<ThermalSensorTerm>&)>& refit,
@@ -282,34 +372,10 @@ ThermalTermSearch learn_thermal_term(const ThermalDataSet& data, const ThermalFi
   for (const auto& run : data.runs) speeds.insert(run.velocity_m_s);
   const std::vector<Candidate> candidates = dictionary(periods_s, longest, speeds.size() >= 2);
   f.dictionary_size = candidates.size();
-  std::vector<ThermalSensorTerm> terms;
-  for (const auto& c : candidates) terms.push_back(c.term);
 
-  // The residuals and the model's global parameters linearised, each run's nuisance (offsets,
-  // heat scale) taken out of every column on its own rows.
-  SparseProblem problem;
-  for (const auto& s : current.samples) {
-    problem.y.push_back(s.measured_C - s.simulated_C);
-    problem.group.push_back(s.run);
-  }
-  for (const auto& [name, column] : current.sensitivities) {
-    const ParameterEstimate& p = current.joint.parameter(name);
-    if (name.rfind("heat_scale ", 0) != 0 && p.free && !p.held_unidentifiable && !p.at_bound) problem.fixed.push_back(column);
-  }
-  problem.candidates = thermal_sensor_term_values(data, options, current, terms);
-  for (const auto& c : candidates) problem.family.push_back(c.family);
-  const RunNuisance nuisance(current);
-  nuisance.remove(problem.y);
-  for (auto& column : problem.fixed) nuisance.remove(column);
-  for (auto& column : problem.candidates) nuisance.remove(column);
-  // The sparsity tolerance: a tenth of what a perfect term could gain over the noise floor,
-  // within [the selection's minimum gain, 2 %] (the held-out RMSE is mostly noise when the
-  // excess is small).
+  const SparseProblem problem = linearised_problem(data, options, current, candidates);
   SparseOptions sparse;
-  const double achievable = rules.noise_floor > 0 && current.cv_rmse_K > rules.noise_floor
-                                ? 100 * (1 - rules.noise_floor / current.cv_rmse_K)
-                                : 100.0;
-  sparse.min_gain_percent = std::clamp(0.1 * achievable, rules.min_cv_gain_percent, 2.0);
+  sparse.min_gain_percent = sparsity_tolerance_percent(current, rules);
   const SparseSelection chosen = select_sparse(problem, sparse);
   if (chosen.selected.empty()) {
     f.reason = fmt::format(
@@ -340,42 +406,9 @@ ThermalTermSearch learn_thermal_term(const ThermalDataSet& data, const ThermalFi
   f.lrt_p = score.lrt_p;
   f.delta_bic = score.bic - information_criteria(before.ss, before.n, std::min(before.n_eff, after.n_eff), before.k).second;
 
-  std::string formula;
-  std::vector<std::string> resembles;
-  std::set<std::string> used;
-  for (std::size_t j = 0; j < chosen_terms.size(); ++j) {
-    const ThermalSensorTerm& term = chosen_terms[j];
-    const auto& indices = joint.sensor_term_parameters[j];
-    EmpiricalComponent c;
-    const auto which = std::find(periods_s.begin(), periods_s.end(), term.scale_s) - periods_s.begin();
-    c.symbol = symbol(term, j + 1, which == 0 ? "P" : fmt::format("P{}", which + 1));
-    c.words = words(term);
-    c.covariates = covariates(term);
-    c.coefficient = within_bounds(joint.joint.parameters[indices.front()]);
-    double scale_s = term.scale_s;
-    if (indices.size() > 1) {
-      c.has_scale = true;
-      c.scale = within_bounds(joint.joint.parameters[indices[1]]);
-      scale_s = c.scale.value;
-    }
-    if (periodic(term.kind)) c.words += fmt::format(" (P = {:.3g} h)", scale_s / kSecondsPerHour);
-    formula += (formula.empty() ? "" : " + ") + c.symbol;
-    const std::string r = resemblance(term, c.coefficient.value, scale_s);
-    if (std::find(resembles.begin(), resembles.end(), r) == resembles.end()) resembles.push_back(r);
-    used.insert(c.covariates.begin(), c.covariates.end());
-    f.components.push_back(std::move(c));
-  }
-  f.formula = formula;
-  for (const auto& r : resembles) f.resembles += (f.resembles.empty() ? "" : "; or ") + r;
-  if (used.count("time_since_start_h")) f.ranges.push_back({"time_since_start_h", 0.0, longest / kSecondsPerHour});
-  if (used.count("ambient_C")) {
-    CovariateRange r{"ambient_C", std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity()};
-    for (const auto& a : ambients)
-      for (double T : a.temperature_C) r.min = std::min(r.min, T), r.max = std::max(r.max, T);
-    f.ranges.push_back(r);
-  }
+  describe_terms(chosen_terms, joint, periods_s, ambients, longest, f);
   if (!passes) {
-    f.reason = "the term the sparse regression chose (" + formula + "), fitted jointly with the model, was not kept: " +
+    f.reason = "the term the sparse regression chose (" + f.formula + "), fitted jointly with the model, was not kept: " +
                score.reason;
     return out;
   }
@@ -384,13 +417,7 @@ ThermalTermSearch learn_thermal_term(const ThermalDataSet& data, const ThermalFi
   ThermalFitOptions joint_options = options;
   joint_options.sensor_terms = chosen_terms;
   f.curve = time_curve(data, joint_options, joint);
-  // The parts at their fitted values: a coefficient, then the scale where the term has one.
-  out.terms = chosen_terms;
-  for (std::size_t j = 0; j < out.terms.size() && j < joint.sensor_term_parameters.size(); ++j) {
-    const auto& at = joint.sensor_term_parameters[j];
-    if (!at.empty()) out.terms[j].coefficient = joint.joint.parameters[at[0]].value;
-    if (at.size() > 1) out.terms[j].scale_s = joint.joint.parameters[at[1]].value;
-  }
+  out.terms = at_fitted_values(chosen_terms, joint);
   out.fit = std::move(joint);
   return out;
 }
