@@ -610,6 +610,74 @@ class ThetaStepper {
 
 }  // namespace
 
+namespace {
+
+// Rannacher start-up: Crank-Nicolson's first step is taken as kStartupSubsteps backward-Euler
+// substeps, which damp the stiff modes that switching the heat on excites (CN alone would let
+// them ring for hours) while keeping second order.
+constexpr int kStartupSubsteps = 4;
+
+// A step of the time stepping: from t0 with its stepper to t_next.
+template <typename O>
+struct TimeStep {
+  double t0, t_next;
+  const ThetaStepper<O>* stepper;
+  bool last;
+};
+
+// The steps, in order, the last ending exactly at the duration; Crank-Nicolson's first as the
+// start-up's substeps.
+template <typename O>
+std::vector<TimeStep<O>> time_plan(int steps, double duration_s, bool crank_nicolson, const ThetaStepper<O>& stepper,
+                                   const ThetaStepper<O>& startup) {
+  std::vector<TimeStep<O>> plan;
+  double t = 0.0;
+  for (int step = 0; step < steps; ++step) {
+    const bool substeps = crank_nicolson && step == 0;
+    const ThetaStepper<O>& s = substeps ? startup : stepper;
+    for (int k = 0; k < (substeps ? kStartupSubsteps : 1); ++k) {
+      const bool last = step + 1 == steps && (!substeps || k + 1 == kStartupSubsteps);
+      const double t_next = last ? duration_s : t + s.dt();
+      plan.push_back({t, t_next, &s, last});
+      t = t_next;
+    }
+  }
+  return plan;
+}
+
+// The steps' intervals as advance() takes them (from t0, its stepper's dt long).
+template <typename O>
+std::vector<std::pair<double, double>> intervals_of(const std::vector<TimeStep<O>>& plan) {
+  std::vector<std::pair<double, double>> intervals;
+  for (const TimeStep<O>& p : plan) intervals.emplace_back(p.t0, p.t0 + p.stepper->dt());
+  return intervals;
+}
+
+// A solution before its first record: what it will hold, where and how it was stepped.
+template <typename T>
+RailSolution<T> empty_solution(const RailOutputs& outputs, const Grid& grid, double dt, int steps) {
+  RailSolution<T> sol;
+  sol.output_times_s = outputs.output_times_s;
+  sol.sensor_positions_m = outputs.sensor_positions_m;
+  sol.node_positions_m = grid.x;
+  sol.time_step_s = dt;
+  sol.steps = steps;
+  sol.sensor_temperature_C.reserve(outputs.output_times_s.size() * outputs.sensor_positions_m.size());
+  return sol;
+}
+
+// The rail at t = 0: the initial temperature, or the given profile at the grid's nodes.
+template <typename T>
+std::vector<T> initial_field(const RailParams<T>& params, const Grid& grid) {
+  std::vector<T> field(grid.size(), params.initial_temperature_C);
+  if (!params.initial_profile_C.empty())
+    for (std::size_t i = 0; i < field.size(); ++i)
+      field[i] = T(initial_profile_at(params.initial_profile_x_m, params.initial_profile_C, grid.x[i]));
+  return field;
+}
+
+}  // namespace
+
 // True when x carries a derivative.
 bool varies(double) { return false; }
 template <int N>
@@ -637,42 +705,15 @@ RailSolution<T> simulate_on(const Operator<O>& op, const Prepared<T>& prep, cons
   const double dt = outputs.duration_s / steps;
   const bool crank_nicolson = numerics.scheme == TimeScheme::crank_nicolson;
   const ThetaStepper<O> stepper(op, n, crank_nicolson ? 0.5 : 1.0, dt);
-  // Rannacher start-up: Crank-Nicolson's first step is taken as kStartupSubsteps backward-Euler
-  // substeps, which damp the stiff modes that switching the heat on excites (CN alone would let
-  // them ring for hours) while keeping second order.
-  constexpr int kStartupSubsteps = 4;
   const ThetaStepper<O> startup(op, n, 1.0, dt / kStartupSubsteps);
 
   const HeatRateSchedule<T>& schedule = params.heat_schedule;
   validate(schedule);
   if (!schedule.empty() && heat_rate)
     throw InvalidParameter("heat_schedule", "a heat schedule cannot also follow the rail temperature (coupling)");
-  // The steps, in order: (start, the stepper), the last ending exactly at the duration.
-  struct Step {
-    double t0, t_next;
-    const ThetaStepper<O>* stepper;
-    bool last;
-  };
-  std::vector<Step> plan;
-  {
-    double t = 0.0;
-    for (int step = 0; step < steps; ++step) {
-      const bool substeps = crank_nicolson && step == 0;
-      const ThetaStepper<O>& s = substeps ? startup : stepper;
-      for (int k = 0; k < (substeps ? kStartupSubsteps : 1); ++k) {
-        const bool last = step + 1 == steps && (!substeps || k + 1 == kStartupSubsteps);
-        const double t_next = last ? outputs.duration_s : t + s.dt();
-        plan.push_back({t, t_next, &s, last});
-        t = t_next;
-      }
-    }
-  }
+  const std::vector<TimeStep<O>> plan = time_plan(steps, outputs.duration_s, crank_nicolson, stepper, startup);
   std::shared_ptr<const StepSweeps> sweeps;
-  if (numerics.source == SourceModel::moving) {
-    std::vector<std::pair<double, double>> intervals;
-    for (const Step& p : plan) intervals.emplace_back(p.t0, p.t0 + p.stepper->dt());  // as advance() takes them
-    sweeps = moving_sweeps(prep.motion, grid.faces, intervals);
-  }
+  if (numerics.source == SourceModel::moving) sweeps = moving_sweeps(prep.motion, grid.faces, intervals_of(plan));
   SourceTerm<T> source(numerics.source, prep.motion, grid, params.heat_partition * params.heat_rate_W, sweeps);
   // Q_f for the step starting from `field`: constant, or from the coupling model.
   auto heat_rate_for = [&](const std::vector<T>& field) {
@@ -683,18 +724,8 @@ RailSolution<T> simulate_on(const Operator<O>& op, const Prepared<T>& prep, cons
     return schedule.empty() ? q : schedule.integral_J(t0, t0 + dt) / dt;
   };
 
-  RailSolution<T> sol;
-  sol.output_times_s = outputs.output_times_s;
-  sol.sensor_positions_m = outputs.sensor_positions_m;
-  sol.node_positions_m = grid.x;
-  sol.time_step_s = dt;
-  sol.steps = steps;
-  sol.sensor_temperature_C.reserve(outputs.output_times_s.size() * outputs.sensor_positions_m.size());
-
-  std::vector<T> current(n, params.initial_temperature_C), next(n);
-  if (!params.initial_profile_C.empty())
-    for (std::size_t i = 0; i < n; ++i)
-      current[i] = T(initial_profile_at(params.initial_profile_x_m, params.initial_profile_C, grid.x[i]));
+  RailSolution<T> sol = empty_solution<T>(outputs, grid, dt, steps);
+  std::vector<T> current = initial_field(params, grid), next(n);
   const std::vector<T> initial = outputs.energy_balance ? current : std::vector<T>();
   std::size_t next_output = 0, next_profile = 0;
   std::optional<T> carried_source_temperature;  // of the last interval's end, when computed
@@ -735,7 +766,7 @@ RailSolution<T> simulate_on(const Operator<O>& op, const Prepared<T>& prep, cons
 
   RailEnergy<T> energy;
   RailEnergy<T>* tally = outputs.energy_balance ? &energy : nullptr;
-  for (const Step& p : plan) {
+  for (const TimeStep<O>& p : plan) {
     source.set_power(params.heat_partition * mean_heat_rate(p.t0, p.stepper->dt(), q));
     p.stepper->advance(current, next, p.t0, ambient, source, tally);
     const T q_next = heat_rate ? heat_rate_for(next) : q;
