@@ -1,6 +1,6 @@
-// Work on independent items split into contiguous slices, one per thread (OpenMP). Kept out of
-// the headers that templates include, so that every translation unit sees one definition
-// whether or not it is compiled with OpenMP.
+// Work on independent items split into contiguous slices, one per thread of a pool kept for the
+// process (parallel_slices.cc). Kept out of the headers that templates include, so that every
+// translation unit sees one definition whether or not it is compiled with OpenMP.
 #pragma once
 
 #include <cstddef>

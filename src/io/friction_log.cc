@@ -88,18 +88,6 @@ double preload_class_um(std::string_view preload_class, std::string_view guide) 
                                                       preload_class));
 }
 
-FrictionConditions<double> FrictionLog::conditions(std::size_t i) const {
-  return {.load_N = load_N[i],
-          .preload_um = preload_um[i],
-          .block_length_mm = block_length_mm[i],
-          .velocity_m_s = velocity_m_s[i],
-          .temperature_C = temperature_C[i],
-          .direction = static_cast<double>(direction[i]),
-          .acceleration_m_s2 = i < acceleration_m_s2.size() ? acceleration_m_s2[i] : 0.0,
-          .position_m = i < position_m.size() ? position_m[i] : 0.0,
-          .distance_since_reversal_m = i < distance_since_reversal_m.size() ? distance_since_reversal_m[i] : 0.0};
-}
-
 // Flattened: sixteen push_backs inlined (their capacity reserved by the loaders) rather than called.
 [[gnu::flatten]] void FrictionLog::append(std::uint32_t run_index, std::uint32_t guide_index, double time,
                          const FrictionConditions<double>& c, double friction, double viscosity40,

@@ -203,7 +203,19 @@ struct FrictionLog {
   std::size_t size() const { return friction_N.size(); }
   // The operating point of sample i for the friction law, direction included (ν_ref is per
   // sample: viscosity40_mm2_s).
-  FrictionConditions<double> conditions(std::size_t i) const;
+  // Inline: the fit's row loops call it per sample and pass (out of line it was a seventh of a
+  // 100 k-sample fit's time).
+  FrictionConditions<double> conditions(std::size_t i) const {
+    return {.load_N = load_N[i],
+            .preload_um = preload_um[i],
+            .block_length_mm = block_length_mm[i],
+            .velocity_m_s = velocity_m_s[i],
+            .temperature_C = temperature_C[i],
+            .direction = static_cast<double>(direction[i]),
+            .acceleration_m_s2 = i < acceleration_m_s2.size() ? acceleration_m_s2[i] : 0.0,
+            .position_m = i < position_m.size() ? position_m[i] : 0.0,
+            .distance_since_reversal_m = i < distance_since_reversal_m.size() ? distance_since_reversal_m[i] : 0.0};
+  }
   // Appends one sample to every column.
   void append(std::uint32_t run_index, std::uint32_t guide_index, double time, const FrictionConditions<double>& c,
               double friction, double viscosity40, std::uint32_t source_line = 0);
