@@ -38,8 +38,11 @@ class Pool {
   }
 
   // body(worker) for worker 0..threads-1, worker 0 on this thread; returns when all have.
-  void run(int threads, const std::function<void(int)>& body) {
-    const std::lock_guard lock(job_mutex_);  // jobs from different threads, one at a time
+  // False, having run nothing, while another thread's job has the pool (`lmcal fleet --jobs`'
+  // workers): the caller then does the work alone.
+  bool run(int threads, const std::function<void(int)>& body) {
+    const std::unique_lock lock(job_mutex_, std::try_to_lock);
+    if (!lock.owns_lock()) return false;
     if (owner_ != getpid()) forget_workers();  // a forked child has none of its parent's threads
     while (static_cast<int>(workers_.size()) < threads - 1) {
       const int id = static_cast<int>(workers_.size()) + 1;
@@ -53,6 +56,7 @@ class Pool {
     run_as(0, body);
     for (int left = remaining_.load(std::memory_order_acquire); left != 0; left = remaining_.load(std::memory_order_acquire))
       remaining_.wait(left, std::memory_order_acquire);
+    return true;
   }
 
  private:
@@ -100,12 +104,19 @@ class Pool {
   int job_threads_ = 0;
 };
 
+#ifndef _OPENMP
+// Without OpenMP (a clang build): the cores, or the limit set.
+const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+std::atomic<int> thread_limit{0};
+#endif
+
+// The threads a job may use: OpenMP's (OMP_NUM_THREADS, omp_set_num_threads, the cores).
 int most_threads() {
 #ifdef _OPENMP
   return omp_get_max_threads();
 #else
-  static const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  return cores;
+  const int limit = thread_limit.load();
+  return limit > 0 ? limit : cores;
 #endif
 }
 
@@ -132,8 +143,9 @@ int limit_slice_threads(int threads) {
   omp_set_num_threads(threads > 0 ? threads : default_threads);
   return before;
 #else
-  (void)threads;
-  return 1;
+  const int before = most_threads();
+  thread_limit.store(std::max(threads, 0));
+  return before;
 #endif
 }
 
@@ -148,11 +160,9 @@ void for_each_slice(std::size_t items, int threads, const std::function<void(int
       failure[slice] = std::current_exception();
     }
   };
-  if (inside_parallel_work()) {
-    for (int s = 0; s < threads; ++s) one(s);  // the same slices, one after the other on this thread
-  } else {
-    Pool::instance().run(threads, one);
-  }
+  // Nested, or the pool busy with another thread's job: the same slices, one after the other.
+  if (inside_parallel_work() || !Pool::instance().run(threads, one))
+    for (int s = 0; s < threads; ++s) one(s);
   for (const std::exception_ptr& f : failure)
     if (f) std::rethrow_exception(f);
 }
@@ -167,15 +177,12 @@ void for_each_index(std::size_t items, const std::function<void(std::size_t)>& b
     }
   };
   const int threads = slice_threads(items, 1);
-  if (threads <= 1) {
-    for (std::size_t i = 0; i < items; ++i) one(i);
-  } else {
-    std::atomic<std::size_t> next{0};  // the next index to take, on whichever thread is free
-    Pool::instance().run(threads, [&](int) {
-      for (std::size_t i = next.fetch_add(1, std::memory_order_relaxed); i < items; i = next.fetch_add(1, std::memory_order_relaxed))
-        one(i);
-    });
-  }
+  std::atomic<std::size_t> next{0};  // the next index to take, on whichever thread is free
+  auto take = [&](int) {
+    for (std::size_t i = next.fetch_add(1, std::memory_order_relaxed); i < items; i = next.fetch_add(1, std::memory_order_relaxed))
+      one(i);
+  };
+  if (threads <= 1 || !Pool::instance().run(threads, take)) take(0);
   for (const std::exception_ptr& f : failure)
     if (f) std::rethrow_exception(f);
 }

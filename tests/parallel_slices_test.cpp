@@ -90,6 +90,25 @@ TEST(ParallelSlices, NestedWorkRunsOnTheCallingThread) {
   for (const auto& id : inner_threads) EXPECT_TRUE(outer_threads.count(id));
 }
 
+// Two threads that are not the pool's (`lmcal fleet --jobs 2`'s workers) asking at once: one
+// gets the pool, the other does its work alone; both finish with every item done once.
+TEST(ParallelSlices, TwoCallersAtOnceBothFinish) {
+  std::vector<std::atomic<int>> a(20000), b(20000);
+  auto fill = [](std::vector<std::atomic<int>>& seen) {
+    for (int repeat = 0; repeat < 50; ++repeat)
+      for_each_slice(seen.size(), 2, [&](int, std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i < end; ++i) seen[i].fetch_add(1);
+      });
+  };
+  std::thread other([&] { fill(b); });
+  fill(a);
+  other.join();
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    ASSERT_EQ(a[i].load(), 50);
+    ASSERT_EQ(b[i].load(), 50);
+  }
+}
+
 TEST(ParallelSlices, TheThreadLimitIsObeyed) {
   const int before = limit_slice_threads(1);
   EXPECT_EQ(slice_threads(1'000'000, 1), 1);

@@ -18,6 +18,7 @@
 
 #include "lmcal/diagnose/diagnosis.hpp"
 #include "lmcal/fit/fit_result.hpp"
+#include "parallel_slices.hpp"
 
 namespace lmcal::detail {
 
@@ -166,7 +167,6 @@ Selection<Fit> forward_select(const std::vector<std::string>& library, Fit basel
     std::vector<Fit> fits(candidates);
     std::vector<ModelFit> models(candidates);
     std::vector<CandidateScore> round(candidates);
-    std::exception_ptr failure;
     if (rules.parallel && rules.progress) rules.progress(step + ": " + std::to_string(candidates) + " candidates", 0, 1);
     std::vector<std::size_t> start_order(candidates);
     std::iota(start_order.begin(), start_order.end(), std::size_t{0});
@@ -174,22 +174,20 @@ Selection<Fit> forward_select(const std::vector<std::string>& library, Fit basel
       std::stable_sort(start_order.begin(), start_order.end(), [&](std::size_t a, std::size_t b) {
         return rules.expected_cost(effects_left[a]) > rules.expected_cost(effects_left[b]);
       });
-#pragma omp parallel for schedule(dynamic) if (rules.parallel)
-    for (std::size_t started = 0; started < candidates; ++started) {
+    auto fit_candidate = [&](std::size_t started) {
       const std::size_t i = start_order[started];
-      try {
-        if (!rules.parallel && rules.progress) rules.progress(step + ", " + effects_left[i], i, candidates);
-        std::vector<std::string> effects = s.accepted;
-        effects.push_back(effects_left[i]);
-        fits[i] = fit_with(effects, s.current);
-        std::tie(models[i], round[i]) = summarise(fits[i], effects_left[i]);
-        round[i].effect = effects_left[i];
-      } catch (...) {
-#pragma omp critical(lmcal_forward_select)
-        if (!failure) failure = std::current_exception();
-      }
+      if (!rules.parallel && rules.progress) rules.progress(step + ", " + effects_left[i], i, candidates);
+      std::vector<std::string> effects = s.accepted;
+      effects.push_back(effects_left[i]);
+      fits[i] = fit_with(effects, s.current);
+      std::tie(models[i], round[i]) = summarise(fits[i], effects_left[i]);
+      round[i].effect = effects_left[i];
+    };
+    if (rules.parallel) {
+      for_each_index(candidates, fit_candidate);
+    } else {
+      for (std::size_t started = 0; started < candidates; ++started) fit_candidate(started);
     }
-    if (failure) std::rethrow_exception(failure);
     for (std::size_t i = 0; i < candidates; ++i) score_candidate(current, models[i], rules, round[i]);
     std::size_t best = round.size();
     for (std::size_t i = 0; i < round.size(); ++i)

@@ -12,6 +12,7 @@
 
 #include "lmcal/error.hpp"
 #include "lmcal/models/thermal_effects.hpp"
+#include "parallel_slices.hpp"
 #include "thermal_terms.hpp"
 
 namespace lmcal::detail {
@@ -193,13 +194,10 @@ class ThermalCost final : public ceres::CostFunction {
       }
     }
     if (J) std::fill(J, J + n * P, 0.0);
-    // Runs are independent simulations writing disjoint rows: one thread each (OpenMP).
-    const auto runs = static_cast<long>(model_.runs().size());
-    std::vector<char> ok(static_cast<std::size_t>(runs), 1);
-    std::exception_ptr failure;  // anything else (std::bad_alloc) leaves the region, then is rethrown
-#pragma omp parallel for schedule(dynamic)
-    for (long i = 0; i < runs; ++i) {
-      const auto run = static_cast<std::size_t>(i);
+    // Runs are independent simulations writing disjoint rows: one thread each
+    // (parallel_slices.hpp); anything but a rejected step (std::bad_alloc) is rethrown.
+    std::vector<char> ok(model_.runs().size(), 1);
+    for_each_index(ok.size(), [&](std::size_t run) {
       const std::vector<int> local = local_parameters(model_.layout(), run);
       std::size_t first = model_.first_row(run);
       // A trial step outside the physical range (α(V) outside [0, 1], h <= 0) is rejected,
@@ -216,12 +214,8 @@ class ThermalCost final : public ceres::CostFunction {
         ok[run] = good;
       } catch (const InvalidParameter&) {
         ok[run] = 0;
-      } catch (...) {
-#pragma omp critical(lmcal_thermal_cost)
-        if (!failure) failure = std::current_exception();
       }
-    }
-    if (failure) std::rethrow_exception(failure);
+    });
     if (std::find(ok.begin(), ok.end(), 0) != ok.end()) return false;
     std::size_t row = model_.rows().size();
     // Prior rows of the heat scales, after the data rows.
@@ -439,22 +433,11 @@ void ThermalModel::explain(IdentifiabilityIssue& issue) const {
   }
 }
 
-// f(r) for every run, one thread each (OpenMP; the runs are independent simulations, as in
-// the cost function); the first exception a run throws is rethrown here.
+// f(r) for every run, one thread each (the runs are independent simulations, as in the cost
+// function); the exception of the lowest run that threw is rethrown here.
 template <class F>
 void for_each_run(std::size_t count, const F& f) {
-  std::exception_ptr failure;
-  const auto runs = static_cast<long>(count);
-#pragma omp parallel for schedule(dynamic)
-  for (long i = 0; i < runs; ++i) {
-    try {
-      f(static_cast<std::size_t>(i));
-    } catch (...) {
-#pragma omp critical(lmcal_for_each_run)
-      if (!failure) failure = std::current_exception();
-    }
-  }
-  if (failure) std::rethrow_exception(failure);
+  for_each_index(count, f);
 }
 
 std::vector<std::vector<std::vector<double>>> ThermalModel::simulate(const std::vector<double>& theta) const {

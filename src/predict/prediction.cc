@@ -17,6 +17,7 @@
 #include "lmcal/fit/thermal_fit.hpp"
 #include "lmcal/io/units.hpp"
 #include "lmcal/models/friction_effects.hpp"
+#include "parallel_slices.hpp"
 
 namespace lmcal {
 
@@ -444,21 +445,16 @@ Prediction predict(const ModelFile& m, const DutyCycle& duty, const PredictionOp
 
   std::vector<Trajectory> draws(set.draws.size() - 1);
   std::vector<std::string> failed(draws.size());
-  std::exception_ptr fatal;  // not a draw's physics (out of memory): leaves the loop, then rethrown
-#pragma omp parallel for schedule(dynamic)
-  for (std::size_t i = 0; i < draws.size(); ++i) {
+  // Each draw on a free thread; anything but a draw's physics (out of memory) is rethrown.
+  detail::for_each_index(draws.size(), [&](std::size_t i) {
     try {
       draws[i] = simulate_duty(m, duty, set.draws[i + 1], o, times, nullptr);
     } catch (const InputError& e) {
       failed[i] = e.what();
     } catch (const InvalidParameter& e) {
       failed[i] = e.what();
-    } catch (...) {
-#pragma omp critical(lmcal_prediction_fatal)
-      if (!fatal) fatal = std::current_exception();
     }
-  }
-  if (fatal) std::rethrow_exception(fatal);
+  });
   std::vector<Trajectory> ran;
   std::size_t n_failed = 0;
   std::string first_failure;

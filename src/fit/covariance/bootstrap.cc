@@ -16,6 +16,7 @@
 #include "covariance.hpp"
 #include "lmcal/error.hpp"
 #include "lmcal/io/limits.hpp"
+#include "parallel_slices.hpp"
 
 namespace lmcal::detail {
 
@@ -142,10 +143,9 @@ BootstrapResult cluster_bootstrap(const ScoreInputs& in, std::size_t replicates,
   if (!external && in.jacobian.allFinite()) run_sums(in, H, g);
   else run_sums_sparse(in, external ? external_jacobian : nullptr, H, g, K);
 
-  const auto count = static_cast<long>(replicates);
-  std::exception_ptr failure;  // a replicate's std::bad_alloc leaves the region, then is rethrown
-#pragma omp parallel for schedule(static)
-  for (long b = 0; b < count; ++b) try {
+  // Each replicate on a free thread (parallel_slices.hpp), into its own row of the draws.
+  for_each_index(replicates, [&](std::size_t replicate) {
+    const auto b = static_cast<long>(replicate);
     std::uint64_t state = seed * 0x2545F4914F6CDD1DULL + static_cast<std::uint64_t>(b);
     Eigen::MatrixXd Hb = Eigen::MatrixXd::Zero(m, m);
     Eigen::VectorXd gb = Eigen::VectorXd::Zero(m);
@@ -166,15 +166,11 @@ BootstrapResult cluster_bootstrap(const ScoreInputs& in, std::size_t replicates,
       for (Eigen::Index c = 0; c < d; ++c) Hd(a, c) = Hb(determined[a], determined[c]);
     }
     const Eigen::LDLT<Eigen::MatrixXd> ldlt(Hd);
-    if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) continue;
+    if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) return;
     const Eigen::VectorXd step = ldlt.solve(-gd);
-    if (!step.allFinite()) continue;
+    if (!step.allFinite()) return;
     for (Eigen::Index a = 0; a < d; ++a) out.draws(b, determined[a]) = step[a];
-  } catch (...) {
-#pragma omp critical(lmcal_bootstrap)
-    if (!failure) failure = std::current_exception();
-  }
-  if (failure) std::rethrow_exception(failure);
+  });
 
   // Covariance over the replicates that determined both parameters.
   e.covariance = Eigen::MatrixXd::Constant(m, m, kNaN);
