@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cstdlib>
 #include <cstdint>
 #include <exception>
 #include <mutex>
@@ -105,8 +106,16 @@ class Pool {
 };
 
 #ifndef _OPENMP
-// Without OpenMP (a clang build): the cores, or the limit set.
-const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+// Without OpenMP (a clang build): OMP_NUM_THREADS as OpenMP reads it (its first number), else
+// the cores; limit_slice_threads overrides it.
+int threads_from_environment() {
+  if (const char* text = std::getenv("OMP_NUM_THREADS")) {
+    const int n = std::atoi(text);
+    if (n > 0) return n;
+  }
+  return static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+}
+const int cores = threads_from_environment();
 std::atomic<int> thread_limit{0};
 #endif
 
