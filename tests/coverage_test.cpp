@@ -207,7 +207,7 @@ ThermalFitOptions coverage_fit() {
 
 TEST(Coverage, AlphaUnderAutocorrelatedNoiseRunToRunHeatAndAHeatKnownToTwoPercent) {
   RigEffects effects;
-  effects.thermal.tc_lag = 10;
+  set_rig_effect(effects, "tc_lag", 10);
   Tally alpha{"alpha", 0.6};
   std::size_t heat_counted = 0;
   double boot_over_delta = 0;

@@ -268,7 +268,7 @@ TEST(ThermalPlan, ATieBetweenBaseLossAndForcedConvectionGetsOtherSpeeds) {
   tc.duration_s = 4 * 3600;
   tc.record_every_s = 30;
   RigEffects effects;
-  effects.thermal.base_loss = 0.5;
+  set_rig_effect(effects, "base_loss", 0.5);
   const ThermalDataSet data = generate_thermal_dataset(tc, effects, "one speed").set;
   ThermalFitOptions to;
   to.friction = tc.constants;

@@ -194,7 +194,7 @@ TEST(ThermalFit, CoupledHeatFromAMeasuredFrictionRecoversAlpha) {
   auto rig = clean_rig(3 * 3600.0);
   rig.velocity_m_s = {0.083, 0.11};
   RigEffects effects;
-  effects.thermal.coupling = 1;
+  set_rig_effect(effects, "coupling", 1);
   auto generated = generate_thermal_dataset(rig, effects, "coupled");
   const auto truth = nlohmann::json::parse(generated.truth_json);
   ThermalFitOptions o = options_for_rig();

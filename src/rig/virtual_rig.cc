@@ -30,7 +30,7 @@ using rig::round_to;
 // A named effect of the rig: a friction effect (a slot of FrictionEffects, from the
 // library in friction_effects.hpp), a hidden one (a member of HiddenFrictionEffects) or a
 // thermal one: a mechanism of the library in thermal_mechanisms.hpp (a slot of
-// ThermalRigEffects::mechanisms, or its named member) or one the library lacks (a member).
+// ThermalRigEffects::mechanisms) or one the library lacks (a member).
 struct EffectEntry {
   RigEffectInfo info;
   std::optional<std::size_t> friction_slot;
@@ -40,6 +40,7 @@ struct EffectEntry {
   // data sets were committed, and data made without them keeps its bytes).
   bool listed_when_neutral = true;
   std::optional<std::size_t> mechanism_slot;  // held in ThermalRigEffects::mechanisms
+  bool mechanism_listed_when_off = false;     // a mechanism the truth file lists at 0 too (below)
 
   double& ref(RigEffects& e) const {
     return friction_slot    ? e.friction[*friction_slot]
@@ -50,6 +51,15 @@ struct EffectEntry {
   bool is_thermal() const { return thermal || mechanism_slot; }
   double value(const RigEffects& e) const { return const_cast<EffectEntry*>(this)->ref(const_cast<RigEffects&>(e)); }
 };
+
+// The mechanisms the rig made before it read the library: data sets made since list them in
+// their truth file even when off, and keep their bytes so. A closed list: a mechanism
+// registered later is listed only when on, so that adding one leaves every data set as it was.
+bool listed_when_off(std::string_view rig_name) {
+  constexpr std::string_view kBefore[] = {"convection_velocity", "base_loss", "coupling", "tc_lag", "alpha_velocity",
+                                          "moving_source"};
+  return std::find(std::begin(kBefore), std::end(kBefore), rig_name) != std::end(kBefore);
+}
 
 const std::vector<EffectEntry>& effect_table() {
   static const std::vector<EffectEntry> table = [] {
@@ -95,19 +105,11 @@ const std::vector<EffectEntry>& effect_table() {
       t.push_back({{h.name, h.unit, h.neutral, h.description}, std::nullopt, nullptr, h.member, h.listed_when_neutral});
     auto thermal = [&](const char* name, const char* unit, const char* description, double ThermalRigEffects::*member,
                        double neutral = 0.0) { t.push_back({{name, unit, neutral, description}, std::nullopt, member}); };
-    // The library's mechanisms with a rig effect, in its order; those made before the rig read
-    // the library keep their named members.
-    using R = ThermalRigEffects;
-    const std::pair<std::string_view, double R::*> named[] = {
-        {"convection_velocity", &R::convection_velocity}, {"base_loss", &R::base_loss}, {"coupling", &R::coupling},
-        {"tc_lag", &R::tc_lag}, {"alpha_velocity", &R::alpha_velocity}, {"moving_source", &R::moving_source}};
-    for (std::size_t slot = 0; slot < kThermalMechanismCount; ++slot) {
-      const auto& rig = ThermalMechanismLibrary::infos[slot].rig;
-      if (!rig) continue;
-      const auto member = std::find_if(std::begin(named), std::end(named), [&](auto& n) { return n.first == rig->name; });
-      if (member != std::end(named)) thermal(rig->name, rig->unit, rig->description, member->second);
-      else t.push_back({{rig->name, rig->unit, 0.0, rig->description}, std::nullopt, nullptr, nullptr, true, slot});
-    }
+    // The library's mechanisms with a rig effect, in its order.
+    for (std::size_t slot = 0; slot < kThermalMechanismCount; ++slot)
+      if (const auto& rig = ThermalMechanismLibrary::infos[slot].rig)
+        t.push_back({{rig->name, rig->unit, 0.0, rig->description}, std::nullopt, nullptr, nullptr, true, slot,
+                     listed_when_off(rig->name)});
     thermal("ambient_daily_K", "K",
             "not in the library: the air swings daily, A sin(2 pi t/86400 s + phase of the run); the rail sees all of it",
             &ThermalRigEffects::ambient_daily_K);
@@ -147,8 +149,8 @@ nlohmann::json effects_json(const RigEffects& effects) {
     const double value = e.value(effects);
     if (!e.listed_when_neutral && !later_on) continue;
     // A mechanism registered since the rig read the library is listed when on, so that data
-    // made without it keeps its bytes.
-    if (e.mechanism_slot && value == e.info.neutral) continue;
+    // made without it keeps its bytes (listed_when_off).
+    if (e.mechanism_slot && !e.mechanism_listed_when_off && value == e.info.neutral) continue;
     j[e.info.name] = {{"value", value}, {"unit", e.info.unit}, {"active", value != e.info.neutral}};
   }
   return j;

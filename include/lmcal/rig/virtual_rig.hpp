@@ -63,16 +63,9 @@ namespace LMCAL_API lmcal {
 
 struct ThermalRigEffects {
   // The value of each mechanism of the library (thermal_mechanisms.hpp) with a rig effect, by
-  // slot: its parameter, or 1 for a switch; 0 leaves it out. set_rig_effect sets them by name.
-  // The six made before the rig read the library keep their members below instead (code sets
-  // them directly); `mechanisms` holds every one registered since.
+  // slot: its parameter, or 1 for a switch; 0 leaves it out. set_rig_effect sets them by name
+  // (its unit and meaning: rig_effects(), or the mechanism's header).
   std::array<double, kThermalMechanismCount> mechanisms{};
-  double convection_velocity = 0;  // c_V in h = h0 + c_V sqrt(V), W/m²K per sqrt(m/s)
-  double base_loss = 0;            // b, W/mK
-  double coupling = 0;             // 1: Q_f from the friction law at the rail temperature
-  double tc_lag = 0;               // thermocouple time constant, s
-  double alpha_velocity = 0;       // s_α in α = α0 + s_α (V - 0.1 m/s), per m/s
-  double moving_source = 0;        // 1: the block moves (truth on the full rail); 0: averaged
   // Not in the library (the empirical term's tests hide them): the air around the rail swings
   // daily, A sin(2π t/86400 s + φ_run) (φ_run: the run's start in the day, from a stream of
   // its own); the rail sees all of it, the logged ambient sensors only the share `seen`.
