@@ -22,6 +22,7 @@
 #include <vector>
 #include <cmath>
 #include <cstddef>
+#include <optional>
 #include <utility>
 
 #include "lmcal/error.hpp"
@@ -112,6 +113,30 @@ class CentredSums {
     return out;
   }
 
+  // The rows `later` summed (the rows after this one's, not yet closed), appended: a chunk
+  // that runs on across the seam merges with its continuation by Chan's formula.
+  void append(CentredSums&& later) {
+    LMCAL_ASSERT(!closed_ && !later.closed_ && later.size_ == size_, "append to open sums of one size");
+    flush();
+    later.flush();
+    total_ += later.total_;
+    std::size_t first = 0;
+    if (!chunks_.empty() && !later.chunks_.empty() && chunks_.back().group == later.chunks_.front().group) {
+      Chunk& c = chunks_.back();
+      const Chunk& next = later.chunks_.front();
+      const Eigen::VectorXd d = next.mean - c.mean;
+      total_.selfadjointView<Eigen::Lower>().rankUpdate(d, c.n * next.n / (c.n + next.n));
+      c.mean += d * (next.n / (c.n + next.n));
+      c.n += next.n;
+      first = 1;
+    }
+    for (std::size_t k = first; k < later.chunks_.size(); ++k) {
+      const std::size_t group = later.chunks_[k].group;
+      if (group >= group_count_.size()) group_count_.resize(group + 1, 0.0), group_sum_.resize(group + 1, Eigen::VectorXd::Zero(size_));
+      chunks_.push_back(std::move(later.chunks_[k]));
+    }
+  }
+
   // Per group: rows and Σ x (after close(); groups beyond those seen have none).
   void close() {
     if (closed_) return;
@@ -189,14 +214,21 @@ class BatchedAutoDiffCostFunction final : public ceres::CostFunction, public Nor
   bool normal_equations(const double* theta, const std::vector<bool>& held, double& cost, Eigen::MatrixXd& JtJ,
                         Eigen::VectorXd& Jtr) const override {
     const int p = parameter_block_sizes()[0];
-    CentredSums sums(p + 1);
-    std::vector<double> x(static_cast<std::size_t>(p) + 1);
-    auto add = [&](std::size_t i, double r) {
-      x[static_cast<std::size_t>(p)] = r;
-      sums.add(groups_.empty() ? 0 : groups_[i], x.data());
+    std::optional<CentredSums> summed;
+    const auto sums_of_part = [&] { return CentredSums(p + 1); };
+    auto add = [&](CentredSums& part, std::size_t i, const double* gradient, double r) {
+      double x[17];
+      std::copy_n(gradient, p, x);
+      x[p] = r;
+      part.add(groups_.empty() ? 0 : groups_[i], x);
       return std::isfinite(r);
     };
-    if (!rows_with_gradient(theta, x.data(), add, held)) return false;
+    auto merge = [&](CentredSums&& part) {
+      if (summed) summed->append(std::move(part));
+      else summed.emplace(std::move(part));
+    };
+    if (!rows_with_gradient(theta, Reduce{sums_of_part, add, merge}, held)) return false;
+    CentredSums& sums = *summed;
     if (profiled_ && profiled_->profiling && !groups_.empty()) profile(sums, p);
     const Eigen::MatrixXd S = sums.finish(groups_.empty() ? std::vector<double>{} : shrink_or_ones());
     JtJ = S.topLeftCorner(p, p);
@@ -210,14 +242,13 @@ class BatchedAutoDiffCostFunction final : public ceres::CostFunction, public Nor
     const int p = parameter_block_sizes()[0];
     r.resize(static_cast<Eigen::Index>(rows_));
     J.resize(static_cast<Eigen::Index>(rows_), p);
-    std::vector<double> gradient(static_cast<std::size_t>(p));
-    auto store = [&](std::size_t i, double value) {
+    auto store = [&](Stored&, std::size_t i, const double* gradient, double value) {
       const auto row = static_cast<Eigen::Index>(i);
       r[row] = value;
-      for (int j = 0; j < p; ++j) J(row, j) = gradient[static_cast<std::size_t>(j)];
+      for (int j = 0; j < p; ++j) J(row, j) = gradient[j];
       return std::isfinite(value);
     };
-    const bool ok = rows_with_gradient(theta, gradient.data(), store, held);
+    const bool ok = rows_with_gradient(theta, Reduce{[] { return Stored{}; }, store, [](Stored&&) {}}, held);
     if (ok && !groups_.empty()) centre_columns(r, J);
     return ok;
   }
@@ -243,12 +274,12 @@ class BatchedAutoDiffCostFunction final : public ceres::CostFunction, public Nor
       ok = std::find(finite.begin(), finite.end(), 0) == finite.end();
     } else {
       const auto p = static_cast<std::size_t>(parameter_block_sizes()[0]);
-      std::vector<double> gradient(p);
-      ok = rows_with_gradient(theta, gradient.data(), [&](std::size_t i, double r) {
+      auto store = [&](Stored&, std::size_t i, const double* gradient, double r) {
         residuals[i] = r;
-        std::copy(gradient.begin(), gradient.end(), jacobians[0] + i * p);
+        std::copy_n(gradient, p, jacobians[0] + i * p);
         return std::isfinite(r);
-      });
+      };
+      ok = rows_with_gradient(theta, Reduce{[] { return Stored{}; }, store, [](Stored&&) {}});
     }
     if (ok && !groups_.empty()) centre(residuals, jacobians ? jacobians[0] : nullptr);
     return ok;
@@ -264,15 +295,29 @@ class BatchedAutoDiffCostFunction final : public ceres::CostFunction, public Nor
     return false;
   }
 
-  // Rows are evaluated a batch at a time, each batch in slices on the threads
-  // (parallel_slices.hpp) into a buffer, then visited in row order. A row's residual and
-  // gradient do not depend on the thread that computed it, so neither does anything summed from
-  // them: the same bits with 1 thread or many. A batch is a parallel region and its barrier: on
-  // a loaded machine a thread descheduled at each of them stalls the other, so batches are large
-  // (65,536 rows, a buffer of a few MB that stays in the last-level cache): a 10⁶-sample
-  // trajectory fit on 2 threads beside a 2-job build took 2.0 s with 16,384-row batches, 1.2 s.
-  static constexpr std::size_t kBatch = 65536;
+  // A pass over the rows takes them in parts of kPart consecutive rows, each thread (of
+  // parallel_slices.hpp) a stretch of consecutive parts: a part's rows are evaluated into a
+  // buffer and added, in row order, to the part's own sums, and the parts' sums are then merged
+  // in row order. A row's residual and gradient do not depend on the thread that computed it,
+  // and the parts do not depend on the number of threads, so nor does anything summed from them:
+  // the same bits with 1 thread or many. A pass is one parallel region (one barrier: on a loaded
+  // machine a descheduled thread stalls the others at each), and the sums, a rank-k update per
+  // block of rows, are accumulated on every thread (on the calling thread alone they were half
+  // of a 10⁵-row pass).
+  static constexpr std::size_t kPart = 4096;
   static constexpr std::size_t kRowsPerThread = 4096;
+
+  // What a pass does with each row: part() opens a part's sums, add(sums, row, gradient,
+  // residual) adds a row to them (false: the row is not finite, and the pass fails), merge(sums)
+  // takes each part's in row order.
+  template <typename Part, typename Add, typename Merge>
+  struct Reduce {
+    Part part;
+    Add add;
+    Merge merge;
+  };
+  // The sums of a pass that stores each row where it belongs (nothing to merge).
+  struct Stored {};
 
   // A thread's copy of the prepared parameters on cache lines of its own: a row writes into it
   // (the sample's viscosity), and a line shared with the next thread's copy would bounce.
@@ -281,47 +326,51 @@ class BatchedAutoDiffCostFunction final : public ceres::CostFunction, public Nor
     Prepared prepared;
   };
 
-  // Each row's gradient into `gradient` (p values), then visit(row, residual); false when visit
-  // is. By the closed form where the functor has one, else by the smallest Jet that holds the
-  // parameters not `held` (8, 12 or 16); a held parameter's derivative is 0 (a 9-parameter
+  // Each row's residual and gradient (p values) through `reduce`; false when a row is not
+  // finite. By the closed form where the functor has one, else by the smallest Jet that holds
+  // the parameters not `held` (8, 12 or 16); a held parameter's derivative is 0 (a 9-parameter
   // trajectory fit holding two constants fits in the 8-wide Jet, a third cheaper per row).
-  template <typename Visit>
-  bool rows_with_gradient(const double* theta, double* gradient, const Visit& visit,
-                          const std::vector<bool>& held = {}) const {
-    if (analytic()) return analytic_rows(theta, gradient, visit);
+  template <typename R>
+  bool rows_with_gradient(const double* theta, const R& reduce, const std::vector<bool>& held = {}) const {
+    if (analytic()) return analytic_rows(theta, reduce);
     const int p = parameter_block_sizes()[0];
     std::vector<int> seeded;  // the parameters a Jet slot carries, in order
     for (int j = 0; j < p; ++j)
       if (held.empty() || !held[static_cast<std::size_t>(j)]) seeded.push_back(j);
-    if (seeded.size() <= 8) return jet_rows<8>(theta, seeded, gradient, visit);
-    if (seeded.size() <= 12) return jet_rows<12>(theta, seeded, gradient, visit);
-    return jet_rows<16>(theta, seeded, gradient, visit);
+    if (seeded.size() <= 8) return jet_rows<8>(theta, seeded, reduce);
+    if (seeded.size() <= 12) return jet_rows<12>(theta, seeded, reduce);
+    return jet_rows<16>(theta, seeded, reduce);
   }
 
   // slice(prepared, begin, end, gradients, residuals) fills rows [begin, end) with each thread's
   // copy of `prepared` (a row may change it: the sample's viscosity).
-  template <typename Prepared, typename Slice, typename Visit>
-  bool in_batches(const Prepared& prepared, const Slice& slice, double* gradient, const Visit& visit) const {
+  template <typename Prepared, typename Slice, typename R>
+  bool in_parts(const Prepared& prepared, const Slice& slice, const R& reduce) const {
+    using Sums = decltype(reduce.part());
     const auto p = static_cast<std::size_t>(parameter_block_sizes()[0]);
-    const std::size_t batch = std::min(rows_, kBatch);
-    const int threads = slice_threads(batch, kRowsPerThread);
+    const std::size_t parts = (rows_ + kPart - 1) / kPart;
+    const int threads = std::min<int>(slice_threads(rows_, kRowsPerThread), static_cast<int>(std::max<std::size_t>(parts, 1)));
     std::vector<OwnLine<Prepared>> own(static_cast<std::size_t>(threads), {prepared});
-    std::vector<double> g(batch * p), r(batch);
-    for (std::size_t first = 0; first < rows_; first += batch) {
-      const std::size_t n = std::min(batch, rows_ - first);
-      for_each_slice(n, threads, [&](int s, std::size_t begin, std::size_t end) {
-        slice(own[static_cast<std::size_t>(s)].prepared, first + begin, first + end, g.data() + begin * p, r.data() + begin);
-      });
-      for (std::size_t k = 0; k < n; ++k) {
-        std::copy_n(g.data() + k * p, p, gradient);
-        if (!visit(first + k, r[k])) return false;
+    std::vector<std::optional<Sums>> sums(parts);
+    std::vector<char> finite(parts, 1);
+    for_each_slice(parts, threads, [&](int s, std::size_t first, std::size_t last) {
+      Prepared& mine = own[static_cast<std::size_t>(s)].prepared;
+      const std::size_t size = std::min(rows_, kPart);
+      std::vector<double> g(size * p), r(size);
+      for (std::size_t k = first; k < last; ++k) {
+        const std::size_t begin = k * kPart, n = std::min(kPart, rows_ - begin);
+        slice(mine, begin, begin + n, g.data(), r.data());
+        Sums& part = sums[k].emplace(reduce.part());
+        for (std::size_t i = 0; i < n && finite[k]; ++i) finite[k] = reduce.add(part, begin + i, g.data() + i * p, r[i]);
       }
-    }
+    });
+    if (std::find(finite.begin(), finite.end(), 0) != finite.end()) return false;
+    for (auto& part : sums) reduce.merge(std::move(*part));
     return true;
   }
 
-  template <typename Visit>
-  bool analytic_rows(const double* theta, double* gradient, const Visit& visit) const {
+  template <typename R>
+  bool analytic_rows(const double* theta, const R& reduce) const {
     if constexpr (requires(const RowFunctor& f, decltype(f.prepare(theta)) prepared, double* g) {
                     f.gradient(prepared, std::size_t{}, g);
                   }) {
@@ -337,16 +386,16 @@ class BatchedAutoDiffCostFunction final : public ceres::CostFunction, public Nor
           *r++ = value;
         }
       };
-      return in_batches(functor_.prepare(theta), slice, gradient, visit);
+      return in_parts(functor_.prepare(theta), slice, reduce);
     } else {
-      (void)theta, (void)gradient, (void)visit;
+      (void)theta, (void)reduce;
       return false;
     }
   }
 
   // Slot k of the Jets carries parameter seeded[k]; the others are constants.
   template <int N>
-  bool jet_rows(const double* theta, const std::vector<int>& seeded, double* gradient, const auto& visit) const {
+  bool jet_rows(const double* theta, const std::vector<int>& seeded, const auto& reduce) const {
     using Jet = ceres::Jet<double, N>;
     const int p = parameter_block_sizes()[0];
     std::vector<Jet> t(static_cast<std::size_t>(p));
@@ -358,7 +407,7 @@ class BatchedAutoDiffCostFunction final : public ceres::CostFunction, public Nor
     auto slice = [this, &seeded](auto& prepared, std::size_t begin, std::size_t end, double* g, double* r) {
       jet_slice<N>(prepared, seeded, begin, end, g, r);
     };
-    return in_batches(functor_.prepare(t.data()), slice, gradient, visit);
+    return in_parts(functor_.prepare(t.data()), slice, reduce);
   }
 
   // Flattened: GCC otherwise leaves Eigen's Jet assignments out of line in the row loop (a

@@ -1,8 +1,9 @@
 // The least-squares engine behind every lmcal fit (private: Ceres and NLopt stay here).
 //
-//   1. multi-start: `starts` local searches with NLopt (bounded L-BFGS on a subsample of
-//      the residuals, gradient from the model's own autodiff cost function), from the
-//      given start and from a Halton sequence over the bounds;
+//   1. multi-start: `starts` local searches on a subsample of the residuals, from the given
+//      start and from a Halton sequence over the bounds: Levenberg-Marquardt on the
+//      subsample's normal equations where the cost accumulates them (the friction models),
+//      else NLopt's bounded L-BFGS with the gradient of the model's autodiff cost function;
 //   2. polish: Ceres Levenberg-Marquardt on all residuals from the best start, with
 //      bounds, held parameters (SubsetManifold) and an optional robust loss (row by row);
 //   3. identifiability: (JᵀJ)⁻¹ from a rank-revealing QR of the autodiff Jacobian (what

@@ -1,6 +1,7 @@
-// Step 1, the multi-start: bounded L-BFGS searches (NLopt) on a subsample of the rows, from
-// the given start and from a Halton sequence over the bounds, side by side where the model's
-// cost allows.
+// Step 1, the multi-start: local searches on a subsample of the rows, from the given start and
+// from a Halton sequence over the bounds, side by side where the model's cost allows: the
+// polish's Levenberg-Marquardt where the cost accumulates normal equations, else bounded L-BFGS
+// (NLopt).
 #include <fmt/format.h>
 #include <nlopt.hpp>
 
@@ -68,6 +69,9 @@ std::vector<double> halton_start(const std::vector<ParameterSpec>& specs, const 
   return theta;
 }
 
+// A start's search ends here at the latest (L-BFGS: evaluations; Levenberg-Marquardt: iterations).
+constexpr int kStartEvaluations = 250, kStartIterations = 100;
+
 }  // namespace
 
 MultiStart multi_start(const LeastSquaresModel& model, const std::vector<ParameterSpec>& specs,
@@ -96,8 +100,18 @@ MultiStart multi_start(const LeastSquaresModel& model, const std::vector<Paramet
   // Each start's search on its own (its own buffers, its own NLopt object): side by side where
   // the model allows, and the same ends in the same order either way.
   std::vector<std::pair<double, std::vector<double>>> ends(static_cast<std::size_t>(options.starts));
+  // A cost that accumulates its normal equations is searched by the polish's own
+  // Levenberg-Marquardt, inside the bounds: a Gauss-Newton step per pass over the subsample, ~10
+  // passes to a minimum where L-BFGS took ~150 (the starts of a 100 k-sample friction fit: 28 ms, then 5.5).
+  const auto* normal = dynamic_cast<const NormalEquationsCost*>(cost.get());
   auto search_from = [&](std::size_t k) {
     std::vector<double> theta = k == 0 ? start : halton_start(specs, held, start, options.seed * 7919 + k);
+    if (normal) {
+      for (int j : free) theta[j] = std::clamp(theta[j], specs[j].lower, specs[j].upper);
+      Polish end = solve_normal_equations(*normal, *cost, specs, held, std::move(theta), true, kStartIterations);
+      ends[k] = {end.summary.final_cost, std::move(end.theta)};
+      return;
+    }
     LocalSearch search{cost.get(), theta, free, scale, Eigen::VectorXd(rows.size()), {}};
     search.J.resize(static_cast<Eigen::Index>(rows.size()), static_cast<Eigen::Index>(specs.size()));
     std::vector<double> u;
@@ -108,7 +122,7 @@ MultiStart multi_start(const LeastSquaresModel& model, const std::vector<Paramet
     opt.set_min_objective(&LocalSearch::objective, &search);
     opt.set_ftol_rel(1e-10);
     opt.set_xtol_rel(1e-8);
-    opt.set_maxeval(250);
+    opt.set_maxeval(kStartEvaluations);
     double f = std::numeric_limits<double>::max();
     try {
       opt.optimize(u, f);

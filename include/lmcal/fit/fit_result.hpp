@@ -94,7 +94,7 @@ inline CovarianceMethod parse_covariance_method(std::string_view name, const std
 struct FitOptions {
   RobustLoss loss = RobustLoss::none;
   double loss_scale = 1.345;     // in units of the residual σ (whitened residuals)
-  int starts = 8;                // multi-start local searches (NLopt) before the Ceres polish
+  int starts = 8;                // multi-start local searches on a subsample before the polish
   std::size_t subsample = 300;   // residuals the multi-start stage uses (evenly spread)
   int max_iterations = 200;      // of the Ceres polish (a diagnosis caps its many warm-started fits)
   ProfileMode profile = ProfileMode::automatic;
