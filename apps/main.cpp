@@ -11,6 +11,7 @@
 #include "usage.hpp"
 #include "lmcal/error.hpp"
 #include "lmcal/io/config_file.hpp"
+#include "lmcal/process.hpp"
 #include "lmcal/version.hpp"
 
 namespace {
@@ -32,6 +33,7 @@ int main(int argc, char** argv) {
   if (!args.empty()) args[0] = "lmcal";
   // Ceres logs through glog; lmcal reports numerical trouble in its results instead.
   FLAGS_minloglevel = google::GLOG_FATAL;
+  lmcal::keep_freed_memory();  // one job, then exit: pages freed are reused, not faulted in again
   CLI::App app{"lmcal: calibrate the friction and thermal models of roller LM guides (Cheng et al. 2017)"};
   std::string version = fmt::format("lmcal {} (commit {})\n", LMCAL_VERSION, lmcal::git_commit());
   for (const auto& [name, v] : lmcal::software_versions())

@@ -5,7 +5,9 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <array>
 #include <cmath>
+#include <optional>
 #include <cstdlib>
 #include <string>
 #include <memory>
@@ -218,6 +220,51 @@ TEST(NormalEquations, LevenbergMarquardtReachesCeresMinimum) {
       EXPECT_NEAR(ours.parameters[j].value, theirs.parameters[j].value, 1e-3 * theirs.parameters[j].se) << names[j];
       EXPECT_NEAR(ours.parameters[j].se, theirs.parameters[j].se, 1e-5 * theirs.parameters[j].se) << names[j];
     }
+  }
+}
+
+}  // namespace
+}  // namespace lmcal
+
+namespace lmcal {
+namespace {
+
+// A pass sums its rows in parts of fixed size, each on its own, merged in row order
+// (CentredSums::append): the parts' merge equals the sums of all rows at once, wherever the
+// seams fall (inside a group's stretch or at its edge), and a column constant within a group
+// stays exactly 0 once centred.
+TEST(NormalEquations, SumsMergedFromPartsEqualTheSumsOfAllRows) {
+  const std::size_t n = 3000, size = 4;
+  std::vector<std::size_t> group(n);
+  std::vector<std::array<double, 4>> rows(n);
+  std::srand(7);
+  for (std::size_t i = 0; i < n; ++i) {
+    group[i] = (i / 350) % 5;  // stretches of 350 rows, groups recurring
+    const double noise = static_cast<double>(std::rand()) / RAND_MAX - 0.5;
+    rows[i] = {250.0 + 125.0 * static_cast<double>(group[i]), 1e3 + 0.1 * static_cast<double>(i) + noise, noise,
+               3.0 * noise + 1e-3 * static_cast<double>(i)};
+  }
+  const std::vector<double> shrink{1.0, 0.4, 1.0, 0.7, 0.2};
+  detail::CentredSums whole(static_cast<Eigen::Index>(size));
+  for (std::size_t i = 0; i < n; ++i) whole.add(group[i], rows[i].data());
+  const Eigen::MatrixXd expected = whole.finish(shrink);
+  for (const std::vector<std::size_t> seams : {std::vector<std::size_t>{1000, 2000}, {350, 700, 1050}, {1, 2999}, {173, 1777, 2501}}) {
+    std::optional<detail::CentredSums> merged;
+    std::size_t begin = 0;
+    for (std::size_t k = 0; k <= seams.size(); ++k) {
+      const std::size_t end = k < seams.size() ? seams[k] : n;
+      detail::CentredSums part(static_cast<Eigen::Index>(size));
+      for (std::size_t i = begin; i < end; ++i) part.add(group[i], rows[i].data());
+      if (merged) merged->append(std::move(part));
+      else merged.emplace(std::move(part));
+      begin = end;
+    }
+    const Eigen::MatrixXd got = merged->finish(shrink);
+    for (Eigen::Index a = 0; a < 4; ++a)
+      for (Eigen::Index b = 0; b < 4; ++b)
+        EXPECT_NEAR(got(a, b), expected(a, b), 1e-11 * std::sqrt(expected(a, a) * expected(b, b)) + 1e-12)
+            << "seams at " << seams.front() << "…: " << a << "," << b;
+    EXPECT_EQ(merged->finish(std::vector<double>(5, 1.0))(0, 0), 0.0) << "constant within each group: exactly 0 centred";
   }
 }
 

@@ -5,22 +5,39 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <numeric>
 #include <optional>
 
 #include "empirical_friction_parts.hpp"
+#include "parallel_slices.hpp"
 
 namespace lmcal::detail {
 
 namespace {
 
-// The spline blocks tried, each scored as it is built (F and the block alone: blocks never enter
-// together), so that only one block's columns exist at a time in `p.candidates`.
+// A covariate the smooth terms are tried in: its distinct values and each sample's among them
+// (a basis function is evaluated once per value: a speed or a load takes a handful), and the
+// factor a block is multiplied by (a part of the law; none: 1).
+struct SplineCovariate {
+  TermCovariate c;
+  std::optional<TermFactor> times;
+  std::vector<double> values;
+  std::vector<std::uint32_t> value_of;
+  std::vector<double> multiplier;
+};
+
+// A block of splines to try: its covariate and knots.
+struct Block {
+  std::size_t covariate;  // in Blocks::covariates
+  std::vector<double> knots;
+};
+
+// The spline blocks tried (F and the block alone: blocks never enter together). Each block is
+// built and scored on a free thread, with its own columns, then taken in the order found.
 struct Blocks {
-  SparseProblem p;
-  std::vector<std::vector<FrictionTerm>> terms;
-  std::vector<SupportScore> scores;
-  std::size_t tried = 0;  // basis functions, over all blocks
+  std::vector<SplineCovariate> covariates;
+  std::vector<Block> blocks;
 };
 
 // The blocks of splines in covariate c (times the factor `times`, when given): 1 to 4
@@ -28,7 +45,6 @@ struct Blocks {
 // cubic over the whole range (`cubic_only`).
 void add_blocks(Blocks& blocks, const FrictionLog& log, const TermSeries& series, const TermColumns& columns, TermCovariate c,
                 std::optional<TermFactor> times, bool cubic_only) {
-  SparseProblem& p = blocks.p;
   std::vector<double> x(log.size());
   for (std::size_t i = 0; i < log.size(); ++i) x[i] = term_covariate_value(log, series, i, c);
   std::vector<double> sorted = x;
@@ -37,7 +53,6 @@ void add_blocks(Blocks& blocks, const FrictionLog& log, const TermSeries& series
   for (double v : sorted)
     if (distinct.empty() || v > distinct.back() + 1e-9 * std::max(1.0, std::abs(v))) distinct.push_back(v);
   if (distinct.size() < 4) return;
-  const std::vector<double> multiplier = times ? columns.factor(*times, 0) : std::vector<double>(log.size(), 1.0);
   // A campaign covariate is almost one value per run: a spline with a knot every few runs
   // would follow each run's own level and shape (a factor of its own, which no new run shares),
   // so it gets a knot per six runs at most, and none under twelve runs.
@@ -52,23 +67,38 @@ void add_blocks(Blocks& blocks, const FrictionLog& log, const TermSeries& series
       if (q > knots.back() && q < sorted.back()) knots.push_back(q);
     }
     knots.insert(knots.end(), 4, sorted.back());
-    const int bases = static_cast<int>(knots.size()) - 4;
-    std::vector<FrictionTerm> terms;
-    p.candidates.clear();
-    for (int b = 1; b < bases; ++b) {
-      FrictionTerm t{.factors = {TermFactor{.covariate = c, .transform = TermTransform::spline, .basis = b, .knots = knots}}};
-      if (times) t.factors.insert(t.factors.begin(), *times);
-      std::vector<double> column(log.size());
-      for (std::size_t i = 0; i < log.size(); ++i) column[i] = times ? multiplier[i] * bspline(knots, b, x[i]) : bspline(knots, b, x[i]);
-      p.candidates.push_back(std::move(column));
-      terms.push_back(std::move(t));
-    }
-    std::vector<std::size_t> block(p.candidates.size());
-    std::iota(block.begin(), block.end(), std::size_t{0});
-    blocks.scores.push_back(score_supports(p, {block}).front());
-    blocks.tried += terms.size();
-    blocks.terms.push_back(std::move(terms));
+    blocks.blocks.push_back({blocks.covariates.size(), std::move(knots)});
   }
+  std::vector<double> values = sorted;
+  values.erase(std::unique(values.begin(), values.end()), values.end());
+  std::vector<std::uint32_t> value_of(x.size());
+  for (std::size_t i = 0; i < x.size(); ++i)
+    value_of[i] = static_cast<std::uint32_t>(std::lower_bound(values.begin(), values.end(), x[i]) - values.begin());
+  std::vector<double> multiplier = times ? columns.factor(*times, 0) : std::vector<double>{};
+  blocks.covariates.push_back({c, times, std::move(values), std::move(value_of), std::move(multiplier)});
+}
+
+// A block's terms (basis functions 1 … bases − 1: the first is the level, the runs' own) and
+// its score with F.
+struct ScoredBlock {
+  std::vector<FrictionTerm> terms;
+  SupportScore score;
+};
+ScoredBlock score_block(const SparseProblem& p, const SplineCovariate& v, const Block& block) {
+  const int bases = static_cast<int>(block.knots.size()) - 4;
+  ScoredBlock out;
+  std::vector<std::vector<double>> columns;
+  for (int b = 1; b < bases; ++b) {
+    FrictionTerm t{.factors = {TermFactor{.covariate = v.c, .transform = TermTransform::spline, .basis = b, .knots = block.knots}}};
+    if (v.times) t.factors.insert(t.factors.begin(), *v.times);
+    std::vector<double> at(v.values.size()), column(v.value_of.size());
+    for (std::size_t k = 0; k < at.size(); ++k) at[k] = bspline(block.knots, b, v.values[k]);
+    for (std::size_t i = 0; i < column.size(); ++i) column[i] = v.times ? v.multiplier[i] * at[v.value_of[i]] : at[v.value_of[i]];
+    columns.push_back(std::move(column));
+    out.terms.push_back(std::move(t));
+  }
+  out.score = score_columns(p, columns);
+  return out;
 }
 
 // Only a covariate that varies within runs: what changes only between runs is the random
@@ -88,11 +118,6 @@ SmoothChoice smooth_term(const FrictionLog& log, const TermSeries& series, const
                          double min_gain_percent) {
   SmoothChoice out;
   Blocks blocks;
-  SparseProblem& p = blocks.p;
-  p.y = linear.y;
-  p.group = linear.group;
-  p.level = linear.level;
-  p.fixed = linear.fixed;
   for (TermCovariate c : {TermCovariate::velocity_m_s, TermCovariate::load_N, TermCovariate::temperature_C}) {
     // A logged temperature scatters around its setting: knots inside that scatter would fit
     // the thermocouple's noise through the law's temperature slope (errors in variables), so
@@ -111,15 +136,23 @@ SmoothChoice smooth_term(const FrictionLog& log, const TermSeries& series, const
   const TermFactor shift_T{TermCovariate::temperature_C, TermTransform::input_shift};
   if (series.timed) add_blocks(blocks, log, series, columns, TermCovariate::campaign_time_s, shift_T, false);
   else if (campaign) add_blocks(blocks, log, series, columns, TermCovariate::run_index, shift_T, false);
-  out.tried = blocks.tried;
-  std::vector<std::vector<FrictionTerm>>& block_terms = blocks.terms;
-  const std::vector<SupportScore>& scores = blocks.scores;
+  std::vector<ScoredBlock> scored(blocks.blocks.size());
+  for_each_index(scored.size(), [&](std::size_t b) {
+    const Block& block = blocks.blocks[b];
+    scored[b] = score_block(linear, blocks.covariates[block.covariate], block);
+  });
+  std::vector<std::vector<FrictionTerm>> block_terms;
+  std::vector<SupportScore> scores;
+  for (ScoredBlock& b : scored) {
+    out.tried += b.terms.size();
+    block_terms.push_back(std::move(b.terms));
+    scores.push_back(std::move(b.score));
+  }
   if (block_terms.empty()) {
     out.why_not = "no covariate varies enough for a smooth term";
     return out;
   }
-  p.candidates.clear();
-  const double fixed = score_supports(p, {{}}).front().cv_rmse;  // the model alone
+  const double fixed = score_columns(linear, {}).cv_rmse;  // the model alone
   // The best, and among those within the tolerance of it the one with the fewest basis functions.
   std::size_t best = 0;
   for (std::size_t b = 1; b < scores.size(); ++b)

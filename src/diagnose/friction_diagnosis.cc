@@ -22,6 +22,7 @@
 #include "lmcal/fit/statistics.hpp"
 #include "fit/fit_json.hpp"
 #include "fit/friction_condition.hpp"
+#include "fit/friction_steps.hpp"
 #include "cause_starts.hpp"
 #include "empirical_friction.hpp"
 #include "friction_residual_tests.hpp"
@@ -272,18 +273,43 @@ CandidateStart candidate_start(const FrictionLog& log, const FrictionDiagnosisOp
   return {std::move(effects), std::move(effect_start), start};
 }
 
+// The log the diagnosis's fits take, and the options they take it with: where a fit would
+// smooth the logged temperatures to their set points' means (FrictionTemperature::block_mean),
+// they are smoothed here once, not in each of the diagnosis's dozens of fits (a tenth of each
+// fit's time on 10⁵ samples), and the fits take them as logged: the same fits, bit for bit.
+class FitLog {
+ public:
+  FitLog(const FrictionLog& log, const FrictionDiagnosisOptions& o) : options_(o) {
+    if (detail::smooths_temperature(log, o.fit)) {
+      smoothed_ = with_block_mean_temperature(log);
+      options_.fit.temperature = FrictionTemperature::logged;
+    }
+    log_ = smoothed_ ? &*smoothed_ : &log;
+  }
+  FitLog(const FitLog&) = delete;
+  FitLog& operator=(const FitLog&) = delete;
+
+  const FrictionLog& log() const { return *log_; }
+  const FrictionDiagnosisOptions& options() const { return options_; }
+
+ private:
+  std::optional<FrictionLog> smoothed_;
+  const FrictionLog* log_ = nullptr;
+  FrictionDiagnosisOptions options_;
+};
+
 // The candidates' fits, from several threads at once (the forward selection fits a round's
 // candidates in parallel), and which of them needed the zeros' variance held.
 class CandidateFits {
  public:
-  CandidateFits(const FrictionLog& log, const FrictionDiagnosisOptions& o) : log_(log), o_(o) {}
+  CandidateFits(const FrictionLog& log, const FitLog& fits, const FrictionDiagnosisOptions& o) : log_(log), fits_(fits), o_(o) {}
 
   // The law with `causes` (and `terms`), started from `current`.
   FrictionFitResult fit(const std::vector<std::string>& causes, const FrictionFitResult& current,
                         const std::vector<FrictionTerm>& terms = {}) {
     const CandidateStart s = candidate_start(log_, o_, causes, current);
     const std::string& added = causes.empty() ? std::string() : causes.back();
-    FrictionFitResult fit = fit_with(log_, o_, s.effects, s.start, s.effect_start, current.run_offset_ratio, terms);
+    FrictionFitResult fit = fit_with(fits_.log(), fits_.options(), s.effects, s.start, s.effect_start, current.run_offset_ratio, terms);
     // The random zeros are a spread about 0 added outside the law and its effects. A candidate
     // whose fit needs them to spread far wider than the model before it trades the law's level
     // against a zero common to the runs: outside an effect on the total, (F + c)(1 + a·dir) - c
@@ -292,7 +318,7 @@ class CandidateFits {
     // current model's: it must explain the data with the law's level where the law puts it.
     if (fit.run_offsets == RunOffsets::random &&
         fit.run_offset_sd_N > 2 * current.run_offset_sd_N + 0.5 * current.rmse_N) {
-      fit = fit_with(log_, o_, s.effects, s.start, s.effect_start, current.run_offset_ratio, terms, true);
+      fit = fit_with(fits_.log(), fits_.options(), s.effects, s.start, s.effect_start, current.run_offset_ratio, terms, true);
       const std::lock_guard<std::mutex> lock(held_zeros_mutex_);
       held_zeros_.insert(terms.empty() ? added : "the empirical term");
     }
@@ -311,6 +337,7 @@ class CandidateFits {
 
  private:
   const FrictionLog& log_;
+  const FitLog& fits_;
   const FrictionDiagnosisOptions& o_;
   std::set<std::string> held_zeros_;  // candidates fitted with the zeros' variance held
   std::mutex held_zeros_mutex_;
@@ -423,11 +450,12 @@ FrictionDiagnosis diagnose_friction(const FrictionLog& log, const FrictionDiagno
   FrictionDiagnosis d;
 
   // 1. The baseline and its residuals.
-  const FrictionFitResult baseline = baseline_fit(log, o);
+  const FitLog fits(log, o);
+  const FrictionFitResult baseline = baseline_fit(fits.log(), fits.options());
   d.baseline = diagnose_residuals(log, baseline, o);
 
   // 2-3. Candidates, forward.
-  CandidateFits candidates(log, o);
+  CandidateFits candidates(log, fits, o);
   auto fit_candidate = [&](const std::vector<std::string>& causes, const FrictionFitResult& current) {
     return candidates.fit(causes, current);
   };

@@ -39,7 +39,11 @@ GroupGrams group_grams(const SparseProblem& p, const std::vector<const std::vect
   std::size_t levels = 1;
   if (centre) {
     std::map<std::size_t, std::size_t> level_index;
-    for (std::size_t i = 0; i < n; ++i) level[i] = level_index.try_emplace(p.level[i], level_index.size()).first->second;
+    // Looked up only where the level changes (a run's rows are a stretch): a tree look-up per
+    // row was most of a Gram's serial part.
+    for (std::size_t i = 0; i < n; ++i)
+      level[i] = i > 0 && p.level[i] == p.level[i - 1] ? level[i - 1]
+                                                       : level_index.try_emplace(p.level[i], level_index.size()).first->second;
     levels = level_index.size();
   }
   Eigen::MatrixXd mean = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(levels), static_cast<Eigen::Index>(k + 1));
@@ -187,6 +191,29 @@ class Scorer {
   std::size_t fixed_;
 };
 
+// One member per family: the one that alone predicts held-out groups best (each candidate's
+// score on a free thread, then taken in candidate order), in candidate order.
+std::vector<std::size_t> family_representatives(const SparseProblem& p, const Scorer& scorer, const std::vector<double>& rms,
+                                                double y_rms) {
+  const std::size_t m = p.candidates.size();
+  const auto beyond = [&](std::size_t j) { return rms[j] > 1e-9 * std::max(y_rms, 1e-300); };  // else nothing beyond F and the levels
+  std::vector<double> alone(m);
+  for_each_index(m, [&](std::size_t j) {
+    if (beyond(j)) alone[j] = scorer.cv_rmse({j});
+  });
+  std::map<std::size_t, std::pair<double, std::size_t>> best_of_family;  // family -> (cv, member)
+  for (std::size_t j = 0; j < m; ++j) {
+    if (!beyond(j)) continue;
+    const std::size_t family = p.family.empty() ? j : p.family[j];
+    auto [it, inserted] = best_of_family.try_emplace(family, alone[j], j);
+    if (!inserted && alone[j] < it->second.first) it->second = {alone[j], j};
+  }
+  std::vector<std::size_t> pool;
+  for (const auto& [family, best] : best_of_family) pool.push_back(best.second);
+  std::sort(pool.begin(), pool.end());
+  return pool;
+}
+
 }  // namespace
 
 SparseSelection select_sparse(const SparseProblem& p, const SparseOptions& o) {
@@ -206,18 +233,7 @@ SparseSelection select_sparse(const SparseProblem& p, const SparseOptions& o) {
   for (std::size_t j = 0; j < m; ++j) rms[j] = scorer.rms_beyond_fixed(j);
   const double y_rms = scorer.residual_rms_fixed();
 
-  // One member per family: the one that alone predicts held-out groups best.
-  std::map<std::size_t, std::pair<double, std::size_t>> best_of_family;  // family -> (cv, member)
-  for (std::size_t j = 0; j < m; ++j) {
-    if (!(rms[j] > 1e-9 * std::max(y_rms, 1e-300))) continue;  // nothing beyond F and the levels
-    const std::size_t family = p.family.empty() ? j : p.family[j];
-    const double cv = scorer.cv_rmse({j});
-    auto [it, inserted] = best_of_family.try_emplace(family, cv, j);
-    if (!inserted && cv < it->second.first) it->second = {cv, j};
-  }
-  std::vector<std::size_t> pool;
-  for (const auto& [family, best] : best_of_family) pool.push_back(best.second);
-  std::sort(pool.begin(), pool.end());
+  std::vector<std::size_t> pool = family_representatives(p, scorer, rms, y_rms);
   s.family_representative = pool;
 
   // The STLSQ path.
@@ -252,14 +268,17 @@ SparseSelection select_sparse(const SparseProblem& p, const SparseOptions& o) {
   while (forward.size() < o.max_terms) {
     std::size_t best = m;
     double best_step_cv = std::numeric_limits<double>::infinity();
-    for (std::size_t j : pool) {
-      if (std::find(forward.begin(), forward.end(), j) != forward.end()) continue;
+    // Each trial on a free thread, taken in pool order (NaN: already in).
+    std::vector<double> with(pool.size(), std::numeric_limits<double>::quiet_NaN());
+    for_each_index(pool.size(), [&](std::size_t a) {
+      if (std::find(forward.begin(), forward.end(), pool[a]) != forward.end()) return;
       std::vector<std::size_t> trial = forward;
-      trial.push_back(j);
+      trial.push_back(pool[a]);
       std::sort(trial.begin(), trial.end());
-      const double cv = scorer.cv_rmse(trial);
-      if (cv < best_step_cv) best_step_cv = cv, best = j;
-    }
+      with[a] = scorer.cv_rmse(trial);
+    });
+    for (std::size_t a = 0; a < pool.size(); ++a)
+      if (with[a] < best_step_cv) best_step_cv = with[a], best = pool[a];
     if (best == m) break;
     forward.push_back(best);
     std::sort(forward.begin(), forward.end());
@@ -280,6 +299,20 @@ SparseSelection select_sparse(const SparseProblem& p, const SparseOptions& o) {
   s.cv_rmse = chosen->cv_rmse;
   s.coefficient = scorer.coefficients(s.selected);
   return s;
+}
+
+SupportScore score_columns(const SparseProblem& p, const std::vector<std::vector<double>>& columns) {
+  std::vector<const std::vector<double>*> all;
+  for (const auto& c : p.fixed) all.push_back(&c);
+  for (const auto& c : columns) {
+    LMCAL_ASSERT(c.size() == p.y.size(), "columns of n rows");
+    all.push_back(&c);
+  }
+  const GroupGrams grams = group_grams(p, all);
+  const Scorer scorer(grams, p.fixed.size());
+  std::vector<std::size_t> own(columns.size());
+  std::iota(own.begin(), own.end(), std::size_t{0});
+  return {scorer.cv_rmse(own), scorer.coefficients(own)};
 }
 
 std::vector<SupportScore> score_supports(const SparseProblem& p, const std::vector<std::vector<std::size_t>>& supports) {

@@ -75,5 +75,8 @@ struct SupportScore {
   std::vector<double> coefficient;
 };
 std::vector<SupportScore> score_supports(const SparseProblem& problem, const std::vector<std::vector<std::size_t>>& supports);
+// The same for F plus `columns` (n rows each) given apart from the problem's candidates (its
+// candidates are not read): a block scored on a thread of its own.
+SupportScore score_columns(const SparseProblem& problem, const std::vector<std::vector<double>>& columns);
 
 }  // namespace lmcal::detail

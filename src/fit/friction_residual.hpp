@@ -40,6 +40,11 @@ struct FrictionResidual {
     std::uint64_t nu40_bits = 0, temperature_bits = 0;
     bool has_viscosity = false;
     T viscosity{};
+    // Likewise the Stribeck decay at the speed of the last row: a log at set speeds holds each
+    // for a stretch of samples.
+    std::uint64_t velocity_bits = 0;
+    bool has_decay = false;
+    T decay{};
 
     // k with ν_ref = nu40 (the row's oil), and ν at temperature_C.
     const T& viscosity_at(double nu40, double temperature_C) {
@@ -50,6 +55,16 @@ struct FrictionResidual {
         nu40_bits = nu40_now, temperature_bits = temperature_now, has_viscosity = true;
       }
       return viscosity;
+    }
+
+    // exp(−V/V_St) at velocity_m_s.
+    const T& decay_at(double velocity_m_s) {
+      const auto velocity_now = std::bit_cast<std::uint64_t>(velocity_m_s);
+      if (!has_decay || velocity_now != velocity_bits) {
+        decay = stribeck_decay(k, velocity_m_s);
+        velocity_bits = velocity_now, has_decay = true;
+      }
+      return decay;
     }
   };
 
@@ -132,7 +147,7 @@ struct FrictionResidual {
     const FrictionConstants<double>& k = p.k;
     // The law's value from its one definition (the residual-only evaluation computes the
     // same, to the last bit), the derivatives from its pieces.
-    const FrictionBreakdown<double> b = friction_breakdown_at_viscosity(k, c, nu_at_T);
+    const FrictionBreakdown<double> b = friction_breakdown_given(k, c, nu_at_T, p.decay_at(c.velocity_m_s));
     const double x = c.temperature_C - k.T_ref_C, nu = b.viscosity_mm2_s;
     const double pc = c.preload_um, Lb = c.block_length_mm, V = c.velocity_m_s;
     const double viscous_per_mu = Lb * pc * V * nu, stribeck_per_mu = pc * Lb / nu * b.stribeck_decay;
@@ -162,7 +177,8 @@ struct FrictionResidual {
       return (log.friction_N[i] - predicted) * data->inv_sigma[entry];
     } else {
       const FrictionConditions<double> c = log.conditions(i);
-      const auto b = friction_breakdown_at_viscosity(p.k, c, p.viscosity_at(log.viscosity40_mm2_s[i], c.temperature_C));
+      const auto b = friction_breakdown_given(p.k, c, p.viscosity_at(log.viscosity40_mm2_s[i], c.temperature_C),
+                                              p.decay_at(c.velocity_m_s));
       const T predicted = effect_slots.empty() ? T(b.total_N()) : T(friction_force_with_effects_N(p.k, p.e, c, b));
       return (log.friction_N[i] - predicted) * data->inv_sigma[entry];
     }

@@ -119,20 +119,32 @@ auto viscosity_mm2_s(const FrictionConstants<P>& k, const C& temperature_C) {
   return k.nu_ref_mm2_s * exp(-k.beta_per_K * (temperature_C - k.T_ref_C));
 }
 
-// Eqs. 3-5 and 7, term by term, at the viscosity `nu` = ν(T) that Eq. 6 gives at c's temperature
-// (a fit computes it once for the rows at one temperature). The scalar of the result is
-// whatever P ⊗ C promotes to.
-template <typename P, typename C, typename N>
-auto friction_breakdown_at_viscosity(const FrictionConstants<P>& k, const FrictionConditions<C>& c, const N& nu) {
+// The Stribeck decay of Eq. 4, exp(−V/V_St).
+template <typename P, typename C>
+auto stribeck_decay(const FrictionConstants<P>& k, const C& velocity_m_s) {
   using std::exp;
+  return exp(-velocity_m_s / k.v_st_m_s);
+}
+
+// Eqs. 3-5 and 7, term by term, at the viscosity `nu` = ν(T) that Eq. 6 gives at c's temperature
+// and the Stribeck decay `decay` at c's speed (a fit computes each once for the rows that share
+// a temperature or a speed). The scalar of the result is whatever P ⊗ C promotes to.
+template <typename P, typename C, typename N, typename D>
+auto friction_breakdown_given(const FrictionConstants<P>& k, const FrictionConditions<C>& c, const N& nu, const D& decay) {
   using R = decltype(std::declval<P>() * std::declval<C>());
   FrictionBreakdown<R> out;
   out.viscosity_mm2_s = nu;
-  out.stribeck_decay = exp(-c.velocity_m_s / k.v_st_m_s);
+  out.stribeck_decay = decay;
   out.coulomb_N = (k.k1 - k.k2 * c.preload_um) * c.load_N * 1e-3;
   out.viscous_N = c.block_length_mm * (k.mu_v * c.preload_um * c.velocity_m_s * nu + k.f0);
   out.stribeck_N = k.mu_st * c.preload_um * c.block_length_mm / nu * out.stribeck_decay;
   return out;
+}
+
+// The same at the viscosity `nu` alone.
+template <typename P, typename C, typename N>
+auto friction_breakdown_at_viscosity(const FrictionConstants<P>& k, const FrictionConditions<C>& c, const N& nu) {
+  return friction_breakdown_given(k, c, nu, stribeck_decay(k, c.velocity_m_s));
 }
 
 // Eqs. 3-7, term by term.

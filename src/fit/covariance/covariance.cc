@@ -21,28 +21,32 @@ std::vector<Eigen::MatrixXd> run_score_series(const ScoreInputs& in, bool with_p
   std::vector<std::size_t> steps(rows.clusters, 0);
   for (std::size_t i = 0; i < rows.cluster.size(); ++i)
     steps[rows.cluster[i]] = std::max(steps[rows.cluster[i]], rows.is_prior(i) ? std::size_t{1} : rows.time[i] + 1);
-  std::vector<Eigen::MatrixXd> series(rows.clusters);
-  for (std::size_t c = 0; c < rows.clusters; ++c) series[c] = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(steps[c]), m);
   const std::size_t n = rows.cluster.size();
   // Rows already in series order (each run's rows together, time 0, 1, 2, …; no priors): each
-  // run's series is a block of J scaled by its residuals.
+  // run's series is a block of J scaled by its residuals, taken without zeroing it first.
   bool blocks = true;
   for (std::size_t i = 0; i < n && blocks; ++i)
     blocks = !rows.is_prior(i) &&
              (rows.time[i] == 0 ? i == 0 || rows.cluster[i] != rows.cluster[i - 1]
                                 : i > 0 && rows.cluster[i] == rows.cluster[i - 1] && rows.time[i] == rows.time[i - 1] + 1);
+  std::vector<Eigen::MatrixXd> series(rows.clusters);
   if (blocks) {
-    for (std::size_t first = 0; first < n;) {
+    std::vector<char> seen(rows.clusters, 0);
+    for (std::size_t first = 0; first < n && blocks;) {
       const std::size_t c = rows.cluster[first];
-      const auto count = series[c].rows();
-      if (!series[c].isZero(0.0)) break;  // a run in two blocks: not this layout after all
+      const auto count = static_cast<Eigen::Index>(steps[c]);
+      blocks = !seen[c];  // a run in two blocks: not this layout after all
+      seen[c] = 1;
       series[c] = in.jacobian.middleRows(static_cast<Eigen::Index>(first), count).array().colwise() *
                   in.residuals.segment(static_cast<Eigen::Index>(first), count).array();
       first += static_cast<std::size_t>(count);
-      if (first == n) return series;
     }
-    for (auto& s : series) s.setZero();
+    // (A run without rows has an empty series.)
+    for (std::size_t c = 0; c < rows.clusters && blocks; ++c)
+      if (!seen[c]) series[c] = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(steps[c]), m);
+    if (blocks) return series;
   }
+  for (std::size_t c = 0; c < rows.clusters; ++c) series[c] = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(steps[c]), m);
   // Column by column: J is stored by columns, and so are the series.
   std::vector<Eigen::Index> step(n);
   for (std::size_t i = 0; i < n; ++i)

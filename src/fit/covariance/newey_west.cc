@@ -50,13 +50,14 @@ double andrews_bandwidth(const std::vector<Eigen::MatrixXd>& series) {
   std::vector<double> num_of(static_cast<std::size_t>(m), 0.0), den_of(static_cast<std::size_t>(m), 0.0);
   for_each_index(static_cast<std::size_t>(m), [&](std::size_t component) {
     const auto a = static_cast<Eigen::Index>(component);
-    // The five autocovariances in one pass over the component.
+    // The five autocovariances, each series' a dot product of the component with itself shifted.
     double sums[std::size(kLags)] = {};
     for (const auto& s : series) {
-      const double* x = s.col(a).data();
-      for (Eigen::Index t = 0; t < s.rows(); ++t)
-        for (std::size_t k = 0; k < std::size(kLags); ++k)
-          if (t >= kLags[k]) sums[k] += x[t] * x[t - kLags[k]];
+      const auto x = s.col(a);
+      for (std::size_t k = 0; k < std::size(kLags); ++k) {
+        const Eigen::Index length = s.rows() - kLags[k];
+        if (length > 0) sums[k] += x.tail(length).dot(x.head(length));
+      }
     }
     auto autocovariance = [&](Eigen::Index lag) {
       return sums[std::find(std::begin(kLags), std::end(kLags), lag) - std::begin(kLags)];
