@@ -172,13 +172,18 @@ void add_timed_families(Entries& out, const FrictionLog& log, const TermSeries& 
   add_decay_family(out, log, series, TermCovariate::time_in_run_s, {});
   add_decay_family(out, log, series, TermCovariate::time_in_run_s, {kLawFactor});
   if (temperature_changes_within_runs(log, series)) {
-    for (double tau : {15.0, 30.0, 60.0, 120.0, 240.0, 480.0, 960.0, 1920.0}) {
+    // Each lag's column (the law evaluated at every row) on a free thread.
+    constexpr double kLags_s[] = {15.0, 30.0, 60.0, 120.0, 240.0, 480.0, 960.0, 1920.0};
+    std::vector<std::vector<double>> columns(std::size(kLags_s));
+    for_each_index(columns.size(), [&](std::size_t k) {
+      const std::vector<double> change = lagged_temperature_change(log, series, kLags_s[k]);
+      columns[k].resize(log.size());
+      for (std::size_t i = 0; i < log.size(); ++i) columns[k][i] = law_warmer(i, change[i]) - law[i];
+    });
+    for (std::size_t k = 0; k < columns.size(); ++k) {
       FrictionTerm t{.factors = {TermFactor{TermCovariate::temperature_C, TermTransform::lagged_temperature}},
-                     .scale = tau, .scale_lower = 1.0, .scale_upper = 1e5};
-      const std::vector<double> change = lagged_temperature_change(log, series, tau);
-      std::vector<double> column(log.size());
-      for (std::size_t i = 0; i < log.size(); ++i) column[i] = law_warmer(i, change[i]) - law[i];
-      out.list.push_back({std::move(t), std::move(column), out.family});
+                     .scale = kLags_s[k], .scale_lower = 1.0, .scale_upper = 1e5};
+      out.list.push_back({std::move(t), std::move(columns[k]), out.family});
     }
     ++out.family;
   }
