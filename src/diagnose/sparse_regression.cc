@@ -81,10 +81,11 @@ GroupGrams group_grams(const SparseProblem& p, const std::vector<const std::vect
         y(static_cast<Eigen::Index>(r)) = p.y[i] - (centre ? mean(l, K) : 0.0);
       }
       const auto M = static_cast<Eigen::Index>(m);
-      g.xx[gr].noalias() += X.topRows(M).transpose() * X.topRows(M);
+      g.xx[gr].selfadjointView<Eigen::Lower>().rankUpdate(X.topRows(M).transpose());  // the lower half: half the work
       g.xy[gr].noalias() += X.topRows(M).transpose() * y.head(M);
       g.yy[gr] += y.head(M).squaredNorm();
     }
+    g.xx[gr] = g.xx[gr].selfadjointView<Eigen::Lower>();
   });
   g.XX = Eigen::MatrixXd::Zero(K, K);
   g.Xy = Eigen::VectorXd::Zero(K);
