@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -104,6 +105,36 @@ LineAt line_at(const std::vector<double>& t, const std::vector<double>& y, std::
   const double var = stt - st * st / count;
   const double slope = var > 0 ? (sty - st * sy / count) / var : 0.0;
   return {.value = y[i] + sy / count - slope * st / count, .slope = slope};  // the line at t_i
+}
+
+// The local slopes of K series on one time axis: the time's sums, shared, once per window; each
+// sum accumulated in line_at's order, so the same bits as K calls of local_slope.
+template <std::size_t K>
+std::array<std::vector<double>, K> local_slopes(const std::vector<double>& t, const std::array<const std::vector<double>*, K>& y,
+                                                std::size_t window) {
+  const std::size_t n = t.size(), half = window / 2;
+  std::array<std::vector<double>, K> out;
+  for (auto& v : out) v.resize(n);
+  detail::for_each_slice(n, detail::slice_threads(n, 16384), [&](int, std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      const std::size_t lo = i >= half ? i - half : 0, hi = std::min(n, i + half + 1);
+      double st = 0, stt = 0, sy[K] = {}, sty[K] = {};
+      for (std::size_t j = lo; j < hi; ++j) {
+        const double dt = t[j] - t[i];
+        st += dt;
+        stt += dt * dt;
+        for (std::size_t k = 0; k < K; ++k) {
+          const double dy = (*y[k])[j] - (*y[k])[i];
+          sy[k] += dy;
+          sty[k] += dt * dy;
+        }
+      }
+      const double count = static_cast<double>(hi - lo);
+      const double var = stt - st * st / count;
+      for (std::size_t k = 0; k < K; ++k) out[k][i] = var > 0 ? (sty[k] - st * sy[k] / count) / var : 0.0;
+    }
+  });
+  return out;
 }
 
 }  // namespace
@@ -320,6 +351,30 @@ std::vector<double> filtered_acceleration(const RunSamples& run, Motion motion, 
                                       : local_slope(run.time_s, run.motion, window);
 }
 
+// The RMS of filtered_acceleration over every `stride`-th sample (the same values at each of
+// them; all of them at stride 1): a scale for choosing the window. Each sampled acceleration
+// needs the local slopes at its window's two ends only (positions) or at itself (velocities).
+double filtered_acceleration_rms(const RunSamples& run, Motion motion, std::size_t window, std::size_t stride) {
+  const std::vector<double>& t = run.time_s;
+  const std::size_t n = t.size(), half = window / 2, count = (n + stride - 1) / stride;
+  const auto lo_of = [&](std::size_t i) { return i >= half ? i - half : 0; };
+  const auto hi_of = [&](std::size_t i) { return std::min(n, i + half + 1); };
+  const auto slope = [&](std::size_t i) { return line_at(t, run.motion, i, lo_of(i), hi_of(i)).slope; };
+  std::vector<double> a(count);
+  detail::for_each_slice(count, detail::slice_threads(count, 16384), [&](int, std::size_t begin, std::size_t end) {
+    for (std::size_t k = begin; k < end; ++k) {
+      const std::size_t i = k * stride;
+      if (motion != Motion::position_m) {
+        a[k] = slope(i);
+        continue;
+      }
+      const std::size_t lo = lo_of(i), last = hi_of(i) - 1;
+      a[k] = last > lo ? (slope(last) - slope(lo)) / (t[last] - t[lo]) : 0.0;
+    }
+  });
+  return rms(a);
+}
+
 // v, a and the force over a window of 2h + 1 samples, zero phase, through one operator (see
 // segment in raw_friction.hpp). A velocity column: v the local line's value, a its slope, the
 // force the slope of its integral.
@@ -328,10 +383,12 @@ void filter_trajectory(const RunSamples& run, Motion motion, std::size_t window,
   const std::vector<double> impulse = running_integral(t, run.force_N);
   if (motion == Motion::position_m) {
     // One operator K for all three: a = K[x], v = K[∫x], F = K[∫∫F]; the friction is then
-    // evaluated at the velocity it was smoothed with.
-    s.velocity_m_s = window_operator(t, running_integral(t, run.motion), window);
-    s.acceleration_m_s2 = filtered_acceleration(run, motion, window);
-    s.force_N = window_operator(t, running_integral(t, impulse), window);
+    // evaluated at the velocity it was smoothed with. (The three local slopes in one pass.)
+    const std::vector<double> distance = running_integral(t, run.motion), momentum = running_integral(t, impulse);
+    const auto slopes = local_slopes<3>(t, {&distance, &run.motion, &momentum}, window);
+    s.velocity_m_s = window_difference(t, slopes[0], window);
+    s.acceleration_m_s2 = window_difference(t, slopes[1], window);
+    s.force_N = window_difference(t, slopes[2], window);
   } else {
     LocalLine line = local_line(t, run.motion, window);
     s.velocity_m_s = std::move(line.value);
@@ -392,6 +449,9 @@ void drop_force_steps(const RunSamples& run, std::size_t reach, Segmented& s) {
   }
 }
 
+// Samples the acceleration scale that chooses a trajectory's window is taken from, at least.
+constexpr std::size_t kWindowScaleSamples = 65536;
+
 Segmented segment_trajectory(const RunSamples& run, Motion motion, const RawFrictionOptions& o) {
   const std::size_t n = run.time_s.size();
   if (n < 20) throw SampleError(0, fmt::format("a trajectory of {} samples: at least 20 are needed to filter it", n));
@@ -425,7 +485,9 @@ Segmented segment_trajectory(const RunSamples& run, Motion motion, const RawFric
   if (h == 0) {
     // Only the wide filter's acceleration is needed (its v and F would be three times the work).
     const std::size_t wide = 2 * std::min(std::max<std::size_t>(half_window(0.025), 5), most) + 1;
-    const double a_rms = rms(filtered_acceleration(run, motion, wide));
+    // (Its RMS from 65,536 samples or so, evenly spread, on a longer log: the wide window's
+    // acceleration at every one of a million samples was a third of loading them.)
+    const double a_rms = filtered_acceleration_rms(run, motion, wide, std::max<std::size_t>(1, n / kWindowScaleSamples));
     for (h = 2; h < most && filter_noise(motion, sigma, dt, h).second > 0.02 * a_rms; ++h) {
     }
   }
