@@ -248,7 +248,7 @@ TEST(NormalEquations, SumsMergedFromPartsEqualTheSumsOfAllRows) {
   detail::CentredSums whole(static_cast<Eigen::Index>(size));
   for (std::size_t i = 0; i < n; ++i) whole.add(group[i], rows[i].data());
   const Eigen::MatrixXd expected = whole.finish(shrink);
-  for (const std::vector<std::size_t> seams : {std::vector<std::size_t>{1000, 2000}, {350, 700, 1050}, {1, 2999}, {173, 1777, 2501}}) {
+  for (const auto& seams : {std::vector<std::size_t>{1000, 2000}, {350, 700, 1050}, {1, 2999}, {173, 1777, 2501}}) {
     std::optional<detail::CentredSums> merged;
     std::size_t begin = 0;
     for (std::size_t k = 0; k <= seams.size(); ++k) {

@@ -69,6 +69,7 @@ void add_blocks(Blocks& blocks, const FrictionLog& log, const TermSeries& series
     knots.insert(knots.end(), 4, sorted.back());
     blocks.blocks.push_back({blocks.covariates.size(), std::move(knots)});
   }
+  if (blocks.blocks.empty() || blocks.blocks.back().covariate != blocks.covariates.size()) return;  // no block in c
   std::vector<double> values = sorted;
   values.erase(std::unique(values.begin(), values.end()), values.end());
   std::vector<std::uint32_t> value_of(x.size());

@@ -228,7 +228,7 @@ class BatchedAutoDiffCostFunction final : public ceres::CostFunction, public Nor
       else summed.emplace(std::move(part));
     };
     if (!rows_with_gradient(theta, Reduce{sums_of_part, add, merge}, held)) return false;
-    CentredSums& sums = *summed;
+    CentredSums& sums = summed ? *summed : summed.emplace(p + 1);  // (no rows: no parts)
     if (profiled_ && profiled_->profiling && !groups_.empty()) profile(sums, p);
     const Eigen::MatrixXd S = sums.finish(groups_.empty() ? std::vector<double>{} : shrink_or_ones());
     JtJ = S.topLeftCorner(p, p);

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "lmcal/io/friction_log.hpp"
@@ -62,6 +63,20 @@ std::vector<double> local_slope(const std::vector<double>& t, const std::vector<
 // The difference quotient of y across a centred window of `window` samples (shorter at the
 // ends): the derivative of an already filtered series, in O(1) per sample.
 std::vector<double> window_difference(const std::vector<double>& t, const std::vector<double>& y, std::size_t window);
+
+// The trajectory filter's pieces (raw_filters.cc), for segment():
+// the median of |x|; σ of white noise on y from its `order`-th differences (robustly); the RMS;
+// the running trapezoid integral of y over t (0 at the first sample);
+double median_abs(std::vector<double> x);
+double difference_noise(const std::vector<double>& y, int order);
+double rms(const std::vector<double>& x);
+std::vector<double> running_integral(const std::vector<double>& t, const std::vector<double>& y);
+// the RMS of the filtered acceleration over every `stride`-th sample (all at stride 1);
+double filtered_acceleration_rms(const RunSamples& run, Motion motion, std::size_t window, std::size_t stride);
+// v, a and the force over a window, zero phase, through one operator (into s's columns);
+void filter_trajectory(const RunSamples& run, Motion motion, std::size_t window, Segmented& s);
+// the noise left in v and a by a window of 2h + 1 samples at step dt, for white noise σ on the motion.
+std::pair<double, double> filter_noise(Motion motion, double sigma, double dt, std::size_t h);
 
 // Segments one run (options.segmentation: plateaus, or the whole trajectory). Throws SampleError
 // when the position goes back between reversals (the velocity cannot be derived), when no
