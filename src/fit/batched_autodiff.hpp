@@ -316,6 +316,8 @@ class BatchedAutoDiffCostFunction final : public ceres::CostFunction, public Nor
     Add add;
     Merge merge;
   };
+  template <typename Part, typename Add, typename Merge>
+  Reduce(Part, Add, Merge) -> Reduce<Part, Add, Merge>;  // (clang before 17 deduces no aggregate's arguments)
   // The sums of a pass that stores each row where it belongs (nothing to merge).
   struct Stored {};
 
