@@ -12,68 +12,83 @@ namespace lmcal::raw {
 
 namespace {
 
-// f(i, lo, hi) at every sample i, over the window [lo, hi) of `window` samples centred on it
-// (shorter at the ends).
+// The window of `window` samples centred on sample i of n, [lo, hi) (shorter at the ends).
+struct Window {
+  std::size_t lo, hi;
+};
+Window window_at(std::size_t n, std::size_t window, std::size_t i) {
+  const std::size_t half = window / 2;
+  return {i >= half ? i - half : 0, std::min(n, i + half + 1)};
+}
+
+// f(i, lo, hi) at every sample i, over its window.
 template <typename F>
 std::vector<double> over_windows(std::size_t n, std::size_t window, F f) {
   std::vector<double> out(n);
-  const std::size_t half = window / 2;
   // Each sample's window on its own: slices of the samples on the threads, the same bits.
   detail::for_each_slice(n, detail::slice_threads(n, 16384), [&](int, std::size_t begin, std::size_t end) {
-    for (std::size_t i = begin; i < end; ++i) out[i] = f(i, i >= half ? i - half : 0, std::min(n, i + half + 1));
+    for (std::size_t i = begin; i < end; ++i) {
+      const Window w = window_at(n, window, i);
+      out[i] = f(i, w.lo, w.hi);
+    }
   });
   return out;
 }
 
-}  // namespace
+// The difference quotient of y across [lo, last]: (y_last − y_lo) / (t_last − t_lo), 0 for one sample.
+double across(const std::vector<double>& t, double y_lo, double y_last, std::size_t lo, std::size_t last) {
+  return last > lo ? (y_last - y_lo) / (t[last] - t[lo]) : 0.0;
+}
 
-namespace {
+// The sums of the least-squares lines through samples [lo, hi) of K series on one time axis,
+// in offsets from sample i (for round-off: times may be epoch seconds), one pass: the time's
+// shared, each series' own, each accumulated in the same order whatever K.
+template <std::size_t K>
+struct WindowSums {
+  double st = 0, stt = 0, sy[K] = {}, sty[K] = {}, count = 0;
+  WindowSums(const std::vector<double>& t, const std::array<const std::vector<double>*, K>& y, std::size_t i, std::size_t lo,
+             std::size_t hi)
+      : count(static_cast<double>(hi - lo)) {
+    for (std::size_t j = lo; j < hi; ++j) {
+      const double dt = t[j] - t[i];
+      st += dt;
+      stt += dt * dt;
+      for (std::size_t k = 0; k < K; ++k) {
+        const double dy = (*y[k])[j] - (*y[k])[i];
+        sy[k] += dy;
+        sty[k] += dt * dy;
+      }
+    }
+  }
+  double slope(std::size_t k) const {
+    const double var = stt - st * st / count;
+    return var > 0 ? (sty[k] - st * sy[k] / count) / var : 0.0;
+  }
+};
 
 // The least-squares line through samples [lo, hi): its value at t_i and its slope.
 struct LineAt {
   double value, slope;
 };
 LineAt line_at(const std::vector<double>& t, const std::vector<double>& y, std::size_t i, std::size_t lo, std::size_t hi) {
-  // Offsets from sample i, for round-off (times may be epoch seconds); one pass of sums.
-  double st = 0, sy = 0, stt = 0, sty = 0;
-  for (std::size_t j = lo; j < hi; ++j) {
-    const double dt = t[j] - t[i], dy = y[j] - y[i];
-    st += dt;
-    sy += dy;
-    stt += dt * dt;
-    sty += dt * dy;
-  }
-  const double count = static_cast<double>(hi - lo);
-  const double var = stt - st * st / count;
-  const double slope = var > 0 ? (sty - st * sy / count) / var : 0.0;
-  return {.value = y[i] + sy / count - slope * st / count, .slope = slope};  // the line at t_i
+  const WindowSums<1> s(t, {&y}, i, lo, hi);
+  const double slope = s.slope(0);
+  return {.value = y[i] + s.sy[0] / s.count - slope * s.st / s.count, .slope = slope};  // the line at t_i
 }
 
-// The local slopes of K series on one time axis: the time's sums, shared, once per window; each
-// sum accumulated in line_at's order, so the same bits as K calls of local_slope.
+// The local slopes of K series on one time axis, the time's sums shared: the same bits as K
+// calls of local_slope.
 template <std::size_t K>
 std::array<std::vector<double>, K> local_slopes(const std::vector<double>& t, const std::array<const std::vector<double>*, K>& y,
                                                 std::size_t window) {
-  const std::size_t n = t.size(), half = window / 2;
+  const std::size_t n = t.size();
   std::array<std::vector<double>, K> out;
   for (auto& v : out) v.resize(n);
   detail::for_each_slice(n, detail::slice_threads(n, 16384), [&](int, std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {
-      const std::size_t lo = i >= half ? i - half : 0, hi = std::min(n, i + half + 1);
-      double st = 0, stt = 0, sy[K] = {}, sty[K] = {};
-      for (std::size_t j = lo; j < hi; ++j) {
-        const double dt = t[j] - t[i];
-        st += dt;
-        stt += dt * dt;
-        for (std::size_t k = 0; k < K; ++k) {
-          const double dy = (*y[k])[j] - (*y[k])[i];
-          sy[k] += dy;
-          sty[k] += dt * dy;
-        }
-      }
-      const double count = static_cast<double>(hi - lo);
-      const double var = stt - st * st / count;
-      for (std::size_t k = 0; k < K; ++k) out[k][i] = var > 0 ? (sty[k] - st * sy[k] / count) / var : 0.0;
+      const Window w = window_at(n, window, i);
+      const WindowSums<K> s(t, y, i, w.lo, w.hi);
+      for (std::size_t k = 0; k < K; ++k) out[k][i] = s.slope(k);
     }
   });
   return out;
@@ -99,9 +114,7 @@ std::vector<double> local_slope(const std::vector<double>& t, const std::vector<
 }
 
 std::vector<double> window_difference(const std::vector<double>& t, const std::vector<double>& y, std::size_t window) {
-  return over_windows(t.size(), window, [&](std::size_t, std::size_t lo, std::size_t hi) {
-    return hi - 1 > lo ? (y[hi - 1] - y[lo]) / (t[hi - 1] - t[lo]) : 0.0;
-  });
+  return over_windows(t.size(), window, [&](std::size_t, std::size_t lo, std::size_t hi) { return across(t, y[lo], y[hi - 1], lo, hi - 1); });
 }
 
 // The median of |x|.
@@ -143,20 +156,17 @@ std::vector<double> running_integral(const std::vector<double>& t, const std::ve
 // needs the local slopes at its window's two ends only (positions) or at itself (velocities).
 double filtered_acceleration_rms(const RunSamples& run, Motion motion, std::size_t window, std::size_t stride) {
   const std::vector<double>& t = run.time_s;
-  const std::size_t n = t.size(), half = window / 2, count = (n + stride - 1) / stride;
-  const auto lo_of = [&](std::size_t i) { return i >= half ? i - half : 0; };
-  const auto hi_of = [&](std::size_t i) { return std::min(n, i + half + 1); };
-  const auto slope = [&](std::size_t i) { return line_at(t, run.motion, i, lo_of(i), hi_of(i)).slope; };
+  const std::size_t n = t.size(), count = (n + stride - 1) / stride;
+  const auto slope = [&](std::size_t i) {
+    const Window w = window_at(n, window, i);
+    return line_at(t, run.motion, i, w.lo, w.hi).slope;
+  };
   std::vector<double> a(count);
   detail::for_each_slice(count, detail::slice_threads(count, 16384), [&](int, std::size_t begin, std::size_t end) {
     for (std::size_t k = begin; k < end; ++k) {
       const std::size_t i = k * stride;
-      if (motion != Motion::position_m) {
-        a[k] = slope(i);
-        continue;
-      }
-      const std::size_t lo = lo_of(i), last = hi_of(i) - 1;
-      a[k] = last > lo ? (slope(last) - slope(lo)) / (t[last] - t[lo]) : 0.0;
+      const Window w = window_at(n, window, i);
+      a[k] = motion != Motion::position_m ? slope(i) : across(t, slope(w.lo), slope(w.hi - 1), w.lo, w.hi - 1);
     }
   });
   return rms(a);
