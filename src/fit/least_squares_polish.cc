@@ -1,5 +1,7 @@
-// Step 2, the polish: Ceres Levenberg-Marquardt on all rows from the best start, with bounds
-// and held parameters, or one exact Gauss-Newton step for a model linear in its parameters.
+// Step 2, the polish: Levenberg-Marquardt on all rows from the best start, with bounds and
+// held parameters (the engine's own on the normal equations for a NormalEquationsCost, as the
+// friction and thermal models' are; Ceres' for any other cost), or one exact Gauss-Newton step
+// for a model linear in its parameters.
 #include <fmt/format.h>
 
 #include <Eigen/Dense>

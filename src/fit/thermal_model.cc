@@ -5,10 +5,8 @@
 
 #include <algorithm>
 #include <exception>
-#include <cctype>
 #include <cmath>
 #include <limits>
-#include <set>
 
 #include "lmcal/error.hpp"
 #include "lmcal/models/thermal_effects.hpp"
@@ -169,7 +167,42 @@ RunTerms run_terms(const PreparedRun& run, const ThermalLayout& layout, const do
   return out;
 }
 
-class ThermalCost final : public ceres::CostFunction {
+// The global parameters run r's rows depend on (its simulation's, its sensors' offsets and the
+// sensor terms'), ascending: the only nonzero columns of its Jacobian rows.
+std::vector<int> run_columns(const ThermalLayout& layout, std::size_t r) {
+  std::vector<int> columns = local_parameters(layout, r);
+  for (int o : layout.offsets[r])
+    if (o >= 0) columns.push_back(o);
+  for (std::size_t j = 0; j < layout.terms.size(); ++j) {
+    columns.push_back(layout.term_coefficient[j]);
+    if (layout.term_scale[j] >= 0) columns.push_back(layout.term_scale[j]);
+  }
+  std::sort(columns.begin(), columns.end());
+  columns.erase(std::unique(columns.begin(), columns.end()), columns.end());
+  return columns;
+}
+
+// Where rows go: row k's residual at r[k - first]; with J, its slope over global parameter j
+// at J[(k - first) · stride + column(j)], column(j) = j or, for a run's own block, its place
+// among the run's columns.
+struct RowSink {
+  double* r;
+  double* J = nullptr;
+  std::size_t first = 0, stride = 0;
+  const std::vector<int>* column = nullptr;  // global -> block column; null: the global index
+  double& slope(std::size_t row, int j) const {
+    return J[(row - first) * stride + static_cast<std::size_t>(column ? (*column)[static_cast<std::size_t>(j)] : j)];
+  }
+};
+
+// One run's data rows: residuals and their Jacobian over the run's own columns (row-major).
+struct RunBlock {
+  std::vector<int> columns;
+  Eigen::VectorXd r;
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> J;
+};
+
+class ThermalCost final : public ceres::CostFunction, public NormalEquationsCost {
  public:
   ThermalCost(const ThermalModel& model, std::vector<std::size_t> rows, RowLoss loss)
       : model_(model), rows_(std::move(rows)), loss_(loss) {
@@ -194,37 +227,13 @@ class ThermalCost final : public ceres::CostFunction {
       }
     }
     if (J) std::fill(J, J + n * P, 0.0);
-    // Runs are independent simulations writing disjoint rows: one thread each
-    // (parallel_slices.hpp); anything but a rejected step (std::bad_alloc) is rethrown.
-    std::vector<char> ok(model_.runs().size(), 1);
-    for_each_index(ok.size(), [&](std::size_t run) {
-      const std::vector<int> local = local_parameters(model_.layout(), run);
-      std::size_t first = model_.first_row(run);
-      // A trial step outside the physical range (α(V) outside [0, 1], h <= 0) is rejected,
-      // not thrown through Ceres.
-      try {
-        bool good = true;
-        // The smallest Jet of AutodiffScalars that holds the run's parameters (at most 8: checked by the fit).
-        if (!J) good = evaluate_run<double>(run, theta, local, r, nullptr, first);
-#define LMCAL_EVALUATE_WITH_JET(N) \
-        else if (local.size() <= N) good = evaluate_run<ceres::Jet<double, N>>(run, theta, local, r, J, first);
-        LMCAL_FOR_EACH_JET_SIZE(LMCAL_EVALUATE_WITH_JET)
-#undef LMCAL_EVALUATE_WITH_JET
-        else LMCAL_ASSERT(false, "a thermal run depends on more parameters than the largest Jet holds");
-        ok[run] = good;
-      } catch (const InvalidParameter&) {
-        ok[run] = 0;
-      }
-    });
-    if (std::find(ok.begin(), ok.end(), 0) != ok.end()) return false;
-    std::size_t row = model_.rows().size();
-    // Prior rows of the heat scales, after the data rows.
-    for (std::size_t k = 0; k < model_.prior_runs().size(); ++k, ++row) {
-      const std::size_t run = model_.prior_runs()[k];
-      const auto index = static_cast<std::size_t>(model_.layout().heat_scale[run]);
-      const double weight = model_.runs()[run].heat_prior_weight;
-      r[row] = weight * (theta[index] - 1.0);
-      if (J) J[row * P + index] = weight;
+    const bool ok = evaluate_runs(theta, J != nullptr, [&](std::size_t) { return RowSink{r, J, 0, P}; });
+    if (!ok) return false;
+    for (std::size_t k = 0; k < model_.prior_runs().size(); ++k) {
+      const std::size_t row = model_.rows().size() + k;
+      const Prior prior = prior_row(theta, k);
+      r[row] = prior.residual;
+      if (J) J[row * P + prior.index] = prior.weight;
     }
     if (subset) {
       for (std::size_t k = 0; k < rows_.size(); ++k) {
@@ -235,7 +244,144 @@ class ThermalCost final : public ceres::CostFunction {
     return true;
   }
 
+  // Each run's JᵀJ over its own columns (a handful of the parameters: its simulation's, its
+  // offsets, the terms'), scattered into the whole in run order: the same bits on any thread count.
+  bool normal_equations(const double* theta, const std::vector<bool>& held, double& cost, Eigen::MatrixXd& JtJ,
+                        Eigen::VectorXd& Jtr) const override {
+    const auto P = static_cast<Eigen::Index>(model_.layout().size);
+    JtJ.setZero(P, P);
+    Jtr.setZero(P);
+    cost = 0;
+    if (!rows_.empty()) {  // a subset of rows: through the stored Jacobian
+      Eigen::VectorXd r;
+      Eigen::MatrixXd J;
+      if (!residuals_and_jacobian(theta, held, r, J)) return false;
+      JtJ.noalias() = J.transpose() * J;
+      Jtr.noalias() = J.transpose() * r;
+      cost = 0.5 * r.squaredNorm();
+      return true;
+    }
+    struct Sums {
+      Eigen::MatrixXd H;
+      Eigen::VectorXd g;
+      double cost = 0;
+    };
+    std::vector<Sums> sums(model_.runs().size());
+    const bool ok = run_blocks(theta, [&](std::size_t run, const RunBlock& b) {
+      sums[run] = {b.J.transpose() * b.J, b.J.transpose() * b.r, 0.5 * b.r.squaredNorm()};
+    });
+    if (!ok) return false;
+    for (std::size_t run = 0; run < sums.size(); ++run) {
+      const std::vector<int> columns = run_columns(model_.layout(), run);
+      for (std::size_t a = 0; a < columns.size(); ++a) {
+        Jtr[columns[a]] += sums[run].g[static_cast<Eigen::Index>(a)];
+        for (std::size_t b = 0; b < columns.size(); ++b)
+          JtJ(columns[a], columns[b]) += sums[run].H(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b));
+      }
+      cost += sums[run].cost;
+    }
+    for (std::size_t k = 0; k < model_.prior_runs().size(); ++k) {
+      const Prior prior = prior_row(theta, k);
+      JtJ(prior.index, prior.index) += prior.weight * prior.weight;
+      Jtr[prior.index] += prior.weight * prior.residual;
+      cost += 0.5 * prior.residual * prior.residual;
+    }
+    return true;
+  }
+
+  bool residuals_and_jacobian(const double* theta, const std::vector<bool>&, Eigen::VectorXd& r,
+                              Eigen::MatrixXd& J) const override {
+    const auto P = static_cast<Eigen::Index>(model_.layout().size);
+    if (!rows_.empty()) {
+      Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> rowwise(num_residuals(), P);
+      r.resize(num_residuals());
+      double* jacobians[] = {rowwise.data()};
+      if (!Evaluate(&theta, r.data(), jacobians)) return false;
+      J = rowwise;
+      return true;
+    }
+    const auto n = static_cast<Eigen::Index>(model_.num_residuals());
+    r.resize(n);
+    J.setZero(n, P);
+    const bool ok = run_blocks(theta, [&](std::size_t run, const RunBlock& b) {
+      const auto first = static_cast<Eigen::Index>(model_.first_row(run));
+      r.segment(first, b.r.size()) = b.r;
+      for (std::size_t a = 0; a < b.columns.size(); ++a)
+        J.col(b.columns[a]).segment(first, b.r.size()) = b.J.col(static_cast<Eigen::Index>(a));
+    });
+    if (!ok) return false;
+    for (std::size_t k = 0; k < model_.prior_runs().size(); ++k) {
+      const auto row = static_cast<Eigen::Index>(model_.rows().size() + k);
+      const Prior prior = prior_row(theta, k);
+      r[row] = prior.residual;
+      J(row, static_cast<Eigen::Index>(prior.index)) = prior.weight;
+    }
+    return true;
+  }
+
  private:
+  // The prior row of the k-th fitted heat scale (after the data rows): weight · (scale - 1).
+  struct Prior {
+    std::size_t index;
+    double weight, residual;
+  };
+  Prior prior_row(const double* theta, std::size_t k) const {
+    const std::size_t run = model_.prior_runs()[k];
+    const auto index = static_cast<std::size_t>(model_.layout().heat_scale[run]);
+    const double weight = model_.runs()[run].heat_prior_weight;
+    return {index, weight, weight * (theta[index] - 1.0)};
+  }
+
+  // Every run's data rows with derivatives, one block per run, handed to `use(run, block)` on
+  // the thread that built it.
+  template <class Use>
+  bool run_blocks(const double* theta, const Use& use) const {
+    const auto P = static_cast<std::size_t>(model_.layout().size);
+    std::vector<RunBlock> blocks(model_.runs().size());
+    std::vector<std::vector<int>> column(blocks.size());
+    const bool ok = evaluate_runs(theta, true, [&](std::size_t run) {
+      RunBlock& b = blocks[run];
+      b.columns = run_columns(model_.layout(), run);
+      column[run].assign(P, -1);
+      for (std::size_t a = 0; a < b.columns.size(); ++a) column[run][static_cast<std::size_t>(b.columns[a])] = static_cast<int>(a);
+      const std::size_t first = model_.first_row(run);
+      const std::size_t end = run + 1 < blocks.size() ? model_.first_row(run + 1) : model_.rows().size();
+      b.r.resize(static_cast<Eigen::Index>(end - first));
+      b.J.setZero(b.r.size(), static_cast<Eigen::Index>(b.columns.size()));
+      return RowSink{b.r.data(), b.J.data(), first, b.columns.size(), &column[run]};
+    }, [&](std::size_t run) { use(run, blocks[run]); });
+    return ok;
+  }
+
+  // Each run simulated and its rows written where sink(run) says; then, on the same thread,
+  // done(run). Runs are independent simulations writing disjoint rows: one thread each
+  // (parallel_slices.hpp); anything but a rejected step (std::bad_alloc) is rethrown.
+  template <class Sink, class Done = void (*)(std::size_t)>
+  bool evaluate_runs(const double* theta, bool derivatives, const Sink& sink, const Done& done = [](std::size_t) {}) const {
+    std::vector<char> ok(model_.runs().size(), 1);
+    for_each_index(ok.size(), [&](std::size_t run) {
+      const std::vector<int> local = local_parameters(model_.layout(), run);
+      const RowSink out = sink(run);
+      // A trial step outside the physical range (α(V) outside [0, 1], h <= 0) is rejected,
+      // not thrown through Ceres.
+      try {
+        bool good = true;
+        // The smallest Jet of AutodiffScalars that holds the run's parameters (at most 8: checked by the fit).
+        if (!derivatives) good = evaluate_run<double>(run, theta, local, out);
+#define LMCAL_EVALUATE_WITH_JET(N) \
+        else if (local.size() <= N) good = evaluate_run<ceres::Jet<double, N>>(run, theta, local, out);
+        LMCAL_FOR_EACH_JET_SIZE(LMCAL_EVALUATE_WITH_JET)
+#undef LMCAL_EVALUATE_WITH_JET
+        else LMCAL_ASSERT(false, "a thermal run depends on more parameters than the largest Jet holds");
+        ok[run] = good;
+      } catch (const InvalidParameter&) {
+        ok[run] = 0;
+      }
+      if (ok[run]) done(run);
+    });
+    return std::find(ok.begin(), ok.end(), 0) == ok.end();
+  }
+
   // θ_global as a T: a Jet carrying the derivative in its slot when the parameter is one of
   // the run's `local` ones.
   template <typename T>
@@ -252,13 +398,12 @@ class ThermalCost final : public ceres::CostFunction {
   }
 
   template <typename T>
-  bool evaluate_run(std::size_t run, const double* theta, const std::vector<int>& local, double* r, double* J,
-                    std::size_t& row) const {
+  bool evaluate_run(std::size_t run, const double* theta, const std::vector<int>& local, const RowSink& out) const {
     const ThermalLayout& layout = model_.layout();
     const auto param = parameter<T>(theta, local);
     const PreparedRun& pr = model_.runs()[run];
     if constexpr (std::is_same_v<T, double>) {
-      return evaluate_rows(run, theta, local, r, J, row, simulate_run<T>(pr, model_.numerics(), layout, run, param));
+      return evaluate_rows(run, theta, local, out, simulate_run<T>(pr, model_.numerics(), layout, run, param));
     } else {  // with the end profile and its slopes, for end_profiles()
       RailProfile end;
       std::vector<T> end_field;
@@ -267,21 +412,20 @@ class ThermalCost final : public ceres::CostFunction {
       for (std::size_t j = 0; j < local.size(); ++j)
         for (std::size_t i = 0; i < end_field.size(); ++i) slope[j][i] = end_field[i].v[static_cast<Eigen::Index>(j)];
       model_.remember_end_profile(run, theta, local, std::move(end), std::move(slope));
-      return evaluate_rows(run, theta, local, r, J, row, simulated);
+      return evaluate_rows(run, theta, local, out, simulated);
     }
   }
 
   template <typename T>
-  bool evaluate_rows(std::size_t run, const double* theta, const std::vector<int>& local, double* r, double* J,
-                     std::size_t& row, const std::vector<std::vector<T>>& simulated) const {
+  bool evaluate_rows(std::size_t run, const double* theta, const std::vector<int>& local, const RowSink& out,
+                     const std::vector<std::vector<T>>& simulated) const {
     const ThermalLayout& layout = model_.layout();
-    const auto P = static_cast<std::size_t>(layout.size);
     const auto param = parameter<T>(theta, local);
     const PreparedRun& pr = model_.runs()[run];
-    const RunTerms terms = run_terms(pr, layout, theta, J != nullptr);
+    const RunTerms terms = run_terms(pr, layout, theta, out.J != nullptr);
     const T T0 = layout.initial[run] >= 0 ? param(layout.initial[run]) : T(pr.params.initial_temperature_C);
     const auto& rows = model_.rows();
-    for (; row < rows.size() && rows[row].run == run; ++row) {
+    for (std::size_t row = model_.first_row(run); row < rows.size() && rows[row].run == run; ++row) {
       const auto& w = rows[row];
       const int offset_index = layout.offsets[run][w.sensor];
       T raw = pr.measured[w.time][w.sensor] - simulated[w.time][w.sensor];
@@ -294,21 +438,21 @@ class ThermalCost final : public ceres::CostFunction {
         else raw -= c * phi;
       }
       const T residual = robust_residual(raw, loss_);
+      double& r = out.r[row - out.first];
       if constexpr (std::is_same_v<T, double>) {
-        r[row] = residual;
-        if (!std::isfinite(r[row])) return false;
+        r = residual;
+        if (!std::isfinite(r)) return false;
       } else {
-        r[row] = residual.a;
-        if (!std::isfinite(r[row])) return false;
-        for (std::size_t k = 0; k < local.size(); ++k) J[row * P + static_cast<std::size_t>(local[k])] = residual.v[k];
+        r = residual.a;
+        if (!std::isfinite(r)) return false;
+        for (std::size_t k = 0; k < local.size(); ++k) out.slope(row, local[k]) = residual.v[k];
         const double slope = robust_residual(ceres::Jet<double, 1>(raw.a, 0), loss_).v[0];  // ∂residual/∂raw
-        if (offset_index >= 0) J[row * P + static_cast<std::size_t>(offset_index)] = -slope;
+        if (offset_index >= 0) out.slope(row, offset_index) = -slope;
         for (std::size_t j = 0; j < layout.terms.size(); ++j) {
           const double by = layout.terms[j].kind == ThermalTermKind::rise_time ? rise.a : 1.0;
-          J[row * P + static_cast<std::size_t>(layout.term_coefficient[j])] = -slope * terms.phi[j][w.time] * by;
+          out.slope(row, layout.term_coefficient[j]) = -slope * terms.phi[j][w.time] * by;
           if (const int scale = layout.term_scale[j]; scale >= 0)  // shared by the periodic terms: summed
-            J[row * P + static_cast<std::size_t>(scale)] -=
-                slope * theta[layout.term_coefficient[j]] * terms.dphi[j][w.time] * by;
+            out.slope(row, scale) -= slope * theta[layout.term_coefficient[j]] * terms.dphi[j][w.time] * by;
         }
       }
     }
@@ -322,115 +466,15 @@ class ThermalCost final : public ceres::CostFunction {
 
 }  // namespace
 
-ThermalModel::ThermalModel(const std::vector<PreparedRun>& runs, ThermalLayout layout, RailNumerics numerics)
-    : runs_(runs), layout_(std::move(layout)), numerics_(numerics), end_memo_(runs.size()) {
-  for (std::size_t r = 0; r < runs_.size(); ++r) {
-    first_row_.push_back(rows_.size());
-    for (std::size_t t = 0; t < runs_[r].times_s.size(); ++t)
-      for (std::size_t s = 0; s < runs_[r].sensor_positions_m.size(); ++s)
-        if (!std::isnan(runs_[r].measured[t][s])) rows_.push_back({r, t, s});
-  }
-  for (std::size_t r = 0; r < runs_.size(); ++r)
-    if (!layout_.heat_scale.empty() && layout_.heat_scale[r] >= 0) priors_.push_back(r);
-}
-
-// A run is a cluster and its records are the time steps (its sensors read at once share one);
-// every sensor of every run is its own series. A heat scale's prior row belongs to its run
-// (for the cluster methods) but is not data (RowStructure::prior).
-RowStructure ThermalModel::row_structure() const {
-  RowStructure rows;
-  rows.clusters = runs_.size();
-  std::vector<std::size_t> first_series(runs_.size() + 1, 0);
-  for (std::size_t r = 0; r < runs_.size(); ++r) first_series[r + 1] = first_series[r] + runs_[r].sensor_names.size();
-  for (const Row& row : rows_) {
-    rows.cluster.push_back(row.run);
-    rows.time.push_back(row.time);
-    rows.series.push_back(first_series[row.run] + row.sensor);
-  }
-  rows.prior_variance.assign(rows_.size(), std::numeric_limits<double>::quiet_NaN());
-  for (std::size_t k = 0; k < priors_.size(); ++k) {
-    rows.cluster.push_back(priors_[k]);
-    rows.time.push_back(0);
-    rows.series.push_back(first_series.back() + k);
-    rows.prior_variance.push_back(std::pow(runs_[priors_[k]].heat_prior_sigma_K, 2));
-  }
-  return rows;
-}
-
 std::unique_ptr<ceres::CostFunction> ThermalModel::cost_function(const std::vector<std::size_t>& rows,
                                                                  const RowLoss& loss) const {
   return std::make_unique<ThermalCost>(*this, rows, loss);
-}
-
-// Temperatures are linear in α (Q fixed), in the initial temperature and in the offsets;
-// h enters the operator and is not.
-bool ThermalModel::linear(const std::vector<bool>& held) const {
-  for (std::size_t e = 0; e < layout_.extensions.size(); ++e) {
-    // A heat that follows the rail makes α act on the field through the heat: never linear.
-    if (layout_.extensions[e]->heat_follows_rail) return false;
-    if (layout_.extensions[e]->linear) continue;
-    for (std::size_t j = 0; j < layout_.extensions[e]->parameters.size(); ++j)
-      if (!held[static_cast<std::size_t>(layout_.extension_first[e]) + j]) return false;
-  }
-  for (int scale : layout_.heat_scale)
-    if (scale >= 0 && !held[static_cast<std::size_t>(scale)]) return false;  // α · scale
-  // A sensor term is linear in its coefficient; not in its scale, and c · rise(α) not in both.
-  for (std::size_t j = 0; j < layout_.terms.size(); ++j) {
-    if (layout_.term_scale[j] >= 0 && !held[static_cast<std::size_t>(layout_.term_scale[j])]) return false;
-    if (layout_.terms[j].kind == ThermalTermKind::rise_time && !held[static_cast<std::size_t>(layout_.term_coefficient[j])])
-      return false;
-  }
-  return layout_.h < 0 || held[static_cast<std::size_t>(layout_.h)];
 }
 
 std::size_t ThermalModel::max_local_parameters() const {
   std::size_t most = 0;
   for (std::size_t r = 0; r < runs_.size(); ++r) most = std::max(most, local_parameters(layout_, r).size());
   return most;
-}
-
-void ThermalModel::explain(IdentifiabilityIssue& issue) const {
-  std::set<std::string> names;
-  std::string combo;
-  for (const auto& [name, weight] : issue.combination) {
-    if (std::abs(weight) >= 0.3) names.insert(name);
-    combo += fmt::format(" {:+.2f}·{}", weight, name);
-  }
-  const bool alpha = names.count("alpha") > 0, h = names.count("h_W_m2K") > 0;
-  bool offsets = false, initial = false;
-  for (const auto& n : names) {
-    offsets |= n.rfind("offset", 0) == 0;
-    initial |= n.rfind("T0", 0) == 0;
-  }
-  const ThermalExtension* extension = nullptr;
-  for (const auto* e : layout_.extensions)
-    for (const auto& p : e->parameters)
-      if (names.count(p.name)) extension = e;
-  // A sensor term's parameters: "c<j> <symbol>", "P_s" ("P2_s", …), "tau<j>_s" (thermal_fit.cc).
-  const bool term = !layout_.terms.empty() && std::any_of(names.begin(), names.end(), [](const std::string& n) {
-    return (n.size() > 1 && n[0] == 'c' && std::isdigit(static_cast<unsigned char>(n[1]))) ||
-           (n[0] == 'P' && n.ends_with("_s")) || n.rfind("tau", 0) == 0;
-  });
-  if (term) {
-    issue.why = "the records do not separate the empirical sensor terms from the rest: they determine only" + combo;
-    issue.measure = "longer runs, or runs that start at other times of day or with other ambient courses";
-  } else if (extension) {
-    issue.why = fmt::format("the records do not separate {} ({}) from the rest: they determine only{}", extension->name,
-                            extension->description, combo);
-    issue.measure = extension->measure;
-  } else if (alpha && h) {
-    issue.why = "α and h trade off: a larger α with a larger h gives the same temperatures at these sensors and times";
-    issue.measure = "record the whole warm-up and the cool-down after the block stops, or sensors farther from the stroke";
-  } else if (offsets && initial) {
-    issue.why = "a thermocouple offset and the initial temperature shift the same reading the same way";
-    issue.measure = "log the rail at rest against a reference thermometer before the run";
-  } else if (offsets && alpha) {
-    issue.why = "the offsets absorb the heating: the records do not show the warm-up clearly enough";
-    issue.measure = "start logging before the block moves and run until the rail is close to steady state";
-  } else {
-    issue.why = "the records determine only the combination" + combo;
-    issue.measure = "longer runs, more sensors along the rail, or runs at other speeds";
-  }
 }
 
 // f(r) for every run, one thread each (the runs are independent simulations, as in the cost

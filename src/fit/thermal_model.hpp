@@ -1,6 +1,9 @@
 // The thermal least-squares model (private to the fit layer): rail thermocouple residuals
 // through the templated rail solver, one simulation per run, Jets seeded only with the
-// parameters that run depends on (α, h, the extensions', its offsets, its T0).
+// parameters that run depends on (α, h, the extensions', its offsets, its T0). Its cost is a
+// NormalEquationsCost: each run's JᵀJ over the few columns its rows touch, added in run order,
+// so the engine polishes it with its own Levenberg-Marquardt (no n × p Jacobian per iteration).
+// Its description (rows, linearity, identifiability) is in thermal_model_structure.cc.
 #pragma once
 
 #include <string>
