@@ -12,6 +12,7 @@
 
 #include "lmcal/error.hpp"
 #include "lmcal/io/limits.hpp"
+#include "parallel_slices.hpp"
 #include "thermal_model.hpp"
 #include "thermal_terms.hpp"
 
@@ -313,10 +314,10 @@ void fit_each_run(const ThermalDataSet& data, const std::vector<PreparedRun>& ru
   std::vector<double> alphas;
   ThermalFitOptions one_run = o;  // for the spread across runs: estimates and SEs, no profiles
   one_run.fit.profile = ProfileMode::none;
-  for (const auto& run : runs) {
-    result.per_run.push_back(fit_runs({run}, one_run));
-    alphas.push_back(result.per_run.back().parameter("alpha").value);
-  }
+  // Independent fits (each its own model): one thread each, kept in run order.
+  result.per_run.resize(runs.size());
+  detail::for_each_index(runs.size(), [&](std::size_t r) { result.per_run[r] = fit_runs({runs[r]}, one_run); });
+  for (const FitResult& run : result.per_run) alphas.push_back(run.parameter("alpha").value);
   result.alpha_spread = spread(alphas, o.fit.confidence);
   std::vector<Estimate> estimates;
   std::vector<double> se;

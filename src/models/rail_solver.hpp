@@ -81,6 +81,33 @@ struct LaneAmbient {
   }
 };
 
+// One ambient trace read by a time loop (twice a step, at nearby times): the same value as
+// trace.at(t), found by stepping from where the last read ended instead of a binary search.
+// Local to one simulation (it keeps that place).
+class AmbientCursor {
+ public:
+  explicit AmbientCursor(const AmbientTrace& trace) : trace_(trace) {}
+  double at(double t) const {
+    const std::vector<double>& time = trace_.time_s;
+    if (time.size() == 1 || t <= time.front()) return trace_.temperature_C.front();
+    if (t >= time.back()) return trace_.temperature_C.back();
+    // j: the first sample after t (upper_bound's), 1 <= j < size.
+    while (j_ + 1 < time.size() && time[j_] <= t) ++j_;
+    while (j_ > 1 && time[j_ - 1] > t) --j_;
+    const double s = (t - time[j_ - 1]) / (time[j_] - time[j_ - 1]);
+    return trace_.temperature_C[j_ - 1] + s * (trace_.temperature_C[j_] - trace_.temperature_C[j_ - 1]);
+  }
+
+ private:
+  const AmbientTrace& trace_;
+  mutable std::size_t j_ = 1;
+};
+inline AmbientCursor ambient_reader(const AmbientTrace& trace) { return AmbientCursor(trace); }
+template <int L>
+LaneAmbient<L> ambient_reader(const LaneAmbient<L>& lanes) {
+  return lanes;
+}
+
 template <int L>
 double value_of(const Lanes<L>& x) {
   return x.v[0];

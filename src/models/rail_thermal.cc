@@ -262,9 +262,10 @@ RailSolution<T> simulate_on(const Operator<O>& op, const Prepared<T>& prep, cons
 
   RailEnergy<T> energy;
   RailEnergy<T>* tally = outputs.energy_balance ? &energy : nullptr;
+  const auto ambient_now = ambient_reader(ambient);
   for (const TimeStep<O>& p : plan) {
     source.set_power(params.heat_partition * mean_heat_rate(p.t0, p.stepper->dt(), q));
-    p.stepper->advance(current, next, p.t0, ambient, source, tally);
+    p.stepper->advance(current, next, p.t0, ambient_now, source, tally);
     const T q_next = heat_rate ? heat_rate_for(next) : q;
     emit(p.t0, p.t_next, current, next, q, q_next, p.last);
     q = q_next;
