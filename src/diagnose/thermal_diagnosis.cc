@@ -24,7 +24,7 @@ namespace {
 constexpr int kCandidateIterations = 30;
 
 // Every model of the diagnosis is fitted like this: offsets per thermocouple, one start
-// (warm-started from the model before), no profiles, leave-one-run-out scores.
+// (warm-started from the model before), no profiles or bootstrap, leave-one-run-out scores.
 ThermalFitOptions model_options(const ThermalDiagnosisOptions& o) {
   ThermalFitOptions f = o.fit;
   f.offsets = ThermalOffsets::fitted;
@@ -35,6 +35,7 @@ ThermalFitOptions model_options(const ThermalDiagnosisOptions& o) {
   f.cross_validate = true;
   f.fit.starts = 0;
   f.fit.profile = ProfileMode::none;
+  f.fit.bootstrap = 0;  // the diagnosis quotes no bootstrap intervals (the calibrated model does)
   f.sensitivities = true;  // the empirical term's search linearises the model in its global parameters
   return f;
 }

@@ -346,6 +346,8 @@ void compare_sources(const std::vector<PreparedRun>& runs, const ThermalFitOptio
   ThermalFitOptions other = o;
   other.source = o.source == SourceModel::paper ? SourceModel::averaged : SourceModel::paper;
   other.per_run_fits = other.compare_sources = false;
+  other.fit.bootstrap = 0;  // only its α is read
+  other.fit.profile = ProfileMode::none;
   auto [other_layout, other_specs] = layout_for(runs, other);
   const ThermalModel other_model(runs, other_layout, numerics_of(other));
   const FitResult other_fit = detail::solve_least_squares(other_model, other_specs, other.fit);
