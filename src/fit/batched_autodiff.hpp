@@ -76,6 +76,11 @@ class NormalEquationsCost {
   // detour; the columns of `held` parameters may come out 0, as in normal_equations.
   virtual bool residuals_and_jacobian(const double* theta, const std::vector<bool>& held, Eigen::VectorXd& r,
                                       Eigen::MatrixXd& J) const = 0;
+  // True when the solver should try each step with the normal equations themselves rather than
+  // a residual pass first: where residuals alone cost nearly as much (a simulation carries
+  // the derivatives along) and nearly every step is taken, the normal equations of the trial
+  // are those of the next iteration.
+  virtual bool normal_equations_at_trials() const { return false; }
 };
 
 // Sums of x xᵀ over rows x = [J_i, r_i], centred within groups the way

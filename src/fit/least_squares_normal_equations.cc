@@ -96,7 +96,9 @@ std::vector<double> projected_candidate(const std::vector<double>& theta, Eigen:
 // Ceres polish: the step solves (JᵀJ + diag(JᵀJ)/Δ) δ = -Jᵀr (the diagonal of the
 // Jacobi-scaled JᵀJ clamped to [1e-6, 1e32]), the radius Δ grows by 1/max(1/3, 1 - (2ρ - 1)³) after a step whose gain
 // ratio ρ exceeds 1e-3 and halves (then quarters, …) after a failed one; with bounds, the
-// step is projected onto the box and its predicted gain computed for the projected step.
+// step is projected onto the box and its predicted gain computed for the projected step. A
+// trial's cost is a residual pass, or, where the cost asks for it (normal_equations_at_trials),
+// its normal equations, kept for the next iteration when the step is taken.
 Polish solve_normal_equations(const NormalEquationsCost& normal, const ceres::CostFunction& cost,
                               const std::vector<ParameterSpec>& specs, const std::vector<bool>& held,
                               std::vector<double> theta, bool bounded, int max_iterations) {
@@ -123,9 +125,10 @@ Polish solve_normal_equations(const NormalEquationsCost& normal, const ceres::Co
     out.theta = std::move(theta);
     return std::move(out);
   };
-  Eigen::MatrixXd H;
-  Eigen::VectorXd g;
+  Eigen::MatrixXd H, H_new;
+  Eigen::VectorXd g, g_new;
   double f = 0;
+  const bool at_trials = normal.normal_equations_at_trials();
   if (!normal.normal_equations(theta.data(), held, f, H, g)) {
     summary.initial_cost = summary.final_cost = kNaN;
     return finish(ceres::FAILURE, "the residuals are not finite at the start", 0);
@@ -151,7 +154,9 @@ Polish solve_normal_equations(const NormalEquationsCost& normal, const ceres::Co
       return finish(ceres::CONVERGENCE, "parameter tolerance reached", iteration);
     const double predicted = -(gf.dot(step) + 0.5 * step.dot(Hf * step));
     double f_new = 0;
-    const bool finite = ldlt.info() == Eigen::Success && step.allFinite() && cost_at(candidate, f_new);
+    const bool solved = ldlt.info() == Eigen::Success && step.allFinite();
+    const bool finite = solved && (at_trials ? normal.normal_equations(candidate.data(), held, f_new, H_new, g_new)
+                                             : cost_at(candidate, f_new));
     const double gain = finite ? f - f_new : -kInfinity;
     if (finite && std::abs(gain) <= kFunctionTolerance * f) {
       if (gain > 0) theta = std::move(candidate), summary.final_cost = f_new;
@@ -164,7 +169,12 @@ Polish solve_normal_equations(const NormalEquationsCost& normal, const ceres::Co
       summary.final_cost = f;
       radius = std::min(radius / std::max(1.0 / 3.0, 1.0 - std::pow(2 * rho - 1, 3)), 1e16);
       decrease = 2;
-      if (!normal.normal_equations(theta.data(), held, f, H, g)) return finish(ceres::FAILURE, "the Jacobian is not finite", iteration);
+      if (at_trials) {
+        H.swap(H_new);
+        g.swap(g_new);
+      } else if (!normal.normal_equations(theta.data(), held, f, H, g)) {
+        return finish(ceres::FAILURE, "the Jacobian is not finite", iteration);
+      }
       summary.final_cost = f;
       restrict_to_free(H, g, free, Hf, gf);
       if (gradient_small(theta, gf, free, specs, bounded)) return finish(ceres::CONVERGENCE, "gradient tolerance reached", iteration);

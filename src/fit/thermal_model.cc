@@ -195,13 +195,6 @@ struct RowSink {
   }
 };
 
-// One run's data rows: residuals and their Jacobian over the run's own columns (row-major).
-struct RunBlock {
-  std::vector<int> columns;
-  Eigen::VectorXd r;
-  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> J;
-};
-
 class ThermalCost final : public ceres::CostFunction, public NormalEquationsCost {
  public:
   ThermalCost(const ThermalModel& model, std::vector<std::size_t> rows, RowLoss loss)
@@ -246,6 +239,10 @@ class ThermalCost final : public ceres::CostFunction, public NormalEquationsCost
 
   // Each run's JᵀJ over its own columns (a handful of the parameters: its simulation's, its
   // offsets, the terms'), scattered into the whole in run order: the same bits on any thread count.
+  // A residual pass costs 40 % of this one (the simulation dominates both) and nearly every
+  // step of a thermal polish is taken.
+  bool normal_equations_at_trials() const override { return true; }
+
   bool normal_equations(const double* theta, const std::vector<bool>& held, double& cost, Eigen::MatrixXd& JtJ,
                         Eigen::VectorXd& Jtr) const override {
     const auto P = static_cast<Eigen::Index>(model_.layout().size);
@@ -267,10 +264,12 @@ class ThermalCost final : public ceres::CostFunction, public NormalEquationsCost
       double cost = 0;
     };
     std::vector<Sums> sums(model_.runs().size());
-    const bool ok = run_blocks(theta, [&](std::size_t run, const RunBlock& b) {
+    std::vector<ThermalRunRows> blocks;
+    const bool ok = run_blocks(theta, blocks, [&](std::size_t run, const ThermalRunRows& b) {
       sums[run] = {b.J.transpose() * b.J, b.J.transpose() * b.r, 0.5 * b.r.squaredNorm()};
     });
     if (!ok) return false;
+    model_.remember_rows(theta, loss_, std::move(blocks));
     for (std::size_t run = 0; run < sums.size(); ++run) {
       const std::vector<int> columns = run_columns(model_.layout(), run);
       for (std::size_t a = 0; a < columns.size(); ++a) {
@@ -303,13 +302,18 @@ class ThermalCost final : public ceres::CostFunction, public NormalEquationsCost
     const auto n = static_cast<Eigen::Index>(model_.num_residuals());
     r.resize(n);
     J.setZero(n, P);
-    const bool ok = run_blocks(theta, [&](std::size_t run, const RunBlock& b) {
+    auto place = [&](std::size_t run, const ThermalRunRows& b) {
       const auto first = static_cast<Eigen::Index>(model_.first_row(run));
       r.segment(first, b.r.size()) = b.r;
       for (std::size_t a = 0; a < b.columns.size(); ++a)
         J.col(b.columns[a]).segment(first, b.r.size()) = b.J.col(static_cast<Eigen::Index>(a));
-    });
-    if (!ok) return false;
+    };
+    if (const std::vector<ThermalRunRows>* kept = model_.rows_at(theta, loss_)) {
+      for (std::size_t run = 0; run < kept->size(); ++run) place(run, (*kept)[run]);
+    } else {
+      std::vector<ThermalRunRows> blocks;
+      if (!run_blocks(theta, blocks, place)) return false;
+    }
     for (std::size_t k = 0; k < model_.prior_runs().size(); ++k) {
       const auto row = static_cast<Eigen::Index>(model_.rows().size() + k);
       const Prior prior = prior_row(theta, k);
@@ -335,12 +339,12 @@ class ThermalCost final : public ceres::CostFunction, public NormalEquationsCost
   // Every run's data rows with derivatives, one block per run, handed to `use(run, block)` on
   // the thread that built it.
   template <class Use>
-  bool run_blocks(const double* theta, const Use& use) const {
+  bool run_blocks(const double* theta, std::vector<ThermalRunRows>& blocks, const Use& use) const {
     const auto P = static_cast<std::size_t>(model_.layout().size);
-    std::vector<RunBlock> blocks(model_.runs().size());
+    blocks.assign(model_.runs().size(), {});
     std::vector<std::vector<int>> column(blocks.size());
     const bool ok = evaluate_runs(theta, true, [&](std::size_t run) {
-      RunBlock& b = blocks[run];
+      ThermalRunRows& b = blocks[run];
       b.columns = run_columns(model_.layout(), run);
       column[run].assign(P, -1);
       for (std::size_t a = 0; a < b.columns.size(); ++a) column[run][static_cast<std::size_t>(b.columns[a])] = static_cast<int>(a);
@@ -508,6 +512,19 @@ std::vector<std::vector<std::vector<double>>> ThermalModel::term_sums(
     out.push_back(std::move(sums));
   }
   return out;
+}
+
+void ThermalModel::remember_rows(const double* theta, const RowLoss& loss, std::vector<ThermalRunRows> runs) const {
+  rows_memo_.theta.assign(theta, theta + layout_.size);
+  rows_memo_.loss = loss;
+  rows_memo_.runs = std::move(runs);
+}
+
+const std::vector<ThermalRunRows>* ThermalModel::rows_at(const double* theta, const RowLoss& loss) const {
+  const RowsMemo& m = rows_memo_;
+  const bool same = !m.theta.empty() && std::equal(m.theta.begin(), m.theta.end(), theta) && m.loss.kind == loss.kind &&
+                    m.loss.scale == loss.scale;
+  return same ? &m.runs : nullptr;
 }
 
 void ThermalModel::remember_end_profile(std::size_t r, const double* theta, const std::vector<int>& local,

@@ -33,6 +33,14 @@ struct ThermalLayout {
   int size = 1;
 };
 
+// One run's data rows: residuals and their Jacobian over the run's own columns (the global
+// parameters its rows depend on, ascending), row-major.
+struct ThermalRunRows {
+  std::vector<int> columns;
+  Eigen::VectorXd r;
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> J;
+};
+
 class ThermalModel : public LeastSquaresModel {
  public:
   ThermalModel(const std::vector<PreparedRun>& runs, ThermalLayout layout, RailNumerics numerics);
@@ -62,6 +70,12 @@ class ThermalModel : public LeastSquaresModel {
   void remember_end_profile(std::size_t r, const double* theta, const std::vector<int>& local, RailProfile profile,
                             std::vector<std::vector<double>> slope) const;
 
+  // Every run's rows at θ with `loss`, kept from the last normal equations over all rows (the
+  // polish's last trial is usually its answer, whose Jacobian the fit then asks for).
+  void remember_rows(const double* theta, const RowLoss& loss, std::vector<ThermalRunRows> runs) const;
+  // The rows kept at exactly θ and `loss`, or null.
+  const std::vector<ThermalRunRows>* rows_at(const double* theta, const RowLoss& loss) const;
+
   struct Row {
     std::size_t run, time, sensor;
   };
@@ -86,6 +100,12 @@ class ThermalModel : public LeastSquaresModel {
     std::vector<std::vector<double>> slope;
   };
   mutable std::vector<EndProfileMemo> end_memo_;  // per run, sized at construction
+  struct RowsMemo {
+    std::vector<double> theta;  // empty: none yet
+    RowLoss loss;
+    std::vector<ThermalRunRows> runs;
+  };
+  mutable RowsMemo rows_memo_;
 };
 
 }  // namespace lmcal::detail
