@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <functional>
 #include <nlohmann/json.hpp>
 
 #include "diagnose/selection.hpp"
@@ -13,6 +14,7 @@
 #include "lmcal/fit/model_file.hpp"
 #include "lmcal/io/output_record.hpp"
 #include "lmcal/report/html_report.hpp"
+#include "parallel_slices.hpp"
 #include "report/findings.hpp"
 #include "report/sections.hpp"
 
@@ -37,41 +39,57 @@ void add_provenance(std::vector<std::pair<std::string, std::string>>& outputs, c
 }  // namespace
 
 std::vector<std::pair<std::string, std::string>> calibration_outputs(const Calibration& c) {
-  std::vector<std::pair<std::string, std::string>> out;
-  auto append = [&](std::vector<std::pair<std::string, std::string>> files) {
-    for (auto& file : files) out.push_back(std::move(file));
+  using Files = std::vector<std::pair<std::string, std::string>>;
+  // Each writer a task of its own; they run side by side (the report, the longest, first) and
+  // their files are kept in this order.
+  std::vector<std::function<Files()>> tasks;
+  auto one = [&](std::string name, std::function<std::string()> text) {
+    tasks.push_back([name = std::move(name), text = std::move(text)] { return Files{{name, text()}}; });
   };
   // c.inputs: the friction logs first, then the thermal files.
   const auto thermal_inputs = c.inputs.begin() + static_cast<std::ptrdiff_t>(c.set.friction_logs.size());
-  out.emplace_back("model.toml", model_file_toml(calibrated_model_file(c)));
+  const std::vector<std::pair<std::string, std::string>> friction_inputs(c.inputs.begin(), thermal_inputs),
+      thermal_files(thermal_inputs, c.inputs.end());
+  one("model.toml", [&] { return model_file_toml(calibrated_model_file(c)); });
   const CalibratedModel& m = c.calibrated;
   if (m.friction)
-    out.emplace_back("calibrated_friction.json", friction_fit_json(*m.friction, m.friction_options,
-                                                                   {"calibrated_friction", {c.inputs.begin(), thermal_inputs}, c.command}));
+    one("calibrated_friction.json", [&] {
+      return friction_fit_json(*m.friction, m.friction_options, {"calibrated_friction", friction_inputs, c.command});
+    });
   if (m.thermal)
-    out.emplace_back("calibrated_thermal.json",
-                     thermal_fit_json(*m.thermal, m.thermal_options, {thermal_inputs, c.inputs.end()}, c.command, "calibrated_thermal"));
+    one("calibrated_thermal.json",
+        [&] { return thermal_fit_json(*m.thermal, m.thermal_options, thermal_files, c.command, "calibrated_thermal"); });
   if (c.friction)
-    append(friction_fit_files(*c.friction, *c.friction_log, c.friction_options,
-                              {"friction", {c.inputs.begin(), thermal_inputs}, c.command}));
-  if (c.friction_diagnosis) out.emplace_back("friction_diagnosis.json", friction_diagnosis_json(*c.friction_diagnosis));
-  if (c.thermal) append(thermal_fit_files(*c.thermal, c.thermal_options, {thermal_inputs, c.inputs.end()}, c.command, "thermal"));
-  if (c.thermal_diagnosis) out.emplace_back("thermal_diagnosis.json", thermal_diagnosis_json(*c.thermal_diagnosis));
+    tasks.push_back([&] {
+      return friction_fit_files(*c.friction, *c.friction_log, c.friction_options, {"friction", friction_inputs, c.command});
+    });
+  if (c.friction_diagnosis) one("friction_diagnosis.json", [&] { return friction_diagnosis_json(*c.friction_diagnosis); });
+  if (c.thermal)
+    tasks.push_back([&] { return thermal_fit_files(*c.thermal, c.thermal_options, thermal_files, c.command, "thermal"); });
+  if (c.thermal_diagnosis) one("thermal_diagnosis.json", [&] { return thermal_diagnosis_json(*c.thermal_diagnosis); });
   if (c.prediction) {
-    out.emplace_back("prediction.json", prediction_json(*c.prediction, *c.duty, calibrated_model_file(c), c.command));
-    out.emplace_back("prediction_time.csv", prediction_time_csv(*c.prediction));
+    one("prediction.json", [&] { return prediction_json(*c.prediction, *c.duty, calibrated_model_file(c), c.command); });
+    one("prediction_time.csv", [&] { return prediction_time_csv(*c.prediction); });
   }
   if (c.plan) {
-    out.emplace_back("plan_friction.json", friction_plan_json(*c.plan, c.command));
-    out.emplace_back("plan_friction_template.csv", friction_plan_template_csv(*c.plan));
+    one("plan_friction.json", [&] { return friction_plan_json(*c.plan, c.command); });
+    one("plan_friction_template.csv", [&] { return friction_plan_template_csv(*c.plan); });
   }
   if (c.thermal_plan) {
-    out.emplace_back("plan_thermal.json", thermal_plan_json(*c.thermal_plan, c.command));
-    out.emplace_back("plan_thermal_manifest.toml", thermal_plan_manifest_toml(*c.thermal_plan, *c.thermal_data));
+    one("plan_thermal.json", [&] { return thermal_plan_json(*c.thermal_plan, c.command); });
+    one("plan_thermal_manifest.toml", [&] { return thermal_plan_manifest_toml(*c.thermal_plan, *c.thermal_data); });
   }
-  out.emplace_back("calibration.json", calibration_json(c));
-  out.emplace_back("report.html", calibration_report_html(c));
-  add_provenance(out, c);
+  one("calibration.json", [&] { return calibration_json(c); });
+  one("report.html", [&] { return calibration_report_html(c); });
+  std::vector<Files> made(tasks.size());
+  detail::for_each_index(tasks.size(), [&](std::size_t k) {
+    const std::size_t task = (k + tasks.size() - 1) % tasks.size();  // the report (last) first
+    made[task] = tasks[task]();
+    add_provenance(made[task], c);
+  });
+  Files out;
+  for (Files& files : made)
+    for (auto& file : files) out.push_back(std::move(file));
   for (const auto& [name, text] : out) LMCAL_ASSERT(is_calibration_output(name), "every output is in calibration_output_names()");
   return out;
 }
