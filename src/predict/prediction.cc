@@ -8,6 +8,7 @@
 #include <Eigen/Eigenvalues>
 
 #include <algorithm>
+#include <limits>
 #include <cmath>
 #include <exception>
 #include <map>
@@ -80,6 +81,17 @@ double thermal_elongation_m(const std::vector<double>& x, const std::vector<doub
 
 std::string runaway_of(const RailSolution<double>& sol, const std::string& inputs) {
   const PhysicalRange range = physical_range(Quantity::temperature);
+  // The common case first, in one branch-free pass: every value finite (0·x stays 0) and
+  // within the range. Otherwise the pass below finds the value to name.
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo, zero = 0;
+  const auto span = [&](const std::vector<double>& values) {
+    for (double x : values) lo = std::min(lo, x), hi = std::max(hi, x), zero += 0 * x;
+  };
+  for (const auto& profile : sol.profiles_C) span(profile);
+  span(sol.sensor_temperature_C);
+  span(sol.source_temperature_C);
+  for (double q : sol.heat_rate_W) zero += 0 * q;
+  if (zero == 0 && (lo > hi || (range.contains(lo) && range.contains(hi)))) return "";
   double worst = 0;
   bool finite = true;
   const auto see = [&](double T) {
