@@ -22,6 +22,7 @@
 
 #include "io/input_file.hpp"
 #include "lmcal/error.hpp"
+#include "parallel_slices.hpp"
 
 namespace lmcal {
 
@@ -228,8 +229,10 @@ void OutputSet::commit() {
       if (fs::is_directory(target, ec)) throw InputError(target.string(), 0, 0, "cannot write output file: it is a folder");
       journal.renames.emplace_back(temporary_for(target), target);
       step(static_cast<int>(journal.renames.size()));
-      write_durably(journal.renames.back().first, contents);
     }
+    // The temporaries written side by side (their fsyncs overlap); the first failure in file
+    // order is the one reported.
+    detail::for_each_index(files_.size(), [&](std::size_t k) { write_durably(journal.renames[k].first, files_[k].second); });
     for (const fs::path& path : removals_) {
       const fs::path target = fs::absolute(path);
       const bool kept = std::any_of(journal.renames.begin(), journal.renames.end(), [&](const auto& r) { return r.second == target; });
