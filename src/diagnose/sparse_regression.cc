@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -48,14 +49,23 @@ GroupGrams group_grams(const SparseProblem& p, const std::vector<const std::vect
   }
   Eigen::MatrixXd mean = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(levels), static_cast<Eigen::Index>(k + 1));
   Eigen::VectorXd count = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(levels));
-  if (centre) {
-    for (std::size_t i = 0; i < n; ++i) {
-      const auto l = static_cast<Eigen::Index>(level[i]);
-      for (std::size_t j = 0; j < k; ++j) mean(l, static_cast<Eigen::Index>(j)) += column(j)[i];
-      mean(l, static_cast<Eigen::Index>(k)) += p.y[i];
-      count(l) += 1;
-    }
-    for (Eigen::Index l = 0; l < mean.rows(); ++l) mean.row(l) /= count(l);
+  if (centre && n > 0) {
+    for (std::size_t i = 0; i < n; ++i) count(static_cast<Eigen::Index>(level[i])) += 1;
+    // Column by column (each on a free thread), its rows in order: the same sums as row by row.
+    for_each_index(k + 1, [&](std::size_t j) {
+      const std::vector<double>& x = j < k ? column(j) : p.y;
+      double* sum = mean.col(static_cast<Eigen::Index>(j)).data();
+      // The running sum in a register through each stretch of one level: the same additions
+      // in the same order as sum[level[i]] += x[i], without a store and load per row.
+      std::size_t at = level[0];
+      double running = sum[at];
+      for (std::size_t i = 0; i < n; ++i) {
+        if (level[i] != at) sum[at] = running, at = level[i], running = sum[at];
+        running += x[i];
+      }
+      sum[at] = running;
+      for (std::size_t l = 0; l < levels; ++l) sum[l] /= count(static_cast<Eigen::Index>(l));
+    });
   }
   GroupGrams g;
   const auto K = static_cast<Eigen::Index>(k);
@@ -72,13 +82,21 @@ GroupGrams group_grams(const SparseProblem& p, const std::vector<const std::vect
     Eigen::VectorXd y(static_cast<Eigen::Index>(kBlock));
     for (std::size_t start = 0; start < rows[gr].size(); start += kBlock) {
       const std::size_t m = std::min(kBlock, rows[gr].size() - start);
-      for (std::size_t r = 0; r < m; ++r) {
-        const std::size_t i = rows[gr][start + r];
-        const auto l = static_cast<Eigen::Index>(level[i]);
-        for (std::size_t j = 0; j < k; ++j)
-          X(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(j)) =
-              column(j)[i] - (centre ? mean(l, static_cast<Eigen::Index>(j)) : 0.0);
-        y(static_cast<Eigen::Index>(r)) = p.y[i] - (centre ? mean(l, K) : 0.0);
+      const std::size_t* block = rows[gr].data() + start;
+      std::array<std::size_t, kBlock> block_level;
+      for (std::size_t r = 0; r < m; ++r) block_level[r] = level[block[r]];
+      // A group's rows are mostly a stretch (a run): then read straight, not through the indices.
+      const bool stretch = block[m - 1] - block[0] == m - 1;
+      // Column by column: X is column-major.
+      for (std::size_t j = 0; j <= k; ++j) {
+        const std::vector<double>& x = j < k ? column(j) : p.y;
+        double* out = j < k ? X.col(static_cast<Eigen::Index>(j)).data() : y.data();
+        if (stretch) std::copy_n(x.data() + block[0], m, out);
+        else
+          for (std::size_t r = 0; r < m; ++r) out[r] = x[block[r]];
+        if (!centre) continue;
+        const double* level_mean = mean.col(static_cast<Eigen::Index>(j)).data();
+        for (std::size_t r = 0; r < m; ++r) out[r] -= level_mean[block_level[r]];
       }
       const auto M = static_cast<Eigen::Index>(m);
       g.xx[gr].selfadjointView<Eigen::Lower>().rankUpdate(X.topRows(M).transpose());  // the lower half: half the work
