@@ -79,28 +79,28 @@ void run_sums(const ScoreInputs& in, std::vector<Eigen::MatrixXd>& H, std::vecto
   const auto m = static_cast<std::size_t>(in.jacobian.cols());
   const auto n = static_cast<std::size_t>(in.jacobian.rows());
   const double* J = in.jacobian.data();  // column-major: entry (i, a) at J[a·n + i]
-  std::vector<double> row(m);
-  std::vector<std::vector<double>> lower(H.size(), std::vector<double>(m * m, 0.0)), score(H.size(), std::vector<double>(m, 0.0));
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::size_t c = in.rows.cluster[i];
-    for (std::size_t a = 0; a < m; ++a) row[a] = J[a * n + i];
-    double* h = lower[c].data();
-    double* s = score[c].data();
-    const double r = in.residuals[static_cast<Eigen::Index>(i)];
-    for (std::size_t a = 0; a < m; ++a) {
-      const double x = row[a];
-      double* h_row = h + a * m;  // H(a, b) for b <= a
-      for (std::size_t b = 0; b <= a; ++b) h_row[b] += row[b] * x;
-      s[a] += r * x;
+  // Each run's rows, in order; each run's sums on a free thread (they touch no other run's).
+  std::vector<std::vector<std::size_t>> rows_of(H.size());
+  for (std::size_t i = 0; i < n; ++i) rows_of[in.rows.cluster[i]].push_back(i);
+  for_each_index(H.size(), [&](std::size_t c) {
+    std::vector<double> row(m), lower(m * m, 0.0), score(m, 0.0);
+    for (const std::size_t i : rows_of[c]) {
+      for (std::size_t a = 0; a < m; ++a) row[a] = J[a * n + i];
+      const double r = in.residuals[static_cast<Eigen::Index>(i)];
+      for (std::size_t a = 0; a < m; ++a) {
+        const double x = row[a];
+        double* h_row = lower.data() + a * m;  // H(a, b) for b <= a
+        for (std::size_t b = 0; b <= a; ++b) h_row[b] += row[b] * x;
+        score[a] += r * x;
+      }
     }
-  }
-  for (std::size_t c = 0; c < H.size(); ++c)
     for (std::size_t a = 0; a < m; ++a) {
-      g[c][static_cast<Eigen::Index>(a)] = score[c][a];
+      g[c][static_cast<Eigen::Index>(a)] = score[a];
       for (std::size_t b = 0; b <= a; ++b)
         H[c](static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b)) =
-            H[c](static_cast<Eigen::Index>(b), static_cast<Eigen::Index>(a)) = lower[c][a * m + b];
+            H[c](static_cast<Eigen::Index>(b), static_cast<Eigen::Index>(a)) = lower[a * m + b];
     }
+  });
 }
 
 }  // namespace
