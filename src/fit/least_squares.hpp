@@ -2,10 +2,12 @@
 //
 //   1. multi-start: `starts` local searches on a subsample of the residuals, from the given
 //      start and from a Halton sequence over the bounds: Levenberg-Marquardt on the
-//      subsample's normal equations where the cost accumulates them (the friction models),
-//      else NLopt's bounded L-BFGS with the gradient of the model's autodiff cost function;
-//   2. polish: Ceres Levenberg-Marquardt on all residuals from the best start, with
-//      bounds, held parameters (SubsetManifold) and an optional robust loss (row by row);
+//      subsample's normal equations where the cost accumulates them (the friction and
+//      thermal models), else NLopt's bounded L-BFGS with the gradient of the model's autodiff
+//      cost function;
+//   2. polish: Levenberg-Marquardt on all residuals from the best start, with bounds, held
+//      parameters and an optional robust loss (row by row): the engine's own on the normal
+//      equations where the cost accumulates them, else Ceres' (SubsetManifold for the held);
 //   3. identifiability: (JᵀJ)⁻¹ from a rank-revealing QR of the autodiff Jacobian (what
 //      ceres::Covariance computes; tested against it); the eigen-directions of the relatively
 //      scaled covariance (or the null space of JᵀJ when the Jacobian is rank deficient); a

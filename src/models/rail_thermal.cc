@@ -72,7 +72,14 @@ double initial_profile_at(const std::vector<double>& xs, const std::vector<doubl
 void validate(const AmbientTrace& ambient, double duration_s) {
   if (ambient.time_s.empty() || ambient.time_s.size() != ambient.temperature_C.size())
     throw InvalidParameter("ambient", "the ambient trace needs as many temperatures as times, and at least one");
+  // A fit simulates the same trace hundreds of times: the common case in one inline pass, the
+  // checks that name the first bad sample only when it fails.
+  bool fine = true;
   for (std::size_t i = 0; i < ambient.time_s.size(); ++i) {
+    const double t = ambient.time_s[i], T = ambient.temperature_C[i];
+    fine &= std::isfinite(t) && std::isfinite(T) && T >= -273.15 && T <= 1000.0 && (i == 0 || t > ambient.time_s[i - 1]);
+  }
+  for (std::size_t i = 0; i < ambient.time_s.size() && !fine; ++i) {
     require_finite("ambient time_s", ambient.time_s[i]);
     require_in_range("ambient temperature_C", ambient.temperature_C[i], -273.15, 1000.0);
     if (i > 0 && !(ambient.time_s[i] > ambient.time_s[i - 1]))
@@ -99,7 +106,10 @@ void validate(const HeatRateSchedule<T>& schedule) {
 }
 
 void validate_times(const char* name, const std::vector<double>& times, double duration_s) {
-  for (std::size_t i = 0; i < times.size(); ++i) {
+  bool fine = true;  // as validate(ambient): the common case first
+  for (std::size_t i = 0; i < times.size(); ++i)
+    fine &= std::isfinite(times[i]) && times[i] >= 0.0 && times[i] <= duration_s && (i == 0 || times[i] >= times[i - 1]);
+  for (std::size_t i = 0; i < times.size() && !fine; ++i) {
     require_in_range(name, times[i], 0.0, duration_s);
     if (i > 0 && times[i] < times[i - 1]) throw InvalidParameter(name, times[i], "times in ascending order");
   }
