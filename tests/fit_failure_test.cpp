@@ -16,12 +16,15 @@ namespace lmcal {
 namespace {
 
 // y = a·x + b at x = 0..n-1; the residual is NaN where a > nan_above. Unless `a_seen`, the
-// model leaves a out (a column of zeros).
+// model leaves a out (a column of zeros). Linear where it is never NaN, or where it says so
+// (`claims_linear`: the engine's linear path, which takes the start's residuals with its
+// Jacobian).
 class Line : public detail::LeastSquaresModel {
  public:
-  Line(std::size_t n, double nan_above, bool a_seen = true) : n_(n), nan_above_(nan_above), a_seen_(a_seen) {}
+  Line(std::size_t n, double nan_above, bool a_seen = true, bool claims_linear = false)
+      : n_(n), nan_above_(nan_above), a_seen_(a_seen), claims_linear_(claims_linear) {}
   std::size_t num_residuals() const override { return n_; }
-  bool linear(const std::vector<bool>&) const override { return !std::isfinite(nan_above_); }
+  bool linear(const std::vector<bool>&) const override { return claims_linear_ || !std::isfinite(nan_above_); }
   std::unique_ptr<ceres::CostFunction> cost_function(const std::vector<std::size_t>& rows,
                                                      const detail::RowLoss&) const override {
     return std::make_unique<Cost>(rows.empty() ? all() : rows, nan_above_, a_seen_ ? 1.0 : 0.0);
@@ -60,7 +63,7 @@ class Line : public detail::LeastSquaresModel {
   }
   std::size_t n_;
   double nan_above_;
-  bool a_seen_;
+  bool a_seen_, claims_linear_;
 };
 
 std::vector<detail::ParameterSpec> specs(double a_start, bool free = true) {
@@ -68,6 +71,16 @@ std::vector<detail::ParameterSpec> specs(double a_start, bool free = true) {
 }
 
 constexpr double kNever = std::numeric_limits<double>::infinity();
+
+TEST(FitFailure, ALinearModelNotFiniteAtTheStartSaysSoToo) {
+  // A linear model's start residuals come with its Jacobian (no residual pass of their own).
+  const FitResult fit = detail::solve_least_squares(Line(20, 5, true, true), specs(6), {});
+  EXPECT_FALSE(fit.solver.usable);
+  EXPECT_NE(fit.solver.unusable_reason.find("the residuals are not finite: residual 1 of 20 is nan at the start values"),
+            std::string::npos)
+      << fit.solver.unusable_reason;
+  EXPECT_EQ(fit.parameter("a").value, 6);
+}
 
 TEST(FitFailure, ResidualsNotFiniteAtTheStartAreAnUnusableResultThatSaysWhy) {
   // Was an abort: "internal error at least_squares.cc: residual evaluation failed".

@@ -109,14 +109,16 @@ Estimate estimate(const LeastSquaresModel& model, const std::vector<ParameterSpe
   for (std::size_t j = 0; j < p; ++j) start[j] = specs[j].start;
   const RowLoss loss{options.loss, options.loss_scale};
   const auto cost = model.cost_function({}, loss);
-  try {
-    evaluate_residuals(model, start, loss);
-  } catch (const NonFiniteResiduals& e) {
-    throw NonFiniteResiduals(std::string(e.what()) + " at the start values");
-  }
-
-  // A linear model has one minimum: neither multi-start nor iterations are needed.
+  auto at_start = [](const NonFiniteResiduals& e) { return NonFiniteResiduals(std::string(e.what()) + " at the start values"); };
+  // A linear model has one minimum: neither multi-start nor iterations are needed. Its
+  // residuals at the start come with its Jacobian there (the first round below); any other's
+  // are checked first.
   const bool linear = model.linear(held) && options.loss == RobustLoss::none;
+  try {
+    if (!linear) evaluate_residuals(model, start, loss);
+  } catch (const NonFiniteResiduals& e) {
+    throw at_start(e);
+  }
   Estimate e;
   e.starts = linear ? MultiStart{start, 1, 1, {}, {}, 0} : multi_start(model, specs, held, start, options);
   std::vector<double> theta = e.starts.best;
@@ -139,7 +141,12 @@ Estimate estimate(const LeastSquaresModel& model, const std::vector<ParameterSpe
     condition_number.reset();
     for (std::size_t round = 0; round <= p; ++round) {
       if (linear && model.linear(held)) {
-        e.fit = linear_solve(model, *cost, specs, held, theta, loss, state.jacobian);
+        try {
+          e.fit = linear_solve(model, *cost, specs, held, theta, loss, state.jacobian);
+        } catch (const NonFiniteResiduals& failure) {
+          if (round == 0 && theta == start) throw at_start(failure);
+          throw;
+        }
         state.residuals = e.fit.residuals;
       } else {
         e.fit = polish(*cost, specs, held, theta, options.max_iterations);
