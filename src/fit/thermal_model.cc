@@ -237,12 +237,13 @@ class ThermalCost final : public ceres::CostFunction, public NormalEquationsCost
     return true;
   }
 
-  // Each run's JᵀJ over its own columns (a handful of the parameters: its simulation's, its
-  // offsets, the terms'), scattered into the whole in run order: the same bits on any thread count.
-  // A residual pass costs 40 % of this one (the simulation dominates both) and nearly every
-  // step of a thermal polish is taken.
+  // A residual pass costs 40 % of the normal equations' (the simulation dominates both) and
+  // nearly every step of a thermal polish is taken.
   bool normal_equations_at_trials() const override { return true; }
 
+  // Each run's JᵀJ over its own columns (a handful of the parameters: its simulation's, its
+  // offsets, the terms'), scattered into the whole in run order: the same bits on any thread
+  // count. The runs' rows are kept in the model for residuals_and_jacobian at the same θ.
   bool normal_equations(const double* theta, const std::vector<bool>& held, double& cost, Eigen::MatrixXd& JtJ,
                         Eigen::VectorXd& Jtr) const override {
     const auto P = static_cast<Eigen::Index>(model_.layout().size);
