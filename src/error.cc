@@ -2,7 +2,6 @@
 
 #include <fmt/format.h>
 
-#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 
@@ -30,21 +29,12 @@ InvalidParameter::InvalidParameter(std::string parameter, double value, const st
 InvalidParameter::InvalidParameter(std::string parameter, const std::string& message)
     : std::invalid_argument(fmt::format("{}: {}", parameter, message)), parameter_(std::move(parameter)) {}
 
-void require_finite(const char* parameter, double value) {
-  if (!std::isfinite(value)) throw InvalidParameter(parameter, value, "a finite number");
+void throw_invalid(const char* parameter, double value, const char* expected) {
+  throw InvalidParameter(parameter, value, expected);
 }
 
-void require_positive(const char* parameter, double value) {
-  if (!(std::isfinite(value) && value > 0)) throw InvalidParameter(parameter, value, "a finite value > 0");
-}
-
-void require_non_negative(const char* parameter, double value) {
-  if (!(std::isfinite(value) && value >= 0)) throw InvalidParameter(parameter, value, "a finite value >= 0");
-}
-
-void require_in_range(const char* parameter, double value, double lo, double hi) {
-  if (!(std::isfinite(value) && value >= lo && value <= hi))
-    throw InvalidParameter(parameter, value, fmt::format("a value in [{}, {}]", lo, hi));
+void throw_out_of_range(const char* parameter, double value, double lo, double hi) {
+  throw InvalidParameter(parameter, value, fmt::format("a value in [{}, {}]", lo, hi));
 }
 
 void assertion_failed(const char* expr, const char* file, int line, const char* message) {

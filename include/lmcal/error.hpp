@@ -9,6 +9,7 @@
 
 #include "lmcal/export.hpp"
 
+#include <cmath>
 #include <stdexcept>
 #include <string>
 
@@ -37,11 +38,27 @@ class InvalidParameter : public std::invalid_argument {
   std::string parameter_;
 };
 
+// The InvalidParameter the checks below raise; out of line, so that the checks inline.
+[[noreturn]] void throw_invalid(const char* parameter, double value, const char* expected);
+[[noreturn]] void throw_out_of_range(const char* parameter, double value, double lo, double hi);
+
 // Throws InvalidParameter unless `value` is finite and satisfies the named bound.
-void require_finite(const char* parameter, double value);
-void require_positive(const char* parameter, double value);
-void require_non_negative(const char* parameter, double value);
-void require_in_range(const char* parameter, double value, double lo, double hi);
+inline void require_finite(const char* parameter, double value) {
+  if (!std::isfinite(value)) [[unlikely]]
+    throw_invalid(parameter, value, "a finite number");
+}
+inline void require_positive(const char* parameter, double value) {
+  if (!(std::isfinite(value) && value > 0)) [[unlikely]]
+    throw_invalid(parameter, value, "a finite value > 0");
+}
+inline void require_non_negative(const char* parameter, double value) {
+  if (!(std::isfinite(value) && value >= 0)) [[unlikely]]
+    throw_invalid(parameter, value, "a finite value >= 0");
+}
+inline void require_in_range(const char* parameter, double value, double lo, double hi) {
+  if (!(std::isfinite(value) && value >= lo && value <= hi)) [[unlikely]]
+    throw_out_of_range(parameter, value, lo, hi);
+}
 
 [[noreturn]] void assertion_failed(const char* expr, const char* file, int line, const char* message);
 

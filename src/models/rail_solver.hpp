@@ -70,37 +70,29 @@ struct Lanes {
   friend Lanes operator/(double a, const Lanes& b) { return Lanes(a) /= b; }
 };
 
-// L ambient traces, read at once.
+// L ambient traces, read at once. A time loop reads a copy (ambient_reader), which keeps each
+// trace's place as AmbientCursor does.
 template <int L>
 struct LaneAmbient {
   const AmbientTrace* traces[L];
+  mutable std::size_t places[L];
   Lanes<L> at(double t) const {
     Lanes<L> out;
-    for (int l = 0; l < L; ++l) out.v[l] = traces[l]->at(t);
+    for (int l = 0; l < L; ++l) out.v[l] = traces[l]->at(t, places[l]);
     return out;
   }
 };
 
-// One ambient trace read by a time loop (twice a step, at nearby times): the same value as
-// trace.at(t), found by stepping from where the last read ended instead of a binary search.
-// Local to one simulation (it keeps that place).
+// One ambient trace read by a time loop (twice a step, at nearby times), keeping its place.
+// Local to one simulation.
 class AmbientCursor {
  public:
   explicit AmbientCursor(const AmbientTrace& trace) : trace_(trace) {}
-  double at(double t) const {
-    const std::vector<double>& time = trace_.time_s;
-    if (time.size() == 1 || t <= time.front()) return trace_.temperature_C.front();
-    if (t >= time.back()) return trace_.temperature_C.back();
-    // j: the first sample after t (upper_bound's), 1 <= j < size.
-    while (j_ + 1 < time.size() && time[j_] <= t) ++j_;
-    while (j_ > 1 && time[j_ - 1] > t) --j_;
-    const double s = (t - time[j_ - 1]) / (time[j_] - time[j_ - 1]);
-    return trace_.temperature_C[j_ - 1] + s * (trace_.temperature_C[j_] - trace_.temperature_C[j_ - 1]);
-  }
+  double at(double t) const { return trace_.at(t, place_); }
 
  private:
   const AmbientTrace& trace_;
-  mutable std::size_t j_ = 1;
+  mutable std::size_t place_ = 1;
 };
 inline AmbientCursor ambient_reader(const AmbientTrace& trace) { return AmbientCursor(trace); }
 template <int L>

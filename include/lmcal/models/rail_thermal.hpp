@@ -152,6 +152,9 @@ struct AmbientTrace {
   std::vector<double> temperature_C;
   static AmbientTrace constant(double temperature_C) { return {{0.0}, {temperature_C}}; }
   double at(double time_s) const;
+  // at(time_s) for a loop that reads nearby times in turn: `place` (start it at 1) keeps where
+  // the last read ended, and the search steps from there instead of bisecting the whole trace.
+  double at(double time_s, std::size_t& place) const;
 };
 
 // Energy over the run, for the whole rail (the half-rail models count both halves), J.
