@@ -215,6 +215,33 @@ TEST(RailThermal, AmbientFollowsTheTraceWhenThereIsNoHeat) {
   EXPECT_NEAR(w.temperature_C(0, 0), 33.0 - 10.0 * std::exp(-kSixHours_s / tau), 0.05);
 }
 
+// A time loop's reads keep their place (AmbientTrace::at(t, place)): whatever the order of the
+// reads (forward by less or more than a sample, backward, far jumps, the ends, exact sample
+// times), each is the same bits as the stand-alone read, which bisects.
+TEST(RailThermal, AnAmbientReadThatKeepsItsPlaceReadsWhatABisectionReads) {
+  AmbientTrace trace;
+  for (int k = 0; k <= 200; ++k) {
+    trace.time_s.push_back(k * 30.0 + (k % 7) * 1.5);
+    trace.temperature_C.push_back(22.0 + 3.0 * std::sin(0.05 * k) + 0.01 * k);
+  }
+  const double last = trace.time_s.back();
+  std::vector<double> reads;
+  for (double t = 0; t <= last; t += 7.3) reads.push_back(t);                        // forward, under a sample
+  for (double t = last; t >= 0; t -= 95.0) reads.push_back(t);                       // backward, over three
+  for (double t : {-5.0, last + 10, 15.0, last - 1, 31.5, 30.0, 3000.0, 3000.0}) reads.push_back(t);  // jumps, ends, knots
+  for (int k = 0; k < 400; ++k) reads.push_back(std::fmod(k * 613.7, last + 40) - 20);  // scattered
+  std::size_t place = 1;
+  int moved = 0;
+  for (double t : reads) {
+    const std::size_t before = place;
+    EXPECT_EQ(trace.at(t, place), trace.at(t)) << "at t = " << t;
+    moved += place != before;
+    ASSERT_GE(place, 1u);
+    ASSERT_LT(place, trace.time_s.size());
+  }
+  EXPECT_GT(moved, 100);  // the place did follow the reads
+}
+
 TEST(RailThermal, RefusesNonPhysicalInputNamingTheParameter) {
   const auto g = srn35c_geometry();
   const auto p = srn35c_params();

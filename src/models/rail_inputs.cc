@@ -31,10 +31,14 @@ double AmbientTrace::at(double t, std::size_t& j) const {
   LMCAL_ASSERT(!time_s.empty() && time_s.size() == temperature_C.size(), "ambient trace is empty or ragged");
   if (time_s.size() == 1 || t <= time_s.front()) return temperature_C.front();
   if (t >= time_s.back()) return temperature_C.back();
-  // j: the first sample after t (upper_bound's), 1 <= j < size: where the last read ended, one
-  // sample on, or else bisected.
-  const auto holds = [&](std::size_t k) { return k >= 1 && k < time_s.size() && time_s[k - 1] <= t && time_s[k] > t; };
-  if (!holds(j)) j = holds(j + 1) ? j + 1 : static_cast<std::size_t>(std::upper_bound(time_s.begin(), time_s.end(), t) - time_s.begin());
+  // j: the first sample after t (upper_bound's), 1 <= j < size. A time loop reads nearby times,
+  // forward and back: walk a few samples from where the last read ended, bisect beyond that.
+  // (front < t < back here, so a walk never leaves [1, size - 1].)
+  const auto before_t = [&](std::size_t k) { return time_s[k] <= t; };
+  j = std::clamp<std::size_t>(j, 1, time_s.size() - 1);
+  for (int walk = 0; walk < 8 && (before_t(j) || !before_t(j - 1)); ++walk) before_t(j) ? ++j : --j;
+  if (before_t(j) || !before_t(j - 1))
+    j = static_cast<std::size_t>(std::upper_bound(time_s.begin(), time_s.end(), t) - time_s.begin());
   const double s = (t - time_s[j - 1]) / (time_s[j] - time_s[j - 1]);
   return temperature_C[j - 1] + s * (temperature_C[j] - temperature_C[j - 1]);
 }
