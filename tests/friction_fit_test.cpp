@@ -4,13 +4,16 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <iostream>
 #include <map>
 #include <set>
 #include <tuple>
 
 #include "fit/friction_model.hpp"
+#include "parallel_slices.hpp"
 #include "support/finite_differences.hpp"
 #include "lmcal/rig/virtual_rig.hpp"
 
@@ -248,6 +251,13 @@ TEST(FrictionFit, TheLawSeesEachBlocksMeanLoggedTemperatureNotTheThermometersNoi
   const FrictionLog log = generate_friction_log(rig, {}).log;
   const FrictionLog seen = with_block_mean_temperature(log);
   ASSERT_EQ(seen.size(), log.size());
+  {  // each setting on a free thread: the same bits as one after another
+    const int before = detail::limit_slice_threads(1);
+    const FrictionLog serial = with_block_mean_temperature(log);
+    detail::limit_slice_threads(before);
+    for (std::size_t i = 0; i < log.size(); ++i)
+      ASSERT_EQ(std::bit_cast<std::uint64_t>(serial.temperature_C[i]), std::bit_cast<std::uint64_t>(seen.temperature_C[i]));
+  }
   // The rig holds each setting at a set point (its temperatures), one run after another:
   // every sample of a (run, guide, preload, load, set point) block sees the block's mean.
   std::map<std::tuple<std::uint32_t, std::uint32_t, double, double, double>, std::pair<double, double>> blocks;

@@ -17,6 +17,7 @@
 #include "friction_steps.hpp"
 #include "lmcal/error.hpp"
 #include "lmcal/fit/statistics.hpp"
+#include "parallel_slices.hpp"
 
 namespace lmcal {
 
@@ -311,15 +312,16 @@ FrictionLog with_block_mean_temperature(const FrictionLog& logged) {
     for (std::size_t i : members) sum += T[i];
     for (std::size_t i : members) out.temperature_C[i] = sum / static_cast<double>(members.size());
   };
-  std::vector<double> steps;
-  std::vector<std::pair<double, std::size_t>> by_T;
-  for (std::size_t s = 0; s < offset.size(); ++s) {
+  // The settings' samples are disjoint: each setting on a free thread, the same sums as in turn.
+  detail::for_each_index(offset.size(), [&](std::size_t s) {
+    std::vector<double> steps;
+    std::vector<std::pair<double, std::size_t>> by_T;
     const std::span<std::size_t> members(grouped.data() + begin_of[s], begin_of[s + 1] - begin_of[s]);
     const double noise = successive_noise(members, T, steps);  // members in time (log) order
     const double gap = std::max(kSetPointGap_K, 5 * noise), width = std::max(kSetPointWidth_K, 8 * noise);
     // By temperature, sorted as (T, sample) pairs held together (ties are equal values: their
     // order changes no mean).
-    by_T.clear();
+    by_T.reserve(members.size());
     for (std::size_t i : members) by_T.emplace_back(T[i], i);
     std::sort(by_T.begin(), by_T.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
     for (std::size_t k = 0; k < members.size(); ++k) members[k] = by_T[k].second;
@@ -339,7 +341,7 @@ FrictionLog with_block_mean_temperature(const FrictionLog& logged) {
       }
       begin = end;
     }
-  }
+  });
   return out;
 }
 
