@@ -220,9 +220,21 @@ class FileLoader {
   // limits on rows and names) the slices throw SlicesDisagree rather than decide.
   void read_slices(int count);
 
-  // The rows `part` read from a later slice appended to this file's (see read_slices); `last`:
-  // each run's last sample so far, by the log's run index.
-  void join(const FileLoader& part, long lines_before, std::vector<LastSample>& last);
+  // A later slice's rows as this file's log will hold them: its run and guide indices mapped to
+  // the log's, its line numbers after `lines_before`.
+  struct JoinedPart {
+    const FrictionLog* log;
+    std::vector<std::uint32_t> run_map, guide_map;
+    long lines_before;
+  };
+
+  // The names, the combination law's setup and each run's last sample (`last`, by the log's run
+  // index) of `part`, a later slice, joined to this file's (see read_slices); its rows are
+  // appended afterwards with the other slices' (append_parts).
+  JoinedPart join(const FileLoader& part, long lines_before, std::vector<LastSample>& last);
+
+  // The rows of `parts`, in order, appended to the log: each column on a free thread.
+  void append_parts(const std::vector<JoinedPart>& parts);
 
   // A combination law's setup as a later slice stated it (see law_conditions): the log's first
   // values, or SlicesDisagree.

@@ -3,6 +3,7 @@
 #include "friction_file_loader.hpp"
 
 #include <algorithm>
+#include <functional>
 #include <cmath>
 #include <memory>
 
@@ -35,17 +36,21 @@ void FileLoader::read_slices(int count) {
     }
     part->log.law = log_.law;
     part->loader.reset(new FileLoader(*this, rest->slices[k], 0, part->log, part->runs, part->guides));
-    reserve(part->log, static_cast<std::size_t>(rows_per_byte * static_cast<double>(rest->slices[k].size())) + 16);
   }
   detail::for_each_slice(parts.size(), static_cast<int>(parts.size()), [&](int, std::size_t begin, std::size_t end) {
-    for (std::size_t k = begin; k < end; ++k) parts[k]->loader->read_rows();
+    for (std::size_t k = begin; k < end; ++k) {
+      // A slice's own log mapped by the thread that fills it.
+      if (k != 0) reserve(parts[k]->log, static_cast<std::size_t>(rows_per_byte * static_cast<double>(rest->slices[k].size())) + 16);
+      parts[k]->loader->read_rows();
+    }
   });
   std::vector<LastSample> last = parts[0]->loader->last_;  // by the log's run index
   long lines_before = parts[0]->loader->reader_.line();
+  std::vector<JoinedPart> joined;
   for (std::size_t k = 0; k < parts.size(); ++k) {
     FileLoader& part = *parts[k]->loader;
     if (k != 0) {
-      join(part, lines_before, last);
+      joined.push_back(join(part, lines_before, last));
       lines_before += part.reader_.line();
     }
     report_.rows_read += part.report_.rows_read;
@@ -55,10 +60,11 @@ void FileLoader::read_slices(int count) {
     negative_rows_ += part.negative_rows_;
   }
   if (report_.rows_read > io::kMaxRows) throw SlicesDisagree();
+  append_parts(joined);
   report_.bytes = static_cast<double>(reader_.file_size());
 }
 
-void FileLoader::join(const FileLoader& part, long lines_before, std::vector<LastSample>& last) {
+FileLoader::JoinedPart FileLoader::join(const FileLoader& part, long lines_before, std::vector<LastSample>& last) {
   const FrictionLog& from = part.log_;
   const std::vector<std::uint32_t> run_map = map_names<SlicesDisagree>(runs_, from.run_names);
   const std::vector<std::uint32_t> guide_map = map_names<SlicesDisagree>(guides_, from.guide_names);
@@ -71,23 +77,36 @@ void FileLoader::join(const FileLoader& part, long lines_before, std::vector<Las
     if (sample.first_s < before.time_s) throw SlicesDisagree();
     before = {sample.time_s, sample.line + lines_before, before.line == 0 ? sample.first_s : before.first_s};
   }
-  const auto append = [](auto& to, const auto& more) { to.insert(to.end(), more.begin(), more.end()); };
-  for (std::uint32_t r : from.run) log_.run.push_back(run_map[r]);
-  for (std::uint32_t g : from.guide) log_.guide.push_back(guide_map[g]);
-  for (std::uint32_t l : from.line) log_.line.push_back(l + static_cast<std::uint32_t>(lines_before));
-  append(log_.time_s, from.time_s);
-  append(log_.velocity_m_s, from.velocity_m_s);
-  append(log_.load_N, from.load_N);
-  append(log_.preload_um, from.preload_um);
-  append(log_.block_length_mm, from.block_length_mm);
-  append(log_.temperature_C, from.temperature_C);
-  append(log_.friction_N, from.friction_N);
-  append(log_.viscosity40_mm2_s, from.viscosity40_mm2_s);
-  append(log_.direction, from.direction);
-  append(log_.acceleration_m_s2, from.acceleration_m_s2);
-  append(log_.position_m, from.position_m);
-  append(log_.distance_since_reversal_m, from.distance_since_reversal_m);
-  append(log_.time_since_reversal_s, from.time_since_reversal_s);
+  return {&from, std::move(run_map), std::move(guide_map), lines_before};
+}
+
+void FileLoader::append_parts(const std::vector<JoinedPart>& parts) {
+  // One task per column, each appending every part in order: the copies (and the first touch of
+  // the log's reserved pages) side by side, the same rows as one part after another.
+  std::vector<std::function<void()>> tasks;
+  const auto copied = [&](auto FrictionLog::*column) {
+    tasks.emplace_back([this, &parts, column] {
+      auto& to = log_.*column;
+      for (const JoinedPart& part : parts) to.insert(to.end(), (part.log->*column).begin(), (part.log->*column).end());
+    });
+  };
+  const auto mapped = [&](std::vector<std::uint32_t> FrictionLog::*column, auto map) {
+    tasks.emplace_back([this, &parts, column, map] {
+      auto& to = log_.*column;
+      for (const JoinedPart& part : parts)
+        for (std::uint32_t value : part.log->*column) to.push_back(map(part, value));
+    });
+  };
+  mapped(&FrictionLog::run, [](const JoinedPart& part, std::uint32_t r) { return part.run_map[r]; });
+  mapped(&FrictionLog::guide, [](const JoinedPart& part, std::uint32_t g) { return part.guide_map[g]; });
+  mapped(&FrictionLog::line, [](const JoinedPart& part, std::uint32_t l) { return l + static_cast<std::uint32_t>(part.lines_before); });
+  for (auto column : {&FrictionLog::time_s, &FrictionLog::velocity_m_s, &FrictionLog::load_N, &FrictionLog::preload_um,
+                      &FrictionLog::block_length_mm, &FrictionLog::temperature_C, &FrictionLog::friction_N,
+                      &FrictionLog::viscosity40_mm2_s, &FrictionLog::acceleration_m_s2, &FrictionLog::position_m,
+                      &FrictionLog::distance_since_reversal_m, &FrictionLog::time_since_reversal_s})
+    copied(column);
+  copied(&FrictionLog::direction);
+  detail::for_each_index(tasks.size(), [&](std::size_t t) { tasks[t](); });
 }
 
 void FileLoader::join_law(const FrictionLawConditions& from) {
