@@ -29,14 +29,18 @@ TEST(Process, FreedMemoryIsKeptForTheNextAllocation) {
   GTEST_SKIP() << "glibc's malloc only (a sanitizer brings its own)";
 #else
   ASSERT_TRUE(keep_freed_memory());
-  constexpr std::size_t kBytes = 8u << 20;
-  const auto mapped_before = mallinfo2().hblkhd;
-  void* block = std::malloc(kBytes);
-  ASSERT_NE(block, nullptr);
-  std::memset(block, 1, kBytes);
-  EXPECT_EQ(mallinfo2().hblkhd, mapped_before) << "not a mapping of its own";
-  std::free(block);
-  EXPECT_GE(mallinfo2().fordblks, kBytes) << "the freed block stays in the heap, free for the next allocation";
+  // 8 MB (glibc's default would map it) and 64 MB (over the ceiling of M_MMAP_THRESHOLD: a
+  // 10⁶-sample fit's Jacobian is 56 MB).
+  for (const std::size_t bytes : {std::size_t{8} << 20, std::size_t{64} << 20}) {
+    SCOPED_TRACE(bytes);
+    const auto mapped_before = mallinfo2().hblkhd;
+    void* block = std::malloc(bytes);
+    ASSERT_NE(block, nullptr);
+    std::memset(block, 1, bytes);
+    EXPECT_EQ(mallinfo2().hblkhd, mapped_before) << "not a mapping of its own";
+    std::free(block);
+    EXPECT_GE(mallinfo2().fordblks, bytes) << "the freed block stays in the heap, free for the next allocation";
+  }
 #endif
 }
 

@@ -10,7 +10,8 @@
 namespace LMCAL_API lmcal {
 
 // Keeps the memory the process frees for its next allocations instead of returning it to the
-// system: with glibc's malloc, blocks up to 32 MB come from the heap and the heap is not trimmed.
+// system: with glibc's malloc, every block comes from the heap (none is mapped on its own, the
+// default for blocks over 32 MB) and the heap is not trimmed.
 // A fit allocates and frees its Jacobian, its residuals and its score series, a diagnosis does
 // so for dozens of fits, and every page new to the process costs a fault (slow on a virtual
 // machine): a 10⁵-sample friction fit took 100 ms, 80 ms so. The resident memory then stays at
