@@ -7,7 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
-#include <iterator>
+#include <tuple>
 
 #include "io/input_file.hpp"
 #include "parallel_slices.hpp"
@@ -64,30 +64,18 @@ void FileLoader::load(bool* sliced) {
 
 void FileLoader::reserve(FrictionLog& log, std::size_t capacity) {
   // Each column's storage mapped on a free thread (a million rows: 8 MB a column).
-  const std::function<void()> columns[] = {
-      [&] { csv::reserve_rows(log.time_s, capacity); },
-      [&] { csv::reserve_rows(log.velocity_m_s, capacity); },
-      [&] { csv::reserve_rows(log.load_N, capacity); },
-      [&] { csv::reserve_rows(log.preload_um, capacity); },
-      [&] { csv::reserve_rows(log.block_length_mm, capacity); },
-      [&] { csv::reserve_rows(log.temperature_C, capacity); },
-      [&] { csv::reserve_rows(log.friction_N, capacity); },
-      [&] { csv::reserve_rows(log.viscosity40_mm2_s, capacity); },
-      [&] { csv::reserve_rows(log.acceleration_m_s2, capacity); },
-      [&] { csv::reserve_rows(log.position_m, capacity); },
-      [&] { csv::reserve_rows(log.distance_since_reversal_m, capacity); },
-      [&] { csv::reserve_rows(log.time_since_reversal_s, capacity); },
-      [&] { csv::reserve_rows(log.run, capacity); },
-      [&] { csv::reserve_rows(log.guide, capacity); },
-      [&] { csv::reserve_rows(log.direction, capacity); },
-      [&] { csv::reserve_rows(log.line, capacity); },
+  std::vector<std::function<void()>> columns;
+  const auto each = [&](auto... member) {
+    (columns.emplace_back([&log, capacity, member] { csv::reserve_rows(log.*member, capacity); }), ...);
   };
+  std::apply(each, kValueColumns);
+  std::apply(each, kIndexColumns);
   constexpr std::size_t kParallelRows = 1 << 16;
   if (capacity < kParallelRows) {
     for (const auto& column : columns) column();
     return;
   }
-  detail::for_each_index(std::size(columns), [&](std::size_t c) { columns[c](); });
+  detail::for_each_index(columns.size(), [&](std::size_t c) { columns[c](); });
 }
 
 void FileLoader::read_rows() {

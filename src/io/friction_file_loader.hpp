@@ -15,6 +15,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <tuple>
 #include <vector>
 
 #include "io/csv_reader.hpp"
@@ -28,6 +29,15 @@ namespace lmcal::detail::friction_reading {
 using csv::Rule;
 
 constexpr double kDefaultViscosity40_mm2_s = 99.0;  // ν_i of Eq. 6 (PHYSICS.md §2)
+
+// A log's per-sample columns, as members: those a row fills with its values, and the indices
+// (run, guide, source line) that change when slices of a file are joined.
+inline constexpr auto kValueColumns =
+    std::make_tuple(&FrictionLog::time_s, &FrictionLog::velocity_m_s, &FrictionLog::load_N, &FrictionLog::preload_um,
+                    &FrictionLog::block_length_mm, &FrictionLog::temperature_C, &FrictionLog::friction_N,
+                    &FrictionLog::viscosity40_mm2_s, &FrictionLog::direction, &FrictionLog::acceleration_m_s2,
+                    &FrictionLog::position_m, &FrictionLog::distance_since_reversal_m, &FrictionLog::time_since_reversal_s);
+inline constexpr auto kIndexColumns = std::make_tuple(&FrictionLog::run, &FrictionLog::guide, &FrictionLog::line);
 
 // The columns of a friction log, in the order the writer puts them; a raw log's last.
 enum Spec : std::size_t {

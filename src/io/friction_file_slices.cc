@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <functional>
+#include <tuple>
 #include <cmath>
 #include <memory>
 
@@ -100,12 +101,7 @@ void FileLoader::append_parts(const std::vector<JoinedPart>& parts) {
   mapped(&FrictionLog::run, [](const JoinedPart& part, std::uint32_t r) { return part.run_map[r]; });
   mapped(&FrictionLog::guide, [](const JoinedPart& part, std::uint32_t g) { return part.guide_map[g]; });
   mapped(&FrictionLog::line, [](const JoinedPart& part, std::uint32_t l) { return l + static_cast<std::uint32_t>(part.lines_before); });
-  for (auto column : {&FrictionLog::time_s, &FrictionLog::velocity_m_s, &FrictionLog::load_N, &FrictionLog::preload_um,
-                      &FrictionLog::block_length_mm, &FrictionLog::temperature_C, &FrictionLog::friction_N,
-                      &FrictionLog::viscosity40_mm2_s, &FrictionLog::acceleration_m_s2, &FrictionLog::position_m,
-                      &FrictionLog::distance_since_reversal_m, &FrictionLog::time_since_reversal_s})
-    copied(column);
-  copied(&FrictionLog::direction);
+  std::apply([&](auto... member) { (copied(member), ...); }, kValueColumns);
   detail::for_each_index(tasks.size(), [&](std::size_t t) { tasks[t](); });
 }
 
