@@ -105,8 +105,14 @@ Polish linear_solve(const LeastSquaresModel& model, const ceres::CostFunction& c
     out.summary.message = out.brief = "no free parameters: nothing to solve for";
     return out;
   }
-  Eigen::MatrixXd Jf(J.rows(), static_cast<Eigen::Index>(free.size()));
-  for (std::size_t k = 0; k < free.size(); ++k) Jf.col(static_cast<Eigen::Index>(k)) = J.col(free[k]);
+  // The free columns: J itself when none is held (a tall J is not copied once more for nothing).
+  const bool some_held = free.size() != static_cast<std::size_t>(J.cols());
+  Eigen::MatrixXd held_out;
+  if (some_held) {
+    held_out.resize(J.rows(), static_cast<Eigen::Index>(free.size()));
+    for (std::size_t k = 0; k < free.size(); ++k) held_out.col(static_cast<Eigen::Index>(k)) = J.col(free[k]);
+  }
+  const Eigen::MatrixXd& Jf = some_held ? held_out : J;
   Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(Jf);
   if (qr.rank() == Jf.cols()) {
     const Eigen::VectorXd step = qr.solve(-r0);
