@@ -59,7 +59,7 @@ def text_differences(a, b, out):
     na, nb = NUMBER.findall(a), NUMBER.findall(b)
     if ta != tb or len(na) != len(nb):
         line = next((i for i, (x, y) in enumerate(zip(a.splitlines(), b.splitlines())) if NUMBER.sub("#", x) != NUMBER.sub("#", y)), None)
-        out.append(f"the text differs beyond its numbers" + (f" (line {line + 1})" if line is not None else ""))
+        out.append("the text differs beyond its numbers" + (f" (line {line + 1})" if line is not None else ""))
         return
     for i, (x, y) in enumerate(zip(na, nb)):
         if x != y and not close(float(x), float(y), ABSOLUTE):

@@ -470,12 +470,18 @@ std::size_t Reader::estimated_rows() const {
   return std::min(static_cast<std::size_t>(rows * 1.03) + 16, io::kMaxRows);
 }
 
+namespace {
+// madvise(advice) on the whole `unit`-aligned units inside [data, data + bytes), if any.
+[[maybe_unused]] void advise_inside(const void* data, std::size_t bytes, std::uintptr_t unit, int advice) {
+  const auto begin = (reinterpret_cast<std::uintptr_t>(data) + unit - 1) & ~(unit - 1);
+  const auto end = (reinterpret_cast<std::uintptr_t>(data) + bytes) & ~(unit - 1);
+  if (end > begin) ::madvise(reinterpret_cast<void*>(begin), end - begin, advice);
+}
+}  // namespace
+
 void prefer_huge_pages(const void* data, std::size_t bytes) {
 #ifdef MADV_HUGEPAGE
-  constexpr std::uintptr_t kHuge = std::uintptr_t{2} << 20;
-  const auto begin = (reinterpret_cast<std::uintptr_t>(data) + kHuge - 1) & ~(kHuge - 1);
-  const auto end = (reinterpret_cast<std::uintptr_t>(data) + bytes) & ~(kHuge - 1);
-  if (end > begin) ::madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE);
+  advise_inside(data, bytes, std::uintptr_t{2} << 20, MADV_HUGEPAGE);
 #else
   (void)data, (void)bytes;
 #endif
@@ -483,10 +489,7 @@ void prefer_huge_pages(const void* data, std::size_t bytes) {
 
 void populate_pages(const void* data, std::size_t bytes) {
 #ifdef MADV_POPULATE_WRITE
-  constexpr std::uintptr_t kPage = 4096;
-  const auto begin = (reinterpret_cast<std::uintptr_t>(data) + kPage - 1) & ~(kPage - 1);
-  const auto end = (reinterpret_cast<std::uintptr_t>(data) + bytes) & ~(kPage - 1);
-  if (end > begin) ::madvise(reinterpret_cast<void*>(begin), end - begin, MADV_POPULATE_WRITE);
+  advise_inside(data, bytes, 4096, MADV_POPULATE_WRITE);
 #else
   (void)data, (void)bytes;
 #endif
