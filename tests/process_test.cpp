@@ -3,8 +3,13 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdint>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
 
 #if defined(__GLIBC__)
 #include <malloc.h>
@@ -41,6 +46,44 @@ TEST(Process, FreedMemoryIsKeptForTheNextAllocation) {
     std::free(block);
     EXPECT_GE(mallinfo2().fordblks, bytes) << "the freed block stays in the heap, free for the next allocation";
   }
+#endif
+}
+
+// The VmFlags line of the mapping of /proc/self/smaps that holds `address`, or "" when none does.
+std::string vm_flags_of(const void* address) {
+  const auto at = reinterpret_cast<std::uintptr_t>(address);
+  std::ifstream smaps("/proc/self/smaps");
+  std::string line;
+  bool inside = false;
+  while (std::getline(smaps, line)) {
+    std::uintptr_t begin = 0, end = 0;
+    char dash = 0;
+    std::istringstream head(line);
+    if (head >> std::hex >> begin >> dash >> end && dash == '-' && line.find(':') > line.find(' ')) {
+      inside = begin <= at && at < end;
+    } else if (inside && line.starts_with("VmFlags:")) {
+      return line;
+    }
+  }
+  return "";
+}
+
+// The heap's pages that follow are marked for transparent huge pages (madvise's "hg"), so a
+// large job faults a 2 MB page at a time: a block allocated afterwards lies in a marked mapping.
+TEST(Process, TheHeapIsMarkedForHugePages) {
+#if !defined(__GLIBC__) || defined(LMCAL_TEST_SANITIZED_MALLOC)
+  GTEST_SKIP() << "glibc's malloc only (a sanitizer brings its own)";
+#else
+  if (!std::filesystem::exists("/sys/kernel/mm/transparent_hugepage/enabled") ||
+      !std::filesystem::exists("/proc/self/smaps"))
+    GTEST_SKIP() << "a kernel without transparent huge pages";
+  ASSERT_TRUE(keep_freed_memory());
+  void* block = std::malloc(std::size_t{64} << 20);
+  ASSERT_NE(block, nullptr);
+  const std::string flags = vm_flags_of(static_cast<char*>(block) + (std::size_t{32} << 20));
+  std::free(block);
+  ASSERT_FALSE(flags.empty()) << "no mapping holds the block";
+  EXPECT_NE((flags + " ").find(" hg "), std::string::npos) << flags;
 #endif
 }
 
