@@ -250,17 +250,42 @@ LackOfFit noise_lack_of_fit(const FrictionLog& log, const std::vector<detail::Co
 // differences (residual_noise), with o.noise_margin.
 LackOfFit lack_of_fit(const FrictionLog& log, const std::vector<detail::ConditionKey>& keys, const std::vector<double>& centred,
                       std::size_t parameters, const FrictionDiagnosisOptions& o) {
+  // Each sample's condition, numbered in order of first appearance (a stretch of samples at one
+  // condition looked up once).
+  const std::size_t n = log.size();
   std::map<detail::ConditionKey, std::size_t> condition_index;
-  std::map<std::pair<std::size_t, std::size_t>, std::pair<double, double>> cells;  // (run, condition) -> sum, count
-  for (std::size_t i = 0; i < log.size(); ++i) {
-    const std::size_t ci = condition_index.try_emplace(keys[i], condition_index.size()).first->second;
-    auto& cell = cells[{log.run[i], ci}];
-    cell.first += centred[i];
-    cell.second += 1;
+  std::vector<std::size_t> condition_of(n);
+  for (std::size_t i = 0; i < n; ++i)
+    condition_of[i] = i > 0 && keys[i] == keys[i - 1] ? condition_of[i - 1]
+                                                      : condition_index.try_emplace(keys[i], condition_index.size()).first->second;
+  const std::size_t R = log.run_names.size(), C = condition_index.size();
+  // The (run, condition) cells in that order, each with its samples' sum in log order: the
+  // samples sorted by condition, then stably by run (two counting sorts), and summed in turn.
+  struct Cell {
+    std::size_t run, condition;
+    double sum = 0, count = 0;
+  };
+  const auto counting_sort = [n](const std::vector<std::size_t>& order, std::size_t groups, auto group_of) {
+    std::vector<std::size_t> start(groups + 1, 0), sorted(n);
+    for (std::size_t i : order) ++start[group_of(i) + 1];
+    std::partial_sum(start.begin(), start.end(), start.begin());
+    for (std::size_t i : order) sorted[start[group_of(i)]++] = i;
+    return sorted;
+  };
+  std::vector<std::size_t> order(n);
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  order = counting_sort(order, C, [&](std::size_t i) { return condition_of[i]; });
+  order = counting_sort(order, R, [&](std::size_t i) { return std::size_t{log.run[i]}; });
+  std::vector<Cell> cells;
+  for (std::size_t i : order) {
+    if (cells.empty() || cells.back().run != log.run[i] || cells.back().condition != condition_of[i])
+      cells.push_back({.run = log.run[i], .condition = condition_of[i]});
+    cells.back().sum += centred[i];
+    cells.back().count += 1;
   }
-  const std::size_t R = log.run_names.size(), C = condition_index.size(), N = cells.size();
+  const std::size_t N = cells.size();
   std::vector<std::size_t> runs_of_condition(C, 0);
-  for (const auto& [rc, cell] : cells) ++runs_of_condition[rc.second];
+  for (const Cell& cell : cells) ++runs_of_condition[cell.condition];
   const auto repeated = static_cast<std::size_t>(std::count_if(runs_of_condition.begin(), runs_of_condition.end(),
                                                                [](std::size_t runs) { return runs >= 2; }));
   // Connected components of the run-condition graph: the additive model's rank is R + C - components.
@@ -270,9 +295,9 @@ LackOfFit lack_of_fit(const FrictionLog& log, const std::vector<detail::Conditio
     while (parent[x] != x) x = parent[x] = parent[parent[x]];
     return x;
   };
-  for (const auto& [rc, cell] : cells) parent[find(rc.first)] = find(R + rc.second);
+  for (const Cell& cell : cells) parent[find(cell.run)] = find(R + cell.condition);
   std::set<std::size_t> roots;
-  for (const auto& [rc, cell] : cells) roots.insert(find(rc.first));
+  for (const Cell& cell : cells) roots.insert(find(cell.run));
   const double df_pure = static_cast<double>(N) - static_cast<double>(R + C) + static_cast<double>(roots.size());
   const double df_lack = static_cast<double>(C) - static_cast<double>(roots.size()) - static_cast<double>(parameters);
   if (df_pure < 3 || df_lack < 1 || 2 * repeated < C)
@@ -281,18 +306,18 @@ LackOfFit lack_of_fit(const FrictionLog& log, const std::vector<detail::Conditio
   std::vector<double> run_effect(R, 0.0), condition_effect(C, 0.0);
   auto sweep = [&](bool runs) {
     std::vector<double> sum(runs ? R : C, 0.0), count(runs ? R : C, 0.0);
-    for (const auto& [rc, cell] : cells) {
-      const double m = cell.first / cell.second;
-      if (runs) sum[rc.first] += m - condition_effect[rc.second], count[rc.first] += 1;
-      else sum[rc.second] += m - run_effect[rc.first], count[rc.second] += 1;
+    for (const Cell& cell : cells) {
+      const double m = cell.sum / cell.count;
+      if (runs) sum[cell.run] += m - condition_effect[cell.condition], count[cell.run] += 1;
+      else sum[cell.condition] += m - run_effect[cell.run], count[cell.condition] += 1;
     }
     auto& effect = runs ? run_effect : condition_effect;
     for (std::size_t g = 0; g < effect.size(); ++g) effect[g] = count[g] > 0 ? sum[g] / count[g] : 0.0;
   };
   auto ss = [&](bool with_conditions) {
     double total = 0;
-    for (const auto& [rc, cell] : cells)
-      total += std::pow(cell.first / cell.second - run_effect[rc.first] - (with_conditions ? condition_effect[rc.second] : 0.0), 2);
+    for (const Cell& cell : cells)
+      total += std::pow(cell.sum / cell.count - run_effect[cell.run] - (with_conditions ? condition_effect[cell.condition] : 0.0), 2);
     return total;
   };
   sweep(true);
