@@ -15,6 +15,8 @@
 #include <omp.h>
 #endif
 
+#include "process_heap.hpp"
+
 namespace lmcal::detail {
 
 namespace {
@@ -69,7 +71,10 @@ class Pool {
     for (;;) {
       generation_.wait(seen, std::memory_order_acquire);
       seen = generation_.load(std::memory_order_acquire);
-      if (id < job_threads_) run_as(id, *body_);
+      if (id < job_threads_) {
+        prepare_worker_heap();
+        run_as(id, *body_);
+      }
       if (remaining_.fetch_sub(1, std::memory_order_acq_rel) == 1) remaining_.notify_all();
     }
   }

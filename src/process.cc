@@ -1,7 +1,10 @@
 #include "lmcal/process.hpp"
 
+#include <atomic>
 #include <cstdint>
 #include <cstdlib>  // defines __GLIBC__ where the C library is glibc
+
+#include "process_heap.hpp"
 
 #if defined(__GLIBC__)
 #include <malloc.h>
@@ -9,7 +12,7 @@
 #endif
 
 // A sanitizer brings its own malloc: glibc's settings do not reach it, and a reserve would only
-// make it poison (and quarantine) half a gigabyte at every start.
+// make it poison (and quarantine) hundreds of megabytes at every start.
 #if defined(__has_feature)
 #if __has_feature(address_sanitizer) || __has_feature(memory_sanitizer) || __has_feature(thread_sanitizer)
 #define LMCAL_SANITIZED_MALLOC 1
@@ -19,29 +22,40 @@
 #define LMCAL_SANITIZED_MALLOC 1
 #endif
 
+#if defined(__GLIBC__) && defined(MADV_HUGEPAGE) && !defined(LMCAL_SANITIZED_MALLOC)
+#define LMCAL_HUGE_HEAP 1
+#endif
+
 namespace lmcal {
 
 namespace {
 
-#if defined(__GLIBC__) && defined(MADV_HUGEPAGE) && !defined(LMCAL_SANITIZED_MALLOC)
-// The first kHugeHeapBytes of the heap marked for transparent huge pages, what glibc's
+[[maybe_unused]] constexpr int kNeverTrim = 1 << 30;
+
+#if defined(LMCAL_HUGE_HEAP)
+std::atomic<bool> memory_kept{false};  // keep_freed_memory() has been called
+// The reserves: the main heap's, and a thread's own arena's, at most 64 MB (glibc's
+// HEAP_MAX_SIZE on 64 bits, twice the largest mmap threshold; a larger block comes from the main
+// heap). Freed, each stays only below the trim threshold.
+constexpr std::size_t kMainHeapReserve = std::size_t{512} << 20, kThreadHeapReserve = std::size_t{48} << 20;
+static_assert(kMainHeapReserve < static_cast<std::size_t>(kNeverTrim) && kThreadHeapReserve < kMainHeapReserve);
+
+// The next `bytes` of the calling thread's heap marked for transparent huge pages, what glibc's
 // `glibc.malloc.hugetlb=1` does (a tunable only the environment can set, before the process
 // starts): the heap is grown by that much at once and, with trimming off, keeps the range, so
 // the allocations that follow fault a 2 MB page at a time instead of 4 kB. On a virtual machine
 // a fault is a trap to the hypervisor: a 10⁵-sample `lmcal fit friction` faulted 9,400 times,
 // about a third of its 0.36 s. Where the system grants huge pages only on request
 // (/sys/kernel/mm/transparent_hugepage/enabled: madvise, Debian's default) this is what grants
-// them; with `always` it changes nothing, with `never` nothing either. The resident memory grows
-// by at most one 2 MB page beyond the heap's use; the reserve itself is address space only.
-constexpr std::size_t kHugeHeapBytes = std::size_t{512} << 20;
-
-void back_heap_with_huge_pages() {
+// them; with `always` or `never` it changes nothing. The resident memory grows by at most one
+// 2 MB page beyond the heap's use; the reserve itself is address space only.
+void reserve_huge_pages(std::size_t bytes) {
   constexpr std::uintptr_t kHugePage = std::uintptr_t{2} << 20;
-  void* block = std::malloc(kHugeHeapBytes);  // from the heap (no mapped blocks), untouched
-  if (!block) return;                         // address space refused: 4 kB pages, as before
+  void* block = std::malloc(bytes);  // from this thread's heap (no mapped blocks), untouched
+  if (!block) return;                // address space refused: 4 kB pages, as before
   const auto begin = (reinterpret_cast<std::uintptr_t>(block) + kHugePage - 1) & ~(kHugePage - 1);
-  const auto end = (reinterpret_cast<std::uintptr_t>(block) + kHugeHeapBytes) & ~(kHugePage - 1);
-  ::madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE);
+  const auto end = (reinterpret_cast<std::uintptr_t>(block) + bytes) & ~(kHugePage - 1);
+  if (end > begin) ::madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE);
   std::free(block);  // back to the top of the heap, below the trim threshold: kept
 }
 #endif
@@ -51,20 +65,31 @@ void back_heap_with_huge_pages() {
 bool keep_freed_memory() {
 #if defined(__GLIBC__)
   constexpr int kLargestFromHeap = 32 << 20;  // glibc's ceiling for M_MMAP_THRESHOLD on 64 bits
-  constexpr int kNeverTrim = 1 << 30;
   // Blocks over that ceiling (a 10⁶-sample fit's 56 MB Jacobian) from the heap too: no block
   // is mapped on its own, where each allocation would fault its pages afresh.
   constexpr int kNoMappedBlocks = 0;
   const bool kept = mallopt(M_MMAP_THRESHOLD, kLargestFromHeap) == 1 && mallopt(M_TRIM_THRESHOLD, kNeverTrim) == 1 &&
                     mallopt(M_MMAP_MAX, kNoMappedBlocks) == 1;
-#if defined(MADV_HUGEPAGE) && !defined(LMCAL_SANITIZED_MALLOC)
-  static_assert(kHugeHeapBytes < static_cast<std::size_t>(kNeverTrim), "a freed reserve over the threshold is trimmed");
-  if (kept) back_heap_with_huge_pages();
+#if defined(LMCAL_HUGE_HEAP)
+  if (kept && !memory_kept.exchange(true)) reserve_huge_pages(kMainHeapReserve);
 #endif
   return kept;
 #else
   return false;
 #endif
 }
+
+namespace detail {
+
+void prepare_worker_heap() {
+#if defined(LMCAL_HUGE_HEAP)
+  thread_local bool prepared = false;
+  if (prepared || !memory_kept.load(std::memory_order_relaxed)) return;
+  reserve_huge_pages(kThreadHeapReserve);
+  prepared = true;
+#endif
+}
+
+}  // namespace detail
 
 }  // namespace lmcal

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdint>
+#include <cmath>
 #include <cstring>
 #include <functional>
 #include <optional>
@@ -11,6 +12,7 @@
 #include <vector>
 
 #include "lmcal/error.hpp"
+#include "lmcal/io/csv_writer.hpp"
 #include "lmcal/io/friction_log.hpp"
 #include "parallel_slices.hpp"
 #include "support/temp_folder.hpp"
@@ -134,6 +136,31 @@ TEST_F(CsvSlices, ATooLongLineIsRefusedAsLineByLine) {
     if (i == 100'000) line += std::string(std::size_t{2} << 20, ' ');
   });
   expect_refused_alike(file, "line longer than");
+}
+
+// Written in slices on 2 threads, a CSV's text is the text written row by row: numbers that
+// repeat down a column (the writer reuses their text), numbers that change, text that needs
+// quotes or a formula's apostrophe, empty cells; on 1 thread, and on 2 with a slice boundary
+// inside a stretch of repeats.
+TEST(CsvTextSlices, TwoThreadsWriteTheTextOneRowAtATimeWrites) {
+  const std::vector<std::string> header{"run", "speed_m_s", "force_N", "note"};
+  constexpr std::size_t kRows = 70'001;
+  const auto row = [](CsvText& csv, std::size_t i) {
+    csv.cell(fmt::format("run {}", i / 5000)).cell(0.001 * static_cast<double>(i / 700));
+    csv.cell(i % 3 == 0 ? std::nan("") : 1.0 / static_cast<double>(i + 1));
+    csv.cell(i % 4 == 0 ? "" : i % 4 == 1 ? "a, \"quoted\" note" : i % 4 == 2 ? "=1+1" : "plain").end_row();
+  };
+  CsvText serial(header);
+  for (std::size_t i = 0; i < kRows; ++i) row(serial, i);
+  for (const int threads : {1, 2}) {
+    SCOPED_TRACE(threads);
+    const int before = detail::limit_slice_threads(threads);
+    const std::string text = csv_text(header, kRows, row);
+    detail::limit_slice_threads(before);
+    EXPECT_EQ(text.size(), serial.str().size());
+    EXPECT_TRUE(text == serial.str());
+  }
+  EXPECT_EQ(csv_text(header, 0, row), "run,speed_m_s,force_N,note\n") << "no rows: the header alone";
 }
 
 }  // namespace

@@ -203,9 +203,7 @@ std::string friction_fit_samples_csv(const FrictionFitResult& r, const FrictionL
   if (setup) header.insert(header.end(), {"load_N", "preload_um", "block_length_mm"});
   if (temperature) header.push_back("temperature_C");
   header.insert(header.end(), {"direction", "measured_N", "predicted_N", "residual_N", "sigma_N"});
-  CsvText csv(header);
-  csv.expect_rows(log.size());
-  for (std::size_t i = 0; i < log.size(); ++i) {
+  return csv_text(header, log.size(), [&](CsvText& csv, std::size_t i) {
     csv.cell(log.run_names[log.run[i]]).cell(i < log.line.size() && log.line[i] > 0 ? std::to_string(log.line[i]) : "");
     csv.cell(i < log.time_s.size() ? log.time_s[i] : NAN);  // nan: the log has no time
     csv.cell(log.guide_names.empty() ? "" : log.guide_names[log.guide[i]]);
@@ -214,8 +212,7 @@ std::string friction_fit_samples_csv(const FrictionFitResult& r, const FrictionL
     if (temperature) csv.cell(log.temperature_C[i]);
     csv.cell(double(log.direction[i])).cell(log.friction_N[i]).cell(r.predicted_N[i]);
     csv.cell(log.friction_N[i] - r.predicted_N[i]).cell(r.sigma_N[i]).end_row();
-  }
-  return csv.str();
+  });
 }
 
 std::vector<std::pair<std::string, std::string>> friction_fit_files(const FrictionFitResult& result, const FrictionLog& log,

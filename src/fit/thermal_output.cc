@@ -147,14 +147,13 @@ std::string thermal_fit_json(const ThermalFitResult& r, const ThermalFitOptions&
 }
 
 std::string thermal_fit_samples_csv(const ThermalFitResult& r) {
-  CsvText csv({"run", "line", "sensor", "time_s", "measured_C", "simulated_C", "residual_K"});
-  csv.expect_rows(r.samples.size());
-  for (const auto& s : r.samples) {
-    csv.cell(r.runs[s.run].id).cell(s.line > 0 ? std::to_string(s.line) : "");
-    csv.cell(r.sensor_names[s.run][s.sensor]).cell(s.time_s).cell(s.measured_C);
-    csv.cell(s.simulated_C).cell(s.measured_C - s.simulated_C).end_row();
-  }
-  return csv.str();
+  return csv_text({"run", "line", "sensor", "time_s", "measured_C", "simulated_C", "residual_K"}, r.samples.size(),
+                  [&](CsvText& csv, std::size_t i) {
+                    const auto& s = r.samples[i];
+                    csv.cell(r.runs[s.run].id).cell(s.line > 0 ? std::to_string(s.line) : "");
+                    csv.cell(r.sensor_names[s.run][s.sensor]).cell(s.time_s).cell(s.measured_C);
+                    csv.cell(s.simulated_C).cell(s.measured_C - s.simulated_C).end_row();
+                  });
 }
 
 std::vector<std::pair<std::string, std::string>> thermal_fit_files(const ThermalFitResult& result,

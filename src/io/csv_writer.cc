@@ -6,6 +6,7 @@
 #include <cstring>
 
 #include "lmcal/error.hpp"
+#include "parallel_slices.hpp"
 
 namespace lmcal {
 
@@ -78,6 +79,28 @@ CsvText& CsvText::end_row() {
   if (rows_expected_ > 0 && rows_written_++ == 0)
     text_.reserve(text_.size() + (text_.size() - header_bytes_) * (rows_expected_ + rows_expected_ / 8));
   return *this;
+}
+
+std::string csv_text(const std::vector<std::string>& header, std::size_t rows,
+                     const std::function<void(CsvText& csv, std::size_t row)>& row) {
+  constexpr std::size_t kRowsPerThread = 16384;
+  const int threads = detail::slice_threads(rows, kRowsPerThread);
+  std::vector<std::string> texts(static_cast<std::size_t>(threads));
+  detail::for_each_slice(rows, threads, [&](int slice, std::size_t begin, std::size_t end) {
+    // On this thread's stack: slices side by side in one array would share cache lines, which
+    // every cell writes (a 100 k-row file took longer on 2 threads than on 1).
+    CsvText csv(header);
+    csv.expect_rows(end - begin);
+    for (std::size_t i = begin; i < end; ++i) row(csv, i);
+    texts[static_cast<std::size_t>(slice)] = slice == 0 ? csv.str() : std::string(csv.rows_text());
+  });
+  if (texts.size() == 1) return std::move(texts.front());
+  std::size_t bytes = 0;
+  for (const std::string& t : texts) bytes += t.size();
+  std::string text;
+  text.reserve(bytes);
+  for (const std::string& t : texts) text += t;
+  return text;
 }
 
 }  // namespace lmcal
