@@ -7,7 +7,9 @@
 //     cutting the run into plateaus. Target: >= 150 MB/s;
 //   - user guide catalogs of 10^3 to 10^5 guides (the limit): linear, 10^5 in under 2 s;
 //   - `lmcal check friction` of the 1 M-row friction log as a process (start-up, loading and
-//     the report), on 1 and 2 threads (OMP_NUM_THREADS). Target (issue 39): >= 300 MB/s.
+//     the report), on 1 and 2 threads (OMP_NUM_THREADS). Target (issue 39): >= 300 MB/s;
+//   - `lmcal fit friction` of a 100 k-sample log as a process, with the defaults. Target (issue
+//     39): <= 0.2 s on 2 threads.
 // The files are generated once into a temporary folder (removed at exit). Throughput is
 // reported as bytes/s of CSV text. Target: >= 200 MB/s for the thermal log.
 // Run: build/bench/lmcal_io_bench
@@ -156,6 +158,31 @@ void BM_CheckFrictionLogProcess(benchmark::State& state) {
   state.counters["file_MB"] = static_cast<double>(fs::file_size(file)) / 1e6;
 }
 BENCHMARK(BM_CheckFrictionLogProcess)->ArgName("threads")->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(3.0);
+
+// `lmcal fit friction` of a 101,238-sample log from the virtual rig (47 runs of the default
+// sweep: `lmcal generate friction --runs 47`) with the defaults, the whole process: start-up,
+// loading, the fit with its covariance, bootstrap and per-run fits, the residual checks, writing
+// the three outputs. Wall time; its argument the threads. Target (issue 39): <= 0.2 s on 2.
+void BM_FitFrictionProcess100k(benchmark::State& state) {
+  static const fs::path folder = [] {
+    const fs::path out = scratch().path() / "friction_100k";
+    return run_process({LMCAL_CLI, "generate", "friction", "--runs", "47", "-o", out.string()}, 2) == 0 ? out : fs::path();
+  }();
+  if (folder.empty()) {
+    state.SkipWithError("lmcal generate friction failed");
+    return;
+  }
+  const std::vector<std::string> argv{LMCAL_CLI, "fit", "friction", (folder / "friction.csv").string(), "-o",
+                                      (scratch().path() / "fit_100k").string()};
+  for (auto _ : state) {
+    if (run_process(argv, static_cast<int>(state.range(0))) != 0) {
+      state.SkipWithError("lmcal fit friction failed");
+      return;
+    }
+  }
+  state.counters["file_MB"] = static_cast<double>(fs::file_size(folder / "friction.csv")) / 1e6;
+}
+BENCHMARK(BM_FitFrictionProcess100k)->ArgName("threads")->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(3.0);
 
 // One setup moving back and forth at four speeds, 25 cycles each, logged at 1 kHz.
 const fs::path& raw_friction_manifest() {
