@@ -13,49 +13,51 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 namespace lmcal::detail {
 
-std::vector<Eigen::MatrixXd> run_score_series(const ScoreInputs& in, bool with_priors) {
+RunScoreSeries::RunScoreSeries(const ScoreInputs& in, bool with_priors) : in_(in) {
   const RowStructure& rows = in.rows;
-  const auto m = in.jacobian.cols();
   LMCAL_ASSERT(static_cast<Eigen::Index>(rows.cluster.size()) == in.jacobian.rows() && rows.time.size() == rows.cluster.size(),
                "a run and a time step for every residual row");
-  std::vector<std::size_t> steps(rows.clusters, 0);
-  for (std::size_t i = 0; i < rows.cluster.size(); ++i)
-    steps[rows.cluster[i]] = std::max(steps[rows.cluster[i]], rows.is_prior(i) ? std::size_t{1} : rows.time[i] + 1);
+  steps_.assign(rows.clusters, 0);
   const std::size_t n = rows.cluster.size();
-  // Rows already in series order (each run's rows together, time 0, 1, 2, …; no priors): each
-  // run's series is a block of J scaled by its residuals, taken without zeroing it first.
+  for (std::size_t i = 0; i < n; ++i)
+    steps_[rows.cluster[i]] = std::max(steps_[rows.cluster[i]], rows.is_prior(i) ? std::size_t{1} : rows.time[i] + 1);
+  // Series order: no priors, each run's time steps 0, 1, 2, … on consecutive rows, and each run
+  // starting once (one block per run).
   bool blocks = true;
-  for (std::size_t i = 0; i < n && blocks; ++i)
+  std::vector<std::size_t> first(rows.clusters, n);
+  for (std::size_t i = 0; i < n && blocks; ++i) {
     blocks = !rows.is_prior(i) &&
              (rows.time[i] == 0 ? i == 0 || rows.cluster[i] != rows.cluster[i - 1]
                                 : i > 0 && rows.cluster[i] == rows.cluster[i - 1] && rows.time[i] == rows.time[i - 1] + 1);
-  std::vector<Eigen::MatrixXd> series(rows.clusters);
-  if (blocks) {
-    std::vector<char> seen(rows.clusters, 0);
-    for (std::size_t first = 0; first < n && blocks;) {
-      const std::size_t c = rows.cluster[first];
-      const auto count = static_cast<Eigen::Index>(steps[c]);
-      blocks = !seen[c];  // a run in two blocks: not this layout after all
-      seen[c] = 1;
-      series[c] = in.jacobian.middleRows(static_cast<Eigen::Index>(first), count).array().colwise() *
-                  in.residuals.segment(static_cast<Eigen::Index>(first), count).array();
-      first += static_cast<std::size_t>(count);
+    if (blocks && rows.time[i] == 0) {
+      blocks = first[rows.cluster[i]] == n;
+      first[rows.cluster[i]] = i;
     }
-    // (A run without rows has an empty series.)
-    for (std::size_t c = 0; c < rows.clusters && blocks; ++c)
-      if (!seen[c]) series[c] = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(steps[c]), m);
-    if (blocks) return series;
   }
-  for (std::size_t c = 0; c < rows.clusters; ++c) series[c] = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(steps[c]), m);
-  // Column by column: J is stored by columns, and so are the series.
-  std::vector<Eigen::Index> step(n);
+  if (blocks) {
+    first_ = std::move(first);
+    return;
+  }
+  rows_of_.resize(rows.clusters);
   for (std::size_t i = 0; i < n; ++i)
-    step[i] = rows.is_prior(i) ? (with_priors ? 0 : -1) : static_cast<Eigen::Index>(rows.time[i]);
-  const double* r = in.residuals.data();
+    if (with_priors || !rows.is_prior(i)) rows_of_[rows.cluster[i]].push_back(i);
+}
+
+Eigen::MatrixXd RunScoreSeries::operator()(std::size_t run) const {
+  const auto m = in_.jacobian.cols();
+  const auto steps = length(run);
+  if (!first_.empty()) {
+    if (first_[run] == static_cast<std::size_t>(in_.rows.cluster.size())) return Eigen::MatrixXd::Zero(steps, m);  // no rows
+    const auto first = static_cast<Eigen::Index>(first_[run]);
+    return in_.jacobian.middleRows(first, steps).array().colwise() * in_.residuals.segment(first, steps).array();
+  }
+  Eigen::MatrixXd series = Eigen::MatrixXd::Zero(steps, m);
+  // Column by column: J is stored by columns, and so is the series.
+  const double* r = in_.residuals.data();
   for (Eigen::Index a = 0; a < m; ++a) {
-    const double* J = in.jacobian.col(a).data();
-    for (std::size_t i = 0; i < n; ++i)
-      if (step[i] >= 0) series[rows.cluster[i]](step[i], a) += r[i] * J[i];
+    const double* J = in_.jacobian.col(a).data();
+    double* s = series.col(a).data();
+    for (std::size_t i : rows_of_[run]) s[in_.rows.is_prior(i) ? 0 : in_.rows.time[i]] += r[i] * J[i];
   }
   return series;
 }

@@ -67,9 +67,27 @@ struct CovarianceEstimate {
   double bandwidth = std::numeric_limits<double>::quiet_NaN();  // hac: lags L
 };
 
-// Each run's score series: row t = Σ_{rows of the run at time step t} r_i g_i (time steps
-// without rows are zero rows); prior rows join their run's first step unless left out.
-std::vector<Eigen::MatrixXd> run_score_series(const ScoreInputs& in, bool with_priors = true);
+// Each run's score series, made when asked for (a 10⁶-row fit's series together are as large as
+// its Jacobian): row t = Σ_{rows of the run at time step t} r_i g_i (time steps without rows are
+// zero rows); prior rows join their run's first step unless left out.
+class RunScoreSeries {
+ public:
+  RunScoreSeries(const ScoreInputs& in, bool with_priors);
+  std::size_t runs() const { return steps_.size(); }
+  Eigen::Index components() const { return in_.jacobian.cols(); }  // the free parameters
+  // The run's time steps: its series' rows.
+  Eigen::Index length(std::size_t run) const { return static_cast<Eigen::Index>(steps_[run]); }
+  Eigen::MatrixXd operator()(std::size_t run) const;
+
+ private:
+  const ScoreInputs& in_;
+  std::vector<std::size_t> steps_;
+  // Rows in series order (each run's rows together, time 0, 1, 2, …; no priors): each run's
+  // first row, its series a block of J scaled by its residuals. Otherwise empty, and each
+  // run's rows in order.
+  std::vector<std::size_t> first_;
+  std::vector<std::vector<std::size_t>> rows_of_;
+};
 
 CovarianceEstimate iid_covariance(const ScoreInputs& in);
 // Newey-West over every run's score series; `max_bandwidth_fraction` caps L at that share of
@@ -78,7 +96,7 @@ CovarianceEstimate hac_covariance(const ScoreInputs& in, double max_bandwidth_fr
 // The HAC meat of one run's score series with `lags` Bartlett lags (O(T m²) by moving sums).
 Eigen::MatrixXd bartlett_meat(const Eigen::MatrixXd& series, std::size_t lags);
 // Andrews' (1991) AR(1) plug-in bandwidth for a Bartlett kernel over the runs' score series.
-double andrews_bandwidth(const std::vector<Eigen::MatrixXd>& series);
+double andrews_bandwidth(const RunScoreSeries& series);
 CovarianceEstimate cluster_covariance(const ScoreInputs& in);
 
 // Between-run heterogeneity of each parameter the runs share: Q_j = G·V^cl_jj / V^hac_jj

@@ -38,35 +38,44 @@ Eigen::MatrixXd bartlett_meat(const Eigen::MatrixXd& series, std::size_t lags) {
 // coefficient the slowest-decaying of the lags 1, 2, 4 and 8 implies (c_k^{1/k}): for an AR(1)
 // they agree, but where rows are not evenly spaced in time (a log that skips conditions) or
 // mix fast and slow noise, lag 1 alone understates the memory, and the bandwidth with it.
-double andrews_bandwidth(const std::vector<Eigen::MatrixXd>& series) {
-  if (series.empty()) return 0;
-  const auto m = series.front().cols();
+double andrews_bandwidth(const RunScoreSeries& series) {
+  const std::size_t runs = series.runs();
+  if (runs == 0) return 0;
   double num = 0, den = 0, length = 0;
-  for (const auto& s : series) length += static_cast<double>(s.rows());
-  length /= static_cast<double>(series.size());
+  for (std::size_t c = 0; c < runs; ++c) length += static_cast<double>(series.length(c));
+  length /= static_cast<double>(runs);
   constexpr Eigen::Index kLags[] = {0, 1, 2, 4, 8};
-  // Each component's ρ on a free thread (its sums over the series in their order), the terms of
-  // α̂(1) then added in component order: the same bits on any number of threads.
-  std::vector<double> num_of(static_cast<std::size_t>(m), 0.0), den_of(static_cast<std::size_t>(m), 0.0);
-  for_each_index(static_cast<std::size_t>(m), [&](std::size_t component) {
-    const auto a = static_cast<Eigen::Index>(component);
-    // The five autocovariances, each series' a dot product of the component with itself shifted.
-    double sums[std::size(kLags)] = {};
-    for (const auto& s : series) {
-      const auto x = s.col(a);
-      for (std::size_t k = 0; k < std::size(kLags); ++k) {
-        const Eigen::Index length = s.rows() - kLags[k];
-        if (length > 0) sums[k] += x.tail(length).dot(x.head(length));
+  constexpr std::size_t kNumLags = std::size(kLags);
+  // Each run's series made on a free thread, and its components' five autocovariances (a dot
+  // product of the component with itself shifted) kept; then each component's sums over the
+  // runs in their order: the same bits on any number of threads.
+  const auto m = static_cast<std::size_t>(series.components());
+  const auto dot = [m](std::size_t run, std::size_t component, std::size_t lag) { return (run * m + component) * kNumLags + lag; };
+  std::vector<double> dots(runs * m * kNumLags, 0.0);
+  for_each_index(runs, [&](std::size_t c) {
+    const Eigen::MatrixXd s = series(c);
+    for (std::size_t a = 0; a < m; ++a) {
+      const auto x = s.col(static_cast<Eigen::Index>(a));
+      for (std::size_t k = 0; k < kNumLags; ++k) {
+        const Eigen::Index shifted = s.rows() - kLags[k];
+        if (shifted > 0) dots[dot(c, a, k)] = x.tail(shifted).dot(x.head(shifted));
       }
     }
+  });
+  std::vector<double> num_of(m, 0.0), den_of(m, 0.0);
+  for (std::size_t component = 0; component < m; ++component) {
+    double sums[kNumLags] = {};
+    for (std::size_t c = 0; c < runs; ++c)
+      for (std::size_t k = 0; k < kNumLags; ++k)
+        if (series.length(c) - kLags[k] > 0) sums[k] += dots[dot(c, component, k)];
     auto autocovariance = [&](Eigen::Index lag) {
       return sums[std::find(std::begin(kLags), std::end(kLags), lag) - std::begin(kLags)];
     };
     const double c0 = autocovariance(0);
-    if (!(c0 > 0)) return;
+    if (!(c0 > 0)) continue;
     // Longer lags count only where lag 1 and they themselves stand out of the noise (3/√N):
     // the k-th root of a chance 0.02 would be 0.6 at lag 8.
-    const double noise = 3 / std::sqrt(length * static_cast<double>(series.size()));
+    const double noise = 3 / std::sqrt(length * static_cast<double>(runs));
     double rho = autocovariance(1) / c0;
     for (const Eigen::Index lag : {2, 4, 8}) {
       const double c = autocovariance(lag) / c0;
@@ -75,7 +84,7 @@ double andrews_bandwidth(const std::vector<Eigen::MatrixXd>& series) {
     rho = std::clamp(rho, -0.97, 0.97);
     num_of[component] = 4 * rho * rho / (std::pow(1 - rho, 6) * std::pow(1 + rho, 2));
     den_of[component] = 1 / std::pow(1 - rho, 4);
-  });
+  }
   // (A component without variance left its terms at +0, which add nothing.)
   for (std::size_t a = 0; a < num_of.size(); ++a) num += num_of[a], den += den_of[a];
   if (!(den > 0)) return 0;
@@ -91,9 +100,9 @@ constexpr double kBandwidthFactor = 6.0;
 CovarianceEstimate hac_covariance(const ScoreInputs& in, double max_bandwidth_fraction) {
   CovarianceEstimate e;
   e.method = "hac";
-  const auto series = run_score_series(in, false);
-  std::size_t shortest = series.empty() ? 0 : static_cast<std::size_t>(series.front().rows());
-  for (const auto& s : series) shortest = std::min(shortest, static_cast<std::size_t>(s.rows()));
+  const RunScoreSeries series(in, false);
+  std::size_t shortest = series.runs() == 0 ? 0 : static_cast<std::size_t>(series.length(0));
+  for (std::size_t c = 0; c < series.runs(); ++c) shortest = std::min(shortest, static_cast<std::size_t>(series.length(c)));
   const double cap = max_bandwidth_fraction * static_cast<double>(shortest);
   double chosen = kBandwidthFactor * andrews_bandwidth(series);
   if (!(chosen >= 0)) chosen = 0;  // non-finite scores (a fit that failed): no lags, not a NaN cast to a count
@@ -108,15 +117,14 @@ CovarianceEstimate hac_covariance(const ScoreInputs& in, double max_bandwidth_fr
   Eigen::MatrixXd meat = Eigen::MatrixXd::Zero(in.jacobian.cols(), in.jacobian.cols());
   double b_sum = 0;
   // Each run's meat on a free thread, added in run order.
-  std::vector<Eigen::MatrixXd> run_meat(series.size());
-  for_each_index(series.size(), [&](std::size_t c) { run_meat[c] = bartlett_meat(series[c], lags); });
-  for (std::size_t c = 0; c < series.size(); ++c) {
-    const auto& s = series[c];
-    const double b = std::min(1.0, static_cast<double>(lags + 1) / std::max<double>(1.0, static_cast<double>(s.rows())));
+  std::vector<Eigen::MatrixXd> run_meat(series.runs());
+  for_each_index(series.runs(), [&](std::size_t c) { run_meat[c] = bartlett_meat(series(c), lags); });
+  for (std::size_t c = 0; c < series.runs(); ++c) {
+    const double b = std::min(1.0, static_cast<double>(lags + 1) / std::max<double>(1.0, static_cast<double>(series.length(c))));
     meat += run_meat[c] / (1 - b + b * b / 3);
     b_sum += b;
   }
-  const double G = static_cast<double>(std::max<std::size_t>(series.size(), 1));
+  const double G = static_cast<double>(std::max<std::size_t>(series.runs(), 1));
   const double n = static_cast<double>(in.residuals.size()), m = static_cast<double>(in.jacobian.cols());
   // Priors at their known variance, or their squared residual if larger.
   for (std::size_t i = 0; i < in.rows.cluster.size(); ++i)
