@@ -36,8 +36,9 @@ class CsvText {
     return *this;
   }
   const std::string& str() const { return text_; }
-  // The rows written so far, without the comments and the header.
-  std::string_view rows_text() const { return std::string_view(text_).substr(header_bytes_); }
+  // The text, moved out: the comments and the header (its first header_bytes()), then the rows.
+  std::string take() && { return std::move(text_); }
+  std::size_t header_bytes() const { return header_bytes_; }
 
  private:
   std::size_t columns_, in_row_ = 0, header_bytes_ = 0, rows_expected_ = 0, rows_written_ = 0;
