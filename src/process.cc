@@ -2,6 +2,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <fstream>
 #include <cstdlib>  // defines __GLIBC__ where the C library is glibc
 
 #include "process_heap.hpp"
@@ -48,8 +49,16 @@ static_assert(kMainHeapReserve < static_cast<std::size_t>(kNeverTrim) && kThread
 // about a third of its 0.36 s. Where the system grants huge pages only on request
 // (/sys/kernel/mm/transparent_hugepage/enabled: madvise, Debian's default) this is what grants
 // them; with `always` or `never` it changes nothing. The resident memory grows by at most one
-// 2 MB page beyond the heap's use; the reserve itself is address space only.
+// 2 MB page beyond the heap's use; the reserve itself is address space only, except where the
+// system accounts every mapping up front (vm.overcommit_memory = 2): there each process's
+// reserve would count against the node's limit (a fleet's ranks), so none is made.
 void reserve_huge_pages(std::size_t bytes) {
+  static const bool strict_accounting = [] {
+    std::ifstream mode("/proc/sys/vm/overcommit_memory");
+    int value = 0;
+    return mode >> value && value == 2;
+  }();
+  if (strict_accounting) return;
   constexpr std::uintptr_t kHugePage = std::uintptr_t{2} << 20;
   void* block = std::malloc(bytes);  // from this thread's heap (no mapped blocks), untouched
   if (!block) return;                // address space refused: 4 kB pages, as before

@@ -87,6 +87,8 @@ const char* huge_pages_untestable() {
 #else
   if (!std::filesystem::exists("/sys/kernel/mm/transparent_hugepage/enabled") || !std::filesystem::exists("/proc/self/smaps"))
     return "a kernel without transparent huge pages";
+  std::ifstream overcommit("/proc/sys/vm/overcommit_memory");
+  if (int mode = 0; overcommit >> mode && mode == 2) return "strict overcommit accounting: no reserve is made";
   return nullptr;
 #endif
 }
