@@ -2,8 +2,8 @@
 
 #include <atomic>
 #include <cstdint>
-#include <fstream>
 #include <cstdlib>  // defines __GLIBC__ where the C library is glibc
+#include <fstream>
 
 #include "process_heap.hpp"
 

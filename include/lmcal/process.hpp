@@ -17,8 +17,9 @@ namespace LMCAL_API lmcal {
 // machine): a 10⁵-sample friction fit took 100 ms, 80 ms so. The resident memory then stays at
 // its peak until the process exits. The heap's first 512 MB, and the first 48 MB of each
 // worker thread's own heap, are also marked for transparent huge pages (where the system grants
-// them on request, Debian's default): one fault per 2 MB instead of 512. A 10⁵-sample
-// `lmcal fit friction` went from 0.35 to 0.20 s, its faults from 9,450 to 1,150.
+// them on request, Debian's default): one fault per 2 MB instead of 512. With the rest of
+// session 27's changes, a 10⁵-sample `lmcal fit friction` went from 0.34-0.38 s to 0.19-0.24 s
+// on a 2-core VM, its faults from 9,450 to 1,150.
 // False where the settings are not available (not glibc).
 bool keep_freed_memory();
 
