@@ -9,6 +9,8 @@
 
 #if defined(__GLIBC__)
 #include <malloc.h>
+#endif
+#if defined(__linux__)
 #include <sys/mman.h>
 #endif
 
@@ -59,15 +61,23 @@ void reserve_huge_pages(std::size_t bytes) {
     return mode >> value && value == 2;
   }();
   if (strict_accounting) return;
-  constexpr std::uintptr_t kHugePage = std::uintptr_t{2} << 20;
   void* block = std::malloc(bytes);  // from this thread's heap (no mapped blocks), untouched
   if (!block) return;                // address space refused: 4 kB pages, as before
-  const auto begin = (reinterpret_cast<std::uintptr_t>(block) + kHugePage - 1) & ~(kHugePage - 1);
-  const auto end = (reinterpret_cast<std::uintptr_t>(block) + bytes) & ~(kHugePage - 1);
-  if (end > begin) ::madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE);
+  detail::prefer_huge_pages(block, bytes);
   std::free(block);  // back to the top of the heap, below the trim threshold: kept
 }
 #endif
+
+// madvise(advice) on the whole `unit`-aligned units inside [data, data + bytes), if any.
+[[maybe_unused]] void advise_inside(const void* data, std::size_t bytes, std::uintptr_t unit, int advice) {
+#if defined(__linux__)
+  const auto begin = (reinterpret_cast<std::uintptr_t>(data) + unit - 1) & ~(unit - 1);
+  const auto end = (reinterpret_cast<std::uintptr_t>(data) + bytes) & ~(unit - 1);
+  if (end > begin) ::madvise(reinterpret_cast<void*>(begin), end - begin, advice);
+#else
+  (void)data, (void)bytes, (void)unit, (void)advice;
+#endif
+}
 
 }  // namespace
 
@@ -89,6 +99,22 @@ bool keep_freed_memory() {
 }
 
 namespace detail {
+
+void prefer_huge_pages(const void* data, std::size_t bytes) {
+#ifdef MADV_HUGEPAGE
+  advise_inside(data, bytes, std::uintptr_t{2} << 20, MADV_HUGEPAGE);
+#else
+  (void)data, (void)bytes;
+#endif
+}
+
+void populate_pages(const void* data, std::size_t bytes) {
+#ifdef MADV_POPULATE_WRITE
+  advise_inside(data, bytes, 4096, MADV_POPULATE_WRITE);
+#else
+  (void)data, (void)bytes;
+#endif
+}
 
 void prepare_worker_heap() {
 #if defined(LMCAL_HUGE_HEAP)

@@ -13,7 +13,6 @@
 #include <cstring>
 #include <limits>
 
-#include <sys/mman.h>
 #include <unistd.h>
 
 #include "io/input_file.hpp"
@@ -102,7 +101,7 @@ std::optional<Reader::Rest> Reader::read_rest(int count) const {
   const std::size_t size = static_cast<std::size_t>(file_size_ - std::min(offset, file_size_));
   Rest rest{.bytes = std::unique_ptr<char[]>(new char[std::max<std::size_t>(size, 1)]), .slices = {}};
   char* const bytes = rest.bytes.get();
-  prefer_huge_pages(bytes, size);
+  detail::prefer_huge_pages(bytes, size);
   const int fd = fileno(stream_.get());
   std::atomic<bool> whole = true;
   // Pieces of at least 4 MiB: each thread's pages are first written by that thread.
@@ -468,31 +467,6 @@ std::size_t Reader::estimated_rows() const {
   const double rows =
       static_cast<double>(file_size_ - consumed) * static_cast<double>(lines) / static_cast<double>(rest_bytes);
   return std::min(static_cast<std::size_t>(rows * 1.03) + 16, io::kMaxRows);
-}
-
-namespace {
-// madvise(advice) on the whole `unit`-aligned units inside [data, data + bytes), if any.
-[[maybe_unused]] void advise_inside(const void* data, std::size_t bytes, std::uintptr_t unit, int advice) {
-  const auto begin = (reinterpret_cast<std::uintptr_t>(data) + unit - 1) & ~(unit - 1);
-  const auto end = (reinterpret_cast<std::uintptr_t>(data) + bytes) & ~(unit - 1);
-  if (end > begin) ::madvise(reinterpret_cast<void*>(begin), end - begin, advice);
-}
-}  // namespace
-
-void prefer_huge_pages(const void* data, std::size_t bytes) {
-#ifdef MADV_HUGEPAGE
-  advise_inside(data, bytes, std::uintptr_t{2} << 20, MADV_HUGEPAGE);
-#else
-  (void)data, (void)bytes;
-#endif
-}
-
-void populate_pages(const void* data, std::size_t bytes) {
-#ifdef MADV_POPULATE_WRITE
-  advise_inside(data, bytes, 4096, MADV_POPULATE_WRITE);
-#else
-  (void)data, (void)bytes;
-#endif
 }
 
 }  // namespace lmcal::csv

@@ -29,6 +29,7 @@
 #include <string_view>
 #include <vector>
 
+#include "process_heap.hpp"
 #include "lmcal/io/load_report.hpp"
 #include "lmcal/io/units.hpp"
 
@@ -182,24 +183,14 @@ std::string accepted_names(std::string_view base, Quantity quantity);
 // `base` with the quantity's internal unit: "load_N".
 std::string canonical_name(std::string_view base, Quantity quantity);
 
-// Asks the kernel to back the whole 2 MiB pages inside [data, data + bytes) by transparent huge
-// pages (Linux; elsewhere, or when refused, nothing happens): the first write to a loader's
-// column of a million rows then costs a few page faults rather than thousands.
-void prefer_huge_pages(const void* data, std::size_t bytes);
-
-// Asks the kernel to map the pages inside [data, data + bytes) now, writable (Linux 5.14's
-// MADV_POPULATE_WRITE; elsewhere, or when refused, nothing happens): one call instead of a page
-// fault at each page's first write, which on a virtual machine is a trap to the hypervisor.
-void populate_pages(const void* data, std::size_t bytes);
-
 // column.reserve(rows), the new storage preferring huge pages and mapped at once.
 template <typename T>
 void reserve_rows(std::vector<T>& column, std::size_t rows) {
   const T* before = column.data();
   column.reserve(rows);
   if (column.data() == before) return;  // the storage it had
-  prefer_huge_pages(column.data(), column.capacity() * sizeof(T));
-  populate_pages(column.data(), column.capacity() * sizeof(T));
+  detail::prefer_huge_pages(column.data(), column.capacity() * sizeof(T));
+  detail::populate_pages(column.data(), column.capacity() * sizeof(T));
 }
 
 // Binds the header cells to `specs` (in header order). Call it before the first next(): errors
