@@ -163,5 +163,13 @@ TEST(CsvTextSlices, TwoThreadsWriteTheTextOneRowAtATimeWrites) {
   EXPECT_EQ(csv_text(header, 0, row), "run,speed_m_s,force_N,note\n") << "no rows: the header alone";
 }
 
+// A text cell is written so that a spreadsheet and lmcal's reader both read back what was
+// meant: quotes inside doubled, a formula's first character behind an apostrophe.
+TEST(CsvTextCells, QuotesAndFormulasAreEscapedAsWritten) {
+  CsvText csv({"note"});
+  for (const char* text : {"plain", "a, \"quoted\" note", "=1+1", "'=x", "#comment", " padded", "\"", ""}) csv.cell(text).end_row();
+  EXPECT_EQ(csv.str(), "note\nplain\n\"a, \"\"quoted\"\" note\"\n'=1+1\n''=x\n\"#comment\"\n\" padded\"\n\"\"\"\"\n\n");
+}
+
 }  // namespace
 }  // namespace lmcal

@@ -412,7 +412,7 @@ class BatchedAutoDiffCostFunction final : public ceres::CostFunction, public Nor
       t[j] = Jet(theta[j], static_cast<int>(k));
     }
     auto slice = [this, &seeded](auto& prepared, std::size_t begin, std::size_t end, double* g, double* r) {
-      jet_slice<N>(prepared, seeded, begin, end, g, r);
+      this->template jet_slice<N>(prepared, seeded, begin, end, g, r);  // `this` named: clang sees the capture used
     };
     return in_parts(functor_.prepare(t.data()), slice, reduce);
   }

@@ -53,8 +53,9 @@ CsvText& CsvText::cell(std::string_view text) {
   // (csv::formula_escaped). So does text that starts with an apostrophe before one of those.
   std::string escaped;
   if (csv_formula_escape_needed(text)) {
-    escaped = "'";
-    escaped += text;
+    escaped.reserve(text.size() + 1);
+    escaped.push_back('\'');
+    escaped.append(text.data(), text.size());
     text = escaped;
   }
   // Quoted where it would not read back as written: separators, quotes and line ends inside, a
@@ -66,7 +67,10 @@ CsvText& CsvText::cell(std::string_view text) {
     return *this;
   }
   text_ += '"';
-  for (char c : text) text_ += c == '"' ? std::string("\"\"") : std::string(1, c);
+  for (char c : text) {
+    text_ += c;
+    if (c == '"') text_ += '"';  // a quote inside is doubled
+  }
   text_ += '"';
   return *this;
 }
