@@ -51,10 +51,12 @@ TEST(FrictionDiagnosis, NamesEveryLibraryEffectHiddenInTheData) {
       if (std::string_view(info.varies) == column) return false;
     return !is_friction_effect_part(info);
   };
-  for (const auto& info : FrictionEffectLibrary::infos)
-    if (!info.dynamics && tidy_log_shows(info))
+  for (const auto& info : FrictionEffectLibrary::infos) {
+    if (!info.dynamics && tidy_log_shows(info)) {
       EXPECT_TRUE(std::any_of(std::begin(hidden), std::end(hidden), [&](const Hidden& h) { return h.effect == std::string(info.name); }))
-        << info.name << " is registered but never hidden in the test data";
+          << info.name << " is registered but never hidden in the test data";
+    }
+  }
   for (const auto& h : hidden) {
     for (std::uint64_t seed : {21, 22}) {
       RigEffects effects;

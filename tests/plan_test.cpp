@@ -139,7 +139,9 @@ TEST(FrictionPlan, ExpectedStandardErrorsCompareTheSameQuantity) {
   const FrictionPlan stuck = plan_friction(log, fit, friction_candidates(log, {}), {.conditions = 3});
   for (const auto& p : stuck.parameters) {
     EXPECT_TRUE(p.held_now.empty()) << p.name;
-    if (p.determined_before) EXPECT_LE(p.se_after, p.se_before * (1 + 1e-9)) << p.name << "\n" << friction_plan_summary(stuck);
+    if (p.determined_before) {
+      EXPECT_LE(p.se_after, p.se_before * (1 + 1e-9)) << p.name << "\n" << friction_plan_summary(stuck);
+    }
   }
   EXPECT_DOUBLE_EQ(planned(stuck, "k1").se_before, fit.fit.parameter("k1").se);
   // Other preloads determine k2: k1 itself was not determined now (only k1 with k2 held).
@@ -152,8 +154,11 @@ TEST(FrictionPlan, ExpectedStandardErrorsCompareTheSameQuantity) {
   EXPECT_EQ(k1.held_now, std::vector<std::string>{"k2"});
   EXPECT_DOUBLE_EQ(k1.se_held_now, fit.fit.parameter("k1").se);
   EXPECT_LE(k1.se_held_after, k1.se_held_now * (1 + 1e-9));
-  for (const auto& p : freed.parameters)  // the constants k2 does not enter with keep their row
-    if (p.name == "f0" || p.name == "v_st_m_s") EXPECT_TRUE(p.held_now.empty() && p.determined_before) << p.name;
+  for (const auto& p : freed.parameters) {  // the constants k2 does not enter with keep their row
+    if (p.name == "f0" || p.name == "v_st_m_s") {
+      EXPECT_TRUE(p.held_now.empty() && p.determined_before) << p.name;
+    }
+  }
   const std::string summary = friction_plan_summary(freed);
   EXPECT_NE(summary.find("n/a (only with k2 held)"), std::string::npos) << summary;
   EXPECT_NE(summary.find("k1 (k2 held)"), std::string::npos) << summary;
@@ -195,9 +200,10 @@ TEST(FrictionPlan, ProposesTheMeasurementsItsNotesAskFor) {
   for (const auto& c : friction_candidates(log, {.preload_um = {2.5}}, fit)) EXPECT_EQ(c.conditions.preload_um, 2.5);
   // Too few samples to determine k2: the note says how many would.
   const FrictionPlan few = plan_friction(log, fit, candidates, {.conditions = 1, .samples_per_condition = 1});
-  if (std::isinf(planned(few, "k2").se_after))
+  if (std::isinf(planned(few, "k2").se_after)) {
     EXPECT_NE(friction_plan_summary(few).find("samples per condition would determine it"), std::string::npos)
         << friction_plan_summary(few);
+  }
 }
 
 TEST(FrictionPlan, ATieBetweenSealDragAndItsBlockSizeFormGetsAnotherBlock) {
@@ -242,12 +248,16 @@ TEST(FrictionPlan, ThePageHoldsThePicksTheStandardErrorsAndTheirPlot) {
   EXPECT_NE(html.find("data-plots=\"plan-se-ratio\""), std::string::npos);
   const nlohmann::json j = nlohmann::json::parse(friction_plan_json(plan, {}));
   for (const auto& p : j["parameters"]) {
-    for (const char* side : {"se_before", "se_after"})
-      if (!p[side].is_null()) EXPECT_NE(html.find(">" + report::num(p[side].get<double>()) + "<"), std::string::npos) << p["name"] << side;
-    if (p.contains("as_quoted_now"))
-      EXPECT_NE(html.find(">" + report::num(p["as_quoted_now"]["se_after"].get<double>()) + "<"), std::string::npos) << p["name"];
+    for (const char* side : {"se_before", "se_after"}) {
+      if (!p[side].is_null()) {
+        EXPECT_NE(html.find(fmt::format(">{}<", report::num(p[side].get<double>()))), std::string::npos) << p["name"] << side;
+      }
+    }
+    if (p.contains("as_quoted_now")) {
+      EXPECT_NE(html.find(fmt::format(">{}<", report::num(p["as_quoted_now"]["se_after"].get<double>()))), std::string::npos) << p["name"];
+    }
   }
-  for (const auto& c : j["conditions"]) EXPECT_NE(html.find(">" + report::num(c["velocity_m_s"].get<double>()) + "<"), std::string::npos);
+  for (const auto& c : j["conditions"]) EXPECT_NE(html.find(fmt::format(">{}<", report::num(c["velocity_m_s"].get<double>()))), std::string::npos);
   EXPECT_NE(html.find("n/a (only with k2 held)"), std::string::npos);
   EXPECT_NE(html.find("new: at pc = "), std::string::npos);  // the proposed preload class, and why
 }
@@ -300,7 +310,7 @@ TEST(ThermalPlan, ATieBetweenBaseLossAndForcedConvectionGetsOtherSpeeds) {
   EXPECT_NE(thermal_plan_manifest_toml(plan, data).find("[[run]]\nid = \"plan1\""), std::string::npos);
   const std::string html = thermal_plan_html(d, {});
   EXPECT_NE(html.find("data-plot=\"plan-se-ratio\""), std::string::npos);
-  EXPECT_NE(html.find(">" + report::num(alpha.se_after) + "<"), std::string::npos);
+  EXPECT_NE(html.find(fmt::format(">{}<", report::num(alpha.se_after))), std::string::npos);
 }
 
 }  // namespace

@@ -507,7 +507,9 @@ void expect_same_samples_and_fit(const FrictionLog& a, const FrictionLog& b, boo
   ASSERT_EQ(a.size(), b.size());
   ASSERT_GT(a.size(), 100u);
   EXPECT_EQ(a.direction, b.direction);
-  if (same_lines) EXPECT_EQ(a.line, b.line);
+  if (same_lines) {
+    EXPECT_EQ(a.line, b.line);
+  }
   for (std::size_t i = 0; i < a.size(); ++i) {
     ASSERT_NEAR(a.velocity_m_s[i], b.velocity_m_s[i], 1e-9 * a.velocity_m_s[i]) << i;
     ASSERT_NEAR(a.friction_N[i], b.friction_N[i], 1e-9 * std::abs(a.friction_N[i])) << i;

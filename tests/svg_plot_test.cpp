@@ -507,7 +507,9 @@ TEST(SvgPlot, EveryAxisHasTwoLabelledTicksThatDoNotCollide) {
     SCOPED_TRACE(plot.id);
     const std::string svg = render_svg(plot);
     EXPECT_GE(tick_labels(svg, false).size(), 2u) << svg;
-    if (plot.x_tick_labels.empty()) EXPECT_GE(tick_labels(svg, true).size(), 2u);
+    if (plot.x_tick_labels.empty()) {
+      EXPECT_GE(tick_labels(svg, true).size(), 2u);
+    }
     EXPECT_FALSE(x_labels_overlap(svg)) << svg;
     EXPECT_EQ(text_outside_view(svg), std::vector<std::string>{});
   }

@@ -390,16 +390,16 @@ class ThermalCost final : public ceres::CostFunction, public NormalEquationsCost
   // θ_global as a T: a Jet carrying the derivative in its slot when the parameter is one of
   // the run's `local` ones.
   template <typename T>
-  static auto parameter(const double* theta, const std::vector<int>& local) {
-    return [theta, &local](int global) {
-      if constexpr (std::is_same_v<T, double>) {
-        return theta[global];
-      } else {
+  static auto parameter(const double* theta, [[maybe_unused]] const std::vector<int>& local) {
+    if constexpr (std::is_same_v<T, double>) {
+      return [theta](int global) { return theta[global]; };
+    } else {
+      return [theta, &local](int global) {
         for (std::size_t k = 0; k < local.size(); ++k)
           if (local[k] == global) return T(theta[global], static_cast<int>(k));
         return T(theta[global]);
-      }
-    };
+      };
+    }
   }
 
   template <typename T>

@@ -1,5 +1,7 @@
 // The friction half of the report: Fig. 6-style force over velocity, the constants, the
 // residuals against every covariate, the spread across runs and the diagnosis.
+#include <fmt/format.h>
+
 #include <map>
 #include <tuple>
 
@@ -136,7 +138,7 @@ Plot velocity_panel(const Calibration& c, const Varied& varied) {
       points.x.push_back(v);
       points.y.push_back(sum.first / static_cast<double>(sum.second));
     }
-    if (points.x.size() < by_velocity.size()) points.label += " " + shown_of(points.x.size(), by_velocity.size());
+    if (points.x.size() < by_velocity.size()) points.label += fmt::format(" {}", shown_of(points.x.size(), by_velocity.size()));
     const auto& [sample, temperature_sum, n] = groups.at(value);
     const double temperature_C = temperature_sum / static_cast<double>(n);
     FrictionConstants<double> k = c.friction->constants();
@@ -208,7 +210,8 @@ Plot condition_residuals(const std::string& id, const std::string& title, const 
       s.x.push_back(r.*x);
       s.y.push_back(r.bias_N);
     }
-    s.label = prefix + "each condition" + (s.x.size() == conditions.size() ? "" : " " + shown_of(s.x.size(), conditions.size()));
+    s.label = prefix + "each condition";
+    if (s.x.size() < conditions.size()) s.label += fmt::format(" {}", shown_of(s.x.size(), conditions.size()));
     plot.series.push_back(std::move(s));
     if (levels.size() > 30) continue;  // a covariate that barely repeats: no levels to average
     Series means{.label = prefix + "mean per level (95 %)", .tooltip = prefix + "level mean ± 95 %", .mark = Mark::line_points,
@@ -461,9 +464,9 @@ void empirical_section(Page& page, const EmpiricalFinding& e, const std::string&
     rows.push_back({component.symbol, component.words, covariates, coefficient, coefficient_interval, scale, scale_interval});
   }
   page.table({"term", "what it does", "covariates", "coefficient", "95 % interval", "scale", "95 % interval"}, rows);
-  page.paragraph(fmt::format("{}: RMSE {} {} before the term, {} {} with it: a gain of {} "
+  page.paragraph(fmt::format("H{}: RMSE {} {} before the term, {} {} with it: a gain of {} "
                              "(LRT p = {}, ΔBIC = {}). Kept: {}.",
-                             "H" + held_out_criterion_words(e.criterion).substr(1), num(e.cv_rmse_before), unit,
+                             held_out_criterion_words(e.criterion).substr(1), num(e.cv_rmse_before), unit,
                              num(e.cv_rmse_after), unit, percent(e.cv_gain_percent, 1), p_value(e.lrt_p),
                              num(e.delta_bic, 3), e.reason));
   page.paragraph(e.resembles.empty() ? "It resembles no mechanism we know of."

@@ -185,7 +185,10 @@ void next_steps(Page& page, const Calibration& c) {
   const std::string set = c.set.dir.string();
   std::string logs = c.set.friction_manifest ? c.set.friction_manifest->string() : "";
   for (const auto& log : c.set.friction_logs)
-    if (!c.set.friction_manifest) logs += (logs.empty() ? "" : " ") + log.string();
+    if (!c.set.friction_manifest) {
+      if (!logs.empty()) logs += ' ';
+      logs += log.string();
+    }
   std::vector<std::pair<std::string, std::string>> steps;
   if (c.calibrated.friction && c.calibrated.thermal)
     steps.emplace_back("Predict the rail's temperature and growth over your machine's duty (a TOML of segments; "

@@ -45,7 +45,7 @@ std::string band_text(const BandAt& b) { return fmt::format("{} {}", report::num
 
 std::vector<Plot> plots(const Prediction& p, const PredictionSummary& s) {
   const std::vector<std::size_t> at = drawn_times(p, s);
-  const std::string thinned = at.size() < p.time_s.size() ? " " + report::shown_of(at.size(), p.time_s.size()) : "";
+  const std::string thinned = at.size() < p.time_s.size() ? fmt::format(" {}", report::shown_of(at.size(), p.time_s.size())) : "";
   const auto time_plot = [&](std::string id, std::string title, std::string y_label) {
     Plot plot{.id = std::move(id), .title = std::move(title), .x_label = "time (h)", .y_label = std::move(y_label)};
     plot.width_px = 620;
